@@ -1,0 +1,26 @@
+#pragma once
+/// @file
+/// Loading the arm model and arm-size files from YAML (schema in docs/arm-model.md).
+
+#include <filesystem>
+#include <string_view>
+
+#include "fullarm/arm/arm_model.hpp"
+
+namespace fullarm::arm {
+
+/// Loads and validates an arm model. Every key is required unless docs/arm-model.md says
+/// otherwise; unknown keys are errors.
+/// @throws ConfigError naming the file, the key path and what was expected.
+[[nodiscard]] ArmModel loadArmModel(const std::filesystem::path& file);
+
+/// Parses an arm model from YAML text; `source` names it in error messages and resolves
+/// relative mesh paths.
+/// @throws ConfigError
+[[nodiscard]] ArmModel parseArmModel(std::string_view yaml_text, const std::filesystem::path& source);
+
+/// Path of the default DTS master model: $FULLARM_CONFIG_DIR/dts_master.yaml if that variable
+/// is set, else the installed or source-tree config folder found at build time.
+[[nodiscard]] std::filesystem::path defaultArmModelPath();
+
+}  // namespace fullarm::arm

@@ -1,0 +1,85 @@
+#pragma once
+/// @file
+/// Strict YAML reading with errors that name the file, the line and the key path.
+/// Every fullarm configuration file is read through these classes: each value is required
+/// unless read with an `optional*` call, and finish() rejects keys nobody read.
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+
+namespace fullarm::arm {
+
+class YamlList;
+
+/// A YAML mapping being read. Copies share the set of keys read so far.
+class YamlMap {
+ public:
+  /// @param node must be a map; otherwise ConfigError is thrown naming `path`.
+  YamlMap(YAML::Node node, std::string path, std::filesystem::path file);
+
+  /// Parses a whole document; the root must be a map.
+  /// @throws ConfigError for a YAML syntax error (with its line) or a non-map root.
+  static YamlMap parse(std::string_view text, const std::filesystem::path& file);
+  /// Reads and parses a file. @throws ConfigError if it cannot be read.
+  static YamlMap load(const std::filesystem::path& file);
+
+  [[nodiscard]] bool has(std::string_view key) const;
+  /// A finite number. `unit_hint` goes into the error message ("metres", "rad").
+  [[nodiscard]] double number(std::string_view key, std::string_view unit_hint = {}) const;
+  [[nodiscard]] std::optional<double> optionalNumber(std::string_view key,
+                                                     std::string_view unit_hint = {}) const;
+  [[nodiscard]] int integer(std::string_view key) const;
+  [[nodiscard]] std::string string(std::string_view key) const;
+  [[nodiscard]] std::optional<std::string> optionalString(std::string_view key) const;
+  [[nodiscard]] Eigen::Vector3d vector3(std::string_view key, std::string_view unit_hint = {}) const;
+  [[nodiscard]] YamlMap map(std::string_view key) const;
+  [[nodiscard]] YamlList list(std::string_view key) const;
+  [[nodiscard]] std::optional<YamlList> optionalList(std::string_view key) const;
+
+  /// @throws ConfigError naming the first key that was never read.
+  void finish() const;
+
+  /// @throws ConfigError at `<path>.<key>` (or at this map when key is empty).
+  [[noreturn]] void fail(std::string_view key, const std::string& message) const;
+
+  [[nodiscard]] const std::string& path() const noexcept { return path_; }
+  [[nodiscard]] const std::filesystem::path& file() const noexcept { return file_; }
+  [[nodiscard]] const YAML::Node& node() const noexcept { return node_; }
+
+ private:
+  [[nodiscard]] YAML::Node get(std::string_view key) const;  // required
+  [[nodiscard]] std::string keyPath(std::string_view key) const;
+
+  YAML::Node node_;
+  std::string path_;
+  std::filesystem::path file_;
+  std::shared_ptr<std::set<std::string, std::less<>>> used_;
+};
+
+/// A YAML sequence being read.
+class YamlList {
+ public:
+  YamlList(YAML::Node node, std::string path, std::filesystem::path file);
+  [[nodiscard]] std::size_t size() const noexcept { return node_.size(); }
+  /// Element `i` as a map (error if it is not one).
+  [[nodiscard]] YamlMap map(std::size_t i) const;
+  [[nodiscard]] const std::string& path() const noexcept { return path_; }
+
+ private:
+  YAML::Node node_;
+  std::string path_;
+  std::filesystem::path file_;
+};
+
+/// 1-based line of the value at a dotted key path such as `joints[2].link.mass_kg` in a parsed
+/// document, or 0 when the path does not exist.
+[[nodiscard]] int lineOfKeyPath(const YAML::Node& root, std::string_view key_path);
+
+}  // namespace fullarm::arm
