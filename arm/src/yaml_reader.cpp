@@ -41,21 +41,6 @@ std::string expected(std::string_view what, std::string_view unit_hint) {
 
 }  // namespace
 
-ConfigError::ConfigError(std::filesystem::path file, std::string key_path, std::string message,
-                         int line)
-    : std::runtime_error([&] {
-        std::string text = file.empty() ? std::string("<input>") : file.string();
-        if (line > 0) text += ":" + std::to_string(line);
-        text += ": ";
-        if (!key_path.empty()) text += key_path + ": ";
-        text += message;
-        return text;
-      }()),
-      file_(std::move(file)),
-      key_path_(std::move(key_path)),
-      message_(std::move(message)),
-      line_(line) {}
-
 YamlMap::YamlMap(YAML::Node node, std::string path, std::filesystem::path file)
     : node_(std::move(node)),
       path_(std::move(path)),

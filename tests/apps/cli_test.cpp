@@ -1,0 +1,146 @@
+// The fullarm program end to end: exit codes, messages on bad input, output folders.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace {
+
+struct Result {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+Result runFullarm(const std::string& args) {
+  const std::string command = std::string(FULLARM_EXE) + " " + args + " 2>&1";
+  Result r;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return r;
+  std::array<char, 4096> buffer{};
+  std::size_t n = 0;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::filesystem::path tempDir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "fullarm_cli_test" / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::string source(const std::string& rel) { return std::string(FULLARM_TEST_SOURCE_DIR) + "/" + rel; }
+
+TEST(Cli, HelpOnEveryCommand) {
+  for (const char* args : {"--help", "arm --help", "arm show --help", "demo --help"}) {
+    const Result r = runFullarm(args);
+    EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("Usage"), std::string::npos) << args;
+  }
+}
+
+TEST(Cli, ArmShowPrintsChainLengthsMassReachAndPose) {
+  const Result r = runFullarm("arm show --config " + source("config/dts_master.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* text : {"R_SFE", "R_FAA", "upper arm 0.2870 m", "forearm 0.2781 m", "Total mass: 17.50 kg",
+                           "Reach", "Hand point at q: p_W = (0.4041, 0.3631, 0.0112) m"}) {
+    EXPECT_NE(r.output.find(text), std::string::npos) << "missing '" << text << "' in\n" << r.output;
+  }
+}
+
+TEST(Cli, UnknownSubcommandFails) {
+  const Result r = runFullarm("arm wiggle");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+}
+
+TEST(Cli, NegativeLengthIsRejected) {
+  const Result r = runFullarm("arm show --upper-arm-length -0.3");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--upper-arm-length"), std::string::npos) << r.output;
+}
+
+TEST(Cli, NonNumericLengthIsRejected) {
+  const Result r = runFullarm("arm show --forearm-length long");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--forearm-length"), std::string::npos) << r.output;
+}
+
+TEST(Cli, PostureOutsideRangeIsRejected) {
+  const Result r = runFullarm("arm show --q \"0, -0.3, 0, 3.0\"");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--q: element 3 (R_EB) = 3.000000 rad is outside the joint range"), std::string::npos)
+      << r.output;
+}
+
+TEST(Cli, GarbagePostureIsRejected) {
+  const Result r = runFullarm("arm show --q \"0, abc\"");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--q: element 1 is 'abc'"), std::string::npos) << r.output;
+}
+
+TEST(Cli, BadConfigNamesFileAndKeyAndExitsNonZero) {
+  const auto dir = tempDir("bad_config");
+  std::ifstream in(source("config/dts_master.yaml"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  yaml.replace(yaml.find("mass_kg: 3.36"), 13, "mass_kg: -1.0");
+  const auto file = dir / "arm.yaml";
+  std::ofstream(file) << yaml;
+  const Result r = runFullarm("arm show --config " + file.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(file.string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("joints[4].link.mass_kg"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("expected a mass >= 0 kg"), std::string::npos) << r.output;
+}
+
+TEST(Cli, MissingConfigFileIsRejected) {
+  const Result r = runFullarm("arm show --config /nonexistent/arm.yaml");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/nonexistent/arm.yaml"), std::string::npos) << r.output;
+}
+
+TEST(Cli, ArmSizeChangesTheReportedLengths) {
+  const Result r = runFullarm("arm show --upper-arm-length 0.33 --forearm-length 0.26");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("upper arm 0.3300 m, forearm 0.2600 m"), std::string::npos) << r.output;
+}
+
+TEST(Cli, ArmShowWritesSummaryAndReport) {
+  const auto dir = tempDir("arm_show");
+  const Result r = runFullarm("arm show --out " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_TRUE(std::filesystem::exists(dir / "report.html"));
+  std::ifstream in(dir / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary["subcommand"], "arm show");
+  EXPECT_EQ(summary["verdict"]["pass"], true);
+  EXPECT_EQ(summary["results"]["arm"]["num_joints"], 10);
+  EXPECT_NEAR(summary["results"]["arm"]["upper_arm_length_m"].get<double>(), 0.287, 1e-12);
+  EXPECT_GT(summary["results"]["arm"]["reach_m"].get<double>(), 0.5);
+  EXPECT_LT(summary["results"]["arm"]["reach_m"].get<double>(), 0.8);
+}
+
+TEST(Cli, DemoRunsAndSaysWhatIsNotBuiltYet) {
+  const auto dir = tempDir("demo");
+  const Result r = runFullarm("demo --out " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("not built yet"), std::string::npos) << r.output;
+  std::ifstream in(dir / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary["subcommand"], "demo");
+  ASSERT_EQ(summary["results"]["steps"].size(), 5u);
+  EXPECT_EQ(summary["results"]["steps"][0]["status"], "done");
+  EXPECT_EQ(summary["results"]["steps"][1]["status"], "not built yet");
+}
+
+}  // namespace
