@@ -22,7 +22,9 @@ const char* actuatorName(const arm::ActuatorGeometry& act) {
   return act.type == arm::ActuatorGeometry::Type::kLinear ? "cylinder on lever" : "rotary";
 }
 
-std::vector<double> toVector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
+std::vector<double> toVector(const Eigen::VectorXd& v) {
+  return {v.data(), v.data() + v.size()};
+}
 
 }  // namespace
 
@@ -65,20 +67,21 @@ void printArmSummary(const arm::ArmModel& model, const ArmSummary& s, std::ostre
   out << "Arm model: " << model.name << "  (" << (model.source.empty() ? "built in code" : model.source.string())
       << ")\n";
   out << "Convention: modified DH (Craig), T = Rx(alpha) Tx(a) Rz(theta) Tz(d), theta = q + offset\n\n";
-  out << std::left << std::setw(7) << "joint" << std::setw(8) << "parent" << std::right << std::setw(9)
-      << "alpha" << std::setw(9) << "a [m]" << std::setw(9) << "d [m]" << std::setw(9) << "offset" << std::setw(10)
-      << "min" << std::setw(9) << "max" << std::setw(9) << "q" << std::setw(11) << "tau_max" << std::setw(11)
-      << "tau_grav" << "  actuator\n";
+  out << std::left << std::setw(7) << "joint" << std::setw(8) << "parent" << std::right << std::setw(9) << "alpha"
+      << std::setw(9) << "a [m]" << std::setw(9) << "d [m]" << std::setw(9) << "offset" << std::setw(10) << "min"
+      << std::setw(9) << "max" << std::setw(9) << "q" << std::setw(11) << "tau_max" << std::setw(11) << "tau_grav"
+      << "  actuator\n";
   out << std::setw(7 + 8 + 9) << "[deg]" << std::setw(27) << "[deg]" << std::setw(10) << "[deg]" << std::setw(9)
-      << "[deg]" << std::setw(9) << "[deg]" << std::setw(11) << "[N m]" << std::setw(11) << "[N m]" << "\n";
+      << "[deg]" << std::setw(9) << "[deg]" << std::setw(11) << "[N m]" << std::setw(11) << "[N m]"
+      << "\n";
   out << std::fixed;
   for (int i = 0; i < model.numJoints(); ++i) {
     const arm::Joint& j = model.joints[static_cast<std::size_t>(i)];
     out << std::left << std::setw(7) << j.name << std::setw(8)
         << (j.parent < 0 ? "base" : model.joints[static_cast<std::size_t>(j.parent)].name) << std::right;
     if (j.dh) {
-      out << std::setprecision(1) << std::setw(9) << j.dh->alpha_rad * kRadToDeg << std::setprecision(4)
-          << std::setw(9) << j.dh->a_m << std::setw(9) << j.dh->d_m << std::setprecision(1) << std::setw(9)
+      out << std::setprecision(1) << std::setw(9) << j.dh->alpha_rad * kRadToDeg << std::setprecision(4) << std::setw(9)
+          << j.dh->a_m << std::setw(9) << j.dh->d_m << std::setprecision(1) << std::setw(9)
           << j.dh->theta_offset_rad * kRadToDeg;
     } else {
       out << std::setw(36) << "(hand origin)";
@@ -139,13 +142,25 @@ void addArmToReport(const arm::ArmModel& model, const ArmSummary& s, reports::Re
   arm["joints"] = joints;
 
   reports::Section& chain = report.addSection("Kinematic chain and joint ranges");
-  chain.addParagraph("Modified Denavit-Hartenberg convention (Craig): T = Rx(alpha) Tx(a) Rz(theta) Tz(d), with "
-                     "theta = q + offset. Ranges, default posture, torque limits and sensor calibration come from "
-                     "the SL robot package for the DTS master arm (see config/dts_master.yaml for each source).");
+  chain.addParagraph(
+      "Modified Denavit-Hartenberg convention (Craig): T = Rx(alpha) Tx(a) Rz(theta) Tz(d), with "
+      "theta = q + offset. Ranges, default posture, torque limits and sensor calibration come from "
+      "the SL robot package for the DTS master arm (see config/dts_master.yaml for each source).");
   reports::Table table;
   table.caption = "Joints";
-  table.columns = {"Joint", "Parent", "alpha [deg]", "a [m]", "d [m]", "offset [deg]", "min [deg]", "max [deg]",
-                   "posture [deg]", "torque limit [N·m]", "gravity torque [N·m]", "mass [kg]", "actuator"};
+  table.columns = {"Joint",
+                   "Parent",
+                   "alpha [deg]",
+                   "a [m]",
+                   "d [m]",
+                   "offset [deg]",
+                   "min [deg]",
+                   "max [deg]",
+                   "posture [deg]",
+                   "torque limit [N·m]",
+                   "gravity torque [N·m]",
+                   "mass [kg]",
+                   "actuator"};
   table.significant_digits = 4;
   for (int i = 0; i < model.numJoints(); ++i) {
     const arm::Joint& j = model.joints[static_cast<std::size_t>(i)];
@@ -161,6 +176,20 @@ void addArmToReport(const arm::ArmModel& model, const ArmSummary& s, reports::Re
     table.rows.push_back(std::move(row));
   }
   chain.addTable(std::move(table));
+
+  reports::Table lengths;
+  lengths.caption = "Link lengths";
+  lengths.columns = {"Segment", "Length [m]", "Carried by"};
+  lengths.rows = {
+      {"upper arm", s.upper_arm_m,
+       model.upper_arm_joint >= 0 ? "DH d of " + model.joints[static_cast<std::size_t>(model.upper_arm_joint)].name
+                                  : "-"},
+      {"forearm", s.forearm_m,
+       model.forearm_joint >= 0 ? "DH d of " + model.joints[static_cast<std::size_t>(model.forearm_joint)].name : "-"},
+      {"hand (wrist to hand point)", s.hand_m,
+       "tool translation on " + model.joints[static_cast<std::size_t>(model.tool_link)].name},
+  };
+  chain.addTable(std::move(lengths));
 
   reports::Section& reach = report.addSection("Reach");
   reach.addParagraph("Hand points of " + std::to_string(s.reach_samples) +

@@ -45,7 +45,8 @@ struct ArmOptions {
   }
 
   arm::ArmModel load() const {
-    arm::ArmModel model = arm::loadArmModel(config.empty() ? arm::defaultArmModelPath() : std::filesystem::path(config));
+    arm::ArmModel model =
+        arm::loadArmModel(config.empty() ? arm::defaultArmModelPath() : std::filesystem::path(config));
     arm::ArmSize size;
     if (!arm_size_file.empty()) size = arm::loadArmSize(arm_size_file);
     if (upper_arm_m) size.upper_arm_length_m = upper_arm_m;
@@ -66,9 +67,9 @@ int runArmShow(const ArmOptions& options, const std::string& q_text, const std::
   printArmSummary(model, summary, std::cout);
   if (!out_dir.empty()) {
     reports::Report report("arm show", "DTS master arm model: " + model.name);
-    report.setVerdict(summary.holds_itself, summary.holds_itself
-                                                ? "The model is valid and can hold itself against gravity at the posture"
-                                                : "Gravity torques at the posture exceed a joint torque limit");
+    report.setVerdict(summary.holds_itself,
+                      summary.holds_itself ? "The model is valid and can hold itself against gravity at the posture"
+                                           : "Gravity torques at the posture exceed a joint torque limit");
     addArmToReport(model, summary, report);
     report.write(out_dir);
     std::cout << "\nReport: " << (std::filesystem::absolute(out_dir) / "report.html").string() << "\n";
@@ -96,13 +97,12 @@ int runDemo(const ArmOptions& options, const std::string& out_dir) {
       {"Valve study, full-arm vs hand-only", "not built yet", "needs haptic rendering (issue: Full-arm haptics)"},
   };
   std::cout << "\n";
-  for (int i = 1; i < 5; ++i) std::cout << "[" << i + 1 << "/5] " << steps[i].name << ": " << steps[i].status << " ("
-                                        << steps[i].detail << ")\n";
+  for (int i = 1; i < 5; ++i)
+    std::cout << "[" << i + 1 << "/5] " << steps[i].name << ": " << steps[i].status << " (" << steps[i].detail << ")\n";
 
   reports::Report report("demo", "fullarm demo");
-  report.setVerdict(summary.holds_itself, summary.holds_itself
-                                              ? "Every step that exists passed (1 of 5 steps built)"
-                                              : "The arm model step failed");
+  report.setVerdict(summary.holds_itself, summary.holds_itself ? "Every step that exists passed (1 of 5 steps built)"
+                                                               : "The arm model step failed");
   nlohmann::json list = nlohmann::json::array();
   reports::Table table;
   table.caption = "Demo steps";
@@ -124,8 +124,9 @@ int runDemo(const ArmOptions& options, const std::string& out_dir) {
 
 int main(int argc, char** argv) {
   using namespace fullarm;
-  CLI::App app{"fullarm: hardware-in-the-loop test bench and controller design toolkit for full-arm haptics on the "
-               "Sarcos DTS master arm"};
+  CLI::App app{
+      "fullarm: hardware-in-the-loop test bench and controller design toolkit for full-arm haptics on the "
+      "Sarcos DTS master arm"};
   app.set_version_flag("--version", std::string(reports::fullarmVersion()));
   app.require_subcommand(1);
 

@@ -143,8 +143,8 @@ void validateArmModel(const ArmModel& model) {
 
     const JointLimits& lim = j.limits;
     if (!(lim.min_rad < lim.max_rad)) {
-      fail(key + ".limits", "expected min_rad < max_rad, got min_rad " + fmt(lim.min_rad) + " and max_rad " +
-                                fmt(lim.max_rad));
+      fail(key + ".limits",
+           "expected min_rad < max_rad, got min_rad " + fmt(lim.min_rad) + " and max_rad " + fmt(lim.max_rad));
     }
     if (!(lim.velocity_radps > 0.0)) fail(key + ".limits.velocity_radps", "expected a value > 0 rad/s");
     if (!(lim.torque_nm > 0.0)) fail(key + ".limits.torque_nm", "expected a value > 0 N m");
@@ -178,7 +178,8 @@ void validateArmModel(const ArmModel& model) {
     const PotentiometerCalibration& pot = j.potentiometer;
     if (pot.bits < 8 || pot.bits > 24) fail(key + ".sensors.potentiometer.bits", "expected 8 .. 24 bits");
     if (pot.polarity != 1 && pot.polarity != -1) fail(key + ".sensors.potentiometer.polarity", "expected 1 or -1");
-    if (pot.slope_rad_per_count == 0.0) fail(key + ".sensors.potentiometer.slope_rad_per_count", "expected a non-zero slope");
+    if (pot.slope_rad_per_count == 0.0)
+      fail(key + ".sensors.potentiometer.slope_rad_per_count", "expected a non-zero slope");
     const auto [pot_lo, pot_hi] = potentiometerSpan(pot);
     if (lim.min_rad < pot_lo || lim.max_rad > pot_hi) {
       fail(key + ".limits", "the joint range [" + fmt(lim.min_rad) + ", " + fmt(lim.max_rad) +
@@ -197,7 +198,8 @@ void validateArmModel(const ArmModel& model) {
   }
   if (model.tool_link < 0 || model.tool_link >= static_cast<int>(n)) fail("tool.link", "expected a joint name");
   const auto check_segment = [&](int joint, const char* key) {
-    if (joint < -1 || joint >= static_cast<int>(n) || (joint >= 0 && model.joints[static_cast<std::size_t>(joint)].is_hand)) {
+    if (joint < -1 || joint >= static_cast<int>(n) ||
+        (joint >= 0 && model.joints[static_cast<std::size_t>(joint)].is_hand)) {
       fail(std::string("segments.") + key, "expected the name of an arm-chain joint");
     }
   };

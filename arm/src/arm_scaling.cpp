@@ -10,7 +10,8 @@ namespace {
 
 void requirePositive(const std::optional<double>& value, const char* field) {
   if (value && !(std::isfinite(*value) && *value > 0.0)) {
-    throw ConfigError({}, std::string("arm_size.") + field, "expected a finite value > 0, got " + std::to_string(*value));
+    throw ConfigError({}, std::string("arm_size.") + field,
+                      "expected a finite value > 0, got " + std::to_string(*value));
   }
 }
 
@@ -48,8 +49,8 @@ ArmModel scaleArm(const ArmModel& model, const ArmSize& size) {
   const ArmSize now = armSizeOf(model);
   ArmModel scaled = model;
 
-  const auto scale_joint = [&](const std::optional<double>& target, const std::optional<double>& current,
-                               int joint, const char* field) {
+  const auto scale_joint = [&](const std::optional<double>& target, const std::optional<double>& current, int joint,
+                               const char* field) {
     if (!target) return;
     if (joint < 0 || !current || *current <= 0.0) {
       throw ConfigError(model.source, std::string("arm_size.") + field,

@@ -214,7 +214,9 @@ ArmModel parseArmModel(std::string_view yaml_text, const std::filesystem::path& 
   return buildAndValidate(YamlMap::parse(yaml_text, source), source);
 }
 
-ArmModel loadArmModel(const std::filesystem::path& file) { return buildAndValidate(YamlMap::load(file), file); }
+ArmModel loadArmModel(const std::filesystem::path& file) {
+  return buildAndValidate(YamlMap::load(file), file);
+}
 
 std::filesystem::path defaultArmModelPath() {
   if (const char* dir = std::getenv("FULLARM_CONFIG_DIR"); dir != nullptr && *dir != '\0') {

@@ -45,8 +45,7 @@ void newtonEuler(const ArmModel& model, ArmData& data, const Eigen::Ref<const Ei
     const LinkInertial& in = joint.inertial;
     const Eigen::Vector3d r_oc = data.com_W[k] - data.o_W[k];
     const Eigen::Vector3d& w = data.omega[k];
-    const Eigen::Vector3d a_c =
-        data.accel_origin[k] + data.omega_dot[k].cross(r_oc) + w.cross(w.cross(r_oc));
+    const Eigen::Vector3d a_c = data.accel_origin[k] + data.omega_dot[k].cross(r_oc) + w.cross(w.cross(r_oc));
     const Eigen::Matrix3d& R = data.X_WL[k].linear();
     data.inertia_W[k].noalias() = R * in.inertia_com_kgm2 * R.transpose();
     const Eigen::Vector3d F = in.mass_kg * a_c;
@@ -67,8 +66,7 @@ void newtonEuler(const ArmModel& model, ArmData& data, const Eigen::Ref<const Ei
 
 }  // namespace
 
-void computeGravityTorques(const ArmModel& model, ArmData& data,
-                           const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
+void computeGravityTorques(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
   computeForwardKinematics(model, data, q);
   const int n = model.numJoints();
   // Subtree mass and first moment, leaves to root.

@@ -30,8 +30,8 @@ bool jointMovesLink(const ArmModel& model, int joint, int link) noexcept {
   return false;
 }
 
-void computePointJacobian(const ArmModel& model, const ArmData& data, int link,
-                          const Eigen::Vector3d& p_W, PointJacobian& J) noexcept {
+void computePointJacobian(const ArmModel& model, const ArmData& data, int link, const Eigen::Vector3d& p_W,
+                          PointJacobian& J) noexcept {
   const int n = model.numJoints();
   assert(link >= 0 && link < n);
   J.resize(6, n);  // within the fixed capacity: no allocation

@@ -47,8 +47,8 @@ YamlMap::YamlMap(YAML::Node node, std::string path, std::filesystem::path file)
       file_(std::move(file)),
       used_(std::make_shared<std::set<std::string, std::less<>>>()) {
   if (!node_.IsMap()) {
-    throw ConfigError(file_, path_.empty() ? "<document>" : path_,
-                      "expected a map of keys, got " + describe(node_), lineOf(node_));
+    throw ConfigError(file_, path_.empty() ? "<document>" : path_, "expected a map of keys, got " + describe(node_),
+                      lineOf(node_));
   }
 }
 
@@ -86,7 +86,9 @@ void YamlMap::fail(std::string_view key, const std::string& message) const {
   throw ConfigError(file_, keyPath(key), message, line);
 }
 
-bool YamlMap::has(std::string_view key) const { return node_[std::string(key)].IsDefined(); }
+bool YamlMap::has(std::string_view key) const {
+  return node_[std::string(key)].IsDefined();
+}
 
 YAML::Node YamlMap::get(std::string_view key) const {
   const YAML::Node child = node_[std::string(key)];
@@ -148,7 +150,9 @@ Eigen::Vector3d YamlMap::vector3(std::string_view key, std::string_view unit_hin
   return v;
 }
 
-YamlMap YamlMap::map(std::string_view key) const { return YamlMap(get(key), keyPath(key), file_); }
+YamlMap YamlMap::map(std::string_view key) const {
+  return YamlMap(get(key), keyPath(key), file_);
+}
 
 YamlList YamlMap::list(std::string_view key) const {
   const YAML::Node child = get(key);

@@ -38,7 +38,9 @@ std::filesystem::path tempDir(const std::string& name) {
   return dir;
 }
 
-std::string source(const std::string& rel) { return std::string(FULLARM_TEST_SOURCE_DIR) + "/" + rel; }
+std::string source(const std::string& rel) {
+  return std::string(FULLARM_TEST_SOURCE_DIR) + "/" + rel;
+}
 
 TEST(Cli, HelpOnEveryCommand) {
   for (const char* args : {"--help", "arm --help", "arm show --help", "demo --help"}) {
@@ -51,8 +53,8 @@ TEST(Cli, HelpOnEveryCommand) {
 TEST(Cli, ArmShowPrintsChainLengthsMassReachAndPose) {
   const Result r = runFullarm("arm show --config " + source("config/dts_master.yaml"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* text : {"R_SFE", "R_FAA", "upper arm 0.2870 m", "forearm 0.2781 m", "Total mass: 17.50 kg",
-                           "Reach", "Hand point at q: p_W = (0.4041, 0.3631, 0.0112) m"}) {
+  for (const char* text : {"R_SFE", "R_FAA", "upper arm 0.2870 m", "forearm 0.2781 m", "Total mass: 17.50 kg", "Reach",
+                           "Hand point at q: p_W = (0.4041, 0.3631, 0.0112) m"}) {
     EXPECT_NE(r.output.find(text), std::string::npos) << "missing '" << text << "' in\n" << r.output;
   }
 }
@@ -102,6 +104,54 @@ TEST(Cli, BadConfigNamesFileAndKeyAndExitsNonZero) {
   EXPECT_NE(r.output.find("joints[4].link.mass_kg"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("expected a mass >= 0 kg"), std::string::npos) << r.output;
 }
+
+// The loader's error cases through the program: each must exit 2 and print the file, the key
+// path and what was expected (issue: one test per case).
+struct BadConfigCase {
+  const char* name;
+  const char* from;
+  const char* to;
+  const char* key_path;
+  const char* expected;
+};
+
+class CliBadConfig : public ::testing::TestWithParam<BadConfigCase> {};
+
+TEST_P(CliBadConfig, NamesFileKeyAndExpectationAndExitsNonZero) {
+  const BadConfigCase& c = GetParam();
+  const auto dir = tempDir(std::string("bad_") + c.name);
+  std::ifstream in(source("config/dts_master.yaml"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::size_t at = yaml.find(c.from);
+  ASSERT_NE(at, std::string::npos) << c.from;
+  yaml.replace(at, std::string(c.from).size(), c.to);
+  const auto file = dir / "arm.yaml";
+  std::ofstream(file) << yaml;
+  const Result r = runFullarm("arm show --config " + file.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(file.string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(c.key_path), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, CliBadConfig,
+    ::testing::Values(
+        BadConfigCase{"missing_key", "    default_rad: -0.30\n", "", "joints[1]", "missing required key 'default_rad'"},
+        BadConfigCase{"wrong_type", "mass_kg: 6.8", "mass_kg: heavy", "joints[2].link.mass_kg",
+                      "expected a finite number (kg), got 'heavy'"},
+        BadConfigCase{"negative_mass", "mass_kg: 3.36", "mass_kg: -1.0", "joints[4].link.mass_kg",
+                      "expected a mass >= 0 kg"},
+        BadConfigCase{"not_positive_definite", "{xx: 0.050926, yy: 0.050926, zz: 0.0085,",
+                      "{xx: 0.050926, yy: 0.050926, zz: -0.0085,", "joints[2].link.inertia_kgm2",
+                      "must be positive definite"},
+        BadConfigCase{"min_above_max", "{min_rad: 0.586132, max_rad: 2.208897,", "{min_rad: 2.3, max_rad: 0.586132,",
+                      "joints[3].limits", "expected min_rad < max_rad"},
+        BadConfigCase{"unknown_key", "    default_rad: 1.57\n", "    default_rad: 1.57\n    stiffnes: 3\n",
+                      "joints[3].stiffnes", "unknown key"}),
+    [](const ::testing::TestParamInfo<BadConfigCase>& case_info) { return std::string(case_info.param.name); });
 
 TEST(Cli, MissingConfigFileIsRejected) {
   const Result r = runFullarm("arm show --config /nonexistent/arm.yaml");

@@ -197,7 +197,7 @@ TEST(Dynamics, SinglePendulumGravityMatchesHandCalculation) {
   j.inertial.mass_kg = 2.0;
   j.inertial.com_m = {0.5, 0.0, 0.0};
   j.inertial.inertia_com_kgm2 = Eigen::Matrix3d::Identity() * 1e-3;  // small sphere: no gravity effect
-  j.potentiometer = {2e-3, -2047.0, 1, 0.0, 12};  // reads +-4.1 rad
+  j.potentiometer = {2e-3, -2047.0, 1, 0.0, 12};                     // reads +-4.1 rad
   j.torque_sensor = {0.05, -2047.0, 12};
   model.joints.push_back(j);
   model.tool_link = 0;

@@ -70,11 +70,11 @@ TEST(Kinematics, ZeroPoseJointAxesMatchPublishedAxes) {
   ArmData data(model);
   computeForwardKinematics(model, data, Eigen::VectorXd::Zero(model.numJoints()));
   const double h = std::sqrt(0.5);
-  const Eigen::Vector3d axes[] = {{h, 0, h}, {0, 1, 0}, {0, 0, -1}, {1, 0, 0}, {0, 0, -1}, {0, -1, 0}, {1, 0, 0},
-                                  {0, 1, 0}, {1, 0, 0}, {1, 0, 0}};
-  const Eigen::Vector3d points[] = {{0.282843, 0, 0.282843},       {0.282843, 0, 0.282843},
-                                    {0.320943, 0, 0.282843},       {0.320943, 0, -0.004157},
-                                    {0.318443, 0, -0.004157},      {0.318443, 0, -0.282257},
+  const Eigen::Vector3d axes[] = {{h, 0, h},  {0, 1, 0}, {0, 0, -1}, {1, 0, 0}, {0, 0, -1},
+                                  {0, -1, 0}, {1, 0, 0}, {0, 1, 0},  {1, 0, 0}, {1, 0, 0}};
+  const Eigen::Vector3d points[] = {{0.282843, 0, 0.282843},        {0.282843, 0, 0.282843},
+                                    {0.320943, 0, 0.282843},        {0.320943, 0, -0.004157},
+                                    {0.318443, 0, -0.004157},       {0.318443, 0, -0.282257},
                                     {0.318443, -0.0081, -0.282257}, {0.268443, 0.0219, -0.282257},
                                     {0.268443, 0.0219, -0.282257},  {0.338443, 0.0219, -0.382257}};
   ASSERT_EQ(model.numJoints(), 10);
@@ -136,7 +136,9 @@ TEST(Kinematics, LinkFramesMatchKdlAtRandomConfigurations) {
 }
 
 // A random point within 0.2 m of the link origin, fixed in the link frame.
-Eigen::Vector3d randomLinkPoint(std::mt19937& rng) { return test::randomVector(3, 0.2, rng); }
+Eigen::Vector3d randomLinkPoint(std::mt19937& rng) {
+  return test::randomVector(3, 0.2, rng);
+}
 
 TEST(Kinematics, PointJacobianMatchesKdlAtRandomConfigurations) {
   const ArmModel& model = defaultModel();

@@ -109,8 +109,7 @@ TEST(ModelLoading, NegativeMassIsRejected) {
 
 TEST(ModelLoading, NonPositiveDefiniteInertiaIsRejected) {
   const ConfigError e = loadError(
-      "not_pd.yaml",
-      edited("{xx: 0.050926, yy: 0.050926, zz: 0.0085,", "{xx: 0.050926, yy: 0.050926, zz: -0.0085,"));
+      "not_pd.yaml", edited("{xx: 0.050926, yy: 0.050926, zz: 0.0085,", "{xx: 0.050926, yy: 0.050926, zz: -0.0085,"));
   EXPECT_EQ(e.keyPath(), "joints[2].link.inertia_kgm2");
   EXPECT_NE(e.message().find("positive definite"), std::string::npos) << e.what();
 }
@@ -118,9 +117,10 @@ TEST(ModelLoading, NonPositiveDefiniteInertiaIsRejected) {
 // The identified R_WR inertia of the SL set (reference section 4.4) is positive definite but
 // no rigid body has it: the loader must say so.
 TEST(ModelLoading, TriangleInequalityViolationIsRejected) {
-  const ConfigError e = loadError(
-      "triangle.yaml", edited("{xx: 0.022999, yy: 0.022999, zz: 0.002688, xy: 0.0, xz: 0.0, yz: 0.0}",
-                              "{xx: 0.023417, yy: 0.000012, zz: 0.003393, xy: -0.000240, xz: 0.008912, yz: -0.000088}"));
+  const ConfigError e =
+      loadError("triangle.yaml",
+                edited("{xx: 0.022999, yy: 0.022999, zz: 0.002688, xy: 0.0, xz: 0.0, yz: 0.0}",
+                       "{xx: 0.023417, yy: 0.000012, zz: 0.003393, xy: -0.000240, xz: 0.008912, yz: -0.000088}"));
   EXPECT_EQ(e.keyPath(), "joints[4].link.inertia_kgm2");
   EXPECT_TRUE(e.message().find("triangle inequality") != std::string::npos ||
               e.message().find("positive definite") != std::string::npos)
@@ -128,14 +128,15 @@ TEST(ModelLoading, TriangleInequalityViolationIsRejected) {
 }
 
 TEST(ModelLoading, ReversedLimitsAreRejected) {
-  const ConfigError e =
-      loadError("reversed.yaml", edited("{min_rad: 0.586132, max_rad: 2.208897,", "{min_rad: 2.208897, max_rad: 0.586132,"));
+  const ConfigError e = loadError(
+      "reversed.yaml", edited("{min_rad: 0.586132, max_rad: 2.208897,", "{min_rad: 2.208897, max_rad: 0.586132,"));
   EXPECT_EQ(e.keyPath(), "joints[3].limits");
   EXPECT_NE(e.message().find("expected min_rad < max_rad"), std::string::npos) << e.what();
 }
 
 TEST(ModelLoading, UnknownKeyIsRejected) {
-  const ConfigError e = loadError("unknown.yaml", edited("    default_rad: 1.57\n", "    default_rad: 1.57\n    dampng: 3\n"));
+  const ConfigError e =
+      loadError("unknown.yaml", edited("    default_rad: 1.57\n", "    default_rad: 1.57\n    dampng: 3\n"));
   EXPECT_EQ(e.keyPath(), "joints[3].dampng");
   EXPECT_NE(e.message().find("unknown key"), std::string::npos) << e.what();
 }
@@ -189,10 +190,11 @@ TEST(ModelLoading, UnknownParentIsRejected) {
 }
 
 TEST(ModelLoading, MissingMeshFileIsRejected) {
-  const ConfigError e = loadError(
-      "mesh.yaml", edited("geometry: {type: capsule, radius_m: 0.04, from_m: [0.0, 0.0, -0.2781], to_m: [0.0, 0.0, 0.0]}",
-                          "geometry: {type: mesh, file: no_such_mesh.stl, scale: 1.0, pose: {translation_m: [0, 0, 0], "
-                          "rpy_deg: [0, 0, 0]}}"));
+  const ConfigError e =
+      loadError("mesh.yaml",
+                edited("geometry: {type: capsule, radius_m: 0.04, from_m: [0.0, 0.0, -0.2781], to_m: [0.0, 0.0, 0.0]}",
+                       "geometry: {type: mesh, file: no_such_mesh.stl, scale: 1.0, pose: {translation_m: [0, 0, 0], "
+                       "rpy_deg: [0, 0, 0]}}"));
   EXPECT_EQ(e.keyPath(), "joints[4].link.geometry.file");
   EXPECT_NE(e.message().find("no_such_mesh.stl"), std::string::npos);
 }
@@ -214,9 +216,15 @@ TEST(ModelLoading, RandomCorruptionsGiveConfigErrorsOnly) {
     for (int k = 0; k < n; ++k) {
       const std::size_t at = pos(rng) % text.size();
       switch (rng() % 3) {
-        case 0: text[at] = alphabet[chr(rng)]; break;
-        case 1: text.erase(at, 1 + rng() % 8); break;
-        default: text.insert(at, 1, alphabet[chr(rng)]); break;
+        case 0:
+          text[at] = alphabet[chr(rng)];
+          break;
+        case 1:
+          text.erase(at, 1 + rng() % 8);
+          break;
+        default:
+          text.insert(at, 1, alphabet[chr(rng)]);
+          break;
       }
     }
     try {

@@ -25,16 +25,21 @@ class RealtimeAllocation : public ::testing::Test {
   PointJacobian J_;
 };
 
-TEST_F(RealtimeAllocation, ForwardKinematics) { EXPECT_NO_HEAP_ALLOCATION(computeForwardKinematics(model_, data_, q_)); }
+TEST_F(RealtimeAllocation, ForwardKinematics) {
+  EXPECT_NO_HEAP_ALLOCATION(computeForwardKinematics(model_, data_, q_));
+}
 
 TEST_F(RealtimeAllocation, PointJacobianOnEveryLink) {
   computeForwardKinematics(model_, data_, q_);
   for (int link = 0; link < model_.numJoints(); ++link) {
-    EXPECT_NO_HEAP_ALLOCATION(computePointJacobian(model_, data_, link, data_.com_W[static_cast<std::size_t>(link)], J_));
+    EXPECT_NO_HEAP_ALLOCATION(
+        computePointJacobian(model_, data_, link, data_.com_W[static_cast<std::size_t>(link)], J_));
   }
 }
 
-TEST_F(RealtimeAllocation, GravityTorques) { EXPECT_NO_HEAP_ALLOCATION(computeGravityTorques(model_, data_, q_)); }
+TEST_F(RealtimeAllocation, GravityTorques) {
+  EXPECT_NO_HEAP_ALLOCATION(computeGravityTorques(model_, data_, q_));
+}
 
 TEST_F(RealtimeAllocation, InverseDynamics) {
   EXPECT_NO_HEAP_ALLOCATION(computeInverseDynamics(model_, data_, q_, qd_, qdd_));

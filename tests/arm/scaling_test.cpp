@@ -20,9 +20,9 @@ constexpr double kTol = 1e-12;
 
 TEST(ArmScaling, SizeOfDefaultModel) {
   const ArmSize size = armSizeOf(test::defaultModel());
-  EXPECT_DOUBLE_EQ(*size.upper_arm_length_m, 0.287);   // l2
-  EXPECT_DOUBLE_EQ(*size.forearm_length_m, 0.2781);    // l4
-  EXPECT_DOUBLE_EQ(*size.hand_length_m, 0.085);        // SL end-effector offset
+  EXPECT_DOUBLE_EQ(*size.upper_arm_length_m, 0.287);  // l2
+  EXPECT_DOUBLE_EQ(*size.forearm_length_m, 0.2781);   // l4
+  EXPECT_DOUBLE_EQ(*size.hand_length_m, 0.085);       // SL end-effector offset
 }
 
 TEST(ArmScaling, ScaledSegmentsHaveTheRequestedLengthsInEveryPosture) {

@@ -67,14 +67,19 @@ void* allocate(std::size_t size) {
 void* allocateAligned(std::size_t size, std::align_val_t alignment) {
   record(size);
   void* p = nullptr;
-  const std::size_t a = static_cast<std::size_t>(alignment) < sizeof(void*) ? sizeof(void*) : static_cast<std::size_t>(alignment);
+  const std::size_t a =
+      static_cast<std::size_t>(alignment) < sizeof(void*) ? sizeof(void*) : static_cast<std::size_t>(alignment);
   if (__real_posix_memalign(&p, a, size == 0 ? a : size) != 0) throw std::bad_alloc();
   return p;
 }
 }  // namespace
 
-void* operator new(std::size_t size) { return allocate(size); }
-void* operator new[](std::size_t size) { return allocate(size); }
+void* operator new(std::size_t size) {
+  return allocate(size);
+}
+void* operator new[](std::size_t size) {
+  return allocate(size);
+}
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
   try {
     return allocate(size);
@@ -89,23 +94,51 @@ void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
     return nullptr;
   }
 }
-void* operator new(std::size_t size, std::align_val_t al) { return allocateAligned(size, al); }
-void* operator new[](std::size_t size, std::align_val_t al) { return allocateAligned(size, al); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void* operator new(std::size_t size, std::align_val_t al) {
+  return allocateAligned(size, al);
+}
+void* operator new[](std::size_t size, std::align_val_t al) {
+  return allocateAligned(size, al);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
+  std::free(p);
+}
 
 namespace fullarm::testing {
 
-AllocationGuard::AllocationGuard() noexcept : start_count_(t_count), start_bytes_(t_bytes) { ++t_depth; }
-AllocationGuard::~AllocationGuard() { --t_depth; }
-std::size_t AllocationGuard::allocations() const noexcept { return t_count - start_count_; }
-std::size_t AllocationGuard::bytes() const noexcept { return t_bytes - start_bytes_; }
+AllocationGuard::AllocationGuard() noexcept : start_count_(t_count), start_bytes_(t_bytes) {
+  ++t_depth;
+}
+AllocationGuard::~AllocationGuard() {
+  --t_depth;
+}
+std::size_t AllocationGuard::allocations() const noexcept {
+  return t_count - start_count_;
+}
+std::size_t AllocationGuard::bytes() const noexcept {
+  return t_bytes - start_bytes_;
+}
 
 bool mallocWrappersActive() noexcept {
   // Call through a volatile pointer and read the flag through a volatile access: GCC assumes

@@ -45,16 +45,16 @@ class AllocationGuard {
 }  // namespace fullarm::testing
 
 /// Fails the test if `statement` allocates on the heap; prints the count and bytes.
-#define EXPECT_NO_HEAP_ALLOCATION(statement)                                                 \
-  do {                                                                                       \
-    std::size_t fullarm_alloc_count_ = 0;                                                    \
-    std::size_t fullarm_alloc_bytes_ = 0;                                                    \
-    {                                                                                        \
-      ::fullarm::testing::AllocationGuard fullarm_alloc_guard_;                              \
-      statement;                                                                             \
-      fullarm_alloc_count_ = fullarm_alloc_guard_.allocations();                             \
-      fullarm_alloc_bytes_ = fullarm_alloc_guard_.bytes();                                   \
-    }                                                                                        \
-    EXPECT_EQ(fullarm_alloc_count_, 0u) << #statement << " allocated " << fullarm_alloc_count_ \
-                                        << " times (" << fullarm_alloc_bytes_ << " bytes)";   \
+#define EXPECT_NO_HEAP_ALLOCATION(statement)                                                                 \
+  do {                                                                                                       \
+    std::size_t fullarm_alloc_count_ = 0;                                                                    \
+    std::size_t fullarm_alloc_bytes_ = 0;                                                                    \
+    {                                                                                                        \
+      ::fullarm::testing::AllocationGuard fullarm_alloc_guard_;                                              \
+      statement;                                                                                             \
+      fullarm_alloc_count_ = fullarm_alloc_guard_.allocations();                                             \
+      fullarm_alloc_bytes_ = fullarm_alloc_guard_.bytes();                                                   \
+    }                                                                                                        \
+    EXPECT_EQ(fullarm_alloc_count_, 0u) << #statement << " allocated " << fullarm_alloc_count_ << " times (" \
+                                        << fullarm_alloc_bytes_ << " bytes)";                                \
   } while (false)

@@ -12,7 +12,9 @@
 namespace fullarm::testing {
 namespace {
 
-TEST(AllocationGuard, MallocWrappersAreLinked) { EXPECT_TRUE(mallocWrappersActive()); }
+TEST(AllocationGuard, MallocWrappersAreLinked) {
+  EXPECT_TRUE(mallocWrappersActive());
+}
 
 TEST(AllocationGuard, CountsOperatorNew) {
   AllocationGuard guard;

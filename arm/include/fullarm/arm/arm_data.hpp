@@ -17,11 +17,11 @@ struct ArmData {
   explicit ArmData(const ArmModel& model);
 
   // Forward kinematics (computeForwardKinematics).
-  Eigen::VectorXd q;                        ///< configuration of the last FK [rad], size n
-  std::vector<Eigen::Isometry3d> X_WL;      ///< link frames in the world
-  std::vector<Eigen::Vector3d> z_W;         ///< joint axes (unit) in the world
-  std::vector<Eigen::Vector3d> o_W;         ///< joint origins (link frame origins) in the world [m]
-  std::vector<Eigen::Vector3d> com_W;       ///< link centres of mass in the world [m]
+  Eigen::VectorXd q;                                       ///< configuration of the last FK [rad], size n
+  std::vector<Eigen::Isometry3d> X_WL;                     ///< link frames in the world
+  std::vector<Eigen::Vector3d> z_W;                        ///< joint axes (unit) in the world
+  std::vector<Eigen::Vector3d> o_W;                        ///< joint origins (link frame origins) in the world [m]
+  std::vector<Eigen::Vector3d> com_W;                      ///< link centres of mass in the world [m]
   Eigen::Isometry3d X_WT = Eigen::Isometry3d::Identity();  ///< hand point (tool) pose
 
   // Gravity (computeGravityTorques).
@@ -34,14 +34,14 @@ struct ArmData {
   Eigen::VectorXd qdd_unit;      ///< scratch for mass-matrix columns
 
   // Per-link scratch, world frame.
-  std::vector<Eigen::Vector3d> omega;        ///< angular velocity [rad/s]
-  std::vector<Eigen::Vector3d> omega_dot;    ///< angular acceleration [rad/s^2]
-  std::vector<Eigen::Vector3d> accel_origin; ///< linear acceleration of the link origin [m/s^2]
-  std::vector<Eigen::Vector3d> force;        ///< force transmitted through the joint [N]
-  std::vector<Eigen::Vector3d> moment;       ///< moment about the joint origin [N m]
-  std::vector<Eigen::Vector3d> mass_moment;  ///< subtree first moment sum(m c) [kg m]
+  std::vector<Eigen::Vector3d> omega;         ///< angular velocity [rad/s]
+  std::vector<Eigen::Vector3d> omega_dot;     ///< angular acceleration [rad/s^2]
+  std::vector<Eigen::Vector3d> accel_origin;  ///< linear acceleration of the link origin [m/s^2]
+  std::vector<Eigen::Vector3d> force;         ///< force transmitted through the joint [N]
+  std::vector<Eigen::Vector3d> moment;        ///< moment about the joint origin [N m]
+  std::vector<Eigen::Vector3d> mass_moment;   ///< subtree first moment sum(m c) [kg m]
   std::vector<double> subtree_mass_kg;
-  std::vector<Eigen::Matrix3d> inertia_W;    ///< link inertia about its COM in the world
+  std::vector<Eigen::Matrix3d> inertia_W;  ///< link inertia about its COM in the world
 };
 
 }  // namespace fullarm::arm

@@ -41,11 +41,11 @@ struct JointLimits {
 struct LinkGeometry {
   enum class Type { kNone, kCapsule, kMesh };
   Type type = Type::kNone;
-  double radius_m = 0.0;                      ///< capsule radius
-  Eigen::Vector3d from_m = Eigen::Vector3d::Zero();  ///< capsule segment start, link frame
-  Eigen::Vector3d to_m = Eigen::Vector3d::Zero();    ///< capsule segment end, link frame
-  std::filesystem::path mesh_file;            ///< absolute path of a mesh file
-  double mesh_scale = 1.0;                    ///< mesh units to metres
+  double radius_m = 0.0;                                   ///< capsule radius
+  Eigen::Vector3d from_m = Eigen::Vector3d::Zero();        ///< capsule segment start, link frame
+  Eigen::Vector3d to_m = Eigen::Vector3d::Zero();          ///< capsule segment end, link frame
+  std::filesystem::path mesh_file;                         ///< absolute path of a mesh file
+  double mesh_scale = 1.0;                                 ///< mesh units to metres
   Eigen::Isometry3d X_LM = Eigen::Isometry3d::Identity();  ///< mesh pose in the link frame
 };
 
@@ -88,7 +88,7 @@ struct TorqueSensorCalibration {
 /// One joint and the link it moves.
 struct Joint {
   std::string name;
-  int parent = -1;     ///< index of the parent joint/link; -1 for the base
+  int parent = -1;  ///< index of the parent joint/link; -1 for the base
   bool is_hand = false;
   std::optional<DhParameters> dh;  ///< set for arm-chain joints
   /// Fixed transform from the parent link frame to this link frame at q = 0; the link frame
@@ -106,14 +106,14 @@ struct Joint {
 /// The whole arm. Treat as constant after validateArmModel(); algorithms take it by const&.
 struct ArmModel {
   std::string name;
-  std::filesystem::path source;  ///< file it was loaded from (empty if built in code)
+  std::filesystem::path source;                            ///< file it was loaded from (empty if built in code)
   Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();  ///< world -> DH frame 0
   Eigen::Vector3d gravity_W_mps2{0.0, 0.0, -9.81};
   std::vector<Joint> joints;  ///< arm chain first, then hand joints; parents precede children
   int tool_link = -1;         ///< link that carries the hand point
   Eigen::Isometry3d X_LT = Eigen::Isometry3d::Identity();  ///< hand point in the tool link frame
-  int upper_arm_joint = -1;   ///< joint whose DH d is the upper-arm length (-1: none)
-  int forearm_joint = -1;     ///< joint whose DH d is the forearm length (-1: none)
+  int upper_arm_joint = -1;                                ///< joint whose DH d is the upper-arm length (-1: none)
+  int forearm_joint = -1;                                  ///< joint whose DH d is the forearm length (-1: none)
 
   [[nodiscard]] int numJoints() const noexcept { return static_cast<int>(joints.size()); }
   /// Number of arm-chain (non-hand) joints.

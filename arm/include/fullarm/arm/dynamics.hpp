@@ -14,27 +14,23 @@ namespace fullarm::arm {
 /// Gravity torques g(q) = dV/dq (the torque that holds the arm still), into data.tau_gravity.
 /// Also runs computeForwardKinematics.
 /// @rt
-void computeGravityTorques(const ArmModel& model, ArmData& data,
-                           const Eigen::Ref<const Eigen::VectorXd>& q) noexcept;
+void computeGravityTorques(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q) noexcept;
 
 /// Inverse dynamics tau = M qdd + C qd + g, into data.tau. All vectors size n.
 /// @rt
-void computeInverseDynamics(const ArmModel& model, ArmData& data,
-                            const Eigen::Ref<const Eigen::VectorXd>& q,
+void computeInverseDynamics(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q,
                             const Eigen::Ref<const Eigen::VectorXd>& qd,
                             const Eigen::Ref<const Eigen::VectorXd>& qdd) noexcept;
 
 /// Coriolis and centrifugal torques C(q, qd) qd, into data.tau_coriolis.
 /// @rt
-void computeCoriolisTorques(const ArmModel& model, ArmData& data,
-                            const Eigen::Ref<const Eigen::VectorXd>& q,
+void computeCoriolisTorques(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q,
                             const Eigen::Ref<const Eigen::VectorXd>& qd) noexcept;
 
 /// Joint-space mass matrix M(q), into data.mass_matrix (symmetric positive definite for a
 /// physically valid model). Built column by column from Newton-Euler (O(n^2)).
 /// @rt
-void computeMassMatrix(const ArmModel& model, ArmData& data,
-                       const Eigen::Ref<const Eigen::VectorXd>& q) noexcept;
+void computeMassMatrix(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q) noexcept;
 
 /// Potential energy V(q) = -sum m_k g . c_k [J] (zero at the world origin height).
 /// @rt

@@ -26,13 +26,12 @@ void computeForwardKinematics(const ArmModel& model, ArmData& data,
 /// @param p_W  point in the world [m]
 /// @param J    output, resized to 6 x n within its fixed capacity (never allocates)
 /// @rt
-void computePointJacobian(const ArmModel& model, const ArmData& data, int link,
-                          const Eigen::Vector3d& p_W, PointJacobian& J) noexcept;
+void computePointJacobian(const ArmModel& model, const ArmData& data, int link, const Eigen::Vector3d& p_W,
+                          PointJacobian& J) noexcept;
 
 /// World coordinates of a point given in a link frame (after computeForwardKinematics).
 /// @rt
-[[nodiscard]] inline Eigen::Vector3d pointInWorld(const ArmData& data, int link,
-                                                  const Eigen::Vector3d& p_L) noexcept {
+[[nodiscard]] inline Eigen::Vector3d pointInWorld(const ArmData& data, int link, const Eigen::Vector3d& p_L) noexcept {
   return data.X_WL[static_cast<std::size_t>(link)] * p_L;
 }
 

@@ -9,7 +9,9 @@ namespace fullarm::arm {
 
 /// Largest ADC/DAC code for `bits` bits (4095 for 12 bits).
 /// @rt
-[[nodiscard]] constexpr int maxCode(int bits) noexcept { return (1 << bits) - 1; }
+[[nodiscard]] constexpr int maxCode(int bits) noexcept {
+  return (1 << bits) - 1;
+}
 
 /// Round to the nearest code and clamp to [0, maxCode(bits)] (ADC/DAC quantisation).
 /// @rt

@@ -33,8 +33,7 @@ class YamlMap {
   [[nodiscard]] bool has(std::string_view key) const;
   /// A finite number. `unit_hint` goes into the error message ("metres", "rad").
   [[nodiscard]] double number(std::string_view key, std::string_view unit_hint = {}) const;
-  [[nodiscard]] std::optional<double> optionalNumber(std::string_view key,
-                                                     std::string_view unit_hint = {}) const;
+  [[nodiscard]] std::optional<double> optionalNumber(std::string_view key, std::string_view unit_hint = {}) const;
   [[nodiscard]] int integer(std::string_view key) const;
   [[nodiscard]] std::string string(std::string_view key) const;
   [[nodiscard]] std::optional<std::string> optionalString(std::string_view key) const;

@@ -1,0 +1,78 @@
+#pragma once
+
+/// @file
+/// A report section: a heading followed by paragraphs, tables and charts, in the order added.
+
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "fullarm/reports/charts.hpp"
+#include "fullarm/reports/table.hpp"
+
+namespace fullarm::reports {
+
+/// A paragraph of plain text (HTML-escaped on output; line breaks are kept).
+struct Paragraph {
+  std::string text{};
+};
+
+/// A line chart: an XyChart whose `SeriesMode::kAuto` series are drawn as lines.
+struct LineChart {
+  XyChart chart{};
+};
+
+/// A scatter chart: an XyChart whose `SeriesMode::kAuto` series are drawn as markers.
+struct ScatterChart {
+  XyChart chart{};
+};
+
+/// A section of report.html. Obtain one from Report::addSection(); every `add*` function
+/// validates its input, appends it and returns `*this` so calls can be chained.
+class Section {
+ public:
+  /// One piece of content.
+  using Block = std::variant<Paragraph, Table, LineChart, ScatterChart, Histogram, HeatMap>;
+
+  /// A section with the given heading (may be empty: no heading is shown).
+  explicit Section(std::string heading);
+
+  /// Appends a paragraph of plain text.
+  Section& addParagraph(std::string text);
+
+  /// Appends a table.
+  /// @throws std::invalid_argument naming the caption if there are no columns, if a row does
+  ///   not have one cell per column, or if `significant_digits` is outside 1..17.
+  Section& addTable(Table table);
+
+  /// Appends a line chart (`SeriesMode::kAuto` series are drawn as lines).
+  /// @throws std::invalid_argument naming the chart title if the title is empty, there is no
+  ///   series, a series has x and y (or point_labels) of different sizes, a value is infinite,
+  ///   or a value on a log axis is <= 0.
+  Section& addLineChart(XyChart chart);
+
+  /// Appends a scatter chart (`SeriesMode::kAuto` series are drawn as markers).
+  /// @throws std::invalid_argument as addLineChart().
+  Section& addScatterChart(XyChart chart);
+
+  /// Appends a histogram; bins are computed with computeHistogramBins().
+  /// @throws std::invalid_argument as computeHistogramBins().
+  Section& addHistogram(Histogram histogram);
+
+  /// Appends a heat map.
+  /// @throws std::invalid_argument naming the chart title if the title is empty, x or y is
+  ///   empty, not finite or not strictly monotonic, a value on a log axis is <= 0, z is not
+  ///   `y.size()` rows by `x.size()` columns, or a z value is infinite.
+  Section& addHeatMap(HeatMap heat_map);
+
+  /// The heading.
+  const std::string& heading() const noexcept { return heading_; }
+  /// The content, in the order added.
+  const std::vector<Block>& blocks() const noexcept { return blocks_; }
+
+ private:
+  std::string heading_;
+  std::vector<Block> blocks_;
+};
+
+}  // namespace fullarm::reports

@@ -1,0 +1,22 @@
+#pragma once
+
+// Input checks behind Section::add*: each throws std::invalid_argument with a message that
+// names the chart (or table) and says what was expected.
+
+#include <string>
+#include <string_view>
+
+#include "fullarm/reports/charts.hpp"
+#include "fullarm/reports/table.hpp"
+
+namespace fullarm::reports::detail {
+
+// `kind "title"` for messages, e.g. line chart "Bode magnitude".
+std::string describe(std::string_view kind, std::string_view title);
+
+// `kind` is "line chart" or "scatter chart".
+void validateXyChart(const XyChart& chart, std::string_view kind);
+void validateHeatMap(const HeatMap& heat_map);
+void validateTable(const Table& table);
+
+}  // namespace fullarm::reports::detail
