@@ -42,12 +42,10 @@ void newtonEuler(const ArmModel& model, ArmData& data, const Eigen::Ref<const Ei
     const Eigen::Vector3d r_po = data.o_W[k] - o_p;
     data.accel_origin[k] = a_p + omega_dot_p.cross(r_po) + omega_p.cross(omega_p.cross(r_po));
 
-    const LinkInertial& in = joint.inertial;
+    const LinkInertial& in = joint.inertial;  // data.inertia_W[k] set by updateWorldInertias
     const Eigen::Vector3d r_oc = data.com_W[k] - data.o_W[k];
     const Eigen::Vector3d& w = data.omega[k];
     const Eigen::Vector3d a_c = data.accel_origin[k] + data.omega_dot[k].cross(r_oc) + w.cross(w.cross(r_oc));
-    const Eigen::Matrix3d& R = data.X_WL[k].linear();
-    data.inertia_W[k].noalias() = R * in.inertia_com_kgm2 * R.transpose();
     const Eigen::Vector3d F = in.mass_kg * a_c;
     data.force[k] = F;
     data.moment[k] = data.inertia_W[k] * data.omega_dot[k] + w.cross(data.inertia_W[k] * w) + r_oc.cross(F);
@@ -61,6 +59,14 @@ void newtonEuler(const ArmModel& model, ArmData& data, const Eigen::Ref<const Ei
       data.force[p] += data.force[k];
       data.moment[p] += data.moment[k] + (data.o_W[k] - data.o_W[p]).cross(data.force[k]);
     }
+  }
+}
+
+// Link inertias about their COM rotated into the world, once per configuration.
+void updateWorldInertias(const ArmModel& model, ArmData& data) noexcept {
+  for (std::size_t k = 0; k < model.joints.size(); ++k) {
+    const Eigen::Matrix3d& R = data.X_WL[k].linear();
+    data.inertia_W[k].noalias() = R * model.joints[k].inertial.inertia_com_kgm2 * R.transpose();
   }
 }
 
@@ -97,18 +103,21 @@ void computeInverseDynamics(const ArmModel& model, ArmData& data, const Eigen::R
                             const Eigen::Ref<const Eigen::VectorXd>& qdd) noexcept {
   assert(qd.size() == model.numJoints() && qdd.size() == model.numJoints());
   computeForwardKinematics(model, data, q);
+  updateWorldInertias(model, data);
   newtonEuler(model, data, qd, qdd, 1.0, data.tau);
 }
 
 void computeCoriolisTorques(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q,
                             const Eigen::Ref<const Eigen::VectorXd>& qd) noexcept {
   computeForwardKinematics(model, data, q);
+  updateWorldInertias(model, data);
   data.qdd_unit.setZero();
   newtonEuler(model, data, qd, data.qdd_unit, 0.0, data.tau_coriolis);
 }
 
 void computeMassMatrix(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
   computeForwardKinematics(model, data, q);
+  updateWorldInertias(model, data);
   const int n = model.numJoints();
   // Column j of M is the Newton-Euler torque for qdd = e_j with qd = 0 and no gravity.
   // data.tau_coriolis is free scratch here (qd = 0 holds it at zero).

@@ -89,22 +89,6 @@ TEST(Cli, GarbagePostureIsRejected) {
   EXPECT_NE(r.output.find("--q: element 1 is 'abc'"), std::string::npos) << r.output;
 }
 
-TEST(Cli, BadConfigNamesFileAndKeyAndExitsNonZero) {
-  const auto dir = tempDir("bad_config");
-  std::ifstream in(source("config/dts_master.yaml"));
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  yaml.replace(yaml.find("mass_kg: 3.36"), 13, "mass_kg: -1.0");
-  const auto file = dir / "arm.yaml";
-  std::ofstream(file) << yaml;
-  const Result r = runFullarm("arm show --config " + file.string());
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find(file.string()), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("joints[4].link.mass_kg"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("expected a mass >= 0 kg"), std::string::npos) << r.output;
-}
-
 // The loader's error cases through the program: each must exit 2 and print the file, the key
 // path and what was expected (issue: one test per case).
 struct BadConfigCase {
