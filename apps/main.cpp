@@ -122,7 +122,9 @@ int runDemo(const ArmOptions& options, const std::string& out_dir) {
 }  // namespace
 }  // namespace fullarm::app
 
-int main(int argc, char** argv) {
+namespace {
+
+int runMain(int argc, char** argv) {
   using namespace fullarm;
   CLI::App app{
       "fullarm: hardware-in-the-loop test bench and controller design toolkit for full-arm haptics on the "
@@ -163,4 +165,19 @@ int main(int argc, char** argv) {
     return app::kExitBadInput;
   }
   return app::kExitBadInput;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Anything that escapes the commands (CLI11 set-up, out of memory) still gets a message and
+  // the bad-input exit code rather than std::terminate.
+  try {
+    return runMain(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "fullarm: error: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "fullarm: error: unknown exception\n";
+  }
+  return 2;
 }

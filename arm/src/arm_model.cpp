@@ -99,7 +99,7 @@ std::string checkInertia(double mass_kg, const Eigen::Matrix3d& I) {
     return "inertia matrix must be symmetric";
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(I);
-  const Eigen::Vector3d lambda = eig.eigenvalues();  // ascending
+  const Eigen::Vector3d& lambda = eig.eigenvalues();  // ascending
   if (lambda[0] <= 0.0) {
     return "inertia about the centre of mass must be positive definite; smallest principal moment is " +
            fmt(lambda[0]) + " kg m^2";

@@ -222,7 +222,7 @@ std::filesystem::path defaultArmModelPath() {
   if (const char* dir = std::getenv("FULLARM_CONFIG_DIR"); dir != nullptr && *dir != '\0') {
     return std::filesystem::path(dir) / "dts_master.yaml";
   }
-  const std::filesystem::path source = std::filesystem::path(FULLARM_SOURCE_CONFIG_DIR) / "dts_master.yaml";
+  std::filesystem::path source = std::filesystem::path(FULLARM_SOURCE_CONFIG_DIR) / "dts_master.yaml";
   if (std::filesystem::is_regular_file(source)) return source;
   return std::filesystem::path(FULLARM_INSTALL_CONFIG_DIR) / "dts_master.yaml";
 }

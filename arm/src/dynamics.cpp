@@ -46,9 +46,9 @@ void newtonEuler(const ArmModel& model, ArmData& data, const Eigen::Ref<const Ei
     const Eigen::Vector3d r_oc = data.com_W[k] - data.o_W[k];
     const Eigen::Vector3d& w = data.omega[k];
     const Eigen::Vector3d a_c = data.accel_origin[k] + data.omega_dot[k].cross(r_oc) + w.cross(w.cross(r_oc));
-    const Eigen::Vector3d F = in.mass_kg * a_c;
-    data.force[k] = F;
-    data.moment[k] = data.inertia_W[k] * data.omega_dot[k] + w.cross(data.inertia_W[k] * w) + r_oc.cross(F);
+    const Eigen::Vector3d f_inertial = in.mass_kg * a_c;
+    data.force[k] = f_inertial;
+    data.moment[k] = data.inertia_W[k] * data.omega_dot[k] + w.cross(data.inertia_W[k] * w) + r_oc.cross(f_inertial);
   }
   for (int i = n - 1; i >= 0; --i) {
     const auto k = static_cast<std::size_t>(i);

@@ -41,8 +41,8 @@ std::string expected(std::string_view what, std::string_view unit_hint) {
 
 }  // namespace
 
-YamlMap::YamlMap(YAML::Node node, std::string path, std::filesystem::path file)
-    : node_(std::move(node)),
+YamlMap::YamlMap(const YAML::Node& node, std::string path, std::filesystem::path file)
+    : node_(node),
       path_(std::move(path)),
       file_(std::move(file)),
       used_(std::make_shared<std::set<std::string, std::less<>>>()) {
@@ -175,8 +175,8 @@ void YamlMap::finish() const {
   }
 }
 
-YamlList::YamlList(YAML::Node node, std::string path, std::filesystem::path file)
-    : node_(std::move(node)), path_(std::move(path)), file_(std::move(file)) {}
+YamlList::YamlList(const YAML::Node& node, std::string path, std::filesystem::path file)
+    : node_(node), path_(std::move(path)), file_(std::move(file)) {}
 
 YamlMap YamlList::map(std::size_t i) const {
   return YamlMap(node_[i], path_ + "[" + std::to_string(i) + "]", file_);

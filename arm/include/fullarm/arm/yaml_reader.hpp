@@ -22,7 +22,7 @@ class YamlList;
 class YamlMap {
  public:
   /// @param node must be a map; otherwise ConfigError is thrown naming `path`.
-  YamlMap(YAML::Node node, std::string path, std::filesystem::path file);
+  YamlMap(const YAML::Node& node, std::string path, std::filesystem::path file);
 
   /// Parses a whole document; the root must be a map.
   /// @throws ConfigError for a YAML syntax error (with its line) or a non-map root.
@@ -65,8 +65,8 @@ class YamlMap {
 /// A YAML sequence being read.
 class YamlList {
  public:
-  YamlList(YAML::Node node, std::string path, std::filesystem::path file);
-  [[nodiscard]] std::size_t size() const noexcept { return node_.size(); }
+  YamlList(const YAML::Node& node, std::string path, std::filesystem::path file);
+  [[nodiscard]] std::size_t size() const { return node_.size(); }
   /// Element `i` as a map (error if it is not one).
   [[nodiscard]] YamlMap map(std::size_t i) const;
   [[nodiscard]] const std::string& path() const noexcept { return path_; }
