@@ -140,6 +140,10 @@ void validateArmModel(const ArmModel& model) {
       fail(key + ".parent", "the parent must be an earlier joint");
     }
     if (!j.is_hand && j.parent != static_cast<int>(i) - 1) fail(key, "arm joints must form a chain");
+    if (!j.is_hand && !j.dh) fail(key + ".dh", "an arm-chain joint needs its DH parameters");
+    if (j.dh && !j.X_PL0.isApprox(dhTransform(*j.dh), 1e-12)) {
+      fail(key + ".dh", "X_PL0 does not equal the transform of the DH parameters");
+    }
 
     const JointLimits& lim = j.limits;
     if (!(lim.min_rad < lim.max_rad)) {
@@ -189,6 +193,11 @@ void validateArmModel(const ArmModel& model) {
     const TorqueSensorCalibration& ts = j.torque_sensor;
     if (ts.bits < 8 || ts.bits > 24) fail(key + ".sensors.torque.bits", "expected 8 .. 24 bits");
     if (ts.slope_nm_per_count == 0.0) fail(key + ".sensors.torque.slope_nm_per_count", "expected a non-zero slope");
+    const TorqueCommandCalibration& tc = j.torque_command;
+    if (tc.bits < 8 || tc.bits > 24) fail(key + ".sensors.torque_command.bits", "expected 8 .. 24 bits");
+    if (tc.slope_nm_per_count == 0.0) {
+      fail(key + ".sensors.torque_command.slope_nm_per_count", "expected a non-zero slope");
+    }
     const auto [ts_lo, ts_hi] = torqueSensorSpan(ts);
     if (-lim.torque_nm < ts_lo || lim.torque_nm > ts_hi) {
       fail(key + ".limits.torque_nm", "the torque limit " + fmt(lim.torque_nm) +

@@ -13,6 +13,9 @@
 #ifndef FULLARM_INSTALL_CONFIG_DIR
 #error "FULLARM_INSTALL_CONFIG_DIR must be defined by the build"
 #endif
+#ifndef FULLARM_INSTALL_PREFIX
+#error "FULLARM_INSTALL_PREFIX must be defined by the build"
+#endif
 
 namespace fullarm::arm {
 namespace {
@@ -119,6 +122,11 @@ void readJointBody(const YamlMap& m, Joint& joint, const std::filesystem::path& 
   joint.torque_sensor.offset_counts = torque.number("offset_counts", "counts");
   joint.torque_sensor.bits = torque.integer("bits");
   torque.finish();
+  const YamlMap command = sensors.map("torque_command");
+  joint.torque_command.slope_nm_per_count = command.number("slope_nm_per_count", "N m per count");
+  joint.torque_command.offset_counts = command.number("offset_counts", "counts");
+  joint.torque_command.bits = command.integer("bits");
+  command.finish();
   sensors.finish();
 }
 
@@ -222,9 +230,17 @@ std::filesystem::path defaultArmModelPath() {
   if (const char* dir = std::getenv("FULLARM_CONFIG_DIR"); dir != nullptr && *dir != '\0') {
     return std::filesystem::path(dir) / "dts_master.yaml";
   }
+  std::filesystem::path installed = std::filesystem::path(FULLARM_INSTALL_CONFIG_DIR) / "dts_master.yaml";
   std::filesystem::path source = std::filesystem::path(FULLARM_SOURCE_CONFIG_DIR) / "dts_master.yaml";
-  if (std::filesystem::is_regular_file(source)) return source;
-  return std::filesystem::path(FULLARM_INSTALL_CONFIG_DIR) / "dts_master.yaml";
+  // A program installed under the install prefix reads the installed config; anything else (the
+  // build tree's programs and tests) reads the source tree's, when that tree still exists.
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const std::string prefix = std::filesystem::path(FULLARM_INSTALL_PREFIX).lexically_normal().string() + "/";
+  const bool running_installed = !ec && exe.lexically_normal().string().rfind(prefix, 0) == 0;
+  if (!running_installed && std::filesystem::is_regular_file(source)) return source;
+  if (std::filesystem::is_regular_file(installed)) return installed;
+  return source;
 }
 
 }  // namespace fullarm::arm

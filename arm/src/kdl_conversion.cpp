@@ -28,17 +28,25 @@ std::string parentSegment(const ArmModel& model, int parent) {
 
 KDL::Tree toKdlTree(const ArmModel& model) {
   KDL::Tree tree("world");
-  tree.addSegment(KDL::Segment("base", KDL::Joint("base_fixed", KDL::Joint::None), toKdl(model.X_WB)), "world");
+  // addSegment refuses a name already in the tree (a joint called "base", "tool", "world" or
+  // "<joint>_origin") and would leave a truncated tree: say so instead.
+  const auto add = [&tree](const KDL::Segment& segment, const std::string& parent) {
+    if (!tree.addSegment(segment, parent)) {
+      throw std::invalid_argument("toKdlTree: cannot add segment '" + segment.getName() + "' under '" + parent +
+                                  "' (world, base, tool and <joint>_origin are reserved names)");
+    }
+  };
+  add(KDL::Segment("base", KDL::Joint("base_fixed", KDL::Joint::None), toKdl(model.X_WB)), "world");
   for (const Joint& joint : model.joints) {
     const std::string origin = joint.name + "_origin";
-    tree.addSegment(KDL::Segment(origin, KDL::Joint(origin + "_fixed", KDL::Joint::None), toKdl(joint.X_PL0)),
-                    parentSegment(model, joint.parent));
-    tree.addSegment(KDL::Segment(joint.name, KDL::Joint(joint.name, KDL::Joint::RotZ), KDL::Frame::Identity(),
-                                 toKdl(joint.inertial)),
-                    origin);
+    add(KDL::Segment(origin, KDL::Joint(origin + "_fixed", KDL::Joint::None), toKdl(joint.X_PL0)),
+        parentSegment(model, joint.parent));
+    add(KDL::Segment(joint.name, KDL::Joint(joint.name, KDL::Joint::RotZ), KDL::Frame::Identity(),
+                     toKdl(joint.inertial)),
+        origin);
   }
-  tree.addSegment(KDL::Segment("tool", KDL::Joint("tool_fixed", KDL::Joint::None), toKdl(model.X_LT)),
-                  model.joints[static_cast<std::size_t>(model.tool_link)].name);
+  add(KDL::Segment("tool", KDL::Joint("tool_fixed", KDL::Joint::None), toKdl(model.X_LT)),
+      model.joints[static_cast<std::size_t>(model.tool_link)].name);
   return tree;
 }
 

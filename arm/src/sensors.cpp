@@ -27,6 +27,10 @@ double torqueSensorCounts(const TorqueSensorCalibration& cal, double tau_nm) noe
   return tau_nm / cal.slope_nm_per_count - cal.offset_counts;
 }
 
+int torqueCommandCode(const TorqueCommandCalibration& cal, double tau_nm) noexcept {
+  return quantizeCode(torqueSensorCounts(cal, tau_nm), cal.bits);
+}
+
 std::pair<double, double> potentiometerSpan(const PotentiometerCalibration& cal) noexcept {
   const double a = potentiometerAngle(cal, 0.0);
   const double b = potentiometerAngle(cal, maxCode(cal.bits));

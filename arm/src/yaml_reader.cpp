@@ -50,6 +50,15 @@ YamlMap::YamlMap(const YAML::Node& node, std::string path, std::filesystem::path
     throw ConfigError(file_, path_.empty() ? "<document>" : path_, "expected a map of keys, got " + describe(node_),
                       lineOf(node_));
   }
+  // yaml-cpp keeps the first of two equal keys and drops the second without a word: a user who
+  // appends an override would silently get the old value.
+  std::set<std::string, std::less<>> seen;
+  for (const auto& entry : node_) {
+    if (!seen.insert(entry.first.Scalar()).second) {
+      throw ConfigError(file_, keyPath(entry.first.Scalar()), "duplicate key (each key may appear once)",
+                        lineOf(entry.first));
+    }
+  }
 }
 
 YamlMap YamlMap::parse(std::string_view text, const std::filesystem::path& file) {
@@ -92,7 +101,9 @@ bool YamlMap::has(std::string_view key) const {
 
 YAML::Node YamlMap::get(std::string_view key) const {
   const YAML::Node child = node_[std::string(key)];
-  if (!child.IsDefined()) fail("", "missing required key '" + std::string(key) + "'");
+  if (!child.IsDefined()) {
+    throw ConfigError(file_, keyPath(key), "missing required key '" + std::string(key) + "'", lineOf(node_));
+  }
   used_->emplace(key);
   return child;
 }

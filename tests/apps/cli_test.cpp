@@ -137,6 +137,25 @@ INSTANTIATE_TEST_SUITE_P(
                       "joints[3].stiffnes", "unknown key"}),
     [](const ::testing::TestParamInfo<BadConfigCase>& case_info) { return std::string(case_info.param.name); });
 
+TEST(Cli, FailingVerdictExitsOne) {
+  // A shoulder that can only deliver 1 N m cannot hold the arm at the default posture.
+  const auto dir = tempDir("weak_shoulder");
+  std::ifstream in(source("config/dts_master.yaml"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::string from = "velocity_radps: 3.0, torque_nm: 99.6}";
+  yaml.replace(yaml.find(from), from.size(), "velocity_radps: 3.0, torque_nm: 1.0}");
+  const auto file = dir / "arm.yaml";
+  std::ofstream(file) << yaml;
+  const Result r = runFullarm("arm show --config " + file.string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("BEYOND the joint torque limits"), std::string::npos) << r.output;
+  std::ifstream summary_in(dir / "out" / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(summary_in);
+  EXPECT_EQ(summary["verdict"]["pass"], false);
+}
+
 TEST(Cli, MissingConfigFileIsRejected) {
   const Result r = runFullarm("arm show --config /nonexistent/arm.yaml");
   EXPECT_EQ(r.exit_code, 2) << r.output;

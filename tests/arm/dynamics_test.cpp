@@ -191,25 +191,24 @@ TEST(Dynamics, SinglePendulumGravityMatchesHandCalculation) {
   model.name = "pendulum";
   Joint j;
   j.name = "hinge";
-  j.dh = DhParameters{};
-  j.X_PL0 = Eigen::Isometry3d(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()));  // axis along -y world
+  j.dh = DhParameters{M_PI / 2, 0.0, 0.0, 0.0};  // alpha = 90 deg: joint axis Rx(90 deg) z = -y
+  j.X_PL0 = dhTransform(*j.dh);
   j.limits = {-3.0, 3.0, 1.0, 100.0};
   j.inertial.mass_kg = 2.0;
   j.inertial.com_m = {0.5, 0.0, 0.0};
   j.inertial.inertia_com_kgm2 = Eigen::Matrix3d::Identity() * 1e-3;  // small sphere: no gravity effect
   j.potentiometer = {2e-3, -2047.0, 1, 0.0, 12};                     // reads +-4.1 rad
   j.torque_sensor = {0.05, -2047.0, 12};
+  j.torque_command = {0.05, -2047.0, 12};
   model.joints.push_back(j);
   model.tool_link = 0;
   validateArmModel(model);
   ArmData data(model);
   for (const double q : {0.0, 0.4, -1.1}) {
     computeGravityTorques(model, data, Eigen::VectorXd::Constant(1, q));
-    // The lever lies in the world x-z plane; the holding torque about the joint axis is
-    // z . (r x (-m g)) = m g 0.5 cos(q) for this orientation.
-    const Eigen::Vector3d r = data.com_W[0] - data.o_W[0];
-    EXPECT_NEAR(std::abs(data.tau_gravity[0]), 2.0 * 9.81 * 0.5 * std::cos(q), 1e-12);
-    EXPECT_NEAR(data.tau_gravity[0], data.z_W[0].dot(r.cross(-2.0 * model.gravity_W_mps2)), 1e-12);
+    // By hand: the joint axis is Rx(90 deg) z = -y, the lever Rx(90 deg) Rz(q) x = (cos q, 0, sin q),
+    // so the COM height is 0.5 sin q, V = m g 0.5 sin q and g(q) = dV/dq = +m g 0.5 cos q.
+    EXPECT_NEAR(data.tau_gravity[0], 2.0 * 9.81 * 0.5 * std::cos(q), 1e-12);
   }
 }
 

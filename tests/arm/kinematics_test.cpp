@@ -226,3 +226,15 @@ TEST(Kinematics, JointMovesLinkFollowsTheTree) {
 
 }  // namespace
 }  // namespace fullarm::arm
+
+namespace fullarm::arm {
+namespace {
+
+TEST(KdlConversion, ReservedSegmentNamesAreRefused) {
+  ArmModel model = test::defaultModel();
+  model.joints[1].name = "tool";
+  EXPECT_THROW((void)toKdlTree(model), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace fullarm::arm

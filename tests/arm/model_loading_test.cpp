@@ -83,7 +83,7 @@ TEST(ModelLoading, ParseFromTextEqualsLoadFromFile) {
 
 TEST(ModelLoading, MissingKeyIsNamed) {
   const ConfigError e = loadError("missing.yaml", edited("    default_rad: -0.30\n", ""));
-  EXPECT_EQ(e.keyPath(), "joints[1]");
+  EXPECT_EQ(e.keyPath(), "joints[1].default_rad");
   EXPECT_NE(e.message().find("missing required key 'default_rad'"), std::string::npos) << e.what();
   EXPECT_GT(e.line(), 0);
 }
@@ -114,11 +114,20 @@ TEST(ModelLoading, NonPositiveDefiniteInertiaIsRejected) {
   EXPECT_NE(e.message().find("positive definite"), std::string::npos) << e.what();
 }
 
-// The identified R_WR inertia of the SL set (reference section 4.4) is positive definite but
-// no rigid body has it: the loader must say so.
+// Positive definite, but one principal moment exceeds the sum of the other two: no rigid body.
 TEST(ModelLoading, TriangleInequalityViolationIsRejected) {
   const ConfigError e =
-      loadError("triangle.yaml",
+      loadError("triangle.yaml", edited("{xx: 0.022999, yy: 0.022999, zz: 0.002688, xy: 0.0, xz: 0.0, yz: 0.0}",
+                                        "{xx: 0.001, yy: 0.001, zz: 0.003, xy: 0.0, xz: 0.0, yz: 0.0}"));
+  EXPECT_EQ(e.keyPath(), "joints[4].link.inertia_kgm2");
+  EXPECT_NE(e.message().find("triangle inequality"), std::string::npos) << e.what();
+}
+
+// The identified R_WR inertia of the SL set (reference section 4.4) is positive definite but
+// no rigid body has it: the loader must say so.
+TEST(ModelLoading, IdentifiedSlInertiaIsRejected) {
+  const ConfigError e =
+      loadError("sl_inertia.yaml",
                 edited("{xx: 0.022999, yy: 0.022999, zz: 0.002688, xy: 0.0, xz: 0.0, yz: 0.0}",
                        "{xx: 0.023417, yy: 0.000012, zz: 0.003393, xy: -0.000240, xz: 0.008912, yz: -0.000088}"));
   EXPECT_EQ(e.keyPath(), "joints[4].link.inertia_kgm2");
@@ -144,6 +153,28 @@ TEST(ModelLoading, UnknownKeyIsRejected) {
 TEST(ModelLoading, UnknownTopLevelKeyIsRejected) {
   const ConfigError e = loadError("unknown_top.yaml", defaultText() + "\nextra_setting: 1\n");
   EXPECT_EQ(e.keyPath(), "extra_setting");
+}
+
+TEST(ModelLoading, DuplicateKeyIsRejected) {
+  const ConfigError e = loadError("duplicate_key.yaml",
+                                  edited("    default_rad: 1.57\n", "    default_rad: 1.57\n    default_rad: 2.0\n"));
+  EXPECT_EQ(e.keyPath(), "joints[3].default_rad");
+  EXPECT_NE(e.message().find("duplicate key"), std::string::npos) << e.what();
+  EXPECT_GT(e.line(), 0);
+}
+
+TEST(ModelLoading, ArmJointWithoutDhIsRejected) {
+  ArmModel model = test::defaultModel();
+  model.joints[2].dh.reset();
+  EXPECT_THROW(validateArmModel(model), ConfigError);
+  model = test::defaultModel();
+  model.joints[2].X_PL0.translation().z() += 0.01;  // no longer the DH transform
+  try {
+    validateArmModel(model);
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.keyPath(), "joints[2].dh");
+  }
 }
 
 TEST(ModelLoading, YamlSyntaxErrorHasALine) {

@@ -59,7 +59,8 @@ TEST_F(RealtimeAllocation, SensorsAndActuators) {
   double sum = 0.0;
   EXPECT_NO_HEAP_ALLOCATION({
     sum += potentiometerAngle(j.potentiometer, quantizeCode(potentiometerCounts(j.potentiometer, 0.1), 12));
-    sum += torqueSensorTorque(j.torque_sensor, 2100.0);
+    sum += torqueSensorTorque(j.torque_sensor, 2100.0) + torqueSensorCounts(j.torque_sensor, 3.0);
+    sum += torqueCommandCode(j.torque_command, 3.0);
     sum += actuatorMomentArm(j.actuator, 0.2) + cylinderLength(j.actuator, 0.2);
   });
   EXPECT_TRUE(std::isfinite(sum));

@@ -51,6 +51,16 @@ TEST(ArmScaling, ScaledSegmentsHaveTheRequestedLengthsInEveryPosture) {
     EXPECT_NEAR((top - o(hr)).norm(), 0.32, kTol);
   }
   EXPECT_DOUBLE_EQ(scaled.joints[static_cast<std::size_t>(hr)].geometry.radius_m, 0.05 * 1.2);
+  // Centres of mass move with their segment: upper arm z by 0.32 / 0.287, hand by 0.10 / 0.085.
+  EXPECT_NEAR(scaled.joints[static_cast<std::size_t>(hr)].inertial.com_m.z(), -0.188 * 0.32 / 0.287, kTol);
+  EXPECT_NEAR(scaled.joints[static_cast<std::size_t>(waa)].inertial.com_m.x(), 0.05 * 0.10 / 0.085, kTol);
+  // Hand joints on the hand link move with the hand; the thumb's second joint (on R_TL) does not.
+  const auto origin = [](const ArmModel& m, const char* name) {
+    return m.joints[static_cast<std::size_t>(m.jointIndex(name))].X_PL0.translation();
+  };
+  EXPECT_NEAR((origin(scaled, "R_FAA") - origin(model, "R_FAA") * 0.10 / 0.085).norm(), 0.0, kTol);
+  EXPECT_NEAR((origin(scaled, "R_TL") - origin(model, "R_TL") * 0.10 / 0.085).norm(), 0.0, kTol);
+  EXPECT_NEAR((origin(scaled, "R_TV") - origin(model, "R_TV")).norm(), 0.0, kTol);
   EXPECT_DOUBLE_EQ(scaled.totalMass(), model.totalMass());
 }
 

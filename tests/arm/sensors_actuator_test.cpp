@@ -68,6 +68,23 @@ TEST(Sensors, TorqueRoundTrip) {
   EXPECT_DOUBLE_EQ(torqueSensorTorque(cal, 2047.0), 0.0);
 }
 
+// Reference 6.1: the finger cards command torque with the opposite sign of their load cells;
+// SL writes code = tau / des_slope + 2047, clipped to 0 .. 4095.
+TEST(Sensors, TorqueCommandCodesFollowTheDacCalibration) {
+  const Joint& eb = joint("R_EB");
+  const Joint& tv = joint("R_TV");
+  EXPECT_EQ(torqueCommandCode(eb.torque_command, 0.0), 2047);
+  EXPECT_EQ(torqueCommandCode(eb.torque_command, 10.0), static_cast<int>(std::lround(10.0 / -0.02488643 + 2047)));
+  // Same torque, opposite direction of the code on a finger: the sign anomaly.
+  // R_TV: load slope +0.0035394, command slope -0.0035394 N m per count.
+  EXPECT_GT(torqueSensorCounts(tv.torque_sensor, 1.0), 2047.0);
+  EXPECT_LT(torqueCommandCode(tv.torque_command, 1.0), 2047);
+  EXPECT_EQ(torqueCommandCode(tv.torque_command, 1.0), static_cast<int>(std::lround(1.0 / -0.0035394 + 2047)));
+  // Beyond full scale the DAC saturates.
+  EXPECT_EQ(torqueCommandCode(eb.torque_command, 500.0), 0);
+  EXPECT_EQ(torqueCommandCode(eb.torque_command, -500.0), 4095);
+}
+
 TEST(Actuator, MomentArmIsTheDerivativeOfCylinderLength) {
   for (const Joint& j : test::defaultModel().joints) {
     if (j.actuator.type != ActuatorGeometry::Type::kLinear) continue;

@@ -79,11 +79,16 @@ struct PotentiometerCalibration {
 };
 
 /// Joint torque sensor (load cell) read through an ADC: tau = (counts + offset_counts) * slope.
+/// The same rule describes the desired-torque DAC (TorqueCommandCalibration).
 struct TorqueSensorCalibration {
   double slope_nm_per_count = 0.0;
   double offset_counts = 0.0;
   int bits = 12;
 };
+
+/// The desired-torque DAC of a joint card: tau = (code + offset_counts) * slope. Its slope may
+/// differ in sign from the load cell's (the DTS finger joints, reference section 6.1).
+using TorqueCommandCalibration = TorqueSensorCalibration;
 
 /// One joint and the link it moves.
 struct Joint {
@@ -101,6 +106,7 @@ struct Joint {
   ActuatorGeometry actuator;
   PotentiometerCalibration potentiometer;
   TorqueSensorCalibration torque_sensor;
+  TorqueCommandCalibration torque_command;
 };
 
 /// The whole arm. Treat as constant after validateArmModel(); algorithms take it by const&.

@@ -20,7 +20,9 @@ namespace fullarm::arm {
 [[nodiscard]] ArmModel parseArmModel(std::string_view yaml_text, const std::filesystem::path& source);
 
 /// Path of the default DTS master model: $FULLARM_CONFIG_DIR/dts_master.yaml if that variable
-/// is set, else the installed or source-tree config folder found at build time.
+/// is set; else, for a program installed under the install prefix, the installed config; else the
+/// source tree's config/ (when the tree the library was built from still exists), else the
+/// installed one.
 [[nodiscard]] std::filesystem::path defaultArmModelPath();
 
 }  // namespace fullarm::arm

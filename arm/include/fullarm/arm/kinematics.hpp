@@ -13,7 +13,13 @@ namespace fullarm::arm {
 /// angular velocity of the link [rad/s per rad/s]; one column per joint.
 using PointJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxJoints>;
 
+/// Real-time notes for every @rt function of the arm module: vectors must have size
+/// model.numJoints() (checked by assert in debug builds only), and must be plain vectors or
+/// blocks of them: passing an expression such as `q + dq` makes Eigen evaluate it into a heap
+/// temporary before the call.
+///
 /// Link frames, joint axes z_i and origins o_i, link centres of mass and the hand pose.
+/// World frame W is the arm's root frame (the SL base, z up).
 /// @param q joint angles [rad], size model.numJoints()
 /// @rt
 void computeForwardKinematics(const ArmModel& model, ArmData& data,

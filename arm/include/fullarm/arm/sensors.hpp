@@ -33,6 +33,11 @@ namespace fullarm::arm {
 /// @rt
 [[nodiscard]] double torqueSensorCounts(const TorqueSensorCalibration& cal, double tau_nm) noexcept;
 
+/// Desired-torque DAC code for a torque command tau [N m], rounded and clamped to the DAC range
+/// (a command beyond full scale saturates, as on the hardware).
+/// @rt
+[[nodiscard]] int torqueCommandCode(const TorqueCommandCalibration& cal, double tau_nm) noexcept;
+
 /// Angle range [rad] the potentiometer can report over codes 0 .. maxCode (min, max).
 [[nodiscard]] std::pair<double, double> potentiometerSpan(const PotentiometerCalibration& cal) noexcept;
 
