@@ -226,12 +226,12 @@ ArmModel loadArmModel(const std::filesystem::path& file) {
   return buildAndValidate(YamlMap::load(file), file);
 }
 
-std::filesystem::path defaultArmModelPath() {
+std::filesystem::path defaultConfigPath(std::string_view file_name) {
   if (const char* dir = std::getenv("FULLARM_CONFIG_DIR"); dir != nullptr && *dir != '\0') {
-    return std::filesystem::path(dir) / "dts_master.yaml";
+    return std::filesystem::path(dir) / file_name;
   }
-  std::filesystem::path installed = std::filesystem::path(FULLARM_INSTALL_CONFIG_DIR) / "dts_master.yaml";
-  std::filesystem::path source = std::filesystem::path(FULLARM_SOURCE_CONFIG_DIR) / "dts_master.yaml";
+  std::filesystem::path installed = std::filesystem::path(FULLARM_INSTALL_CONFIG_DIR) / file_name;
+  std::filesystem::path source = std::filesystem::path(FULLARM_SOURCE_CONFIG_DIR) / file_name;
   // A program installed under the install prefix reads the installed config; anything else (the
   // build tree's programs and tests) reads the source tree's, when that tree still exists.
   std::error_code ec;
@@ -242,5 +242,7 @@ std::filesystem::path defaultArmModelPath() {
   if (std::filesystem::is_regular_file(installed)) return installed;
   return source;
 }
+
+std::filesystem::path defaultArmModelPath() { return defaultConfigPath("dts_master.yaml"); }
 
 }  // namespace fullarm::arm

@@ -1,12 +1,14 @@
-# Script mode: write the `arm show` report, then open it in headless Chromium with
-# tests/reports/check_report.mjs (fails on console errors or charts that did not render).
+# Script mode: run `fullarm ${ARGS} --out ${OUT_DIR}`, then open the report in headless Chromium
+# with tests/reports/check_report.mjs (fails on console errors, network requests, or fewer than
+# ${MIN_CHARTS} rendered charts) and save a screenshot beside it.
 file(REMOVE_RECURSE ${OUT_DIR})
-execute_process(COMMAND ${FULLARM_EXE} arm show --out ${OUT_DIR} RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+separate_arguments(args UNIX_COMMAND "${ARGS}")
+execute_process(COMMAND ${FULLARM_EXE} ${args} --out ${OUT_DIR} RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "fullarm arm show failed (${rc}): ${err}")
+  message(FATAL_ERROR "fullarm ${ARGS} failed (${rc}): ${err}")
 endif()
 execute_process(COMMAND ${NODE} ${SOURCE_DIR}/tests/reports/check_report.mjs ${OUT_DIR}/report.html
-                        ${OUT_DIR}/screenshot.png --min-charts 3
+                        ${OUT_DIR}/screenshot.png --min-charts ${MIN_CHARTS}
                 WORKING_DIRECTORY ${SOURCE_DIR} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 message(STATUS "${out}")
 if(NOT rc EQUAL 0)

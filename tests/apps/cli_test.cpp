@@ -183,6 +183,36 @@ TEST(Cli, ArmShowWritesSummaryAndReport) {
   EXPECT_LT(summary["results"]["arm"]["reach_m"].get<double>(), 0.8);
 }
 
+TEST(Cli, PlantSimulateWritesTheCsvLogAndReport) {
+  const auto dir = tempDir("plant_step");
+  const Result r = runFullarm("plant simulate --joint EB --input step --duration 0.2 --out " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream csv(dir / "plant_log.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("time_s,command,q_rad,qd_rad_s,tau_measured_nm,p_a_pa,p_b_pa,spool", 0), 0u) << header;
+  int rows = 0;
+  for (std::string line; std::getline(csv, line);) ++rows;
+  EXPECT_GE(rows, 200);  // 0.2 s at 1 kHz
+  EXPECT_TRUE(std::filesystem::exists(dir / "report.html"));
+}
+
+TEST(Cli, PlantSimulateRejectsAnUnknownJoint) {
+  const Result r =
+      runFullarm("plant simulate --joint ELBOW --duration 0.1 --out " + tempDir("plant_bad_joint").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("ELBOW"), std::string::npos) << r.output;
+}
+
+TEST(Cli, PlantSimulateRejectsAMalformedCsv) {
+  const auto dir = tempDir("plant_bad_csv");
+  const auto csv = dir / "input.csv";
+  std::ofstream(csv) << "time_s,command\n0.0,0.1\n0.001,abc\n";
+  const Result r = runFullarm("plant simulate --joint EB --input " + csv.string() + " --out " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(csv.string()), std::string::npos) << r.output;
+}
+
 TEST(Cli, DemoRunsAndSaysWhatIsNotBuiltYet) {
   const auto dir = tempDir("demo");
   const Result r = runFullarm("demo --out " + dir.string());
@@ -191,9 +221,10 @@ TEST(Cli, DemoRunsAndSaysWhatIsNotBuiltYet) {
   std::ifstream in(dir / "summary.json");
   const nlohmann::json summary = nlohmann::json::parse(in);
   EXPECT_EQ(summary["subcommand"], "demo");
-  ASSERT_EQ(summary["results"]["steps"].size(), 5u);
+  ASSERT_EQ(summary["results"]["steps"].size(), 6u);
   EXPECT_EQ(summary["results"]["steps"][0]["status"], "done");
-  EXPECT_EQ(summary["results"]["steps"][1]["status"], "not built yet");
+  EXPECT_EQ(summary["results"]["steps"][1]["status"], "done");  // plant chirp experiment
+  EXPECT_EQ(summary["results"]["steps"][2]["status"], "not built yet");
 }
 
 }  // namespace

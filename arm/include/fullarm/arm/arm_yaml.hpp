@@ -19,10 +19,13 @@ namespace fullarm::arm {
 /// @throws ConfigError
 [[nodiscard]] ArmModel parseArmModel(std::string_view yaml_text, const std::filesystem::path& source);
 
-/// Path of the default DTS master model: $FULLARM_CONFIG_DIR/dts_master.yaml if that variable
-/// is set; else, for a program installed under the install prefix, the installed config; else the
+/// Path of a default configuration file `file_name` (e.g. "dts_plant.yaml"):
+/// $FULLARM_CONFIG_DIR/<file_name> if that variable is set; else, for a program installed under the install prefix, the installed config; else the
 /// source tree's config/ (when the tree the library was built from still exists), else the
 /// installed one.
+[[nodiscard]] std::filesystem::path defaultConfigPath(std::string_view file_name);
+
+/// defaultConfigPath("dts_master.yaml"): the default DTS master model.
 [[nodiscard]] std::filesystem::path defaultArmModelPath();
 
 }  // namespace fullarm::arm

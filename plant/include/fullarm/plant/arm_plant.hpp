@@ -1,0 +1,228 @@
+#pragma once
+/// @file
+/// ArmPlant: the DTS master arm as a stiff ODE (rigid-body dynamics of fullarm::arm coupled to
+/// one servovalve-actuated hydraulic joint per active DOF), integrated with CVODES (BDF, dense
+/// direct linear solver, analytic Jacobian) one control period at a time.
+///
+/// State vector y (size 6 n for n active joints), in SI units:
+///   y[4k+0] spool position x_v of joint k, normalised (1 = full opening)
+///   y[4k+1] spool velocity [1/s]
+///   y[4k+2] chamber A pressure p_a [Pa, gauge]
+///   y[4k+3] chamber B pressure p_b [Pa, gauge]
+///   y[4n+k] joint angle q [rad]
+///   y[5n+k] joint velocity qd [rad/s]
+/// Joints not active (the rest of the arm in single-joint mode, the hand joints) are locked at
+/// their posture. Equations: docs/plant.md.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fullarm/arm/arm_data.hpp"
+#include "fullarm/arm/arm_model.hpp"
+#include "fullarm/arm/kinematics.hpp"
+#include "fullarm/plant/hydraulics.hpp"
+#include "fullarm/plant/joint_params.hpp"
+#include "fullarm/plant/sensor_model.hpp"
+
+namespace fullarm::plant {
+
+/// Largest number of active joints.
+inline constexpr int kMaxPlantJoints = arm::kMaxJoints;
+/// Largest state size.
+inline constexpr int kMaxPlantStates = 6 * kMaxPlantJoints;
+
+/// Fixed-capacity per-joint vector (no heap).
+using JointVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxPlantJoints, 1>;
+
+/// How CVODES gets the Newton matrix.
+enum class JacobianKind {
+  kAnalytic,          ///< analytic hydraulic and actuator terms; rigid-body q/qd gradients omitted
+  kFiniteDifference,  ///< CVODE's internal dense difference quotients (slow; for checking)
+};
+
+/// Integrator settings.
+struct SolverOptions {
+  double rtol = 1e-6;
+  double atol_spool = 1e-6;
+  double atol_spool_rate_per_s = 1e-2;
+  double atol_pressure_pa = 100.0;
+  double atol_angle_rad = 1e-7;
+  double atol_velocity_radps = 1e-5;
+  long max_steps_per_period = 20000;
+  /// Re-initialise CVODES when a command changes by more than this fraction of its full scale
+  /// (valve mode: 1/amplifier gain volts; torque mode: the joint torque limit) in one period.
+  double reinit_command_jump = 0.002;
+  JacobianKind jacobian = JacobianKind::kAnalytic;
+};
+
+/// User arm strapped to the cuff: a point mass, a spring to the cuff's rest position and a
+/// damper (Cartesian, world frame), on link `link` at `point_L` (link frame).
+struct UserArmParams {
+  bool enabled = false;
+  int link = -1;
+  Eigen::Vector3d point_L = Eigen::Vector3d::Zero();
+  double mass_kg = 0.0;
+  double stiffness_n_per_m = 0.0;
+  double damping_ns_per_m = 0.0;
+};
+
+/// An explicit rigid load on one joint (single-joint mode without an arm model):
+/// inertia J and gravity torque g(q) = gravity_cos_nm cos(q) + gravity_sin_nm sin(q), with
+/// the sign of fullarm::arm's g(q) (the torque that holds the load still).
+struct RigidLoad {
+  double inertia_kgm2 = 0.05;
+  double gravity_cos_nm = 0.0;
+  double gravity_sin_nm = 0.0;
+};
+
+/// Inputs of one control period (held constant over it), indexed by active joint.
+struct PlantCommand {
+  JointVector command;         ///< valve voltage [V], desired torque [N m] or ideal torque [N m]
+  JointVector tau_user_nm;     ///< torque the user applies at each joint
+  JointVector tau_contact_nm;  ///< torque from contact with the (virtual) environment
+  /// All zero for `n` joints.
+  static PlantCommand zero(int n);
+};
+
+/// The continuous state of one joint.
+struct JointState {
+  double spool = 0.0;
+  double spool_rate_per_s = 0.0;
+  double p_a_pa = 0.0;
+  double p_b_pa = 0.0;
+  double q_rad = 0.0;
+  double qd_radps = 0.0;
+};
+
+/// Solver counters, accumulated over CVodeReInit (which resets CVODES' own counters).
+struct SolverStats {
+  long steps = 0;
+  long rhs_evals = 0;
+  long jac_evals = 0;
+  long nonlin_iters = 0;
+  long nonlin_conv_fails = 0;
+  long err_test_fails = 0;
+  long root_events = 0;  ///< hard-stop contacts and releases
+  long reinits = 0;
+};
+
+/// Outcome of step().
+enum class PlantStatus { kOk, kSolverFailure, kNotConfigured };
+
+/// The plant. Configure once (allocates), reset, then step() at the control rate (no
+/// allocation). Not copyable or movable (CVODES holds a pointer to it).
+class ArmPlant {
+ public:
+  ArmPlant();
+  ~ArmPlant();
+  ArmPlant(const ArmPlant&) = delete;
+  ArmPlant& operator=(const ArmPlant&) = delete;
+
+  /// Whole arm: `joints` lists one JointParams per active joint (by name, in model order).
+  /// @param posture initial posture of every model joint (locked joints stay there) [rad]
+  /// @throws arm::ConfigError for an unknown joint name or invalid parameters.
+  void configure(const arm::ArmModel& model, const std::vector<JointParams>& joints, const Eigen::VectorXd& posture,
+                 const UserArmParams& user, const SolverOptions& options, std::uint64_t seed = 1);
+  /// One joint with an explicit rigid load (no arm model).
+  void configure(const JointParams& joint, const RigidLoad& load, const SolverOptions& options, std::uint64_t seed = 1);
+
+  /// Resets time to 0, the sensors, the statistics and the state: spool closed, pressures at
+  /// the null-valve equilibrium (p_s + p_r)/2, q at the posture, at rest.
+  void reset();
+  /// Resets with an explicit state per active joint.
+  void reset(const std::vector<JointState>& initial);
+
+  /// Advances exactly one control period of `dt_s` with the command held (stop time at the
+  /// boundary), re-initialising CVODES only at hard-stop events or large command jumps, then
+  /// samples the sensors. @rt
+  PlantStatus step(double dt_s, const PlantCommand& command) noexcept;
+
+  [[nodiscard]] int numJoints() const noexcept { return n_; }
+  [[nodiscard]] int numStates() const noexcept { return 6 * n_; }
+  [[nodiscard]] double time() const noexcept { return t_; }
+  [[nodiscard]] const JointParams& joint(int k) const noexcept { return params_[static_cast<std::size_t>(k)]; }
+  /// Index in the arm model of active joint k (-1 with an explicit load).
+  [[nodiscard]] int modelIndex(int k) const noexcept { return active_[static_cast<std::size_t>(k)]; }
+  [[nodiscard]] JointState state(int k) const noexcept;
+  /// Sensor readings of the last step.
+  [[nodiscard]] const JointMeasurement& measurement(int k) const noexcept {
+    return measured_[static_cast<std::size_t>(k)];
+  }
+  /// True torque through the load cell at the end of the last step [N m].
+  [[nodiscard]] double transmittedTorque(int k) const noexcept { return tau_cell_[k]; }
+  /// Torque the actuator fluid applies at the end of the last step [N m].
+  [[nodiscard]] double hydraulicTorque(int k) const noexcept { return tau_hyd_[k]; }
+  /// Joint accelerations at the end of the last step [rad/s^2].
+  [[nodiscard]] const JointVector& accelerations() const noexcept { return qdd_; }
+  [[nodiscard]] const SolverStats& stats() const noexcept { return stats_; }
+  /// Last CVODES error message (empty if none).
+  [[nodiscard]] const char* lastError() const noexcept { return error_; }
+
+  // Verification interface (tests): the right-hand side and the analytic Jacobian at (t, y)
+  // for the command of the current period.
+  /// Current state vector (size numStates()).
+  [[nodiscard]] Eigen::VectorXd stateVector() const;
+  /// dy/dt at y; also updates accelerations(), transmittedTorque() and hydraulicTorque(). @rt
+  void evaluateRhs(const double* y, double* ydot) noexcept;
+  /// The analytic Newton Jacobian df/dy at y into J (numStates() square, column-major). @rt
+  void evaluateJacobian(const double* y, double* J) noexcept;
+  /// Sets the command used by evaluateRhs/evaluateJacobian (step() sets it too). @rt
+  void setCommand(const PlantCommand& command) noexcept { cmd_ = command; }
+
+ private:
+  struct Solver;  // CVODES handles (RAII), defined in the .cpp
+  void allocate(const SolverOptions& options, std::uint64_t seed);
+  void mechanics(const double* y) noexcept;
+  void compositeRigidBodyMass() noexcept;
+  void reinitSolver() noexcept;
+  void harvestStats() noexcept;
+  void initialiseSensors() noexcept;
+  void singleAxisCuff(double q, double qd, double& tau, double& dtau_dq, double& dtau_dqd) const noexcept;
+
+  friend struct SolverCallbacks;
+
+  int n_ = 0;
+  std::vector<JointParams> params_;
+  std::vector<int> active_;
+  double t_ = 0.0;
+  SolverOptions options_{};
+  PlantCommand cmd_{};
+  PlantCommand last_cmd_{};
+  bool need_reinit_ = true;
+  SolverStats stats_{};
+  SolverStats stats_base_{};
+  char error_[256] = {};
+
+  // Mechanics.
+  bool single_axis_ = true;
+  RigidLoad load_{};
+  std::unique_ptr<arm::ArmModel> model_;  // copy with the user mass merged into its link
+  std::unique_ptr<arm::ArmData> data_;
+  Eigen::VectorXd posture_;
+  Eigen::VectorXd q_full_, qd_full_, zero_full_;
+  UserArmParams user_{};
+  Eigen::Vector3d cuff_anchor_W_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis_W_ = Eigen::Vector3d::UnitZ();  // single axis from an arm model
+  Eigen::Vector3d origin_W_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d cuff0_W_ = Eigen::Vector3d::Zero();
+  bool single_axis_cuff_ = false;
+  Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxPlantJoints> cuff_jac_;
+  arm::PointJacobian point_jac_;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints> mass_, mass_inv_;
+  JointVector qdd_, tau_cell_, tau_hyd_, tau_act_, h_, tau_cuff_;
+  std::vector<StrokeRange> stroke_;
+  double ydot_scratch_[kMaxPlantStates] = {};
+
+  // Sensors.
+  GaussianNoise noise_{1};
+  std::uint64_t seed_ = 1;
+  std::vector<JointSensorState> sensor_state_;
+  std::vector<JointMeasurement> measured_;
+
+  std::unique_ptr<Solver> solver_;
+};
+
+}  // namespace fullarm::plant

@@ -1,0 +1,744 @@
+#include "fullarm/plant/arm_plant.hpp"
+
+#include <cvodes/cvodes.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+#include "fullarm/arm/config_error.hpp"
+#include "fullarm/arm/dynamics.hpp"
+#include "fullarm/arm/kinematics.hpp"
+
+namespace fullarm::plant {
+
+// ---- RAII ownership of every SUNDIALS handle (research/plant.md section 3.5) ---------------
+namespace {
+
+struct ContextDeleter {
+  void operator()(SUNContext c) const noexcept { SUNContext_Free(&c); }
+};
+struct VectorDeleter {
+  void operator()(N_Vector v) const noexcept { N_VDestroy(v); }
+};
+struct MatrixDeleter {
+  void operator()(SUNMatrix m) const noexcept { SUNMatDestroy(m); }
+};
+struct LinearSolverDeleter {
+  void operator()(SUNLinearSolver s) const noexcept { SUNLinSolFree(s); }
+};
+struct CvodeDeleter {
+  void operator()(void* mem) const noexcept { CVodeFree(&mem); }
+};
+
+template <typename Handle, typename Deleter>
+using Owned = std::unique_ptr<std::remove_pointer_t<Handle>, Deleter>;
+
+void check(int flag, const char* call) {
+  if (flag < 0) throw std::runtime_error(std::string("CVODES: ") + call + " failed with flag " + std::to_string(flag));
+}
+
+template <typename T>
+T* checkPtr(T* p, const char* call) {
+  if (p == nullptr) throw std::runtime_error(std::string("CVODES: ") + call + " returned null");
+  return p;
+}
+
+constexpr int kMaxEventsPerPeriod = 64;
+
+// Dense direct linear solver for the Newton matrix I - gamma J with Eigen's blocked,
+// vectorised partial-pivoting LU in fixed-capacity storage (no heap after construction);
+// several times faster than SUNDIALS' reference dense LU at the arm's 42 states.
+using NewtonMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantStates, kMaxPlantStates>;
+using NewtonVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxPlantStates, 1>;
+
+struct EigenLuContent {
+  Eigen::PartialPivLU<NewtonMatrix> lu;
+  NewtonVector rhs;
+  sunindextype last_flag = 0;
+};
+
+SUNLinearSolver_Type luType(SUNLinearSolver /*S*/) {
+  return SUNLINEARSOLVER_DIRECT;
+}
+SUNLinearSolver_ID luId(SUNLinearSolver /*S*/) {
+  return SUNLINEARSOLVER_CUSTOM;
+}
+int luInitialize(SUNLinearSolver /*S*/) {
+  return SUNLS_SUCCESS;
+}
+
+int luSetup(SUNLinearSolver S, SUNMatrix A) {
+  auto* c = static_cast<EigenLuContent*>(S->content);
+  const auto n = static_cast<Eigen::Index>(SM_ROWS_D(A));
+  c->lu.compute(Eigen::Map<const Eigen::MatrixXd>(SM_DATA_D(A), n, n));
+  // A zero pivot makes the factor singular: report it as recoverable (CVODE cuts the step).
+  const double min_pivot = c->lu.matrixLU().diagonal().cwiseAbs().minCoeff();
+  c->last_flag = min_pivot > 0.0 && std::isfinite(min_pivot) ? 0 : 1;
+  return c->last_flag == 0 ? SUNLS_SUCCESS : SUNLS_LUFACT_FAIL;
+}
+
+int luSolve(SUNLinearSolver S, SUNMatrix /*A*/, N_Vector x, N_Vector b, sunrealtype /*tol*/) {
+  auto* c = static_cast<EigenLuContent*>(S->content);
+  const auto n = static_cast<Eigen::Index>(N_VGetLength(b));
+  // P A = L U: x = U^-1 L^-1 P b, in place in fixed-capacity storage.
+  c->rhs.noalias() = c->lu.permutationP() * Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(b), n);
+  c->lu.matrixLU().template triangularView<Eigen::UnitLower>().solveInPlace(c->rhs);
+  c->lu.matrixLU().template triangularView<Eigen::Upper>().solveInPlace(c->rhs);
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(x), n) = c->rhs;
+  return SUNLS_SUCCESS;
+}
+
+sunindextype luLastFlag(SUNLinearSolver S) {
+  return static_cast<EigenLuContent*>(S->content)->last_flag;
+}
+
+int luFree(SUNLinearSolver S) {
+  if (S == nullptr) return SUNLS_SUCCESS;
+  delete static_cast<EigenLuContent*>(S->content);
+  S->content = nullptr;
+  SUNLinSolFreeEmpty(S);
+  return SUNLS_SUCCESS;
+}
+
+SUNLinearSolver newEigenLuSolver(SUNContext ctx, int n) {
+  SUNLinearSolver S = SUNLinSolNewEmpty(ctx);
+  if (S == nullptr) return nullptr;
+  S->ops->gettype = luType;
+  S->ops->getid = luId;
+  S->ops->initialize = luInitialize;
+  S->ops->setup = luSetup;
+  S->ops->solve = luSolve;
+  S->ops->lastflag = luLastFlag;
+  S->ops->free = luFree;
+  auto* content = new EigenLuContent();
+  content->lu = Eigen::PartialPivLU<NewtonMatrix>(n);
+  content->rhs.setZero(n);
+  S->content = content;
+  return S;
+}
+
+}  // namespace
+
+// Declared in this order so they are destroyed in reverse: solver memory first, context last.
+struct ArmPlant::Solver {
+  Owned<SUNContext, ContextDeleter> ctx;
+  Owned<N_Vector, VectorDeleter> y;
+  Owned<N_Vector, VectorDeleter> abstol;
+  Owned<SUNMatrix, MatrixDeleter> A;
+  Owned<SUNLinearSolver, LinearSolverDeleter> ls;
+  Owned<void*, CvodeDeleter> mem;
+};
+
+struct SolverCallbacks {
+  static int rhs(sunrealtype /*t*/, N_Vector y, N_Vector ydot, void* user) noexcept {
+    auto* plant = static_cast<ArmPlant*>(user);
+    plant->evaluateRhs(N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+    return std::isfinite(N_VGetArrayPointer(ydot)[0]) ? 0 : 1;  // 1: recoverable, CVODE retries smaller
+  }
+  static int jac(sunrealtype /*t*/, N_Vector y, N_Vector /*fy*/, SUNMatrix J, void* user, N_Vector /*tmp1*/,
+                 N_Vector /*tmp2*/, N_Vector /*tmp3*/) noexcept {
+    auto* plant = static_cast<ArmPlant*>(user);
+    plant->evaluateJacobian(N_VGetArrayPointer(y), SM_DATA_D(J));
+    return 0;
+  }
+  // Two roots per joint: q - q_max and q_min - q (hard-stop contact and release).
+  static int roots(sunrealtype /*t*/, N_Vector yv, sunrealtype* g, void* user) noexcept {
+    const auto* plant = static_cast<const ArmPlant*>(user);
+    const double* y = N_VGetArrayPointer(yv);
+    const int n = plant->n_;
+    for (int k = 0; k < n; ++k) {
+      const JointParams& p = plant->params_[static_cast<std::size_t>(k)];
+      const double q = y[4 * n + k];
+      const bool ideal = p.actuator.kind == ActuatorKind::kIdealTorque;
+      g[2 * k] = ideal ? -1.0 : q - p.max_rad;
+      g[2 * k + 1] = ideal ? -1.0 : p.min_rad - q;
+    }
+    return 0;
+  }
+  static void error(int code, const char* module, const char* function, char* msg, void* user) noexcept {
+    auto* plant = static_cast<ArmPlant*>(user);
+    std::snprintf(plant->error_, sizeof(plant->error_), "%s %s (%d): %s", module, function, code, msg);
+  }
+};
+
+PlantCommand PlantCommand::zero(int n) {
+  PlantCommand c;
+  c.command = JointVector::Zero(n);
+  c.tau_user_nm = JointVector::Zero(n);
+  c.tau_contact_nm = JointVector::Zero(n);
+  return c;
+}
+
+ArmPlant::ArmPlant() = default;
+ArmPlant::~ArmPlant() = default;
+
+namespace {
+
+// Adds a point mass to a link (parallel-axis theorem), keeping the inertia about the new COM.
+void mergePointMass(arm::LinkInertial& link, double mass_kg, const Eigen::Vector3d& p_L) {
+  if (mass_kg <= 0.0) return;
+  const double m0 = link.mass_kg;
+  const double m = m0 + mass_kg;
+  const Eigen::Vector3d com = (m0 * link.com_m + mass_kg * p_L) / m;
+  auto shift = [](double mass, const Eigen::Vector3d& d) {
+    return Eigen::Matrix3d(mass * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose()));
+  };
+  link.inertia_com_kgm2 = link.inertia_com_kgm2 + shift(m0, link.com_m - com) + shift(mass_kg, p_L - com);
+  link.com_m = com;
+  link.mass_kg = m;
+}
+
+}  // namespace
+
+void ArmPlant::configure(const arm::ArmModel& model, const std::vector<JointParams>& joints,
+                         const Eigen::VectorXd& posture, const UserArmParams& user, const SolverOptions& options,
+                         std::uint64_t seed) {
+  if (joints.empty() || static_cast<int>(joints.size()) > kMaxPlantJoints) {
+    throw arm::ConfigError(model.source, "joints", "expected 1 to " + std::to_string(kMaxPlantJoints) + " joints");
+  }
+  if (posture.size() != model.numJoints()) {
+    throw arm::ConfigError(model.source, "posture", "expected " + std::to_string(model.numJoints()) + " joint angles");
+  }
+  std::vector<int> active;
+  for (const JointParams& p : joints) {
+    const int index = model.jointIndex(p.name);
+    if (index < 0) throw arm::ConfigError(model.source, "joints", "unknown joint name '" + p.name + "'");
+    if (std::find(active.begin(), active.end(), index) != active.end()) {
+      throw arm::ConfigError(model.source, "joints", "joint '" + p.name + "' listed twice");
+    }
+    validateJointParams(p, {}, p.name);
+    active.push_back(index);
+  }
+  if (user.enabled && (user.link < 0 || user.link >= model.numJoints())) {
+    throw arm::ConfigError(model.source, "user_arm.link", "cuff link index out of range");
+  }
+  params_ = joints;
+  active_ = active;
+  n_ = static_cast<int>(joints.size());
+  user_ = user;
+  model_ = std::make_unique<arm::ArmModel>(model);
+  if (user.enabled)
+    mergePointMass(model_->joints[static_cast<std::size_t>(user.link)].inertial, user.mass_kg, user.point_L);
+  data_ = std::make_unique<arm::ArmData>(*model_);
+  posture_ = posture;
+  q_full_ = posture;
+  qd_full_ = Eigen::VectorXd::Zero(model.numJoints());
+  zero_full_ = Eigen::VectorXd::Zero(model.numJoints());
+  single_axis_ = n_ == 1;
+  single_axis_cuff_ = false;
+  if (single_axis_) {
+    // One joint turning with the rest of the arm locked: a rigid body about a fixed axis, so
+    // the inertia is constant and gravity is a cos q + b sin q (exact; evaluated once here).
+    const int i = active_[0];
+    Eigen::VectorXd q = posture;
+    arm::computeMassMatrix(*model_, *data_, q);
+    load_.inertia_kgm2 = data_->mass_matrix(i, i);
+    q[i] = 0.0;
+    arm::computeGravityTorques(*model_, *data_, q);
+    load_.gravity_cos_nm = data_->tau_gravity[i];
+    axis_W_ = data_->z_W[static_cast<std::size_t>(i)];
+    origin_W_ = data_->o_W[static_cast<std::size_t>(i)];
+    if (user.enabled && arm::jointMovesLink(*model_, i, user.link)) {
+      single_axis_cuff_ = true;
+      cuff0_W_ = arm::pointInWorld(*data_, user.link, user.point_L);
+    }
+    q[i] = std::numbers::pi / 2.0;
+    arm::computeGravityTorques(*model_, *data_, q);
+    load_.gravity_sin_nm = data_->tau_gravity[i];
+  }
+  allocate(options, seed);
+}
+
+void ArmPlant::configure(const JointParams& joint, const RigidLoad& load, const SolverOptions& options,
+                         std::uint64_t seed) {
+  validateJointParams(joint, {}, joint.name);
+  if (!(load.inertia_kgm2 > 0.0) && joint.actuator.inertia_kgm2 <= 0.0) {
+    throw arm::ConfigError({}, "load.inertia_kgm2", "expected a positive inertia");
+  }
+  params_ = {joint};
+  active_ = {-1};
+  n_ = 1;
+  user_ = {};
+  model_.reset();
+  data_.reset();
+  single_axis_ = true;
+  single_axis_cuff_ = false;
+  load_ = load;
+  allocate(options, seed);
+}
+
+void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
+  options_ = options;
+  seed_ = seed;
+  cmd_ = PlantCommand::zero(n_);
+  last_cmd_ = cmd_;
+  qdd_ = tau_cell_ = tau_hyd_ = tau_act_ = h_ = tau_cuff_ = JointVector::Zero(n_);
+  mass_.setZero(n_, n_);
+  mass_inv_.setZero(n_, n_);
+  cuff_jac_.setZero(3, n_);
+  stroke_.clear();
+  for (const JointParams& p : params_) stroke_.push_back(strokeRange(p));
+  sensor_state_.assign(static_cast<std::size_t>(n_), JointSensorState{});
+  measured_.assign(static_cast<std::size_t>(n_), JointMeasurement{});
+
+  const auto N = static_cast<sunindextype>(6 * n_);
+  auto s = std::make_unique<Solver>();
+  SUNContext ctx = nullptr;
+  check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create");
+  s->ctx.reset(ctx);
+  s->y.reset(checkPtr(N_VNew_Serial(N, ctx), "N_VNew_Serial"));
+  s->abstol.reset(checkPtr(N_VNew_Serial(N, ctx), "N_VNew_Serial"));
+  N_VConst(0.0, s->y.get());
+  double* atol = N_VGetArrayPointer(s->abstol.get());
+  for (int k = 0; k < n_; ++k) {
+    atol[4 * k + 0] = options.atol_spool;
+    atol[4 * k + 1] = options.atol_spool_rate_per_s;
+    atol[4 * k + 2] = options.atol_pressure_pa;
+    atol[4 * k + 3] = options.atol_pressure_pa;
+    atol[4 * n_ + k] = options.atol_angle_rad;
+    atol[5 * n_ + k] = options.atol_velocity_radps;
+  }
+  s->mem.reset(checkPtr(CVodeCreate(CV_BDF, ctx), "CVodeCreate"));
+  void* mem = s->mem.get();
+  check(CVodeInit(mem, &SolverCallbacks::rhs, 0.0, s->y.get()), "CVodeInit");
+  check(CVodeSetUserData(mem, this), "CVodeSetUserData");
+  check(CVodeSetErrHandlerFn(mem, &SolverCallbacks::error, this), "CVodeSetErrHandlerFn");
+  check(CVodeSVtolerances(mem, options.rtol, s->abstol.get()), "CVodeSVtolerances");
+  s->A.reset(checkPtr(SUNDenseMatrix(N, N, ctx), "SUNDenseMatrix"));
+  s->ls.reset(checkPtr(newEigenLuSolver(ctx, static_cast<int>(N)), "SUNLinSolNewEmpty"));
+  check(CVodeSetLinearSolver(mem, s->ls.get(), s->A.get()), "CVodeSetLinearSolver");
+  if (options.jacobian == JacobianKind::kAnalytic) check(CVodeSetJacFn(mem, &SolverCallbacks::jac), "CVodeSetJacFn");
+  check(CVodeSetMaxNumSteps(mem, options.max_steps_per_period), "CVodeSetMaxNumSteps");
+  check(CVodeRootInit(mem, 2 * n_, &SolverCallbacks::roots), "CVodeRootInit");
+  check(CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
+  solver_ = std::move(s);
+  reset();
+}
+
+void ArmPlant::reset() {
+  std::vector<JointState> initial(static_cast<std::size_t>(n_));
+  for (int k = 0; k < n_; ++k) {
+    const JointParams& p = params_[static_cast<std::size_t>(k)];
+    JointState& s = initial[static_cast<std::size_t>(k)];
+    s.p_a_pa = s.p_b_pa = 0.5 * (p.supply_pressure_pa + p.return_pressure_pa);
+    s.q_rad = active_[static_cast<std::size_t>(k)] >= 0 ? posture_[active_[static_cast<std::size_t>(k)]]
+                                                        : std::clamp(0.0, p.min_rad, p.max_rad);
+  }
+  reset(initial);
+}
+
+void ArmPlant::reset(const std::vector<JointState>& initial) {
+  if (!solver_) throw std::logic_error("ArmPlant::reset before configure");
+  if (static_cast<int>(initial.size()) != n_) throw std::invalid_argument("ArmPlant::reset: one state per joint");
+  double* y = N_VGetArrayPointer(solver_->y.get());
+  for (int k = 0; k < n_; ++k) {
+    const JointState& s = initial[static_cast<std::size_t>(k)];
+    y[4 * k + 0] = s.spool;
+    y[4 * k + 1] = s.spool_rate_per_s;
+    y[4 * k + 2] = s.p_a_pa;
+    y[4 * k + 3] = s.p_b_pa;
+    y[4 * n_ + k] = s.q_rad;
+    y[5 * n_ + k] = s.qd_radps;
+  }
+  t_ = 0.0;
+  stats_ = stats_base_ = {};
+  cmd_ = last_cmd_ = PlantCommand::zero(n_);
+  need_reinit_ = true;
+  error_[0] = '\0';
+  if (model_) {
+    // The cuff spring rests where the cuff is at the initial state.
+    q_full_ = posture_;
+    for (int k = 0; k < n_; ++k) q_full_[active_[static_cast<std::size_t>(k)]] = y[4 * n_ + k];
+    arm::computeForwardKinematics(*model_, *data_, q_full_);
+    if (user_.enabled) cuff_anchor_W_ = arm::pointInWorld(*data_, user_.link, user_.point_L);
+  }
+  noise_.reseed(seed_);
+  for (JointSensorState& s : sensor_state_) s = {};
+  initialiseSensors();
+}
+
+void ArmPlant::initialiseSensors() noexcept {
+  evaluateRhs(N_VGetArrayPointer(solver_->y.get()), ydot_scratch_);
+  const double* y = N_VGetArrayPointer(solver_->y.get());
+  for (int k = 0; k < n_; ++k) {
+    measured_[static_cast<std::size_t>(k)] =
+        sampleJointSensors(params_[static_cast<std::size_t>(k)], sensor_state_[static_cast<std::size_t>(k)], noise_,
+                           y[4 * n_ + k], tau_cell_[k], 0.0);
+  }
+}
+
+JointState ArmPlant::state(int k) const noexcept {
+  const double* y = N_VGetArrayPointer(solver_->y.get());
+  return {y[4 * k], y[4 * k + 1], y[4 * k + 2], y[4 * k + 3], y[4 * n_ + k], y[5 * n_ + k]};
+}
+
+Eigen::VectorXd ArmPlant::stateVector() const {
+  const double* y = N_VGetArrayPointer(solver_->y.get());
+  return Eigen::Map<const Eigen::VectorXd>(y, 6 * n_);
+}
+
+void ArmPlant::singleAxisCuff(double q, double qd, double& tau, double& dtau_dq, double& dtau_dqd) const noexcept {
+  // Cuff point turning rigidly about the joint axis: p(q) = o + Rot(z, q)(p0 - o).
+  const Eigen::Vector3d r = Eigen::AngleAxisd(q, axis_W_) * (cuff0_W_ - origin_W_);
+  const Eigen::Vector3d p = origin_W_ + r;
+  const Eigen::Vector3d jac = axis_W_.cross(r);  // dp/dq
+  const Eigen::Vector3d f = -user_.stiffness_n_per_m * (p - cuff_anchor_W_) - user_.damping_ns_per_m * jac * qd;
+  tau = jac.dot(f);
+  // d/dq of jac . f with d(jac)/dq = z x jac (and jac . (z x jac) = 0).
+  dtau_dq = axis_W_.cross(jac).dot(f) - user_.stiffness_n_per_m * jac.squaredNorm();
+  dtau_dqd = -user_.damping_ns_per_m * jac.squaredNorm();
+}
+
+// Rigid-body part: fills mass_ (incl. actuator inertias), mass_inv_, h_ (C qd + g) and
+// tau_cuff_, cuff_jac_ for the state y.
+void ArmPlant::mechanics(const double* y) noexcept {
+  const int n = n_;
+  if (single_axis_) {
+    const double q = y[4 * n];
+    const double qd = y[5 * n];
+    mass_(0, 0) = load_.inertia_kgm2 + params_[0].actuator.inertia_kgm2;
+    mass_inv_(0, 0) = 1.0 / mass_(0, 0);
+    h_[0] = load_.gravity_cos_nm * std::cos(q) + load_.gravity_sin_nm * std::sin(q);
+    tau_cuff_[0] = 0.0;
+    cuff_jac_.setZero();
+    if (single_axis_cuff_) {
+      double k = 0.0;
+      double b = 0.0;
+      singleAxisCuff(q, qd, tau_cuff_[0], k, b);
+    }
+    return;
+  }
+  for (int k = 0; k < n; ++k) {
+    const int i = active_[static_cast<std::size_t>(k)];
+    q_full_[i] = y[4 * n + k];
+    qd_full_[i] = y[5 * n + k];
+  }
+  // Newton-Euler (fullarm::arm): h = C(q, qd) qd + g(q), then M(q).
+  arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, zero_full_);
+  for (int k = 0; k < n; ++k) h_[k] = data_->tau[active_[static_cast<std::size_t>(k)]];
+  if (user_.enabled) {
+    // Cuff spring and damper through the point Jacobian (frames from the Newton-Euler FK).
+    arm::PointJacobian& J = point_jac_;  // fixed capacity: no heap
+    const Eigen::Vector3d p = arm::pointInWorld(*data_, user_.link, user_.point_L);
+    arm::computePointJacobian(*model_, *data_, user_.link, p, J);
+    for (int k = 0; k < n; ++k) cuff_jac_.col(k) = J.block<3, 1>(0, active_[static_cast<std::size_t>(k)]);
+    const Eigen::Vector3d v = J.topRows<3>() * qd_full_;
+    const Eigen::Vector3d f = -user_.stiffness_n_per_m * (p - cuff_anchor_W_) - user_.damping_ns_per_m * v;
+    tau_cuff_.noalias() = cuff_jac_.transpose() * f;
+  } else {
+    tau_cuff_.setZero();
+  }
+  compositeRigidBodyMass();
+}
+
+// Joint-space inertia of the active joints by the composite-rigid-body method (Featherstone,
+// Rigid Body Dynamics Algorithms, 2008, sec. 6.2) in world coordinates, reusing the frames and
+// world inertias of the Newton-Euler pass: a unit acceleration of joint i turns the composite
+// body C_i (its subtree) about z_i through o_i; M_ji = z_j . [I_C z_i + (c_C - o_j) x m_C (z_i x (c_C - o_i))].
+void ArmPlant::compositeRigidBodyMass() noexcept {
+  const int nm = model_->numJoints();
+  const arm::ArmData& d = *data_;
+  std::array<double, arm::kMaxJoints> mass{};
+  std::array<Eigen::Vector3d, arm::kMaxJoints> first{};    // sum m c
+  std::array<Eigen::Matrix3d, arm::kMaxJoints> inertia{};  // about the world origin
+  for (int l = 0; l < nm; ++l) {
+    const auto k = static_cast<std::size_t>(l);
+    const double m = model_->joints[k].inertial.mass_kg;
+    const Eigen::Vector3d& c = d.com_W[k];
+    mass[k] = m;
+    first[k] = m * c;
+    inertia[k] = d.inertia_W[k] + m * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
+  }
+  for (int l = nm - 1; l >= 0; --l) {  // parents precede children
+    const int parent = model_->joints[static_cast<std::size_t>(l)].parent;
+    if (parent < 0) continue;
+    const auto k = static_cast<std::size_t>(l);
+    const auto p = static_cast<std::size_t>(parent);
+    mass[p] += mass[k];
+    first[p] += first[k];
+    inertia[p] += inertia[k];
+  }
+  const int n = n_;
+  // Descendant y, ancestor-or-self x: M_xy = z_x . [I_Cy z_y + (c_y - o_x) x m_y (z_y x (c_y - o_y))].
+  auto entry = [&](std::size_t x, std::size_t y) {
+    const double m = mass[y];
+    const Eigen::Vector3d c = m > 0.0 ? Eigen::Vector3d(first[y] / m) : d.o_W[y];
+    const Eigen::Matrix3d ic = inertia[y] - m * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
+    const Eigen::Vector3d& z = d.z_W[y];
+    return d.z_W[x].dot(ic * z + (c - d.o_W[x]).cross(m * z.cross(c - d.o_W[y])));
+  };
+  for (int a = 0; a < n; ++a) {
+    const auto i = static_cast<std::size_t>(active_[static_cast<std::size_t>(a)]);
+    for (int b = 0; b <= a; ++b) {
+      const auto j = static_cast<std::size_t>(active_[static_cast<std::size_t>(b)]);
+      double value = 0.0;
+      if (arm::jointMovesLink(*model_, static_cast<int>(j), static_cast<int>(i))) {
+        value = entry(j, i);
+      } else if (arm::jointMovesLink(*model_, static_cast<int>(i), static_cast<int>(j))) {
+        value = entry(i, j);
+      }
+      mass_(a, b) = mass_(b, a) = value;
+    }
+  }
+  for (int a = 0; a < n; ++a) mass_(a, a) += params_[static_cast<std::size_t>(a)].actuator.inertia_kgm2;
+}
+
+void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {
+  const int n = n_;
+  mechanics(y);
+  // Actuator torques: hydraulic (virtual work tau = p_a dV_a/dq + p_b dV_b/dq), friction, stops.
+  for (int k = 0; k < n; ++k) {
+    const JointParams& p = params_[static_cast<std::size_t>(k)];
+    const double q = y[4 * n + k];
+    const double qd = y[5 * n + k];
+    if (p.actuator.kind == ActuatorKind::kIdealTorque) {
+      tau_hyd_[k] = cmd_.command[k];
+      tau_act_[k] = tau_hyd_[k];
+      continue;
+    }
+    const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
+    tau_hyd_[k] = y[4 * k + 2] * v.dva_dq + y[4 * k + 3] * v.dvb_dq;
+    tau_act_[k] = tau_hyd_[k] - frictionTorque(p.friction, qd).value + hardStopTorque(p, q, qd).torque_nm;
+  }
+  // M qdd = tau_act + tau_user + tau_contact + tau_cuff - (C qd + g)   (rigid body, Craig 6.5)
+  JointVector rhs = tau_act_ + cmd_.tau_user_nm + cmd_.tau_contact_nm + tau_cuff_ - h_;
+  if (n == 1) {
+    qdd_[0] = rhs[0] * mass_inv_(0, 0);
+  } else {
+    Eigen::LLT<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints>> llt(mass_);
+    qdd_ = llt.solve(rhs);
+  }
+  for (int k = 0; k < n; ++k) {
+    const JointParams& p = params_[static_cast<std::size_t>(k)];
+    const double q = y[4 * n + k];
+    const double qd = y[5 * n + k];
+    // Load cell between the actuator side and the link: tau_cell = tau_act - J_act qdd.
+    tau_cell_[k] = tau_act_[k] - p.actuator.inertia_kgm2 * qdd_[k];
+    ydot[4 * n + k] = qd;
+    ydot[5 * n + k] = qdd_[k];
+    if (p.actuator.kind == ActuatorKind::kIdealTorque) {
+      ydot[4 * k] = ydot[4 * k + 1] = ydot[4 * k + 2] = ydot[4 * k + 3] = 0.0;
+      continue;
+    }
+    // Spool (research/plant.md 1.1): xv'' = w^2 (u - xv) - 2 zeta w xv'.
+    const double volts = p.input_mode == InputMode::kValveVoltage
+                             ? cmd_.command[k]
+                             : p.torque_loop.gain_v_per_nm * (cmd_.command[k] - tau_cell_[k]);
+    const double u = std::clamp(p.valve.amplifier_gain_per_v * volts, -1.0, 1.0);
+    const double w = 2.0 * std::numbers::pi * p.valve.natural_frequency_hz;
+    const double xv = y[4 * k];
+    const double vv = y[4 * k + 1];
+    ydot[4 * k] = vv;
+    ydot[4 * k + 1] = w * w * (u - xv) - 2.0 * p.valve.damping_ratio * w * vv;
+    // Chambers (research/plant.md 1.3): p' = beta(p)/V (Q_in - leakage - dV/dt).
+    const double pa = y[4 * k + 2];
+    const double pb = y[4 * k + 3];
+    const ValveFlows f = valveFlows(p, xv, pa, pb);
+    const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
+    const double qi = p.chambers.internal_leakage_m3ps_per_pa * (pa - pb);
+    const double ce = p.chambers.external_leakage_m3ps_per_pa;
+    const double beta_a = effectiveBulkModulus(p.fluid, pa).value;
+    const double beta_b = effectiveBulkModulus(p.fluid, pb).value;
+    const double cv_a = checkValveFlow(p, pa).value;
+    const double cv_b = checkValveFlow(p, pb).value;
+    ydot[4 * k + 2] = beta_a / v.v_a_m3 * (f.q_a_m3ps + cv_a - qi - ce * pa - v.dva_dq * qd);
+    ydot[4 * k + 3] = beta_b / v.v_b_m3 * (f.q_b_m3ps + cv_b + qi - ce * pb - v.dvb_dq * qd);
+  }
+}
+
+void ArmPlant::evaluateJacobian(const double* y, double* Jdata) noexcept {
+  const int n = n_;
+  const int N = 6 * n;
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantStates, kMaxPlantStates>> J(Jdata, N, N);
+  J.setZero();
+  // Reuse the RHS pass for M, tau_cell, qdd at this state.
+  evaluateRhs(y, ydot_scratch_);
+  if (n == 1) {
+    mass_inv_(0, 0) = 1.0 / mass_(0, 0);
+  } else {
+    mass_inv_ = mass_.llt().solve(
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints>::Identity(n, n));
+  }
+  // T = d(generalised torque)/dy (n x N): actuator terms, cuff spring/damper, single-axis gravity.
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantStates> T, Tact;
+  T.setZero(n, N);
+  for (int k = 0; k < n; ++k) {
+    const JointParams& p = params_[static_cast<std::size_t>(k)];
+    if (p.actuator.kind == ActuatorKind::kIdealTorque) continue;
+    const double q = y[4 * n + k];
+    const double qd = y[5 * n + k];
+    const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
+    const StopTorque st = hardStopTorque(p, q, qd);
+    T(k, 4 * k + 2) = v.dva_dq;
+    T(k, 4 * k + 3) = v.dvb_dq;
+    T(k, 4 * n + k) = y[4 * k + 2] * v.d2va_dq2 + y[4 * k + 3] * v.d2vb_dq2 + st.d_dq;
+    T(k, 5 * n + k) = -frictionTorque(p.friction, qd).slope + st.d_dqd;
+  }
+  Tact = T;
+  if (single_axis_) {
+    const double q = y[4 * n];
+    T(0, 4 * n) -= -load_.gravity_cos_nm * std::sin(q) + load_.gravity_sin_nm * std::cos(q);
+    if (single_axis_cuff_) {
+      double tau = 0.0;
+      double dq = 0.0;
+      double dqd = 0.0;
+      singleAxisCuff(q, y[5 * n], tau, dq, dqd);
+      T(0, 4 * n) += dq;
+      T(0, 5 * n) += dqd;
+    }
+  } else if (user_.enabled) {
+    // Cuff: d(J^T f)/dq ~ -J^T K J, d/dqd = -J^T B J (rigid-body q gradients of M, C, g omitted:
+    // a modified-Newton matrix; the solution accuracy is set by the tolerances, not by it).
+    T.block(0, 4 * n, n, n) -= user_.stiffness_n_per_m * cuff_jac_.transpose() * cuff_jac_;
+    T.block(0, 5 * n, n, n) -= user_.damping_ns_per_m * cuff_jac_.transpose() * cuff_jac_;
+  }
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantStates> dqdd = mass_inv_ * T;
+  for (int k = 0; k < n; ++k) {
+    J(4 * n + k, 5 * n + k) = 1.0;
+    J.row(5 * n + k) = dqdd.row(k);
+  }
+  for (int k = 0; k < n; ++k) {
+    const JointParams& p = params_[static_cast<std::size_t>(k)];
+    if (p.actuator.kind == ActuatorKind::kIdealTorque) continue;
+    const double q = y[4 * n + k];
+    const double qd = y[5 * n + k];
+    const double xv = y[4 * k];
+    const double pa = y[4 * k + 2];
+    const double pb = y[4 * k + 3];
+    const double w = 2.0 * std::numbers::pi * p.valve.natural_frequency_hz;
+    const int S = 4 * k;
+    const int V = 4 * k + 1;
+    const int A = 4 * k + 2;
+    const int B = 4 * k + 3;
+    const int Q = 4 * n + k;
+    const int W = 5 * n + k;
+    J(S, V) = 1.0;
+    J(V, S) = -w * w;
+    J(V, V) = -2.0 * p.valve.damping_ratio * w;
+    if (p.input_mode == InputMode::kTorqueLoop) {
+      const double volts = p.torque_loop.gain_v_per_nm * (cmd_.command[k] - tau_cell_[k]);
+      const double u = p.valve.amplifier_gain_per_v * volts;
+      if (u > -1.0 && u < 1.0) {
+        const double g = w * w * p.valve.amplifier_gain_per_v * p.torque_loop.gain_v_per_nm;
+        // d tau_cell / dy = d tau_act / dy - J_act d qdd_k / dy
+        J.row(V) -= g * (Tact.row(k) - p.actuator.inertia_kgm2 * dqdd.row(k));
+      }
+    }
+    const ValveFlows f = valveFlows(p, xv, pa, pb);
+    const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
+    const double ci = p.chambers.internal_leakage_m3ps_per_pa;
+    const double ce = p.chambers.external_leakage_m3ps_per_pa;
+    const ValueSlope ba = effectiveBulkModulus(p.fluid, pa);
+    const ValueSlope bb = effectiveBulkModulus(p.fluid, pb);
+    const ValueSlope cv_a = checkValveFlow(p, pa);
+    const ValueSlope cv_b = checkValveFlow(p, pb);
+    const double fa = f.q_a_m3ps + cv_a.value - ci * (pa - pb) - ce * pa - v.dva_dq * qd;
+    const double fb = f.q_b_m3ps + cv_b.value + ci * (pa - pb) - ce * pb - v.dvb_dq * qd;
+    const double ka = ba.value / v.v_a_m3;
+    const double kb = bb.value / v.v_b_m3;
+    J(A, S) = ka * f.dqa_dx;
+    J(A, A) = ba.slope / v.v_a_m3 * fa + ka * (f.dqa_dpa + cv_a.slope - ci - ce);
+    J(A, B) = ka * ci;
+    J(A, Q) = -ka * fa * v.dva_dq / v.v_a_m3 - ka * v.d2va_dq2 * qd;
+    J(A, W) = -ka * v.dva_dq;
+    J(B, S) = kb * f.dqb_dx;
+    J(B, B) = bb.slope / v.v_b_m3 * fb + kb * (f.dqb_dpb + cv_b.slope - ci - ce);
+    J(B, A) = kb * ci;
+    J(B, Q) = -kb * fb * v.dvb_dq / v.v_b_m3 - kb * v.d2vb_dq2 * qd;
+    J(B, W) = -kb * v.dvb_dq;
+  }
+}
+
+void ArmPlant::harvestStats() noexcept {
+  void* mem = solver_->mem.get();
+  long v = 0;
+  SolverStats s = stats_base_;
+  if (CVodeGetNumSteps(mem, &v) >= 0) s.steps += v;
+  if (CVodeGetNumRhsEvals(mem, &v) >= 0) s.rhs_evals += v;
+  if (CVodeGetNumJacEvals(mem, &v) >= 0) s.jac_evals += v;
+  if (CVodeGetNumNonlinSolvIters(mem, &v) >= 0) s.nonlin_iters += v;
+  if (CVodeGetNumNonlinSolvConvFails(mem, &v) >= 0) s.nonlin_conv_fails += v;
+  if (CVodeGetNumErrTestFails(mem, &v) >= 0) s.err_test_fails += v;
+  s.root_events = stats_.root_events;
+  s.reinits = stats_.reinits;
+  stats_ = s;
+}
+
+void ArmPlant::reinitSolver() noexcept {
+  // CVodeReInit resets CVODES' counters: bank them first (research/plant.md 3.2).
+  harvestStats();
+  stats_base_ = stats_;
+  stats_base_.root_events = 0;
+  stats_base_.reinits = 0;
+  CVodeReInit(solver_->mem.get(), t_, solver_->y.get());
+  ++stats_.reinits;
+  need_reinit_ = false;
+}
+
+PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
+  if (!solver_) return PlantStatus::kNotConfigured;
+  cmd_ = command;
+  for (int k = 0; k < n_; ++k) {
+    const JointParams& p = params_[static_cast<std::size_t>(k)];
+    double full_scale = 1.0;
+    if (p.actuator.kind == ActuatorKind::kIdealTorque) {
+      full_scale = std::numeric_limits<double>::infinity();
+    } else if (p.input_mode == InputMode::kValveVoltage) {
+      full_scale = 1.0 / p.valve.amplifier_gain_per_v;
+    } else {
+      full_scale = 1.0 / (p.valve.amplifier_gain_per_v * p.torque_loop.gain_v_per_nm);
+    }
+    if (std::abs(cmd_.command[k] - last_cmd_.command[k]) > options_.reinit_command_jump * full_scale)
+      need_reinit_ = true;
+  }
+  last_cmd_ = cmd_;
+  const double t_end = t_ + dt_s;
+  void* mem = solver_->mem.get();
+  N_Vector y = solver_->y.get();
+  PlantStatus status = PlantStatus::kOk;
+  for (int event = 0;; ++event) {
+    if (need_reinit_) reinitSolver();
+    // One-shot stop time, set before every call (SUNDIALS 6.4.1 pitfall, research/plant.md 3.2).
+    CVodeSetStopTime(mem, t_end);
+    double t_reached = t_;
+    const int flag = CVode(mem, t_end, y, &t_reached, CV_NORMAL);
+    if (flag == CV_ROOT_RETURN && t_reached < t_end - 1e-9 * dt_s && event < kMaxEventsPerPeriod) {
+      // Hard-stop contact or release: the right-hand side changes form; restart the BDF history.
+      ++stats_.root_events;
+      t_ = t_reached;
+      need_reinit_ = true;
+      continue;
+    }
+    if (flag < 0) {
+      status = PlantStatus::kSolverFailure;
+      need_reinit_ = true;
+    }
+    break;
+  }
+  t_ = t_end;
+  harvestStats();
+  // Outputs at the period boundary, then the sensors.
+  const double* yv = N_VGetArrayPointer(y);
+  evaluateRhs(yv, ydot_scratch_);
+  for (int k = 0; k < n_; ++k) {
+    measured_[static_cast<std::size_t>(k)] =
+        sampleJointSensors(params_[static_cast<std::size_t>(k)], sensor_state_[static_cast<std::size_t>(k)], noise_,
+                           yv[4 * n_ + k], tau_cell_[k], dt_s);
+  }
+  return status;
+}
+
+}  // namespace fullarm::plant

@@ -1,0 +1,249 @@
+#include "fullarm/plant/plant_config.hpp"
+
+#include <cstdlib>
+
+#include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/arm/config_error.hpp"
+#include "fullarm/arm/yaml_reader.hpp"
+
+namespace fullarm::plant {
+namespace {
+
+using arm::YamlMap;
+
+constexpr int kSchemaVersion = 1;
+
+JointParams readJoint(const YamlMap& m, const arm::ArmModel& model, const JointParams& shared, int& model_index) {
+  JointParams p = shared;
+  p.name = m.string("name");
+  model_index = model.jointIndex(p.name);
+  if (model_index < 0) m.fail("name", "unknown joint name '" + p.name + "': not a joint of arm model " + model.name);
+  const arm::Joint& j = model.joints[static_cast<std::size_t>(model_index)];
+  p.min_rad = j.limits.min_rad;
+  p.max_rad = j.limits.max_rad;
+  p.potentiometer = j.potentiometer;
+  p.torque_sensor = j.torque_sensor;
+
+  const std::string mode = m.string("input_mode");
+  if (mode == "valve_voltage") {
+    p.input_mode = InputMode::kValveVoltage;
+  } else if (mode == "torque_loop") {
+    p.input_mode = InputMode::kTorqueLoop;
+  } else {
+    m.fail("input_mode", "'" + mode + "' is not an input mode: expected valve_voltage or torque_loop");
+  }
+
+  const YamlMap v = m.map("valve");
+  p.valve.natural_frequency_hz = v.number("natural_frequency_hz", "Hz");
+  p.valve.damping_ratio = v.number("damping_ratio");
+  p.valve.amplifier_gain_per_v = v.number("amplifier_gain_per_v", "normalised opening per volt");
+  p.valve.spool_stroke_m = v.number("spool_stroke_m", "metres");
+  p.valve.rated_flow_m3ps = v.number("rated_flow_m3ps", "m^3/s");
+  p.valve.rated_pressure_drop_pa = v.number("rated_pressure_drop_pa", "Pa");
+  p.valve.lap_pa_m = v.number("lap_pa_m", "metres");
+  p.valve.lap_pb_m = v.number("lap_pb_m", "metres");
+  p.valve.lap_at_m = v.number("lap_at_m", "metres");
+  p.valve.lap_bt_m = v.number("lap_bt_m", "metres");
+  p.valve.edge_rounding_m = v.number("edge_rounding_m", "metres");
+  p.valve.linear_region_pa = v.number("linear_region_pa", "Pa");
+  v.finish();
+
+  const YamlMap a = m.map("actuator");
+  const std::string type = a.string("type");
+  p.actuator.inertia_kgm2 = a.number("inertia_kgm2", "kg m^2");
+  if (type == "rotary_vane") {
+    if (j.actuator.type != arm::ActuatorGeometry::Type::kRotary) {
+      a.fail("type", "rotary_vane, but the arm model gives joint " + p.name + " a linear actuator: expected cylinder");
+    }
+    p.actuator.kind = ActuatorKind::kRotaryVane;
+    p.actuator.displacement_m3_per_rad = a.number("displacement_m3_per_rad", "m^3/rad");
+  } else if (type == "cylinder") {
+    if (j.actuator.type != arm::ActuatorGeometry::Type::kLinear) {
+      a.fail("type", "cylinder, but the arm model gives joint " + p.name + " a rotary actuator: expected rotary_vane");
+    }
+    p.actuator.kind = ActuatorKind::kCylinder;
+    p.actuator.piston_area_a_m2 = a.number("piston_area_a_m2", "m^2");
+    p.actuator.piston_area_b_m2 = a.number("piston_area_b_m2", "m^2");
+    p.actuator.lever = j.actuator;
+  } else {
+    a.fail("type", "'" + type + "' is not an actuator type: expected rotary_vane or cylinder");
+  }
+  a.finish();
+
+  const YamlMap c = m.map("chambers");
+  p.chambers.dead_volume_a_m3 = c.number("dead_volume_a_m3", "m^3");
+  p.chambers.dead_volume_b_m3 = c.number("dead_volume_b_m3", "m^3");
+  p.chambers.internal_leakage_m3ps_per_pa = c.number("internal_leakage_m3ps_per_pa", "m^3/s/Pa");
+  p.chambers.external_leakage_m3ps_per_pa = c.number("external_leakage_m3ps_per_pa", "m^3/s/Pa");
+  p.chambers.check_valve_conductance_m3ps_per_pa = c.number("check_valve_conductance_m3ps_per_pa", "m^3/s/Pa");
+  c.finish();
+
+  const YamlMap f = m.map("friction");
+  p.friction.coulomb_nm = f.number("coulomb_nm", "N m");
+  p.friction.static_nm = f.number("static_nm", "N m");
+  p.friction.stribeck_velocity_radps = f.number("stribeck_velocity_radps", "rad/s");
+  p.friction.viscous_nms_per_rad = f.number("viscous_nms_per_rad", "N m s/rad");
+  p.friction.smoothing_velocity_radps = f.number("smoothing_velocity_radps", "rad/s");
+  f.finish();
+
+  const YamlMap h = m.map("hard_stop");
+  p.hard_stop.stiffness_nm_per_rad = h.number("stiffness_nm_per_rad", "N m/rad");
+  p.hard_stop.damping_s_per_rad = h.number("damping_s_per_rad", "s/rad");
+  h.finish();
+
+  const YamlMap t = m.map("torque_loop");
+  p.torque_loop.gain_v_per_nm = t.number("gain_v_per_nm", "V per N m");
+  t.finish();
+
+  const YamlMap s = m.map("sensors");
+  p.sensor_noise.angle_noise_rad = s.number("angle_noise_rad", "rad");
+  p.sensor_noise.torque_noise_nm = s.number("torque_noise_nm", "N m");
+  p.sensor_noise.torque_bias_nm = s.number("torque_bias_nm", "N m");
+  p.sensor_noise.torque_filter_hz = s.number("torque_filter_hz", "Hz");
+  s.finish();
+  m.finish();
+  return p;
+}
+
+PlantConfig build(const YamlMap& root, const std::filesystem::path& source, const arm::ArmModel& model) {
+  PlantConfig config;
+  config.source = source;
+  if (root.integer("schema_version") != kSchemaVersion) root.fail("schema_version", "expected 1");
+  JointParams shared;
+  const YamlMap supply = root.map("supply");
+  shared.supply_pressure_pa = supply.number("supply_pressure_pa", "Pa");
+  shared.return_pressure_pa = supply.number("return_pressure_pa", "Pa");
+  supply.finish();
+  const YamlMap fluid = root.map("fluid");
+  shared.fluid.oil_bulk_modulus_pa = fluid.number("oil_bulk_modulus_pa", "Pa");
+  shared.fluid.air_fraction = fluid.number("air_fraction", "volume fraction at atmospheric pressure");
+  shared.fluid.polytropic_index = fluid.number("polytropic_index");
+  shared.fluid.atmospheric_pressure_pa = fluid.number("atmospheric_pressure_pa", "Pa");
+  fluid.finish();
+  auto check = [](const YamlMap& m, const char* key, double v, double lo, double hi) {
+    if (!(v >= lo && v <= hi)) {
+      m.fail(key, "value " + std::to_string(v) + " is out of range: expected [" + std::to_string(lo) + ", " +
+                      std::to_string(hi) + "]");
+    }
+  };
+  check(supply, "supply_pressure_pa", shared.supply_pressure_pa, 1e5, 1e8);
+  check(supply, "return_pressure_pa", shared.return_pressure_pa, 0.0, shared.supply_pressure_pa * 0.5);
+  check(fluid, "oil_bulk_modulus_pa", shared.fluid.oil_bulk_modulus_pa, 1e7, 1e11);
+  check(fluid, "air_fraction", shared.fluid.air_fraction, 0.0, 0.2);
+  check(fluid, "polytropic_index", shared.fluid.polytropic_index, 1.0, 1.67);
+  check(fluid, "atmospheric_pressure_pa", shared.fluid.atmospheric_pressure_pa, 5e4, 2e5);
+
+  const YamlMap solver = root.map("solver");
+  SolverOptions& o = config.solver;
+  o.rtol = solver.number("rtol");
+  o.atol_spool = solver.number("atol_spool");
+  o.atol_spool_rate_per_s = solver.number("atol_spool_rate_per_s", "1/s");
+  o.atol_pressure_pa = solver.number("atol_pressure_pa", "Pa");
+  o.atol_angle_rad = solver.number("atol_angle_rad", "rad");
+  o.atol_velocity_radps = solver.number("atol_velocity_radps", "rad/s");
+  o.max_steps_per_period = solver.integer("max_steps_per_period");
+  o.reinit_command_jump = solver.number("reinit_command_jump", "fraction of full scale");
+  const std::string jac = solver.string("jacobian");
+  if (jac == "analytic") {
+    o.jacobian = JacobianKind::kAnalytic;
+  } else if (jac == "finite_difference") {
+    o.jacobian = JacobianKind::kFiniteDifference;
+  } else {
+    solver.fail("jacobian", "'" + jac + "': expected analytic or finite_difference");
+  }
+  for (const auto& [key, value] :
+       {std::pair{"rtol", o.rtol}, std::pair{"atol_spool", o.atol_spool},
+        std::pair{"atol_spool_rate_per_s", o.atol_spool_rate_per_s}, std::pair{"atol_pressure_pa", o.atol_pressure_pa},
+        std::pair{"atol_angle_rad", o.atol_angle_rad}, std::pair{"atol_velocity_radps", o.atol_velocity_radps}}) {
+    if (!(value > 0.0 && value < 1e9)) solver.fail(key, "expected a positive tolerance");
+  }
+  if (!(o.rtol < 1e-2)) solver.fail("rtol", "expected a relative tolerance below 1e-2");
+  if (o.max_steps_per_period < 10) solver.fail("max_steps_per_period", "expected at least 10");
+  if (!(o.reinit_command_jump > 0.0)) solver.fail("reinit_command_jump", "expected a positive fraction");
+  solver.finish();
+
+  const YamlMap user = root.map("user_arm");
+  UserArmParams& u = config.user_arm;
+  const std::string enabled = user.string("enabled");
+  if (enabled != "true" && enabled != "false") user.fail("enabled", "'" + enabled + "': expected true or false");
+  u.enabled = enabled == "true";
+  const std::string link = user.string("link");
+  u.link = model.jointIndex(link);
+  if (u.link < 0) user.fail("link", "unknown link (joint) name '" + link + "'");
+  u.point_L = user.vector3("point_m", "metres, link frame");
+  u.mass_kg = user.number("mass_kg", "kg");
+  u.stiffness_n_per_m = user.number("stiffness_n_per_m", "N/m");
+  u.damping_ns_per_m = user.number("damping_ns_per_m", "N s/m");
+  if (!(u.mass_kg >= 0.0)) user.fail("mass_kg", "expected >= 0");
+  if (!(u.stiffness_n_per_m >= 0.0)) user.fail("stiffness_n_per_m", "expected >= 0");
+  if (!(u.damping_ns_per_m >= 0.0)) user.fail("damping_ns_per_m", "expected >= 0");
+  user.finish();
+
+  const int seed = root.integer("noise_seed");
+  if (seed < 0) root.fail("noise_seed", "expected a seed >= 0");
+  config.seed = static_cast<std::uint64_t>(seed);
+
+  const arm::YamlList joints = root.list("joints");
+  std::vector<int> indices;
+  for (std::size_t i = 0; i < joints.size(); ++i) {
+    const YamlMap jm = joints.map(i);
+    int index = -1;
+    JointParams p = readJoint(jm, model, shared, index);
+    for (int seen : indices) {
+      if (seen == index) jm.fail("name", "joint '" + p.name + "' is listed twice");
+    }
+    if (model.joints[static_cast<std::size_t>(index)].is_hand)
+      jm.fail("name", "hand joint '" + p.name + "' has no hydraulic model");
+    validateJointParams(p, source.string(), jm.path());
+    indices.push_back(index);
+    config.joints.push_back(std::move(p));
+  }
+  if (config.joints.size() != static_cast<std::size_t>(model.numArmJoints())) {
+    root.fail("joints", "expected one entry per arm joint (" + std::to_string(model.numArmJoints()) + "), got " +
+                            std::to_string(config.joints.size()));
+  }
+  root.finish();
+  return config;
+}
+
+}  // namespace
+
+PlantConfig parsePlantConfig(std::string_view yaml_text, const std::filesystem::path& source,
+                             const arm::ArmModel& model) {
+  const YamlMap root = YamlMap::parse(yaml_text, source);
+  try {
+    return build(root, source, model);
+  } catch (const arm::ConfigError& e) {
+    if (e.line() != 0) throw;
+    throw arm::ConfigError(e.file(), e.keyPath(), e.message(), arm::lineOfKeyPath(root.node(), e.keyPath()));
+  }
+}
+
+PlantConfig loadPlantConfig(const std::filesystem::path& file, const arm::ArmModel& model) {
+  const YamlMap root = YamlMap::load(file);
+  try {
+    return build(root, file, model);
+  } catch (const arm::ConfigError& e) {
+    if (e.line() != 0) throw;
+    throw arm::ConfigError(e.file(), e.keyPath(), e.message(), arm::lineOfKeyPath(root.node(), e.keyPath()));
+  }
+}
+
+std::filesystem::path defaultPlantConfigPath() {
+  return arm::defaultConfigPath("dts_plant.yaml");
+}
+
+int findPlantJoint(const PlantConfig& config, std::string_view name) {
+  std::string known;
+  for (std::size_t i = 0; i < config.joints.size(); ++i) {
+    const std::string& full = config.joints[i].name;
+    const std::string_view shortname =
+        full.starts_with("R_") ? std::string_view(full).substr(2) : std::string_view(full);
+    if (name == full || name == shortname) return static_cast<int>(i);
+    known += (known.empty() ? "" : ", ") + std::string(shortname);
+  }
+  throw arm::ConfigError(config.source, "joint",
+                         "unknown joint name '" + std::string(name) + "': expected one of " + known);
+}
+
+}  // namespace fullarm::plant

@@ -1,0 +1,83 @@
+#include "fullarm/plant/sensor_model.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include "fullarm/arm/sensors.hpp"
+
+namespace fullarm::plant {
+namespace {
+
+std::uint64_t rotl(std::uint64_t x, int k) noexcept {
+  return (x << k) | (x >> (64 - k));
+}
+
+std::uint64_t splitMix64(std::uint64_t& x) noexcept {
+  std::uint64_t z = (x += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
+void GaussianNoise::reseed(std::uint64_t seed) noexcept {
+  std::uint64_t x = seed;
+  for (std::uint64_t& s : s_) s = splitMix64(x);
+  has_spare_ = false;
+}
+
+std::uint64_t GaussianNoise::nextBits() noexcept {
+  // xoshiro256** (Blackman and Vigna, 2018).
+  const std::uint64_t result = rotl(s_[1] * 5, 7) * 9;
+  const std::uint64_t t = s_[1] << 17;
+  s_[2] ^= s_[0];
+  s_[3] ^= s_[1];
+  s_[1] ^= s_[2];
+  s_[0] ^= s_[3];
+  s_[2] ^= t;
+  s_[3] = rotl(s_[3], 45);
+  return result;
+}
+
+double GaussianNoise::nextUniform() noexcept {
+  return (static_cast<double>(nextBits() >> 11) + 1.0) * 0x1.0p-53;
+}
+
+double GaussianNoise::next() noexcept {
+  if (has_spare_) {
+    has_spare_ = false;
+    return spare_;
+  }
+  // Box-Muller transform.
+  const double r = std::sqrt(-2.0 * std::log(nextUniform()));
+  const double a = 2.0 * std::numbers::pi * nextUniform();
+  spare_ = r * std::sin(a);
+  has_spare_ = true;
+  return r * std::cos(a);
+}
+
+JointMeasurement sampleJointSensors(const JointParams& p, JointSensorState& state, GaussianNoise& noise,
+                                    double q_true_rad, double tau_true_nm, double dt_s) noexcept {
+  const SensorNoiseParams& n = p.sensor_noise;
+  JointMeasurement m;
+  // Potentiometer: analog noise, then the 12-bit ADC and the SL count-to-angle rule.
+  const double q_analog = q_true_rad + n.angle_noise_rad * noise.next();
+  m.q_counts = arm::quantizeCode(arm::potentiometerCounts(p.potentiometer, q_analog), p.potentiometer.bits);
+  m.q_rad = arm::potentiometerAngle(p.potentiometer, m.q_counts);
+  // Load cell: bias and noise, first-order analog filter (exact ZOH discretisation), ADC.
+  const double tau_analog = tau_true_nm + n.torque_bias_nm + n.torque_noise_nm * noise.next();
+  if (!state.initialised || n.torque_filter_hz <= 0.0) {
+    state.torque_filtered_nm = tau_analog;
+    state.initialised = true;
+  } else {
+    const double a = std::exp(-2.0 * std::numbers::pi * n.torque_filter_hz * dt_s);
+    state.torque_filtered_nm = a * state.torque_filtered_nm + (1.0 - a) * tau_analog;
+  }
+  m.tau_counts =
+      arm::quantizeCode(arm::torqueSensorCounts(p.torque_sensor, state.torque_filtered_nm), p.torque_sensor.bits);
+  m.tau_nm = arm::torqueSensorTorque(p.torque_sensor, m.tau_counts);
+  return m;
+}
+
+}  // namespace fullarm::plant

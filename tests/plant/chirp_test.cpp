@@ -1,0 +1,104 @@
+// Full-amplitude 0.5-80 Hz chirps on every joint of the default DTS plant: pressures stay in
+// [return, supply], the hard stops hold, and the response does not depend on the tolerance.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "fullarm/plant/signals.hpp"
+#include "plant_fixture.hpp"
+#include "plant_test_util.hpp"
+
+namespace fullarm::plant {
+namespace {
+
+using test::PlantTolerance;
+
+// Check valves bound the pressures up to the flow they must pass: 0.5 MPa is 2.4 % of supply.
+constexpr double kPressureMargin_pa = 0.5e6;
+
+struct ChirpRun {
+  std::vector<double> q, p_load;
+  double p_min = 1e300, p_max = -1e300, overshoot_rad = 0.0;
+};
+
+// Starts `start_from_limit_rad` inside the upper limit (0: the default posture).
+ChirpRun runChirp(const JointParams& joint, const SolverOptions& options, double duration_s,
+                  double start_from_limit_rad = 0.0) {
+  const arm::ArmModel& model = test::dtsModel();
+  Eigen::VectorXd posture = model.defaultPosture();
+  if (start_from_limit_rad > 0.0) posture[model.jointIndex(joint.name)] = joint.max_rad - start_from_limit_rad;
+  ArmPlant plant;
+  plant.configure(model, {joint}, posture, UserArmParams{}, options, 1);
+  SignalParams s;
+  s.kind = SignalKind::kChirp;
+  s.amplitude = 1.0 / joint.valve.amplifier_gain_per_v;  // full valve opening
+  s.start_hz = 0.5;
+  s.stop_hz = 80.0;
+  s.duration_s = duration_s;
+  PlantCommand cmd = PlantCommand::zero(1);
+  ChirpRun r;
+  const int periods = static_cast<int>(duration_s * 1000.0);
+  for (int k = 0; k < periods; ++k) {
+    cmd.command[0] = signalValue(s, k * 1e-3);
+    EXPECT_EQ(plant.step(1e-3, cmd), PlantStatus::kOk) << plant.lastError();
+    const JointState st = plant.state(0);
+    r.q.push_back(st.q_rad);
+    r.p_load.push_back(st.p_a_pa - st.p_b_pa);
+    r.p_min = std::min({r.p_min, st.p_a_pa, st.p_b_pa});
+    r.p_max = std::max({r.p_max, st.p_a_pa, st.p_b_pa});
+    r.overshoot_rad = std::max({r.overshoot_rad, st.q_rad - joint.max_rad, joint.min_rad - st.q_rad});
+  }
+  return r;
+}
+
+double rmsDifferenceRatio(const std::vector<double>& a, const std::vector<double>& b) {
+  double mean = 0.0;
+  for (double v : a) mean += v / static_cast<double>(a.size());
+  double diff = 0.0;
+  double ref = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    diff += (a[i] - b[i]) * (a[i] - b[i]);
+    ref += (a[i] - mean) * (a[i] - mean);
+  }
+  return std::sqrt(diff / ref);
+}
+
+TEST(PlantChirp, PressuresStayWithinSupplyAndReturnAndStopsHold) {
+  const PlantConfig& config = test::dtsPlant();
+  int joints_at_stop = 0;
+  for (const JointParams& joint : config.joints) {
+    const ChirpRun r = runChirp(joint, config.solver, 4.0, 0.1);
+    EXPECT_GE(r.p_min, joint.return_pressure_pa - kPressureMargin_pa) << joint.name;
+    EXPECT_LE(r.p_max, joint.supply_pressure_pa + kPressureMargin_pa) << joint.name;
+    EXPECT_LE(r.overshoot_rad * 180.0 / std::numbers::pi, PlantTolerance::kIssueStopDeg) << joint.name;
+    // The chirp loads the chambers to near supply and return (the bounds are not vacuous).
+    EXPECT_GT(r.p_max - r.p_min, 0.3 * (joint.supply_pressure_pa - joint.return_pressure_pa)) << joint.name;
+    if (r.overshoot_rad > 0.0) ++joints_at_stop;
+  }
+  // Started 0.1 rad inside the upper limit, the first half wave drives every joint into the stop.
+  EXPECT_EQ(joints_at_stop, static_cast<int>(config.joints.size()));
+}
+
+TEST(PlantChirp, ResponseIsIndependentOfSolverTolerance) {
+  const PlantConfig& config = test::dtsPlant();
+  const JointParams& joint = config.joints[static_cast<std::size_t>(findPlantJoint(config, "EB"))];
+  SolverOptions half = config.solver;
+  half.rtol *= 0.5;
+  const ChirpRun a = runChirp(joint, config.solver, 4.0);
+  const ChirpRun b = runChirp(joint, half, 4.0);
+  EXPECT_LT(rmsDifferenceRatio(a.q, b.q), PlantTolerance::kIssueRtolRms);
+  EXPECT_LT(rmsDifferenceRatio(a.p_load, b.p_load), PlantTolerance::kIssueRtolRms);
+  // ... and the comparison is not vacuous: a tenfold looser rtol is visibly different.
+  SolverOptions loose = config.solver;
+  loose.rtol *= 100.0;
+  loose.atol_pressure_pa *= 100.0;
+  loose.atol_angle_rad *= 100.0;
+  const ChirpRun c = runChirp(joint, loose, 4.0);
+  EXPECT_GT(rmsDifferenceRatio(a.p_load, c.p_load), 1e-5);
+}
+
+}  // namespace
+}  // namespace fullarm::plant

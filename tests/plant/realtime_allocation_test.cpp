@@ -1,0 +1,58 @@
+// step() must not touch the heap: single joint and whole arm, across command jumps
+// (re-initialisation), hard-stop events (root finding) and both input modes.
+
+#include <gtest/gtest.h>
+
+#include "alloc_guard.hpp"
+#include "plant_fixture.hpp"
+
+namespace fullarm::plant {
+namespace {
+
+TEST(PlantRealtime, GuardIsActive) {
+  EXPECT_TRUE(fullarm::testing::mallocWrappersActive());
+}
+
+TEST(PlantRealtime, SingleJointStepDoesNotAllocate) {
+  const arm::ArmModel& model = test::dtsModel();
+  const PlantConfig& config = test::dtsPlant();
+  for (const InputMode mode : {InputMode::kValveVoltage, InputMode::kTorqueLoop}) {
+    JointParams p = config.joints[static_cast<std::size_t>(findPlantJoint(config, "EB"))];
+    p.input_mode = mode;
+    ArmPlant plant;
+    plant.configure(model, {p}, model.defaultPosture(), config.user_arm, config.solver, config.seed);
+    PlantCommand cmd = PlantCommand::zero(1);
+    for (int k = 0; k < 1200; ++k) {
+      // Full-scale square wave: jumps (re-init) and slams into both stops (root events).
+      cmd.command[0] = (k / 300) % 2 == 0 ? 10.0 : -10.0;
+      if (mode == InputMode::kTorqueLoop) cmd.command[0] *= 5.0;
+      PlantStatus status = PlantStatus::kOk;
+      EXPECT_NO_HEAP_ALLOCATION(status = plant.step(1e-3, cmd));
+      ASSERT_EQ(status, PlantStatus::kOk) << plant.lastError();
+    }
+    EXPECT_GT(plant.stats().root_events, 0) << "the test must exercise hard-stop events";
+    EXPECT_GT(plant.stats().reinits, 2);
+  }
+}
+
+TEST(PlantRealtime, WholeArmStepDoesNotAllocate) {
+  const arm::ArmModel& model = test::dtsModel();
+  const PlantConfig& config = test::dtsPlant();
+  UserArmParams user = config.user_arm;
+  user.enabled = true;
+  ArmPlant plant;
+  plant.configure(model, config.joints, model.defaultPosture(), user, config.solver, config.seed);
+  PlantCommand cmd = PlantCommand::zero(plant.numJoints());
+  for (int k = 0; k < 60; ++k) {
+    for (int j = 0; j < plant.numJoints(); ++j) cmd.command[j] = (k / 20) % 2 == 0 ? 4.0 : -4.0;
+    cmd.tau_user_nm[0] = 1.0;
+    cmd.tau_contact_nm[3] = -2.0;
+    PlantStatus status = PlantStatus::kOk;
+    EXPECT_NO_HEAP_ALLOCATION(status = plant.step(1e-3, cmd));
+    ASSERT_EQ(status, PlantStatus::kOk) << plant.lastError();
+  }
+  EXPECT_GT(plant.stats().reinits, 1);
+}
+
+}  // namespace
+}  // namespace fullarm::plant
