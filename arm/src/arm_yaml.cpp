@@ -243,6 +243,8 @@ std::filesystem::path defaultConfigPath(std::string_view file_name) {
   return source;
 }
 
-std::filesystem::path defaultArmModelPath() { return defaultConfigPath("dts_master.yaml"); }
+std::filesystem::path defaultArmModelPath() {
+  return defaultConfigPath("dts_master.yaml");
+}
 
 }  // namespace fullarm::arm

@@ -104,15 +104,7 @@ class CliBadConfig : public ::testing::TestWithParam<BadConfigCase> {};
 TEST_P(CliBadConfig, NamesFileKeyAndExpectationAndExitsNonZero) {
   const BadConfigCase& c = GetParam();
   const auto dir = tempDir(std::string("bad_") + c.name);
-  std::ifstream in(source("config/dts_master.yaml"));
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  const std::size_t at = yaml.find(c.from);
-  ASSERT_NE(at, std::string::npos) << c.from;
-  yaml.replace(at, std::string(c.from).size(), c.to);
-  const auto file = dir / "arm.yaml";
-  std::ofstream(file) << yaml;
+  const auto file = editedConfig(dir, c.from, c.to);
   const Result r = runFullarm("arm show --config " + file.string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find(file.string()), std::string::npos) << r.output;
@@ -140,14 +132,7 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(Cli, FailingVerdictExitsOne) {
   // A shoulder that can only deliver 1 N m cannot hold the arm at the default posture.
   const auto dir = tempDir("weak_shoulder");
-  std::ifstream in(source("config/dts_master.yaml"));
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  const std::string from = "velocity_radps: 3.0, torque_nm: 99.6}";
-  yaml.replace(yaml.find(from), from.size(), "velocity_radps: 3.0, torque_nm: 1.0}");
-  const auto file = dir / "arm.yaml";
-  std::ofstream(file) << yaml;
+  const auto file = editedConfig(dir, "velocity_radps: 3.0, torque_nm: 99.6}", "velocity_radps: 3.0, torque_nm: 1.0}");
   const Result r = runFullarm("arm show --config " + file.string() + " --out " + (dir / "out").string());
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("BEYOND the joint torque limits"), std::string::npos) << r.output;

@@ -20,8 +20,8 @@ namespace fullarm::arm {
 [[nodiscard]] ArmModel parseArmModel(std::string_view yaml_text, const std::filesystem::path& source);
 
 /// Path of a default configuration file `file_name` (e.g. "dts_plant.yaml"):
-/// $FULLARM_CONFIG_DIR/<file_name> if that variable is set; else, for a program installed under the install prefix, the installed config; else the
-/// source tree's config/ (when the tree the library was built from still exists), else the
+/// $FULLARM_CONFIG_DIR/<file_name> if that variable is set; else, for a program installed under the install prefix, the
+/// installed config; else the source tree's config/ (when the tree the library was built from still exists), else the
 /// installed one.
 [[nodiscard]] std::filesystem::path defaultConfigPath(std::string_view file_name);
 
