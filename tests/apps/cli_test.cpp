@@ -42,6 +42,20 @@ std::string source(const std::string& rel) {
   return std::string(FULLARM_TEST_SOURCE_DIR) + "/" + rel;
 }
 
+// Writes dir/arm.yaml: the default model with the first `from` replaced by `to`.
+std::filesystem::path editedConfig(const std::filesystem::path& dir, const std::string& from, const std::string& to) {
+  std::ifstream in(source("config/dts_master.yaml"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::size_t at = yaml.find(from);
+  EXPECT_NE(at, std::string::npos) << "fixture text not found: " << from;
+  if (at != std::string::npos) yaml.replace(at, from.size(), to);
+  const auto file = dir / "arm.yaml";
+  std::ofstream(file) << yaml;
+  return file;
+}
+
 TEST(Cli, HelpOnEveryCommand) {
   for (const char* args : {"--help", "arm --help", "arm show --help", "demo --help"}) {
     const Result r = runFullarm(args);
