@@ -27,6 +27,26 @@ namespace fullarm::plant {
 // ---- RAII ownership of every SUNDIALS handle (research/plant.md section 3.5) ---------------
 namespace {
 
+// Layout of the CVODES state vector for n joints: joint k's hydraulic states at
+// hydraulicIndex(k, kSpool .. kPressureB) = 4k .. 4k+3, then the n joint angles, then the n
+// joint velocities; 6n states in all.
+constexpr int kSpool = 0;
+constexpr int kSpoolRate = 1;
+constexpr int kPressureA = 2;
+constexpr int kPressureB = 3;
+constexpr int hydraulicIndex(int k, int state) {
+  return 4 * k + state;
+}
+constexpr int angleIndex(int n, int k) {
+  return 4 * n + k;
+}
+constexpr int velocityIndex(int n, int k) {
+  return 5 * n + k;
+}
+constexpr int stateSize(int n) {
+  return 6 * n;
+}
+
 struct ContextDeleter {
   void operator()(SUNContext c) const noexcept { SUNContext_Free(&c); }
 };
@@ -161,7 +181,7 @@ struct SolverCallbacks {
     const int n = plant->n_;
     for (int k = 0; k < n; ++k) {
       const JointParams& p = plant->params_[static_cast<std::size_t>(k)];
-      const double q = y[4 * n + k];
+      const double q = y[angleIndex(n, k)];
       const bool ideal = p.actuator.kind == ActuatorKind::kIdealTorque;
       g[2 * k] = ideal ? -1.0 : q - p.max_rad;
       g[2 * k + 1] = ideal ? -1.0 : p.min_rad - q;
@@ -294,7 +314,7 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   sensor_state_.assign(static_cast<std::size_t>(n_), JointSensorState{});
   measured_.assign(static_cast<std::size_t>(n_), JointMeasurement{});
 
-  const auto N = static_cast<sunindextype>(6 * n_);
+  const auto N = static_cast<sunindextype>(stateSize(n_));
   auto s = std::make_unique<Solver>();
   SUNContext ctx = nullptr;
   check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create");
@@ -304,12 +324,12 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   N_VConst(0.0, s->y.get());
   double* atol = N_VGetArrayPointer(s->abstol.get());
   for (int k = 0; k < n_; ++k) {
-    atol[4 * k + 0] = options.atol_spool;
-    atol[4 * k + 1] = options.atol_spool_rate_per_s;
-    atol[4 * k + 2] = options.atol_pressure_pa;
-    atol[4 * k + 3] = options.atol_pressure_pa;
-    atol[4 * n_ + k] = options.atol_angle_rad;
-    atol[5 * n_ + k] = options.atol_velocity_radps;
+    atol[hydraulicIndex(k, kSpool)] = options.atol_spool;
+    atol[hydraulicIndex(k, kSpoolRate)] = options.atol_spool_rate_per_s;
+    atol[hydraulicIndex(k, kPressureA)] = options.atol_pressure_pa;
+    atol[hydraulicIndex(k, kPressureB)] = options.atol_pressure_pa;
+    atol[angleIndex(n_, k)] = options.atol_angle_rad;
+    atol[velocityIndex(n_, k)] = options.atol_velocity_radps;
   }
   s->mem.reset(checkPtr(CVodeCreate(CV_BDF, ctx), "CVodeCreate"));
   void* mem = s->mem.get();
@@ -346,12 +366,12 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
   double* y = N_VGetArrayPointer(solver_->y.get());
   for (int k = 0; k < n_; ++k) {
     const JointState& s = initial[static_cast<std::size_t>(k)];
-    y[4 * k + 0] = s.spool;
-    y[4 * k + 1] = s.spool_rate_per_s;
-    y[4 * k + 2] = s.p_a_pa;
-    y[4 * k + 3] = s.p_b_pa;
-    y[4 * n_ + k] = s.q_rad;
-    y[5 * n_ + k] = s.qd_radps;
+    y[hydraulicIndex(k, kSpool)] = s.spool;
+    y[hydraulicIndex(k, kSpoolRate)] = s.spool_rate_per_s;
+    y[hydraulicIndex(k, kPressureA)] = s.p_a_pa;
+    y[hydraulicIndex(k, kPressureB)] = s.p_b_pa;
+    y[angleIndex(n_, k)] = s.q_rad;
+    y[velocityIndex(n_, k)] = s.qd_radps;
   }
   t_ = 0.0;
   stats_ = stats_base_ = {};
@@ -361,7 +381,7 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
   if (model_) {
     // The cuff spring rests where the cuff is at the initial state.
     q_full_ = posture_;
-    for (int k = 0; k < n_; ++k) q_full_[active_[static_cast<std::size_t>(k)]] = y[4 * n_ + k];
+    for (int k = 0; k < n_; ++k) q_full_[active_[static_cast<std::size_t>(k)]] = y[angleIndex(n_, k)];
     arm::computeForwardKinematics(*model_, *data_, q_full_);
     if (user_.enabled) cuff_anchor_W_ = arm::pointInWorld(*data_, user_.link, user_.point_L);
   }
@@ -376,18 +396,23 @@ void ArmPlant::initialiseSensors() noexcept {
   for (int k = 0; k < n_; ++k) {
     measured_[static_cast<std::size_t>(k)] =
         sampleJointSensors(params_[static_cast<std::size_t>(k)], sensor_state_[static_cast<std::size_t>(k)], noise_,
-                           y[4 * n_ + k], tau_cell_[k], 0.0);
+                           y[angleIndex(n_, k)], tau_cell_[k], 0.0);
   }
 }
 
 JointState ArmPlant::state(int k) const noexcept {
   const double* y = N_VGetArrayPointer(solver_->y.get());
-  return {y[4 * k], y[4 * k + 1], y[4 * k + 2], y[4 * k + 3], y[4 * n_ + k], y[5 * n_ + k]};
+  return {y[hydraulicIndex(k, kSpool)],
+          y[hydraulicIndex(k, kSpoolRate)],
+          y[hydraulicIndex(k, kPressureA)],
+          y[hydraulicIndex(k, kPressureB)],
+          y[angleIndex(n_, k)],
+          y[velocityIndex(n_, k)]};
 }
 
 Eigen::VectorXd ArmPlant::stateVector() const {
   const double* y = N_VGetArrayPointer(solver_->y.get());
-  return Eigen::Map<const Eigen::VectorXd>(y, 6 * n_);
+  return Eigen::Map<const Eigen::VectorXd>(y, stateSize(n_));
 }
 
 void ArmPlant::singleAxisCuff(double q, double qd, double& tau, double& dtau_dq, double& dtau_dqd) const noexcept {
@@ -407,8 +432,8 @@ void ArmPlant::singleAxisCuff(double q, double qd, double& tau, double& dtau_dq,
 void ArmPlant::mechanics(const double* y) noexcept {
   const int n = n_;
   if (single_axis_) {
-    const double q = y[4 * n];
-    const double qd = y[5 * n];
+    const double q = y[angleIndex(n, 0)];
+    const double qd = y[velocityIndex(n, 0)];
     mass_(0, 0) = load_.inertia_kgm2 + params_[0].actuator.inertia_kgm2;
     mass_inv_(0, 0) = 1.0 / mass_(0, 0);
     h_[0] = load_.gravity_cos_nm * std::cos(q) + load_.gravity_sin_nm * std::sin(q);
@@ -423,8 +448,8 @@ void ArmPlant::mechanics(const double* y) noexcept {
   }
   for (int k = 0; k < n; ++k) {
     const int i = active_[static_cast<std::size_t>(k)];
-    q_full_[i] = y[4 * n + k];
-    qd_full_[i] = y[5 * n + k];
+    q_full_[i] = y[angleIndex(n, k)];
+    qd_full_[i] = y[velocityIndex(n, k)];
   }
   // Newton-Euler (fullarm::arm): h = C(q, qd) qd + g(q), then M(q).
   arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, zero_full_);
@@ -502,15 +527,15 @@ void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {
   // Actuator torques: hydraulic (virtual work tau = p_a dV_a/dq + p_b dV_b/dq), friction, stops.
   for (int k = 0; k < n; ++k) {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
-    const double q = y[4 * n + k];
-    const double qd = y[5 * n + k];
+    const double q = y[angleIndex(n, k)];
+    const double qd = y[velocityIndex(n, k)];
     if (p.actuator.kind == ActuatorKind::kIdealTorque) {
       tau_hyd_[k] = cmd_.command[k];
       tau_act_[k] = tau_hyd_[k];
       continue;
     }
     const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
-    tau_hyd_[k] = y[4 * k + 2] * v.dva_dq + y[4 * k + 3] * v.dvb_dq;
+    tau_hyd_[k] = y[hydraulicIndex(k, kPressureA)] * v.dva_dq + y[hydraulicIndex(k, kPressureB)] * v.dvb_dq;
     tau_act_[k] = tau_hyd_[k] - frictionTorque(p.friction, qd).value + hardStopTorque(p, q, qd).torque_nm;
   }
   // M qdd = tau_act + tau_user + tau_contact + tau_cuff - (C qd + g)   (rigid body, Craig 6.5)
@@ -523,14 +548,15 @@ void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {
   }
   for (int k = 0; k < n; ++k) {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
-    const double q = y[4 * n + k];
-    const double qd = y[5 * n + k];
+    const double q = y[angleIndex(n, k)];
+    const double qd = y[velocityIndex(n, k)];
     // Load cell between the actuator side and the link: tau_cell = tau_act - J_act qdd.
     tau_cell_[k] = tau_act_[k] - p.actuator.inertia_kgm2 * qdd_[k];
-    ydot[4 * n + k] = qd;
-    ydot[5 * n + k] = qdd_[k];
+    ydot[angleIndex(n, k)] = qd;
+    ydot[velocityIndex(n, k)] = qdd_[k];
     if (p.actuator.kind == ActuatorKind::kIdealTorque) {
-      ydot[4 * k] = ydot[4 * k + 1] = ydot[4 * k + 2] = ydot[4 * k + 3] = 0.0;
+      ydot[hydraulicIndex(k, kSpool)] = ydot[hydraulicIndex(k, kSpoolRate)] = ydot[hydraulicIndex(k, kPressureA)] =
+          ydot[hydraulicIndex(k, kPressureB)] = 0.0;
       continue;
     }
     // Spool (research/plant.md 1.1): xv'' = w^2 (u - xv) - 2 zeta w xv'.
@@ -539,13 +565,13 @@ void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {
                              : p.torque_loop.gain_v_per_nm * (cmd_.command[k] - tau_cell_[k]);
     const double u = std::clamp(p.valve.amplifier_gain_per_v * volts, -1.0, 1.0);
     const double w = 2.0 * std::numbers::pi * p.valve.natural_frequency_hz;
-    const double xv = y[4 * k];
-    const double vv = y[4 * k + 1];
-    ydot[4 * k] = vv;
-    ydot[4 * k + 1] = w * w * (u - xv) - 2.0 * p.valve.damping_ratio * w * vv;
+    const double xv = y[hydraulicIndex(k, kSpool)];
+    const double vv = y[hydraulicIndex(k, kSpoolRate)];
+    ydot[hydraulicIndex(k, kSpool)] = vv;
+    ydot[hydraulicIndex(k, kSpoolRate)] = w * w * (u - xv) - 2.0 * p.valve.damping_ratio * w * vv;
     // Chambers (research/plant.md 1.3): p' = beta(p)/V (Q_in - leakage - dV/dt).
-    const double pa = y[4 * k + 2];
-    const double pb = y[4 * k + 3];
+    const double pa = y[hydraulicIndex(k, kPressureA)];
+    const double pb = y[hydraulicIndex(k, kPressureB)];
     const ValveFlows f = valveFlows(p, xv, pa, pb);
     const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
     const double qi = p.chambers.internal_leakage_m3ps_per_pa * (pa - pb);
@@ -554,14 +580,14 @@ void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {
     const double beta_b = effectiveBulkModulus(p.fluid, pb).value;
     const double cv_a = checkValveFlow(p, pa).value;
     const double cv_b = checkValveFlow(p, pb).value;
-    ydot[4 * k + 2] = beta_a / v.v_a_m3 * (f.q_a_m3ps + cv_a - qi - ce * pa - v.dva_dq * qd);
-    ydot[4 * k + 3] = beta_b / v.v_b_m3 * (f.q_b_m3ps + cv_b + qi - ce * pb - v.dvb_dq * qd);
+    ydot[hydraulicIndex(k, kPressureA)] = beta_a / v.v_a_m3 * (f.q_a_m3ps + cv_a - qi - ce * pa - v.dva_dq * qd);
+    ydot[hydraulicIndex(k, kPressureB)] = beta_b / v.v_b_m3 * (f.q_b_m3ps + cv_b + qi - ce * pb - v.dvb_dq * qd);
   }
 }
 
 void ArmPlant::evaluateJacobian(const double* y, double* Jdata) noexcept {
   const int n = n_;
-  const int N = 6 * n;
+  const int N = stateSize(n);
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantStates, kMaxPlantStates>> J(Jdata, N, N);
   J.setZero();
   // Reuse the RHS pass for M, tau_cell, qdd at this state.
@@ -578,53 +604,54 @@ void ArmPlant::evaluateJacobian(const double* y, double* Jdata) noexcept {
   for (int k = 0; k < n; ++k) {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
     if (p.actuator.kind == ActuatorKind::kIdealTorque) continue;
-    const double q = y[4 * n + k];
-    const double qd = y[5 * n + k];
+    const double q = y[angleIndex(n, k)];
+    const double qd = y[velocityIndex(n, k)];
     const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
     const StopTorque st = hardStopTorque(p, q, qd);
-    T(k, 4 * k + 2) = v.dva_dq;
-    T(k, 4 * k + 3) = v.dvb_dq;
-    T(k, 4 * n + k) = y[4 * k + 2] * v.d2va_dq2 + y[4 * k + 3] * v.d2vb_dq2 + st.d_dq;
-    T(k, 5 * n + k) = -frictionTorque(p.friction, qd).slope + st.d_dqd;
+    T(k, hydraulicIndex(k, kPressureA)) = v.dva_dq;
+    T(k, hydraulicIndex(k, kPressureB)) = v.dvb_dq;
+    T(k, angleIndex(n, k)) =
+        y[hydraulicIndex(k, kPressureA)] * v.d2va_dq2 + y[hydraulicIndex(k, kPressureB)] * v.d2vb_dq2 + st.d_dq;
+    T(k, velocityIndex(n, k)) = -frictionTorque(p.friction, qd).slope + st.d_dqd;
   }
   Tact = T;
   if (single_axis_) {
-    const double q = y[4 * n];
-    T(0, 4 * n) -= -load_.gravity_cos_nm * std::sin(q) + load_.gravity_sin_nm * std::cos(q);
+    const double q = y[angleIndex(n, 0)];
+    T(0, angleIndex(n, 0)) -= -load_.gravity_cos_nm * std::sin(q) + load_.gravity_sin_nm * std::cos(q);
     if (single_axis_cuff_) {
       double tau = 0.0;
       double dq = 0.0;
       double dqd = 0.0;
-      singleAxisCuff(q, y[5 * n], tau, dq, dqd);
-      T(0, 4 * n) += dq;
-      T(0, 5 * n) += dqd;
+      singleAxisCuff(q, y[velocityIndex(n, 0)], tau, dq, dqd);
+      T(0, angleIndex(n, 0)) += dq;
+      T(0, velocityIndex(n, 0)) += dqd;
     }
   } else if (user_.enabled) {
     // Cuff: d(J^T f)/dq ~ -J^T K J, d/dqd = -J^T B J (rigid-body q gradients of M, C, g omitted:
     // a modified-Newton matrix; the solution accuracy is set by the tolerances, not by it).
-    T.block(0, 4 * n, n, n) -= user_.stiffness_n_per_m * cuff_jac_.transpose() * cuff_jac_;
-    T.block(0, 5 * n, n, n) -= user_.damping_ns_per_m * cuff_jac_.transpose() * cuff_jac_;
+    T.block(0, angleIndex(n, 0), n, n) -= user_.stiffness_n_per_m * cuff_jac_.transpose() * cuff_jac_;
+    T.block(0, velocityIndex(n, 0), n, n) -= user_.damping_ns_per_m * cuff_jac_.transpose() * cuff_jac_;
   }
   const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantStates> dqdd = mass_inv_ * T;
   for (int k = 0; k < n; ++k) {
-    J(4 * n + k, 5 * n + k) = 1.0;
-    J.row(5 * n + k) = dqdd.row(k);
+    J(angleIndex(n, k), velocityIndex(n, k)) = 1.0;
+    J.row(velocityIndex(n, k)) = dqdd.row(k);
   }
   for (int k = 0; k < n; ++k) {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
     if (p.actuator.kind == ActuatorKind::kIdealTorque) continue;
-    const double q = y[4 * n + k];
-    const double qd = y[5 * n + k];
-    const double xv = y[4 * k];
-    const double pa = y[4 * k + 2];
-    const double pb = y[4 * k + 3];
+    const double q = y[angleIndex(n, k)];
+    const double qd = y[velocityIndex(n, k)];
+    const double xv = y[hydraulicIndex(k, kSpool)];
+    const double pa = y[hydraulicIndex(k, kPressureA)];
+    const double pb = y[hydraulicIndex(k, kPressureB)];
     const double w = 2.0 * std::numbers::pi * p.valve.natural_frequency_hz;
-    const int S = 4 * k;
-    const int V = 4 * k + 1;
-    const int A = 4 * k + 2;
-    const int B = 4 * k + 3;
-    const int Q = 4 * n + k;
-    const int W = 5 * n + k;
+    const int S = hydraulicIndex(k, kSpool);
+    const int V = hydraulicIndex(k, kSpoolRate);
+    const int A = hydraulicIndex(k, kPressureA);
+    const int B = hydraulicIndex(k, kPressureB);
+    const int Q = angleIndex(n, k);
+    const int W = velocityIndex(n, k);
     J(S, V) = 1.0;
     J(V, S) = -w * w;
     J(V, V) = -2.0 * p.valve.damping_ratio * w;
@@ -736,7 +763,7 @@ PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
   for (int k = 0; k < n_; ++k) {
     measured_[static_cast<std::size_t>(k)] =
         sampleJointSensors(params_[static_cast<std::size_t>(k)], sensor_state_[static_cast<std::size_t>(k)], noise_,
-                           yv[4 * n_ + k], tau_cell_[k], dt_s);
+                           yv[angleIndex(n_, k)], tau_cell_[k], dt_s);
   }
   return status;
 }
