@@ -77,6 +77,9 @@ T* checkPtr(T* p, const char* call) {
 }
 
 constexpr int kMaxEventsPerPeriod = 64;
+// Refresh thresholds of the rigid-body block of the Rodas3 Jacobian (ArmPlant::rigidBodyGradients).
+constexpr double kRigidRefreshAngle_rad = 1e-3;
+constexpr double kRigidRefreshVelocity_radps = 1e-2;
 // First Rodas3 step after a reset [s]; the controller adapts it from there.
 constexpr double kRodasInitialStep_s = 1e-4;
 
@@ -432,6 +435,9 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   // Rodas3 on the whole arm takes the rigid-body gradients into its Jacobian (see
   // rigidBodyGradients); one joint's load is exact already (a fixed axis).
   rigid_body_gradients_ = rodas_ != nullptr && !single_axis_;
+  rigid_block_.setZero(n_, 2 * n_);
+  rigid_q_.setZero(n_);
+  rigid_qd_.setZero(n_);
   reset();
 }
 
@@ -465,6 +471,7 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
   cmd_ = last_cmd_ = PlantCommand::zero(n_);
   need_reinit_ = true;
   error_[0] = '\0';
+  rigid_block_age_ = -1;
   if (rodas_) {
     rodas_->resetStepSize(kRodasInitialStep_s);
     rodas_->resetCounters();
@@ -862,30 +869,44 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
 // error estimate no longer sees the error.
 void ArmPlant::rigidBodyGradients(const double* y, double* Jdata, int ld) noexcept {
   const int n = n_;
-  for (int k = 0; k < n; ++k) {
-    const int i = active_[static_cast<std::size_t>(k)];
-    q_full_[i] = y[angleIndex(n, k)];
-    qd_full_[i] = y[velocityIndex(n, k)];
-    acc_full_[i] = qdd_[k];
+  // The block changes slowly with the configuration: it is recomputed when q or qd has moved
+  // by more than kRigidRefresh* since the last evaluation, and reused otherwise (an O(dq, dqd)
+  // approximation of a term that is itself small next to the hydraulic stiffness).
+  bool fresh = rigid_block_age_ < 0;
+  for (int k = 0; k < n && !fresh; ++k) {
+    fresh = std::abs(y[angleIndex(n, k)] - rigid_q_[k]) > kRigidRefreshAngle_rad ||
+            std::abs(y[velocityIndex(n, k)] - rigid_qd_[k]) > kRigidRefreshVelocity_radps;
   }
-  arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, acc_full_);
-  JointVector base(n);
-  for (int k = 0; k < n; ++k) base[k] = data_->tau[active_[static_cast<std::size_t>(k)]];
-  JointVector column(n);
-  for (int c = 0; c < 2 * n; ++c) {
-    const int k = c % n;
-    const int i = active_[static_cast<std::size_t>(k)];
-    Eigen::VectorXd& v = c < n ? q_full_ : qd_full_;
-    const double saved = v[i];
-    const double eps = 1e-7 * std::max(1.0, std::abs(saved));
-    v[i] = saved + eps;
-    arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, acc_full_);
-    v[i] = saved;
-    for (int r = 0; r < n; ++r) column[r] = (data_->tau[active_[static_cast<std::size_t>(r)]] - base[r]) / eps;
-    const int col = c < n ? angleIndex(n, k) : velocityIndex(n, k);
-    for (int r = 0; r < n; ++r) {
-      Jdata[velocityIndex(n, r) + static_cast<std::ptrdiff_t>(col) * ld] -= mass_inv_.row(r).dot(column.head(n));
+  if (fresh) {
+    for (int k = 0; k < n; ++k) {
+      const int i = active_[static_cast<std::size_t>(k)];
+      q_full_[i] = rigid_q_[k] = y[angleIndex(n, k)];
+      qd_full_[i] = rigid_qd_[k] = y[velocityIndex(n, k)];
+      acc_full_[i] = qdd_[k];
     }
+    arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, acc_full_);
+    JointVector base(n);
+    for (int k = 0; k < n; ++k) base[k] = data_->tau[active_[static_cast<std::size_t>(k)]];
+    JointVector column(n);
+    for (int c = 0; c < 2 * n; ++c) {
+      const int k = c % n;
+      const int i = active_[static_cast<std::size_t>(k)];
+      Eigen::VectorXd& v = c < n ? q_full_ : qd_full_;
+      const double saved = v[i];
+      const double eps = 1e-7 * std::max(1.0, std::abs(saved));
+      v[i] = saved + eps;
+      arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, acc_full_);
+      v[i] = saved;
+      for (int r = 0; r < n; ++r) column[r] = (data_->tau[active_[static_cast<std::size_t>(r)]] - base[r]) / eps;
+      rigid_block_.col(c) = -(mass_inv_ * column);
+    }
+    rigid_block_age_ = 0;
+    ++rigid_refreshes_;
+  }
+  for (int c = 0; c < 2 * n; ++c) {
+    const int col = c < n ? angleIndex(n, c) : velocityIndex(n, c - n);
+    for (int r = 0; r < n; ++r)
+      Jdata[velocityIndex(n, r) + static_cast<std::ptrdiff_t>(col) * ld] += rigid_block_(r, c);
   }
 }
 

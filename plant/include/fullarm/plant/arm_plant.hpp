@@ -221,6 +221,11 @@ class ArmPlant {
   Eigen::VectorXd posture_;
   Eigen::VectorXd q_full_, qd_full_, zero_full_, acc_full_;
   bool rigid_body_gradients_ = false;
+  // -M^-1 d ID / d(q, qd) (n x 2n) at (rigid_q_, rigid_qd_); age -1: not evaluated yet.
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, 2 * kMaxPlantJoints> rigid_block_;
+  JointVector rigid_q_, rigid_qd_;
+  int rigid_block_age_ = -1;
+  long rigid_refreshes_ = 0;
   UserArmParams user_{};
   Eigen::Vector3d cuff_anchor_W_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d axis_W_ = Eigen::Vector3d::UnitZ();  // single axis from an arm model
