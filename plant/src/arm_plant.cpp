@@ -762,38 +762,43 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
         y[hydraulicIndex(k, kPressureA)] * v.d2va_dq2 + y[hydraulicIndex(k, kPressureB)] * v.d2vb_dq2 + c.stop.d_dq;
     tact_qd[k] = -c.friction.slope + c.stop.d_dqd;
   }
-  JointMatrix tq = tact_q.asDiagonal();
-  JointMatrix tqd = tact_qd.asDiagonal();
+  // Diagonal q and qd partials of the generalised torque (actuator, and the single-axis gravity
+  // and cuff), plus the cuff's coupling blocks on the whole arm.
+  JointVector diag_q = tact_q;
+  JointVector diag_qd = tact_qd;
+  const bool coupled = !single_axis_ && user_.enabled;
+  JointMatrix cuff_q;
+  JointMatrix cuff_qd;
   if (single_axis_) {
     const double q = y[angleIndex(n, 0)];
-    tq(0, 0) -= -load_.gravity_cos_nm * std::sin(q) + load_.gravity_sin_nm * std::cos(q);
+    diag_q[0] -= -load_.gravity_cos_nm * std::sin(q) + load_.gravity_sin_nm * std::cos(q);
     if (single_axis_cuff_) {
       double tau = 0.0;
       double dq = 0.0;
       double dqd = 0.0;
       singleAxisCuff(q, y[velocityIndex(n, 0)], tau, dq, dqd);
-      tq(0, 0) += dq;
-      tqd(0, 0) += dqd;
+      diag_q[0] += dq;
+      diag_qd[0] += dqd;
     }
-  } else if (user_.enabled) {
+  } else if (coupled) {
     // Cuff: d(J^T f)/dq ~ -J^T K J, d/dqd = -J^T B J (rigid-body q gradients of M, C, g omitted:
     // a modified-Newton matrix; the solution accuracy is set by the tolerances, not by it).
-    tq.noalias() -= user_.stiffness_n_per_m * cuff_jac_.transpose() * cuff_jac_;
-    tqd.noalias() -= user_.damping_ns_per_m * cuff_jac_.transpose() * cuff_jac_;
+    cuff_q.noalias() = -user_.stiffness_n_per_m * cuff_jac_.transpose() * cuff_jac_;
+    cuff_qd.noalias() = -user_.damping_ns_per_m * cuff_jac_.transpose() * cuff_jac_;
   }
-  // qdd = M^-1 tau: d qdd_i / d p_a(k) = Minv(i, k) t_pa(k), etc. (tq, tqd diagonal but for the cuff)
-  const bool coupled = !single_axis_ && user_.enabled;
+  // qdd = M^-1 tau: d qdd_i / d p_a(k) = Minv(i, k) t_pa(k), etc.
   for (int k = 0; k < n; ++k) {
     J(angleIndex(n, k), velocityIndex(n, k)) = 1.0;
     for (int i = 0; i < n; ++i) {
       const int row = velocityIndex(n, i);
-      J(row, hydraulicIndex(k, kPressureA)) = mass_inv_(i, k) * t_pa[k];
-      J(row, hydraulicIndex(k, kPressureB)) = mass_inv_(i, k) * t_pb[k];
-      double dq = mass_inv_(i, k) * tq(k, k);
-      double dqd = mass_inv_(i, k) * tqd(k, k);
+      const double minv = mass_inv_(i, k);
+      J(row, hydraulicIndex(k, kPressureA)) = minv * t_pa[k];
+      J(row, hydraulicIndex(k, kPressureB)) = minv * t_pb[k];
+      double dq = minv * diag_q[k];
+      double dqd = minv * diag_qd[k];
       if (coupled) {
-        dq = mass_inv_.row(i).dot(tq.col(k));
-        dqd = mass_inv_.row(i).dot(tqd.col(k));
+        dq += mass_inv_.row(i).dot(cuff_q.col(k));
+        dqd += mass_inv_.row(i).dot(cuff_qd.col(k));
       }
       J(row, angleIndex(n, k)) = dq;
       J(row, velocityIndex(n, k)) = dqd;
