@@ -1,9 +1,10 @@
 // Real-time factor of the hydraulic plant (simulated seconds per wall second) at a 1 kHz
 // control period, one core: one joint (R_EB) and the 7-joint arm, under a 0.5-80 Hz chirp at
-// full valve amplitude and under a slow sine. Counters per simulated second: CVODES steps,
-// Jacobian evaluations, RHS evaluations, re-initialisations. The peer in the same run is a
-// plain RK4 of the same right-hand side at a fixed 10 us step (the step an explicit method needs
-// for the stiff joint) to put the BDF figures in proportion.
+// full valve amplitude and under a slow sine, with each integrator (CVODES BDF, the reference;
+// Rodas3, the one-step Rosenbrock for real time). Counters per simulated second: integrator
+// steps, Jacobian and RHS evaluations, rejected steps (error-test failures), re-initialisations. The peer in the same
+// run is a plain RK4 of the same right-hand side at a fixed 10 us step (the step an explicit method needs for the stiff
+// joint) to put the BDF figures in proportion.
 
 #include <benchmark/benchmark.h>
 
@@ -47,7 +48,7 @@ SignalParams signal(bool chirp, double full_scale) {
   return s;
 }
 
-void runPlant(benchmark::State& state, bool whole_arm, bool chirp) {
+void runPlant(benchmark::State& state, bool whole_arm, bool chirp, IntegratorKind integrator) {
   ArmPlant plant;
   std::vector<JointParams> joints;
   if (whole_arm) {
@@ -55,7 +56,9 @@ void runPlant(benchmark::State& state, bool whole_arm, bool chirp) {
   } else {
     joints = {config().joints[static_cast<std::size_t>(findPlantJoint(config(), "EB"))]};
   }
-  plant.configure(model(), joints, model().defaultPosture(), UserArmParams{}, config().solver, config().seed);
+  SolverOptions options = config().solver;
+  options.integrator = integrator;
+  plant.configure(model(), joints, model().defaultPosture(), UserArmParams{}, options, config().seed);
   const int n = plant.numJoints();
   PlantCommand cmd = PlantCommand::zero(n);
   const SignalParams sig = signal(chirp, 1.0 / joints[0].valve.amplifier_gain_per_v);
@@ -79,6 +82,7 @@ void runPlant(benchmark::State& state, bool whole_arm, bool chirp) {
     total.rhs_evals += s.rhs_evals;
     total.reinits += s.reinits;
     total.root_events += s.root_events;
+    total.err_test_fails += s.err_test_fails;
   }
   state.counters["rtf"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
   state.counters["steps_per_sim_s"] = static_cast<double>(total.steps) / simulated;
@@ -86,24 +90,44 @@ void runPlant(benchmark::State& state, bool whole_arm, bool chirp) {
   state.counters["rhs_per_sim_s"] = static_cast<double>(total.rhs_evals) / simulated;
   state.counters["reinits_per_sim_s"] = static_cast<double>(total.reinits) / simulated;
   state.counters["events_per_sim_s"] = static_cast<double>(total.root_events) / simulated;
+  state.counters["rejects_per_sim_s"] = static_cast<double>(total.err_test_fails) / simulated;
 }
 
+// CVODES (BDF, the reference integrator and the default).
 void BM_Plant_Joint_Chirp(benchmark::State& state) {
-  runPlant(state, false, true);
+  runPlant(state, false, true, IntegratorKind::kCvodes);
 }
 void BM_Plant_Joint_SlowSine(benchmark::State& state) {
-  runPlant(state, false, false);
+  runPlant(state, false, false, IntegratorKind::kCvodes);
 }
 void BM_Plant_Arm_Chirp(benchmark::State& state) {
-  runPlant(state, true, true);
+  runPlant(state, true, true, IntegratorKind::kCvodes);
 }
 void BM_Plant_Arm_SlowSine(benchmark::State& state) {
-  runPlant(state, true, false);
+  runPlant(state, true, false, IntegratorKind::kCvodes);
 }
 BENCHMARK(BM_Plant_Joint_Chirp)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Joint_SlowSine)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Arm_Chirp)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Arm_SlowSine)->Unit(benchmark::kMillisecond);
+
+// Rodas3 (one-step Rosenbrock, `solver.integrator: rodas3`), same scenarios.
+void BM_Plant_Joint_Chirp_Rodas3(benchmark::State& state) {
+  runPlant(state, false, true, IntegratorKind::kRodas3);
+}
+void BM_Plant_Joint_SlowSine_Rodas3(benchmark::State& state) {
+  runPlant(state, false, false, IntegratorKind::kRodas3);
+}
+void BM_Plant_Arm_Chirp_Rodas3(benchmark::State& state) {
+  runPlant(state, true, true, IntegratorKind::kRodas3);
+}
+void BM_Plant_Arm_SlowSine_Rodas3(benchmark::State& state) {
+  runPlant(state, true, false, IntegratorKind::kRodas3);
+}
+BENCHMARK(BM_Plant_Joint_Chirp_Rodas3)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Joint_SlowSine_Rodas3)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Arm_Chirp_Rodas3)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Arm_SlowSine_Rodas3)->Unit(benchmark::kMillisecond);
 
 // Peer: fixed-step RK4 of the same right-hand side (one joint, 10 us step).
 void BM_Peer_Rk4_Joint_Chirp(benchmark::State& state) {

@@ -77,6 +77,49 @@ T* checkPtr(T* p, const char* call) {
 }
 
 constexpr int kMaxEventsPerPeriod = 64;
+// Refresh thresholds of the rigid-body block of the Rodas3 Jacobian (ArmPlant::rigidBodyGradients).
+constexpr double kRigidRefreshAngle_rad = 1e-3;
+constexpr double kRigidRefreshVelocity_radps = 1e-2;
+// First Rodas3 step after a reset [s]; the controller adapts it from there.
+constexpr double kRodasInitialStep_s = 1e-4;
+
+// Cholesky factor M = L L^T of the small SPD joint-space inertia (lower triangle of l; plain
+// loops: at n <= 10 a library call's dispatch costs more than the arithmetic).
+template <typename Matrix>
+void choleskyFactor(const Matrix& m, Matrix& l, int n) noexcept {
+  for (int j = 0; j < n; ++j) {
+    double d = m(j, j);
+    for (int k = 0; k < j; ++k) d -= l(j, k) * l(j, k);
+    l(j, j) = std::sqrt(d);
+    const double inv = 1.0 / l(j, j);
+    for (int i = j + 1; i < n; ++i) {
+      double v = m(i, j);
+      for (int k = 0; k < j; ++k) v -= l(i, k) * l(j, k);
+      l(i, j) = v * inv;
+    }
+  }
+}
+
+// x = M^-1 b with the factor of choleskyFactor (b and x may be the same vector).
+template <typename Matrix, typename Vector>
+void choleskySolve(const Matrix& l, const Vector& b, Vector& x, int n) noexcept {
+  for (int i = 0; i < n; ++i) {
+    double v = b[i];
+    for (int k = 0; k < i; ++k) v -= l(i, k) * x[k];
+    x[i] = v / l(i, i);
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    double v = x[i];
+    for (int k = i + 1; k < n; ++k) v -= l(k, i) * x[k];
+    x[i] = v / l(i, i);
+  }
+}
+
+// Which side of its range a joint is on: -1 below min, 0 inside, 1 above max.
+signed char stopSide(const JointParams& p, double q) {
+  if (p.actuator.kind == ActuatorKind::kIdealTorque) return 0;
+  return q > p.max_rad ? 1 : (q < p.min_rad ? -1 : 0);
+}
 
 // Dense direct linear solver for the Newton matrix I - gamma J with Eigen's blocked,
 // vectorised partial-pivoting LU in fixed-capacity storage (no heap after construction);
@@ -188,6 +231,17 @@ struct SolverCallbacks {
     }
     return 0;
   }
+  // Rodas3 system: f(y), and J(y) with f(y) from the same pass.
+  static void rodasRhs(void* user, const double* y, double* ydot) noexcept {
+    static_cast<ArmPlant*>(user)->evaluateRhs(y, ydot);
+  }
+  static void rodasJacobian(void* user, const double* y, double* ydot, double* jac) noexcept {
+    auto* plant = static_cast<ArmPlant*>(user);
+    // Rodas3 keeps its Jacobian storage to itself (zeroed at configure): only the structural
+    // nonzeros need writing. Evaluates f(y) into ydot_scratch_ first.
+    plant->jacobianEntries(y, jac);
+    std::copy_n(plant->ydot_scratch_, stateSize(plant->n_), ydot);
+  }
   static void error(int code, const char* module, const char* function, char* msg, void* user) noexcept {
     auto* plant = static_cast<ArmPlant*>(user);
     std::snprintf(plant->error_, sizeof(plant->error_), "%s %s (%d): %s", module, function, code, msg);
@@ -257,8 +311,23 @@ void ArmPlant::configure(const arm::ArmModel& model, const std::vector<JointPara
   q_full_ = posture;
   qd_full_ = Eigen::VectorXd::Zero(model.numJoints());
   zero_full_ = Eigen::VectorXd::Zero(model.numJoints());
+  acc_full_ = Eigen::VectorXd::Zero(model.numJoints());
   single_axis_ = n_ == 1;
   single_axis_cuff_ = false;
+  ancestry_.fill(0);
+  for (int a = 0; a < n_; ++a) {
+    for (int b = 0; b < n_; ++b) {
+      const int i = active_[static_cast<std::size_t>(a)];
+      const int j = active_[static_cast<std::size_t>(b)];
+      signed char r = 0;
+      if (arm::jointMovesLink(*model_, j, i)) {
+        r = 1;
+      } else if (arm::jointMovesLink(*model_, i, j)) {
+        r = -1;
+      }
+      ancestry_[static_cast<std::size_t>(a * kMaxPlantJoints + b)] = r;
+    }
+  }
   if (single_axis_) {
     // One joint turning with the rest of the arm locked: a rigid body about a fixed axis, so
     // the inertia is constant and gravity is a cos q + b sin q (exact; evaluated once here).
@@ -308,9 +377,14 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   qdd_ = tau_cell_ = tau_hyd_ = tau_act_ = h_ = tau_cuff_ = JointVector::Zero(n_);
   mass_.setZero(n_, n_);
   mass_inv_.setZero(n_, n_);
+  chol_.setZero(n_, n_);
   cuff_jac_.setZero(3, n_);
   stroke_.clear();
   for (const JointParams& p : params_) stroke_.push_back(strokeRange(p));
+  volumes_.assign(static_cast<std::size_t>(n_), ChamberVolumes{});
+  terms_.assign(static_cast<std::size_t>(n_), JointTerms{});
+  air_root_.clear();
+  for (const JointParams& p : params_) air_root_.push_back(airRoot(p.fluid));
   sensor_state_.assign(static_cast<std::size_t>(n_), JointSensorState{});
   measured_.assign(static_cast<std::size_t>(n_), JointMeasurement{});
 
@@ -345,6 +419,25 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   check(CVodeRootInit(mem, 2 * n_, &SolverCallbacks::roots), "CVodeRootInit");
   check(CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
   solver_ = std::move(s);
+  rodas_.reset();
+  if (options.integrator == IntegratorKind::kRodas3) {
+    rodas_ = std::make_unique<Rodas3>();
+    rodas_->configure(static_cast<int>(N), atol, options.rtol, options.max_steps_per_period,
+                      {&SolverCallbacks::rodasRhs, &SolverCallbacks::rodasJacobian, this});
+    // Joint k's hydraulic states couple to other joints only through q and qd, except in
+    // torque-loop mode, where the load-cell feedback sees every joint's pressures through M^-1.
+    bool blocks = true;
+    for (const JointParams& p : params_) blocks = blocks && p.input_mode == InputMode::kValveVoltage;
+    // (one joint: a dense 6 x 6 LU is cheaper than the block elimination)
+    rodas_->setBlockStructure(blocks && n_ > 1 ? n_ : 0);
+  }
+  stop_side_.assign(static_cast<std::size_t>(n_), 0);
+  // Rodas3 on the whole arm takes the rigid-body gradients into its Jacobian (see
+  // rigidBodyGradients); one joint's load is exact already (a fixed axis).
+  rigid_body_gradients_ = rodas_ != nullptr && !single_axis_;
+  rigid_block_.setZero(n_, 2 * n_);
+  rigid_q_.setZero(n_);
+  rigid_qd_.setZero(n_);
   reset();
 }
 
@@ -378,6 +471,13 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
   cmd_ = last_cmd_ = PlantCommand::zero(n_);
   need_reinit_ = true;
   error_[0] = '\0';
+  rigid_block_age_ = -1;
+  if (rodas_) {
+    rodas_->resetStepSize(kRodasInitialStep_s);
+    rodas_->resetCounters();
+  }
+  for (int k = 0; k < n_; ++k)
+    stop_side_[static_cast<std::size_t>(k)] = stopSide(params_[static_cast<std::size_t>(k)], y[angleIndex(n_, k)]);
   if (model_) {
     // The cuff spring rests where the cuff is at the initial state.
     q_full_ = posture_;
@@ -497,23 +597,37 @@ void ArmPlant::compositeRigidBodyMass() noexcept {
     inertia[p] += inertia[k];
   }
   const int n = n_;
-  // Descendant y, ancestor-or-self x: M_xy = z_x . [I_Cy z_y + (c_y - o_x) x m_y (z_y x (c_y - o_y))].
-  auto entry = [&](std::size_t x, std::size_t y) {
+  // Descendant y, ancestor-or-self x: M_xy = z_x . [I_Cy z_y + (c_y - o_x) x f_y] with
+  // f_y = m_y (z_y x (c_y - o_y)) and I_Cy about the composite COM c_y; with
+  // g_y = I_Cy z_y + c_y x f_y this is z_x . g_y - f_y . (z_x x o_x): per joint once, then two
+  // dot products per pair.
+  std::array<Eigen::Vector3d, kMaxPlantJoints> g{};
+  std::array<Eigen::Vector3d, kMaxPlantJoints> f{};
+  std::array<Eigen::Vector3d, kMaxPlantJoints> zxo{};
+  for (int a = 0; a < n; ++a) {
+    const auto y = static_cast<std::size_t>(active_[static_cast<std::size_t>(a)]);
+    const auto ka = static_cast<std::size_t>(a);
     const double m = mass[y];
     const Eigen::Vector3d c = m > 0.0 ? Eigen::Vector3d(first[y] / m) : d.o_W[y];
-    const Eigen::Matrix3d ic = inertia[y] - m * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
     const Eigen::Vector3d& z = d.z_W[y];
-    return d.z_W[x].dot(ic * z + (c - d.o_W[x]).cross(m * z.cross(c - d.o_W[y])));
-  };
+    // I_Cy z = I_O z - m (|c|^2 z - c (c . z))  (parallel axis from the world origin to c)
+    const Eigen::Vector3d icz = inertia[y] * z - m * (c.squaredNorm() * z - c * c.dot(z));
+    f[ka] = m * z.cross(c - d.o_W[y]);
+    g[ka] = icz + c.cross(f[ka]);
+    zxo[ka] = z.cross(d.o_W[y]);
+  }
   for (int a = 0; a < n; ++a) {
-    const auto i = static_cast<std::size_t>(active_[static_cast<std::size_t>(a)]);
+    const auto ka = static_cast<std::size_t>(a);
+    const Eigen::Vector3d& za = d.z_W[static_cast<std::size_t>(active_[ka])];
     for (int b = 0; b <= a; ++b) {
-      const auto j = static_cast<std::size_t>(active_[static_cast<std::size_t>(b)]);
+      const auto kb = static_cast<std::size_t>(b);
+      const Eigen::Vector3d& zb = d.z_W[static_cast<std::size_t>(active_[kb])];
       double value = 0.0;
-      if (arm::jointMovesLink(*model_, static_cast<int>(j), static_cast<int>(i))) {
-        value = entry(j, i);
-      } else if (arm::jointMovesLink(*model_, static_cast<int>(i), static_cast<int>(j))) {
-        value = entry(i, j);
+      const int relation = ancestry_[ka * kMaxPlantJoints + kb];
+      if (relation == 1) {  // active b moves link a: x = b, y = a
+        value = zb.dot(g[ka]) - f[ka].dot(zxo[kb]);
+      } else if (relation == -1) {  // a moves b: x = a, y = b
+        value = za.dot(g[kb]) - f[kb].dot(zxo[ka]);
       }
       mass_(a, b) = mass_(b, a) = value;
     }
@@ -522,6 +636,11 @@ void ArmPlant::compositeRigidBodyMass() noexcept {
 }
 
 void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {
+  evaluateTorques(y);
+  evaluateRates(y, ydot);
+}
+
+void ArmPlant::evaluateTorques(const double* y) noexcept {
   const int n = n_;
   mechanics(y);
   // Actuator torques: hydraulic (virtual work tau = p_a dV_a/dq + p_b dV_b/dq), friction, stops.
@@ -534,24 +653,32 @@ void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {
       tau_act_[k] = tau_hyd_[k];
       continue;
     }
-    const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
+    const ChamberVolumes& v = volumes_[static_cast<std::size_t>(k)] =
+        chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
+    JointTerms& c = terms_[static_cast<std::size_t>(k)];
+    c.friction = frictionTorque(p.friction, qd);
+    c.stop = hardStopTorque(p, q, qd);
     tau_hyd_[k] = y[hydraulicIndex(k, kPressureA)] * v.dva_dq + y[hydraulicIndex(k, kPressureB)] * v.dvb_dq;
-    tau_act_[k] = tau_hyd_[k] - frictionTorque(p.friction, qd).value + hardStopTorque(p, q, qd).torque_nm;
+    tau_act_[k] = tau_hyd_[k] - c.friction.value + c.stop.torque_nm;
   }
   // M qdd = tau_act + tau_user + tau_contact + tau_cuff - (C qd + g)   (rigid body, Craig 6.5)
   JointVector rhs = tau_act_ + cmd_.tau_user_nm + cmd_.tau_contact_nm + tau_cuff_ - h_;
   if (n == 1) {
     qdd_[0] = rhs[0] * mass_inv_(0, 0);
   } else {
-    Eigen::LLT<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints>> llt(mass_);
-    qdd_ = llt.solve(rhs);
+    choleskyFactor(mass_, chol_, n);
+    choleskySolve(chol_, rhs, qdd_, n);
   }
+  // Load cell between the actuator side and the link: tau_cell = tau_act - J_act qdd.
+  for (int k = 0; k < n; ++k)
+    tau_cell_[k] = tau_act_[k] - params_[static_cast<std::size_t>(k)].actuator.inertia_kgm2 * qdd_[k];
+}
+
+void ArmPlant::evaluateRates(const double* y, double* ydot) noexcept {
+  const int n = n_;
   for (int k = 0; k < n; ++k) {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
-    const double q = y[angleIndex(n, k)];
     const double qd = y[velocityIndex(n, k)];
-    // Load cell between the actuator side and the link: tau_cell = tau_act - J_act qdd.
-    tau_cell_[k] = tau_act_[k] - p.actuator.inertia_kgm2 * qdd_[k];
     ydot[angleIndex(n, k)] = qd;
     ydot[velocityIndex(n, k)] = qdd_[k];
     if (p.actuator.kind == ActuatorKind::kIdealTorque) {
@@ -572,77 +699,116 @@ void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {
     // Chambers (research/plant.md 1.3): p' = beta(p)/V (Q_in - leakage - dV/dt).
     const double pa = y[hydraulicIndex(k, kPressureA)];
     const double pb = y[hydraulicIndex(k, kPressureB)];
-    const ValveFlows f = valveFlows(p, xv, pa, pb);
-    const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
+    JointTerms& c = terms_[static_cast<std::size_t>(k)];
+    c.flows = valveFlows(p, xv, pa, pb);
+    const ValveFlows& f = c.flows;
+    const ChamberVolumes& v = volumes_[static_cast<std::size_t>(k)];
     const double qi = p.chambers.internal_leakage_m3ps_per_pa * (pa - pb);
     const double ce = p.chambers.external_leakage_m3ps_per_pa;
-    const double beta_a = effectiveBulkModulus(p.fluid, pa).value;
-    const double beta_b = effectiveBulkModulus(p.fluid, pb).value;
-    const double cv_a = checkValveFlow(p, pa).value;
-    const double cv_b = checkValveFlow(p, pb).value;
-    ydot[hydraulicIndex(k, kPressureA)] = beta_a / v.v_a_m3 * (f.q_a_m3ps + cv_a - qi - ce * pa - v.dva_dq * qd);
-    ydot[hydraulicIndex(k, kPressureB)] = beta_b / v.v_b_m3 * (f.q_b_m3ps + cv_b + qi - ce * pb - v.dvb_dq * qd);
+    const double air_root = air_root_[static_cast<std::size_t>(k)];
+    c.beta_a = effectiveBulkModulus(p.fluid, pa, air_root);
+    c.beta_b = effectiveBulkModulus(p.fluid, pb, air_root);
+    c.check_a = checkValveFlow(p, pa);
+    c.check_b = checkValveFlow(p, pb);
+    ydot[hydraulicIndex(k, kPressureA)] =
+        c.beta_a.value / v.v_a_m3 * (f.q_a_m3ps + c.check_a.value - qi - ce * pa - v.dva_dq * qd);
+    ydot[hydraulicIndex(k, kPressureB)] =
+        c.beta_b.value / v.v_b_m3 * (f.q_b_m3ps + c.check_b.value + qi - ce * pb - v.dvb_dq * qd);
   }
 }
 
 void ArmPlant::evaluateJacobian(const double* y, double* Jdata) noexcept {
+  const int N = stateSize(n_);
+  std::fill_n(Jdata, static_cast<std::size_t>(N) * static_cast<std::size_t>(N), 0.0);
+  jacobianEntries(y, Jdata);
+}
+
+// Writes every structurally nonzero entry of J (the others must already be zero, as they stay
+// between calls on the same matrix).
+void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
+  using JointMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints>;
   const int n = n_;
   const int N = stateSize(n);
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantStates, kMaxPlantStates>> J(Jdata, N, N);
-  J.setZero();
-  // Reuse the RHS pass for M, tau_cell, qdd at this state.
+  // Reuse the RHS pass for M, tau_cell, qdd and the chamber volumes at this state.
   evaluateRhs(y, ydot_scratch_);
   if (n == 1) {
     mass_inv_(0, 0) = 1.0 / mass_(0, 0);
   } else {
-    mass_inv_ = mass_.llt().solve(
-        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints>::Identity(n, n));
+    // Columns of M^-1 from the factor of the evaluateRhs() pass above.
+    JointVector e = JointVector::Zero(n);
+    for (int k = 0; k < n; ++k) {
+      e.setZero();
+      e[k] = 1.0;
+      choleskySolve(chol_, e, e, n);
+      mass_inv_.col(k) = e;
+    }
   }
-  // T = d(generalised torque)/dy (n x N): actuator terms, cuff spring/damper, single-axis gravity.
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantStates> T, Tact;
-  T.setZero(n, N);
+  // d(generalised torque)/dy: joint k's actuator torque depends on its own p_a, p_b, q, qd
+  // (t_pa, t_pb, and the diagonals of Tq, Tqd); the cuff spring/damper and the single-axis
+  // gravity add to the q and qd blocks Tq, Tqd (n x n).
+  JointVector t_pa = JointVector::Zero(n);
+  JointVector t_pb = JointVector::Zero(n);
+  JointVector tact_q = JointVector::Zero(n);
+  JointVector tact_qd = JointVector::Zero(n);
   for (int k = 0; k < n; ++k) {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
     if (p.actuator.kind == ActuatorKind::kIdealTorque) continue;
-    const double q = y[angleIndex(n, k)];
-    const double qd = y[velocityIndex(n, k)];
-    const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
-    const StopTorque st = hardStopTorque(p, q, qd);
-    T(k, hydraulicIndex(k, kPressureA)) = v.dva_dq;
-    T(k, hydraulicIndex(k, kPressureB)) = v.dvb_dq;
-    T(k, angleIndex(n, k)) =
-        y[hydraulicIndex(k, kPressureA)] * v.d2va_dq2 + y[hydraulicIndex(k, kPressureB)] * v.d2vb_dq2 + st.d_dq;
-    T(k, velocityIndex(n, k)) = -frictionTorque(p.friction, qd).slope + st.d_dqd;
+    const ChamberVolumes& v = volumes_[static_cast<std::size_t>(k)];
+    const JointTerms& c = terms_[static_cast<std::size_t>(k)];
+    t_pa[k] = v.dva_dq;
+    t_pb[k] = v.dvb_dq;
+    tact_q[k] =
+        y[hydraulicIndex(k, kPressureA)] * v.d2va_dq2 + y[hydraulicIndex(k, kPressureB)] * v.d2vb_dq2 + c.stop.d_dq;
+    tact_qd[k] = -c.friction.slope + c.stop.d_dqd;
   }
-  Tact = T;
+  // Diagonal q and qd partials of the generalised torque (actuator, and the single-axis gravity
+  // and cuff), plus the cuff's coupling blocks on the whole arm.
+  JointVector diag_q = tact_q;
+  JointVector diag_qd = tact_qd;
+  const bool coupled = !single_axis_ && user_.enabled;
+  JointMatrix cuff_q;
+  JointMatrix cuff_qd;
   if (single_axis_) {
     const double q = y[angleIndex(n, 0)];
-    T(0, angleIndex(n, 0)) -= -load_.gravity_cos_nm * std::sin(q) + load_.gravity_sin_nm * std::cos(q);
+    diag_q[0] -= -load_.gravity_cos_nm * std::sin(q) + load_.gravity_sin_nm * std::cos(q);
     if (single_axis_cuff_) {
       double tau = 0.0;
       double dq = 0.0;
       double dqd = 0.0;
       singleAxisCuff(q, y[velocityIndex(n, 0)], tau, dq, dqd);
-      T(0, angleIndex(n, 0)) += dq;
-      T(0, velocityIndex(n, 0)) += dqd;
+      diag_q[0] += dq;
+      diag_qd[0] += dqd;
     }
-  } else if (user_.enabled) {
+  } else if (coupled) {
     // Cuff: d(J^T f)/dq ~ -J^T K J, d/dqd = -J^T B J (rigid-body q gradients of M, C, g omitted:
     // a modified-Newton matrix; the solution accuracy is set by the tolerances, not by it).
-    T.block(0, angleIndex(n, 0), n, n) -= user_.stiffness_n_per_m * cuff_jac_.transpose() * cuff_jac_;
-    T.block(0, velocityIndex(n, 0), n, n) -= user_.damping_ns_per_m * cuff_jac_.transpose() * cuff_jac_;
+    cuff_q.noalias() = -user_.stiffness_n_per_m * cuff_jac_.transpose() * cuff_jac_;
+    cuff_qd.noalias() = -user_.damping_ns_per_m * cuff_jac_.transpose() * cuff_jac_;
   }
-  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantStates> dqdd = mass_inv_ * T;
+  // qdd = M^-1 tau: d qdd_i / d p_a(k) = Minv(i, k) t_pa(k), etc.
   for (int k = 0; k < n; ++k) {
     J(angleIndex(n, k), velocityIndex(n, k)) = 1.0;
-    J.row(velocityIndex(n, k)) = dqdd.row(k);
+    for (int i = 0; i < n; ++i) {
+      const int row = velocityIndex(n, i);
+      const double minv = mass_inv_(i, k);
+      J(row, hydraulicIndex(k, kPressureA)) = minv * t_pa[k];
+      J(row, hydraulicIndex(k, kPressureB)) = minv * t_pb[k];
+      double dq = minv * diag_q[k];
+      double dqd = minv * diag_qd[k];
+      if (coupled) {
+        dq += mass_inv_.row(i).dot(cuff_q.col(k));
+        dqd += mass_inv_.row(i).dot(cuff_qd.col(k));
+      }
+      J(row, angleIndex(n, k)) = dq;
+      J(row, velocityIndex(n, k)) = dqd;
+    }
   }
+  if (rigid_body_gradients_) rigidBodyGradients(y, J.data(), N);
   for (int k = 0; k < n; ++k) {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
     if (p.actuator.kind == ActuatorKind::kIdealTorque) continue;
-    const double q = y[angleIndex(n, k)];
     const double qd = y[velocityIndex(n, k)];
-    const double xv = y[hydraulicIndex(k, kSpool)];
     const double pa = y[hydraulicIndex(k, kPressureA)];
     const double pb = y[hydraulicIndex(k, kPressureB)];
     const double w = 2.0 * std::numbers::pi * p.valve.natural_frequency_hz;
@@ -653,6 +819,10 @@ void ArmPlant::evaluateJacobian(const double* y, double* Jdata) noexcept {
     const int Q = angleIndex(n, k);
     const int W = velocityIndex(n, k);
     J(S, V) = 1.0;
+    if (p.input_mode == InputMode::kTorqueLoop) {
+      // The whole row is assigned (its pattern depends on the valve saturation).
+      for (int c = 0; c < N; ++c) J(V, c) = 0.0;
+    }
     J(V, S) = -w * w;
     J(V, V) = -2.0 * p.valve.damping_ratio * w;
     if (p.input_mode == InputMode::kTorqueLoop) {
@@ -660,18 +830,24 @@ void ArmPlant::evaluateJacobian(const double* y, double* Jdata) noexcept {
       const double u = p.valve.amplifier_gain_per_v * volts;
       if (u > -1.0 && u < 1.0) {
         const double g = w * w * p.valve.amplifier_gain_per_v * p.torque_loop.gain_v_per_nm;
-        // d tau_cell / dy = d tau_act / dy - J_act d qdd_k / dy
-        J.row(V) -= g * (Tact.row(k) - p.actuator.inertia_kgm2 * dqdd.row(k));
+        // d tau_cell / dy = d tau_act / dy - J_act d qdd_k / dy (row W of J is d qdd_k / dy)
+        for (int c = 0; c < N; ++c) J(V, c) += g * p.actuator.inertia_kgm2 * J(W, c);
+        J(V, A) -= g * t_pa[k];
+        J(V, B) -= g * t_pb[k];
+        J(V, Q) -= g * tact_q[k];
+        J(V, W) -= g * tact_qd[k];
       }
     }
-    const ValveFlows f = valveFlows(p, xv, pa, pb);
-    const ChamberVolumes v = chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
+    // Flows, bulk moduli and check valves at y, from the evaluateRhs() pass above.
+    const JointTerms& c = terms_[static_cast<std::size_t>(k)];
+    const ValveFlows& f = c.flows;
+    const ChamberVolumes& v = volumes_[static_cast<std::size_t>(k)];
     const double ci = p.chambers.internal_leakage_m3ps_per_pa;
     const double ce = p.chambers.external_leakage_m3ps_per_pa;
-    const ValueSlope ba = effectiveBulkModulus(p.fluid, pa);
-    const ValueSlope bb = effectiveBulkModulus(p.fluid, pb);
-    const ValueSlope cv_a = checkValveFlow(p, pa);
-    const ValueSlope cv_b = checkValveFlow(p, pb);
+    const ValueSlope& ba = c.beta_a;
+    const ValueSlope& bb = c.beta_b;
+    const ValueSlope& cv_a = c.check_a;
+    const ValueSlope& cv_b = c.check_b;
     const double fa = f.q_a_m3ps + cv_a.value - ci * (pa - pb) - ce * pa - v.dva_dq * qd;
     const double fb = f.q_b_m3ps + cv_b.value + ci * (pa - pb) - ce * pb - v.dvb_dq * qd;
     const double ka = ba.value / v.v_a_m3;
@@ -686,6 +862,56 @@ void ArmPlant::evaluateJacobian(const double* y, double* Jdata) noexcept {
     J(B, A) = kb * ci;
     J(B, Q) = -kb * fb * v.dvb_dq / v.v_b_m3 - kb * v.d2vb_dq2 * qd;
     J(B, W) = -kb * v.dvb_dq;
+  }
+}
+
+// The configuration and velocity gradients of the rigid-body dynamics that the analytic
+// Jacobian leaves out: M qdd = tau - h(q, qd) gives M d qdd/dq_k = d tau/dq_k - d ID/dq_k and
+// M d qdd/dqd_k = d tau/dqd_k - d ID/dqd_k, with ID(q, qd, a) = M(q) a + h(q, qd) taken at
+// a = qdd (fullarm::arm's Newton-Euler, forward differences, one pass per column). Subtracts
+// M^-1 d ID into the qd rows of J (column-major, leading dimension ld). Rodas3 needs them:
+// without them a Rosenbrock method drops to order one on the arm's slow mechanics and its
+// error estimate no longer sees the error.
+void ArmPlant::rigidBodyGradients(const double* y, double* Jdata, int ld) noexcept {
+  const int n = n_;
+  // The block changes slowly with the configuration: it is recomputed when q or qd has moved
+  // by more than kRigidRefresh* since the last evaluation, and reused otherwise (an O(dq, dqd)
+  // approximation of a term that is itself small next to the hydraulic stiffness).
+  bool fresh = rigid_block_age_ < 0;
+  for (int k = 0; k < n && !fresh; ++k) {
+    fresh = std::abs(y[angleIndex(n, k)] - rigid_q_[k]) > kRigidRefreshAngle_rad ||
+            std::abs(y[velocityIndex(n, k)] - rigid_qd_[k]) > kRigidRefreshVelocity_radps;
+  }
+  if (fresh) {
+    for (int k = 0; k < n; ++k) {
+      const int i = active_[static_cast<std::size_t>(k)];
+      q_full_[i] = rigid_q_[k] = y[angleIndex(n, k)];
+      qd_full_[i] = rigid_qd_[k] = y[velocityIndex(n, k)];
+      acc_full_[i] = qdd_[k];
+    }
+    arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, acc_full_);
+    JointVector base(n);
+    for (int k = 0; k < n; ++k) base[k] = data_->tau[active_[static_cast<std::size_t>(k)]];
+    JointVector column(n);
+    for (int c = 0; c < 2 * n; ++c) {
+      const int k = c % n;
+      const int i = active_[static_cast<std::size_t>(k)];
+      Eigen::VectorXd& v = c < n ? q_full_ : qd_full_;
+      const double saved = v[i];
+      const double eps = 1e-7 * std::max(1.0, std::abs(saved));
+      v[i] = saved + eps;
+      arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, acc_full_);
+      v[i] = saved;
+      for (int r = 0; r < n; ++r) column[r] = (data_->tau[active_[static_cast<std::size_t>(r)]] - base[r]) / eps;
+      rigid_block_.col(c) = -(mass_inv_ * column);
+    }
+    rigid_block_age_ = 0;
+    ++rigid_refreshes_;
+  }
+  for (int c = 0; c < 2 * n; ++c) {
+    const int col = c < n ? angleIndex(n, c) : velocityIndex(n, c - n);
+    for (int r = 0; r < n; ++r)
+      Jdata[velocityIndex(n, r) + static_cast<std::ptrdiff_t>(col) * ld] += rigid_block_(r, c);
   }
 }
 
@@ -732,6 +958,7 @@ PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
       need_reinit_ = true;
   }
   last_cmd_ = cmd_;
+  if (rodas_) return stepRodas3(dt_s);
   const double t_end = t_ + dt_s;
   void* mem = solver_->mem.get();
   N_Vector y = solver_->y.get();
@@ -757,15 +984,47 @@ PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
   }
   t_ = t_end;
   harvestStats();
+  sampleOutputs(dt_s);
+  return status;
+}
+
+PlantStatus ArmPlant::stepRodas3(double dt_s) noexcept {
+  double* y = N_VGetArrayPointer(solver_->y.get());
+  const RosenbrockStatus result = rodas_->advance(y, dt_s);
+  PlantStatus status = PlantStatus::kOk;
+  if (result != RosenbrockStatus::kOk) {
+    status = PlantStatus::kSolverFailure;
+    std::snprintf(error_, sizeof(error_), "Rodas3 at t = %.6f s: %s", t_,
+                  result == RosenbrockStatus::kTooManySteps   ? "too many steps in one period"
+                  : result == RosenbrockStatus::kStepTooSmall ? "step size underflow"
+                                                              : "non-finite right-hand side");
+  }
+  t_ += dt_s;
+  const RosenbrockStats& r = rodas_->stats();
+  stats_.steps = r.steps;
+  stats_.rhs_evals = r.rhs_evals;
+  stats_.jac_evals = r.jac_evals;
+  stats_.err_test_fails = r.rejected;
+  // Hard-stop contacts and releases, seen at the period boundaries (no event location: the stop
+  // torque is continuous at contact, and the error control resolves the kink).
+  for (int k = 0; k < n_; ++k) {
+    const signed char side = stopSide(params_[static_cast<std::size_t>(k)], y[angleIndex(n_, k)]);
+    if (side != stop_side_[static_cast<std::size_t>(k)]) ++stats_.root_events;
+    stop_side_[static_cast<std::size_t>(k)] = side;
+  }
+  sampleOutputs(dt_s);
+  return status;
+}
+
+void ArmPlant::sampleOutputs(double dt_s) noexcept {
   // Outputs at the period boundary, then the sensors.
-  const double* yv = N_VGetArrayPointer(y);
-  evaluateRhs(yv, ydot_scratch_);
+  const double* yv = N_VGetArrayPointer(solver_->y.get());
+  evaluateTorques(yv);
   for (int k = 0; k < n_; ++k) {
     measured_[static_cast<std::size_t>(k)] =
         sampleJointSensors(params_[static_cast<std::size_t>(k)], sensor_state_[static_cast<std::size_t>(k)], noise_,
                            yv[angleIndex(n_, k)], tau_cell_[k], dt_s);
   }
-  return status;
 }
 
 }  // namespace fullarm::plant

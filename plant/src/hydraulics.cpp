@@ -27,7 +27,15 @@ ValueSlope roundedRamp(double s, double w) noexcept {
   return {(s + w) * (s + w) / (4.0 * w), (s + w) / (2.0 * w)};
 }
 
+double airRoot(const FluidParams& f) noexcept {
+  return std::pow(f.atmospheric_pressure_pa, 1.0 / f.polytropic_index);
+}
+
 ValueSlope effectiveBulkModulus(const FluidParams& f, double p_gauge_pa) noexcept {
+  return effectiveBulkModulus(f, p_gauge_pa, airRoot(f));
+}
+
+ValueSlope effectiveBulkModulus(const FluidParams& f, double p_gauge_pa, double air_root) noexcept {
   const double el = f.oil_bulk_modulus_pa;
   if (f.air_fraction <= 0.0) return {el, 0.0};
   const double pa = f.atmospheric_pressure_pa;
@@ -36,8 +44,8 @@ ValueSlope effectiveBulkModulus(const FluidParams& f, double p_gauge_pa) noexcep
   // (H3) with x = p_abs^(1/n), c = p_atm^(1/n): E = E_l (1 + a c / x) / (1 + a c E_l / (n p_abs x)).
   const bool clamped = pa + p_gauge_pa < 0.1 * pa;
   const double pabs = clamped ? 0.1 * pa : pa + p_gauge_pa;
-  const double x = std::pow(pabs, 1.0 / n);
-  const double c = std::pow(pa, 1.0 / n);
+  const double x = std::exp(std::log(pabs) / n);  // p_abs^(1/n)
+  const double c = air_root;
   const double num = 1.0 + a * c / x;
   const double den = 1.0 + a * c * el / (n * pabs * x);
   const double dnum = clamped ? 0.0 : -a * c / (n * pabs * x);
@@ -50,10 +58,13 @@ ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad) noe
   const double r = a.lever.moment_arm_m;
   const double d = a.lever.mount_distance_m;
   const double phi = q_rad + a.lever.lever_angle_offset_rad;
-  const double L = arm::cylinderLength(a.lever, q_rad);
-  const double R = arm::actuatorMomentArm(a.lever, q_rad);
+  const double c = std::cos(phi);
+  // L and R as arm::cylinderLength / arm::actuatorMomentArm (law of cosines and dL/dq), with one
+  // cos and sin.
+  const double L = std::sqrt(r * r + d * d - 2.0 * r * d * c);
+  const double R = r * d * std::sin(phi) / L;
   // dR/dq = r d cos(phi) / L - R^2 / L (differentiating R = r d sin(phi) / L, dL/dq = R).
-  const double dR = (r * d * std::cos(phi) - R * R) / L;
+  const double dR = (r * d * c - R * R) / L;
   return {L, R, dR};
 }
 

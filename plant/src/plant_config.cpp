@@ -151,6 +151,14 @@ PlantConfig build(const YamlMap& root, const std::filesystem::path& source, cons
   } else {
     solver.fail("jacobian", "'" + jac + "': expected analytic or finite_difference");
   }
+  const std::string integrator = solver.optionalString("integrator").value_or("cvodes");
+  if (integrator == "cvodes") {
+    o.integrator = IntegratorKind::kCvodes;
+  } else if (integrator == "rodas3") {
+    o.integrator = IntegratorKind::kRodas3;
+  } else {
+    solver.fail("integrator", "'" + integrator + "': expected cvodes or rodas3");
+  }
   for (const auto& [key, value] :
        {std::pair{"rtol", o.rtol}, std::pair{"atol_spool", o.atol_spool},
         std::pair{"atol_spool_rate_per_s", o.atol_spool_rate_per_s}, std::pair{"atol_pressure_pa", o.atol_pressure_pa},

@@ -66,11 +66,21 @@ double rmsDifferenceRatio(const std::vector<double>& a, const std::vector<double
   return std::sqrt(diff / ref);
 }
 
-TEST(PlantChirp, PressuresStayWithinSupplyAndReturnAndStopsHold) {
+// The issue's chirp checks run with each integrator: CVODES (the reference) and Rodas3.
+class PlantChirp : public ::testing::TestWithParam<IntegratorKind> {
+ protected:
+  [[nodiscard]] SolverOptions options() const {
+    SolverOptions o = test::dtsPlant().solver;
+    o.integrator = GetParam();
+    return o;
+  }
+};
+
+TEST_P(PlantChirp, PressuresStayWithinSupplyAndReturnAndStopsHold) {
   const PlantConfig& config = test::dtsPlant();
   int joints_at_stop = 0;
   for (const JointParams& joint : config.joints) {
-    const ChirpRun r = runChirp(joint, config.solver, 4.0, 0.1);
+    const ChirpRun r = runChirp(joint, options(), 4.0, 0.1);
     EXPECT_GE(r.p_min, joint.return_pressure_pa - kPressureMargin_pa) << joint.name;
     EXPECT_LE(r.p_max, joint.supply_pressure_pa + kPressureMargin_pa) << joint.name;
     EXPECT_LE(r.overshoot_rad * 180.0 / std::numbers::pi, PlantTolerance::kIssueStopDeg) << joint.name;
@@ -82,22 +92,96 @@ TEST(PlantChirp, PressuresStayWithinSupplyAndReturnAndStopsHold) {
   EXPECT_EQ(joints_at_stop, static_cast<int>(config.joints.size()));
 }
 
-TEST(PlantChirp, ResponseIsIndependentOfSolverTolerance) {
+TEST_P(PlantChirp, ResponseIsIndependentOfSolverTolerance) {
   const PlantConfig& config = test::dtsPlant();
   const JointParams& joint = config.joints[static_cast<std::size_t>(findPlantJoint(config, "EB"))];
-  SolverOptions half = config.solver;
+  SolverOptions half = options();
   half.rtol *= 0.5;
-  const ChirpRun a = runChirp(joint, config.solver, 4.0);
+  const ChirpRun a = runChirp(joint, options(), 4.0);
   const ChirpRun b = runChirp(joint, half, 4.0);
   EXPECT_LT(rmsDifferenceRatio(a.q, b.q), PlantTolerance::kIssueRtolRms);
   EXPECT_LT(rmsDifferenceRatio(a.p_load, b.p_load), PlantTolerance::kIssueRtolRms);
   // ... and the comparison is not vacuous: a tenfold looser rtol is visibly different.
-  SolverOptions loose = config.solver;
+  SolverOptions loose = options();
   loose.rtol *= 100.0;
   loose.atol_pressure_pa *= 100.0;
   loose.atol_angle_rad *= 100.0;
   const ChirpRun c = runChirp(joint, loose, 4.0);
   EXPECT_GT(rmsDifferenceRatio(a.p_load, c.p_load), 1e-5);
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, PlantChirp, ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3),
+                         [](const ::testing::TestParamInfo<IntegratorKind>& param_info) {
+                           return param_info.param == IntegratorKind::kCvodes ? "Cvodes" : "Rodas3";
+                         });
+
+// CVODES at rtol 1e-8 and 1000x tighter absolute tolerances: the reference for the integrators
+// at their configured tolerances.
+SolverOptions tightReference() {
+  SolverOptions o = test::dtsPlant().solver;
+  o.integrator = IntegratorKind::kCvodes;
+  o.rtol = 1e-8;
+  o.atol_spool *= 1e-3;
+  o.atol_spool_rate_per_s *= 1e-3;
+  o.atol_pressure_pa *= 1e-3;
+  o.atol_angle_rad *= 1e-3;
+  o.atol_velocity_radps *= 1e-3;
+  o.max_steps_per_period = 200000;
+  return o;
+}
+
+// Rodas3 at the configured tolerances against the tight CVODES reference on the EB chirp, from
+// the default posture and from 0.1 rad inside the upper limit (stop contacts): within the same
+// 0.5 % RMS the issue allows between rtol and rtol/2, for the angle and the load pressure.
+TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnJointChirp) {
+  const PlantConfig& config = test::dtsPlant();
+  const JointParams& joint = config.joints[static_cast<std::size_t>(findPlantJoint(config, "EB"))];
+  SolverOptions rodas = config.solver;
+  rodas.integrator = IntegratorKind::kRodas3;
+  for (const double from_limit : {0.0, 0.1}) {
+    const ChirpRun ref = runChirp(joint, tightReference(), 4.0, from_limit);
+    const ChirpRun r = runChirp(joint, rodas, 4.0, from_limit);
+    EXPECT_LT(rmsDifferenceRatio(ref.q, r.q), PlantTolerance::kIssueRtolRms) << "from limit " << from_limit;
+    EXPECT_LT(rmsDifferenceRatio(ref.p_load, r.p_load), PlantTolerance::kIssueRtolRms) << "from limit " << from_limit;
+  }
+}
+
+// The same on the whole arm (all seven joints chirped at once, 1 s), per joint.
+TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnArmChirp) {
+  const arm::ArmModel& model = test::dtsModel();
+  const PlantConfig& config = test::dtsPlant();
+  auto run = [&](const SolverOptions& options) {
+    ArmPlant plant;
+    plant.configure(model, config.joints, model.defaultPosture(), UserArmParams{}, options, 1);
+    const int n = plant.numJoints();
+    SignalParams s;
+    s.kind = SignalKind::kChirp;
+    s.amplitude = 1.0 / config.joints[0].valve.amplifier_gain_per_v;
+    s.start_hz = 0.5;
+    s.stop_hz = 80.0;
+    s.duration_s = 1.0;
+    PlantCommand cmd = PlantCommand::zero(n);
+    std::vector<ChirpRun> runs(static_cast<std::size_t>(n));
+    for (int k = 0; k < 1000; ++k) {
+      for (int j = 0; j < n; ++j) cmd.command[j] = signalValue(s, k * 1e-3);
+      EXPECT_EQ(plant.step(1e-3, cmd), PlantStatus::kOk) << plant.lastError();
+      for (int j = 0; j < n; ++j) {
+        const JointState st = plant.state(j);
+        runs[static_cast<std::size_t>(j)].q.push_back(st.q_rad);
+        runs[static_cast<std::size_t>(j)].p_load.push_back(st.p_a_pa - st.p_b_pa);
+      }
+    }
+    return runs;
+  };
+  SolverOptions rodas = config.solver;
+  rodas.integrator = IntegratorKind::kRodas3;
+  const std::vector<ChirpRun> ref = run(tightReference());
+  const std::vector<ChirpRun> r = run(rodas);
+  for (std::size_t j = 0; j < ref.size(); ++j) {
+    EXPECT_LT(rmsDifferenceRatio(ref[j].q, r[j].q), 2.0 * PlantTolerance::kIssueRtolRms) << config.joints[j].name;
+    EXPECT_LT(rmsDifferenceRatio(ref[j].p_load, r[j].p_load), 2.0 * PlantTolerance::kIssueRtolRms)
+        << config.joints[j].name;
+  }
 }
 
 }  // namespace

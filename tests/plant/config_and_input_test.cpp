@@ -56,6 +56,16 @@ TEST(PlantConfig, DefaultFileLoadsWithArmGeometry) {
   EXPECT_EQ(findPlantJoint(c, "R_EB"), findPlantJoint(c, "EB"));
 }
 
+// solver.integrator is optional (CVODES, the reference, when absent) and checked when given.
+TEST(PlantConfig, IntegratorIsSelectable) {
+  EXPECT_EQ(test::dtsPlant().solver.integrator, IntegratorKind::kCvodes);
+  const std::string rodas =
+      replaced(defaultText(), "  jacobian: analytic\n", "  jacobian: analytic\n  integrator: rodas3\n");
+  EXPECT_EQ(parsePlantConfig(rodas, "test_plant.yaml", test::dtsModel()).solver.integrator, IntegratorKind::kRodas3);
+  expectConfigError(replaced(defaultText(), "  jacobian: analytic\n", "  jacobian: analytic\n  integrator: euler\n"),
+                    "solver.integrator", "expected cvodes or rodas3");
+}
+
 TEST(PlantConfig, UnknownJointNameIsAClearError) {
   try {
     (void)findPlantJoint(test::dtsPlant(), "ELBOW");

@@ -16,8 +16,19 @@ namespace {
 
 using test::PlantTolerance;
 
-SolverOptions tightOptions() {
-  SolverOptions o;
+// Every check runs with each integrator: CVODES (the reference) and Rodas3.
+class JointPhysics : public ::testing::TestWithParam<IntegratorKind> {
+ protected:
+  [[nodiscard]] SolverOptions options() const {
+    SolverOptions o;
+    o.integrator = GetParam();
+    return o;
+  }
+  [[nodiscard]] SolverOptions tightOptions() const;
+};
+
+SolverOptions JointPhysics::tightOptions() const {
+  SolverOptions o = options();
   o.rtol = 1e-8;
   o.atol_pressure_pa = 1.0;
   o.atol_angle_rad = 1e-10;
@@ -27,7 +38,7 @@ SolverOptions tightOptions() {
 
 // Blocked spool (valve overlapped, closed), impulse in velocity: the joint rings at
 // omega_h = sqrt(4 beta D^2 / (V_t J)) (research/plant.md 1.6).
-TEST(JointPhysics, BlockedSpoolImpulseRingsAtHydraulicNaturalFrequency) {
+TEST_P(JointPhysics, BlockedSpoolImpulseRingsAtHydraulicNaturalFrequency) {
   JointParams p = test::vaneJoint();
   p.valve.lap_pa_m = p.valve.lap_pb_m = p.valve.lap_at_m = p.valve.lap_bt_m = 1e-5;  // closed at null
   const RigidLoad load{0.05, 0.0, 0.0};
@@ -58,7 +69,7 @@ TEST(JointPhysics, BlockedSpoolImpulseRingsAtHydraulicNaturalFrequency) {
 }
 
 // Blocked load, small opening: dP_L/dt = 4 beta Q_L / V_t with Q_L = K_v x sqrt(p_s - p_a).
-TEST(JointPhysics, BlockedLoadPressureBuildUpRate) {
+TEST_P(JointPhysics, BlockedLoadPressureBuildUpRate) {
   const JointParams p = test::vaneJoint();
   const RigidLoad load{1e12, 0.0, 0.0};  // blocked
   ArmPlant plant;
@@ -81,12 +92,12 @@ TEST(JointPhysics, BlockedLoadPressureBuildUpRate) {
 }
 
 // No load: steady velocity Q_L / D at three openings, Q_L = K_v x sqrt((p_s - p_r)/2).
-TEST(JointPhysics, NoLoadSteadyVelocityAtThreeOpenings) {
+TEST_P(JointPhysics, NoLoadSteadyVelocityAtThreeOpenings) {
   const JointParams p = test::vaneJoint();
   const double kv = p.valve.rated_flow_m3ps / std::sqrt(p.valve.rated_pressure_drop_pa);
   for (const double x : {0.05, 0.1, 0.2}) {
     ArmPlant plant;
-    plant.configure(p, RigidLoad{0.05, 0.0, 0.0}, SolverOptions{});
+    plant.configure(p, RigidLoad{0.05, 0.0, 0.0}, options());
     JointState s0;
     s0.spool = x;
     s0.q_rad = -0.9;
@@ -109,7 +120,7 @@ TEST(JointPhysics, NoLoadSteadyVelocityAtThreeOpenings) {
 }
 
 // Valve closed, no leakage: hydraulic + kinetic + gravity + stop energy never increases.
-TEST(JointPhysics, ClosedValveIsPassive) {
+TEST_P(JointPhysics, ClosedValveIsPassive) {
   JointParams p = test::vaneJoint();
   p.valve.lap_pa_m = p.valve.lap_pb_m = p.valve.lap_at_m = p.valve.lap_bt_m = 1e-5;
   p.friction = {0.5, 0.8, 0.05, 0.05, 1e-3};
@@ -150,6 +161,11 @@ TEST(JointPhysics, ClosedValveIsPassive) {
     EXPECT_LT(e_prev, e0);  // friction dissipated something
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Integrators, JointPhysics, ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3),
+                         [](const ::testing::TestParamInfo<IntegratorKind>& param_info) {
+                           return param_info.param == IntegratorKind::kCvodes ? "Cvodes" : "Rodas3";
+                         });
 
 }  // namespace
 }  // namespace fullarm::plant

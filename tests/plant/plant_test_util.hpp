@@ -2,10 +2,18 @@
 // Shared fixtures of the plant tests: hand-built joints with textbook-friendly parameters.
 
 #include <cmath>
+#include <ostream>
 #include <vector>
 
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/hydraulics.hpp"
+
+namespace fullarm::plant {
+/// Test names and messages print the integrator by name.
+inline void PrintTo(IntegratorKind kind, std::ostream* os) {
+  *os << (kind == IntegratorKind::kCvodes ? "cvodes" : "rodas3");
+}
+}  // namespace fullarm::plant
 
 namespace fullarm::plant::test {
 

@@ -3,8 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <vector>
+
 #include "alloc_guard.hpp"
 #include "plant_fixture.hpp"
+#include "plant_test_util.hpp"
 
 namespace fullarm::plant {
 namespace {
@@ -13,14 +16,18 @@ TEST(PlantRealtime, GuardIsActive) {
   EXPECT_TRUE(fullarm::testing::mallocWrappersActive());
 }
 
-TEST(PlantRealtime, SingleJointStepDoesNotAllocate) {
+class PlantRealtimeIntegrators : public ::testing::TestWithParam<IntegratorKind> {};
+
+TEST_P(PlantRealtimeIntegrators, SingleJointStepDoesNotAllocate) {
   const arm::ArmModel& model = test::dtsModel();
   const PlantConfig& config = test::dtsPlant();
   for (const InputMode mode : {InputMode::kValveVoltage, InputMode::kTorqueLoop}) {
     JointParams p = config.joints[static_cast<std::size_t>(findPlantJoint(config, "EB"))];
     p.input_mode = mode;
     ArmPlant plant;
-    plant.configure(model, {p}, model.defaultPosture(), config.user_arm, config.solver, config.seed);
+    SolverOptions options = config.solver;
+    options.integrator = GetParam();
+    plant.configure(model, {p}, model.defaultPosture(), config.user_arm, options, config.seed);
     PlantCommand cmd = PlantCommand::zero(1);
     for (int k = 0; k < 1200; ++k) {
       // Full-scale square wave: jumps (re-init) and slams into both stops (root events).
@@ -31,17 +38,21 @@ TEST(PlantRealtime, SingleJointStepDoesNotAllocate) {
       ASSERT_EQ(status, PlantStatus::kOk) << plant.lastError();
     }
     EXPECT_GT(plant.stats().root_events, 0) << "the test must exercise hard-stop events";
-    EXPECT_GT(plant.stats().reinits, 2);
+    if (GetParam() == IntegratorKind::kCvodes) {
+      EXPECT_GT(plant.stats().reinits, 2);
+    }
   }
 }
 
-TEST(PlantRealtime, WholeArmStepDoesNotAllocate) {
+TEST_P(PlantRealtimeIntegrators, WholeArmStepDoesNotAllocate) {
   const arm::ArmModel& model = test::dtsModel();
   const PlantConfig& config = test::dtsPlant();
   UserArmParams user = config.user_arm;
   user.enabled = true;
   ArmPlant plant;
-  plant.configure(model, config.joints, model.defaultPosture(), user, config.solver, config.seed);
+  SolverOptions options = config.solver;
+  options.integrator = GetParam();
+  plant.configure(model, config.joints, model.defaultPosture(), user, options, config.seed);
   PlantCommand cmd = PlantCommand::zero(plant.numJoints());
   for (int k = 0; k < 60; ++k) {
     for (int j = 0; j < plant.numJoints(); ++j) cmd.command[j] = (k / 20) % 2 == 0 ? 4.0 : -4.0;
@@ -51,8 +62,37 @@ TEST(PlantRealtime, WholeArmStepDoesNotAllocate) {
     EXPECT_NO_HEAP_ALLOCATION(status = plant.step(1e-3, cmd));
     ASSERT_EQ(status, PlantStatus::kOk) << plant.lastError();
   }
-  EXPECT_GT(plant.stats().reinits, 1);
+  if (GetParam() == IntegratorKind::kCvodes) {
+    EXPECT_GT(plant.stats().reinits, 1);
+  }
 }
+
+// Rodas3 with the dense Newton matrix (torque-loop joints on the whole arm couple every joint's
+// valve to every pressure through M^-1, so the block elimination is off).
+TEST(PlantRealtime, WholeArmTorqueLoopRodas3StepDoesNotAllocate) {
+  const arm::ArmModel& model = test::dtsModel();
+  const PlantConfig& config = test::dtsPlant();
+  std::vector<JointParams> joints = config.joints;
+  for (JointParams& p : joints) p.input_mode = InputMode::kTorqueLoop;
+  SolverOptions options = config.solver;
+  options.integrator = IntegratorKind::kRodas3;
+  ArmPlant plant;
+  plant.configure(model, joints, model.defaultPosture(), config.user_arm, options, config.seed);
+  PlantCommand cmd = PlantCommand::zero(plant.numJoints());
+  for (int k = 0; k < 60; ++k) {
+    for (int j = 0; j < plant.numJoints(); ++j) cmd.command[j] = (k / 20) % 2 == 0 ? 5.0 : -5.0;
+    PlantStatus status = PlantStatus::kOk;
+    EXPECT_NO_HEAP_ALLOCATION(status = plant.step(1e-3, cmd));
+    ASSERT_EQ(status, PlantStatus::kOk) << plant.lastError();
+  }
+  EXPECT_GT(plant.stats().steps, 60);
+}
+
+INSTANTIATE_TEST_SUITE_P(Integrators, PlantRealtimeIntegrators,
+                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3),
+                         [](const ::testing::TestParamInfo<IntegratorKind>& param_info) {
+                           return param_info.param == IntegratorKind::kCvodes ? "Cvodes" : "Rodas3";
+                         });
 
 }  // namespace
 }  // namespace fullarm::plant

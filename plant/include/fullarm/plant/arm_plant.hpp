@@ -15,6 +15,7 @@
 /// their posture. Equations: docs/plant.md.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -25,6 +26,7 @@
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/plant/hydraulics.hpp"
 #include "fullarm/plant/joint_params.hpp"
+#include "fullarm/plant/rosenbrock.hpp"
 #include "fullarm/plant/sensor_model.hpp"
 
 namespace fullarm::plant {
@@ -43,6 +45,12 @@ enum class JacobianKind {
   kFiniteDifference,  ///< CVODE's internal dense difference quotients (slow; for checking)
 };
 
+/// Which integrator step() uses.
+enum class IntegratorKind {
+  kCvodes,  ///< CVODES BDF with root-found hard-stop events: the reference (default)
+  kRodas3,  ///< adaptive one-step Rosenbrock (Rodas3) for real-time use; validated against CVODES
+};
+
 /// Integrator settings.
 struct SolverOptions {
   double rtol = 1e-6;
@@ -56,6 +64,9 @@ struct SolverOptions {
   /// (valve mode: 1/amplifier gain volts; torque mode: the joint torque limit) in one period.
   double reinit_command_jump = 0.002;
   JacobianKind jacobian = JacobianKind::kAnalytic;
+  /// kRodas3 uses rtol, the absolute tolerances, max_steps_per_period and the analytic
+  /// Jacobian; it ignores reinit_command_jump and `jacobian` (docs/plant.md, Integration).
+  IntegratorKind integrator = IntegratorKind::kCvodes;
 };
 
 /// User arm strapped to the cuff: a point mass, a spring to the cuff's rest position and a
@@ -176,6 +187,12 @@ class ArmPlant {
   struct Solver;  // CVODES handles (RAII), defined in the .cpp
   void allocate(const SolverOptions& options, std::uint64_t seed);
   void mechanics(const double* y) noexcept;
+  // evaluateRhs() in two passes: M, h, actuator torques, qdd and tau_cell at y (all the sensors
+  // and outputs need), then the state derivatives.
+  void evaluateTorques(const double* y) noexcept;
+  void evaluateRates(const double* y, double* ydot) noexcept;
+  void jacobianEntries(const double* y, double* J) noexcept;
+  void rigidBodyGradients(const double* y, double* J, int ld) noexcept;
   void compositeRigidBodyMass() noexcept;
   void reinitSolver() noexcept;
   void harvestStats() noexcept;
@@ -202,7 +219,13 @@ class ArmPlant {
   std::unique_ptr<arm::ArmModel> model_;  // copy with the user mass merged into its link
   std::unique_ptr<arm::ArmData> data_;
   Eigen::VectorXd posture_;
-  Eigen::VectorXd q_full_, qd_full_, zero_full_;
+  Eigen::VectorXd q_full_, qd_full_, zero_full_, acc_full_;
+  bool rigid_body_gradients_ = false;
+  // -M^-1 d ID / d(q, qd) (n x 2n) at (rigid_q_, rigid_qd_); age -1: not evaluated yet.
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, 2 * kMaxPlantJoints> rigid_block_;
+  JointVector rigid_q_, rigid_qd_;
+  int rigid_block_age_ = -1;
+  long rigid_refreshes_ = 0;
   UserArmParams user_{};
   Eigen::Vector3d cuff_anchor_W_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d axis_W_ = Eigen::Vector3d::UnitZ();  // single axis from an arm model
@@ -212,8 +235,20 @@ class ArmPlant {
   Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxPlantJoints> cuff_jac_;
   arm::PointJacobian point_jac_;
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints> mass_, mass_inv_;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints> chol_;  // M = L L^T
   JointVector qdd_, tau_cell_, tau_hyd_, tau_act_, h_, tau_cuff_;
   std::vector<StrokeRange> stroke_;
+  std::vector<ChamberVolumes> volumes_;  // per joint, at the state of the last evaluateRhs()
+  // Per-joint terms of the last evaluateRhs() that evaluateJacobian() reuses (value and slopes).
+  struct JointTerms {
+    ValveFlows flows;
+    ValueSlope beta_a, beta_b, check_a, check_b, friction;
+    StopTorque stop;
+  };
+  std::vector<JointTerms> terms_;
+  std::vector<double> air_root_;  // p_atm^(1/n) per joint (H3)
+  // ancestry_[a * kMaxPlantJoints + b]: 1 if active joint b moves link a, -1 if a moves b, else 0.
+  std::array<signed char, kMaxPlantJoints * kMaxPlantJoints> ancestry_{};
   double ydot_scratch_[kMaxPlantStates] = {};
 
   // Sensors.
@@ -223,6 +258,10 @@ class ArmPlant {
   std::vector<JointMeasurement> measured_;
 
   std::unique_ptr<Solver> solver_;
+  std::unique_ptr<Rodas3> rodas_;       // set when options_.integrator == kRodas3
+  std::vector<signed char> stop_side_;  // -1 below min, 0 inside, 1 above max (Rodas3 event count)
+  PlantStatus stepRodas3(double dt_s) noexcept;
+  void sampleOutputs(double dt_s) noexcept;
 };
 
 }  // namespace fullarm::plant

@@ -29,6 +29,10 @@ struct ValueSlope {
 /// are clamped inside the formula.
 /// @rt
 [[nodiscard]] ValueSlope effectiveBulkModulus(const FluidParams& f, double p_gauge_pa) noexcept;
+/// (H3) with the constant p_atm^(1/n) precomputed by airRoot(f) (one pow() less per call). @rt
+[[nodiscard]] ValueSlope effectiveBulkModulus(const FluidParams& f, double p_gauge_pa, double air_root) noexcept;
+/// p_atm^(1/n) of (H3). @rt
+[[nodiscard]] double airRoot(const FluidParams& f) noexcept;
 
 /// Actuator stroke coordinate s(q) and its derivatives: for a rotary vane s = q [rad] with
 /// area D [m^3/rad]; for a cylinder s = L(q) [m] (cylinder length) with area A [m^2].

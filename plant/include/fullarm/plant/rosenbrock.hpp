@@ -1,0 +1,116 @@
+#pragma once
+/// @file
+/// Rodas3: an adaptive, L-stable, stiffly accurate Rosenbrock method of order 3 with an
+/// embedded order-2 error estimate (Sandu et al., "Benchmarking stiff ODE solvers for
+/// atmospheric chemistry problems II: Rosenbrock solvers", Atmos. Environ. 31, 1997; Hairer &
+/// Wanner, Solving ODEs II, sec. IV.7), for autonomous systems y' = f(y) of up to
+/// kMaxRosenbrockStates states, in fixed-capacity storage (no heap after configure()).
+///
+/// Why a one-step method next to CVODES: the plant's input is a zero-order hold that jumps at
+/// every control period. A multistep method (BDF) must restart at order 1 with tiny steps
+/// after each jump; a one-step method starts every step from scratch anyway, so it carries its
+/// step size across the jump at no cost. Each step needs one Jacobian, one LU factorisation,
+/// three right-hand sides and four solves, and no Newton iteration.
+///
+/// Stages (transformed form, gamma = 1/2, G = I/(h gamma) - J(y0)):
+///   G k1 = f(y0)
+///   G k2 = f(y0) + 4 k1 / h
+///   G k3 = f(y0 + 2 k1) + (k1 - k2) / h
+///   G k4 = f(y0 + 2 k1 + k3) + (k1 - k2 - 8/3 k3) / h
+///   y1 = y0 + 2 k1 + k3 + k4,   local error estimate k4.
+
+#include <Eigen/Core>
+#include <array>
+
+namespace fullarm::plant {
+
+/// Largest state size Rodas3 handles.
+inline constexpr int kMaxRosenbrockStates = 60;
+
+/// Size of the independent diagonal blocks of setBlockStructure().
+inline constexpr int kRosenbrockBlock = 4;
+
+/// Counters of a Rodas3 integrator (since configure() or resetCounters()).
+struct RosenbrockStats {
+  long steps = 0;           ///< accepted steps
+  long rejected = 0;        ///< steps rejected by the error test
+  long rhs_evals = 0;       ///< f evaluations (including the one inside each Jacobian call)
+  long jac_evals = 0;       ///< Jacobian evaluations (one per attempted step)
+  long factorizations = 0;  ///< LU factorisations of G
+};
+
+/// Outcome of Rodas3::advance().
+enum class RosenbrockStatus { kOk, kTooManySteps, kStepTooSmall, kNonFinite };
+
+/// The right-hand side and its Jacobian, supplied by the caller.
+struct RosenbrockSystem {
+  /// f(y) into ydot (size n). @rt
+  void (*rhs)(void* user, const double* y, double* ydot) noexcept = nullptr;
+  /// J = df/dy at y into jac (n x n, column-major) and f(y) into ydot. @rt
+  void (*jacobian)(void* user, const double* y, double* ydot, double* jac) noexcept = nullptr;
+  void* user = nullptr;
+};
+
+/// Adaptive Rodas3 with weighted-RMS error control (the norm CVODES uses):
+/// ||e|| = sqrt(mean_i (e_i / (rtol max(|y0_i|, |y1_i|) + atol_i))^2) <= 1.
+class Rodas3 {
+ public:
+  using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxRosenbrockStates, 1>;
+  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRosenbrockStates, kMaxRosenbrockStates>;
+
+  /// @param n state size (1..kMaxRosenbrockStates); @param atol absolute tolerances (size n)
+  /// @param max_steps_per_call attempted-step budget of one advance()
+  /// @throws std::invalid_argument for a bad size, tolerance or system.
+  void configure(int n, const double* atol, double rtol, long max_steps_per_call, const RosenbrockSystem& system);
+
+  /// Integrates y (size n, in place) over `duration_s` > 0, carrying the step size proposed by
+  /// the previous call; the steps of one call are equal-length subdivisions so the last step
+  /// lands on the end exactly. @rt
+  RosenbrockStatus advance(double* y, double duration_s) noexcept;
+
+  /// Declares that the first `blocks` * kRosenbrockBlock states form independent blocks of
+  /// kRosenbrockBlock states (J has no entries between two different leading blocks), coupled
+  /// only through the remaining "border" states. The Newton matrix is then factorised by block
+  /// elimination (a Schur complement on the border) instead of a dense LU: the plant's
+  /// hydraulic states of one joint couple to the other joints only through q and qd.
+  /// blocks = 0 restores the dense LU. @throws std::invalid_argument if it does not fit.
+  void setBlockStructure(int blocks);
+
+  /// Forgets the step-size history (the next advance() starts from `initial_step_s`). @rt
+  void resetStepSize(double initial_step_s) noexcept { h_ = initial_step_s; }
+  /// Step size the controller proposes for the next step [s].
+  [[nodiscard]] double proposedStep() const noexcept { return h_; }
+  [[nodiscard]] const RosenbrockStats& stats() const noexcept { return stats_; }
+  void resetCounters() noexcept { stats_ = {}; }
+
+ private:
+  /// One attempted step of length h from y0_; returns the error norm (inf if not finite).
+  double attempt(double h) noexcept;
+  /// Factorises G = I / (h gamma) - J; false if singular.
+  bool factor(double h) noexcept;
+  /// x = G^-1 b with the last factorisation.
+  void solve(const Vector& b, Vector& x) noexcept;
+
+  int n_ = 0;
+  double rtol_ = 1e-6;
+  long max_steps_ = 1000;
+  double h_ = 1e-4;
+  RosenbrockSystem sys_{};
+  RosenbrockStats stats_{};
+  Vector atol_, y0_, f0_, y1_, k1_, k2_, k3_, k4_, stage_, fstage_;
+  Matrix jac_, g_;
+  std::array<int, kMaxRosenbrockStates> pivots_{};
+  // Block elimination: per-block LU of D_k, W = D^-1 B (blocks x border), Schur S = E - C W.
+  using BorderMatrix =
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRosenbrockStates, kMaxRosenbrockStates>;
+  int blocks_ = 0;
+  int border_ = 0;
+  std::array<Eigen::Matrix4d, kMaxRosenbrockStates / kRosenbrockBlock> block_lu_{};
+  std::array<int, kMaxRosenbrockStates> block_piv_{};
+  BorderMatrix w_, schur_;
+  Vector z_, stage_scratch_;
+  std::array<int, kMaxRosenbrockStates / kRosenbrockBlock> nonzero_count_{};
+  std::array<int, kMaxRosenbrockStates / kRosenbrockBlock * kMaxRosenbrockStates> nonzero_cols_{};
+};
+
+}  // namespace fullarm::plant

@@ -1,0 +1,328 @@
+#include "fullarm/plant/rosenbrock.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace fullarm::plant {
+
+namespace {
+
+// Rodas3 coefficients in the transformed form (Sandu et al. 1997, Table 4; KPP "RODAS-3"):
+// gamma = 1/2, A: a31 = a41 = 2, a43 = 1; C: c21 = 4, c31 = c41 = 1, c32 = c42 = -1, c43 = -8/3;
+// m = (2, 0, 1, 1); error weights e = (0, 0, 0, 1); local order 3 (controller exponent 1/3).
+constexpr double kGamma = 0.5;
+constexpr double kC21 = 4.0;
+constexpr double kC31 = 1.0;
+constexpr double kC32 = -1.0;
+constexpr double kC41 = 1.0;
+constexpr double kC42 = -1.0;
+constexpr double kC43 = -8.0 / 3.0;
+constexpr double kSafety = 0.9;
+constexpr double kMinFactor = 0.2;
+constexpr double kMaxFactor = 5.0;
+constexpr double kSmallestStep_s = 1e-14;
+
+}  // namespace
+
+void Rodas3::configure(int n, const double* atol, double rtol, long max_steps_per_call,
+                       const RosenbrockSystem& system) {
+  if (n < 1 || n > kMaxRosenbrockStates) throw std::invalid_argument("Rodas3: state size out of range");
+  if (!(rtol > 0.0) || max_steps_per_call < 1) throw std::invalid_argument("Rodas3: bad tolerance or step budget");
+  if (system.rhs == nullptr || system.jacobian == nullptr) throw std::invalid_argument("Rodas3: missing f or J");
+  n_ = n;
+  rtol_ = rtol;
+  max_steps_ = max_steps_per_call;
+  sys_ = system;
+  atol_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    if (!(atol[i] > 0.0)) throw std::invalid_argument("Rodas3: absolute tolerances must be positive");
+    atol_[i] = atol[i];
+  }
+  for (Vector* v : {&y0_, &f0_, &y1_, &k1_, &k2_, &k3_, &k4_, &stage_, &fstage_, &stage_scratch_}) v->setZero(n);
+  blocks_ = 0;
+  border_ = n;
+  jac_.setZero(n, n);
+  g_.setZero(n, n);
+  stats_ = {};
+}
+
+void Rodas3::setBlockStructure(int blocks) {
+  if (blocks < 0 || blocks * kRosenbrockBlock > n_) throw std::invalid_argument("Rodas3: block structure too large");
+  blocks_ = blocks;
+  border_ = n_ - blocks * kRosenbrockBlock;
+  if (blocks_ > 0) {
+    w_.setZero(blocks_ * kRosenbrockBlock, border_);
+    schur_.setZero(border_, border_);
+    z_.setZero(n_);
+  }
+}
+
+namespace {
+
+// In-place LU with partial pivoting of the n x n column-major matrix a (leading dimension ld):
+// P a = L U, row k swapped with piv[k] at elimination step k. Plain loops: at the sizes here
+// (4 to 20) they beat a general library LU's dispatch overhead several times. False if a pivot
+// is zero or not finite.
+bool luFactor(double* a, int ld, int n, int* piv) noexcept {
+  auto at = [a, ld](int i, int j) -> double& { return a[i + static_cast<std::ptrdiff_t>(j) * ld]; };
+  for (int k = 0; k < n; ++k) {
+    int p = k;
+    double best = std::abs(at(k, k));
+    for (int i = k + 1; i < n; ++i) {
+      if (std::abs(at(i, k)) > best) {
+        best = std::abs(at(i, k));
+        p = i;
+      }
+    }
+    piv[k] = p;
+    if (!(best > 0.0) || !std::isfinite(best)) return false;
+    if (p != k) {
+      for (int j = 0; j < n; ++j) std::swap(at(k, j), at(p, j));
+    }
+    const double inv = 1.0 / at(k, k);
+    for (int i = k + 1; i < n; ++i) at(i, k) *= inv;
+    for (int j = k + 1; j < n; ++j) {
+      const double akj = at(k, j);
+      if (akj == 0.0) continue;
+      double* colj = &at(0, j);
+      const double* colk = &at(0, k);
+      for (int i = k + 1; i < n; ++i) colj[i] -= colk[i] * akj;
+    }
+  }
+  return true;
+}
+
+// x = (P^T L U)^-1 x in place with the factors of luFactor.
+void luSolve(const double* __restrict a, int ld, int n, const int* __restrict piv, double* __restrict x) noexcept {
+  // (__restrict: the factors and x never overlap, so the compiler needs no aliasing checks in the
+  // short inner loops.)
+  auto at = [a, ld](int i, int j) { return a[i + static_cast<std::ptrdiff_t>(j) * ld]; };
+  for (int k = 0; k < n; ++k) {
+    if (piv[k] != k) std::swap(x[k], x[piv[k]]);
+  }
+  for (int k = 0; k < n; ++k) {
+    const double xk = x[k];
+    if (xk == 0.0) continue;
+    for (int i = k + 1; i < n; ++i) x[i] -= at(i, k) * xk;
+  }
+  for (int k = n - 1; k >= 0; --k) {
+    x[k] /= at(k, k);
+    const double xk = x[k];
+    for (int i = 0; i < k; ++i) x[i] -= at(i, k) * xk;
+  }
+}
+
+// luFactor and luSolve with the size known at compile time (the single joint's 6 states, the
+// 4-state hydraulic blocks): unrolled by the compiler, several times faster than the
+// runtime-size loops at these sizes. Same arithmetic, same results.
+template <int N>
+void luSolveFixed(const double* __restrict a, const int* __restrict piv, double* __restrict x) noexcept {
+  for (int k = 0; k < N; ++k) {
+    if (piv[k] != k) std::swap(x[k], x[piv[k]]);
+  }
+  for (int k = 0; k < N; ++k) {
+    for (int i = k + 1; i < N; ++i) x[i] -= a[i + k * N] * x[k];
+  }
+  for (int k = N - 1; k >= 0; --k) {
+    x[k] /= a[k + k * N];
+    for (int i = 0; i < k; ++i) x[i] -= a[i + k * N] * x[k];
+  }
+}
+template <int N>
+bool luFactorFixed(double* a, int* piv) noexcept {
+  for (int k = 0; k < N; ++k) {
+    int p = k;
+    double best = std::abs(a[k + k * N]);
+    for (int i = k + 1; i < N; ++i) {
+      if (std::abs(a[i + k * N]) > best) {
+        best = std::abs(a[i + k * N]);
+        p = i;
+      }
+    }
+    piv[k] = p;
+    if (!(best > 0.0) || !std::isfinite(best)) return false;
+    if (p != k) {
+      for (int j = 0; j < N; ++j) std::swap(a[k + j * N], a[p + j * N]);
+    }
+    const double inv = 1.0 / a[k + k * N];
+    for (int i = k + 1; i < N; ++i) a[i + k * N] *= inv;
+    for (int j = k + 1; j < N; ++j) {
+      const double akj = a[k + j * N];
+      for (int i = k + 1; i < N; ++i) a[i + j * N] -= a[i + k * N] * akj;
+    }
+  }
+  return true;
+}
+
+// Dispatch on the sizes that occur (4: hydraulic block, 6: one joint).
+bool luFactorAny(double* a, int ld, int n, int* piv) noexcept {
+  if (n == ld && n == 4) return luFactorFixed<4>(a, piv);
+  if (n == ld && n == 6) return luFactorFixed<6>(a, piv);
+  return luFactor(a, ld, n, piv);
+}
+void luSolveAny(const double* a, int ld, int n, const int* piv, double* x) noexcept {
+  if (n == ld && n == 4) {
+    luSolveFixed<4>(a, piv, x);
+  } else if (n == ld && n == 6) {
+    luSolveFixed<6>(a, piv, x);
+  } else {
+    luSolve(a, ld, n, piv, x);
+  }
+}
+
+}  // namespace
+
+bool Rodas3::factor(double h) noexcept {
+  const double d = 1.0 / (h * kGamma);
+  ++stats_.factorizations;
+  if (blocks_ == 0) {
+    g_ = -jac_;
+    g_.diagonal().array() += d;
+    return luFactorAny(g_.data(), static_cast<int>(g_.rows()), n_, pivots_.data());
+  }
+  // G = [D B; C E] with D block diagonal: factor each D_k, W = D^-1 B, S = E - C W. B_k (the
+  // border columns of block k's rows) and C (the block columns of the border rows) are mostly
+  // exact zeros; only nonzero columns of B_k are solved for and used.
+  const int nb = blocks_ * kRosenbrockBlock;
+  const int m = border_;
+  const int ld = static_cast<int>(jac_.rows());
+  const double* jac = jac_.data();
+  schur_ = -jac_.block(nb, nb, m, m);
+  schur_.diagonal().array() += d;
+  for (int k = 0; k < blocks_; ++k) {
+    const int r = k * kRosenbrockBlock;
+    Eigen::Matrix4d& dk = block_lu_[static_cast<std::size_t>(k)];
+    dk = -jac_.block<4, 4>(r, r);
+    dk.diagonal().array() += d;
+    int* piv = block_piv_.data() + r;
+    if (!luFactorAny(dk.data(), 4, 4, piv)) return false;
+    int& count = nonzero_count_[static_cast<std::size_t>(k)];
+    count = 0;
+    for (int j = 0; j < m; ++j) {
+      const Eigen::Vector4d bj = -jac_.block<4, 1>(r, nb + j);
+      if (bj.isZero(0.0)) continue;
+      nonzero_cols_[static_cast<std::size_t>(k * kMaxRosenbrockStates + count++)] = j;
+      Eigen::Vector4d wj = bj;
+      luSolveAny(dk.data(), 4, 4, piv, wj.data());
+      w_.block<4, 1>(r, j) = wj;
+      // S -= C_k w_j with C = -J_mh: S(:, j) += J(border, block k) w_j.
+      for (int c = 0; c < kRosenbrockBlock; ++c) {
+        const double* col = jac + static_cast<std::ptrdiff_t>(r + c) * ld + nb;
+        for (int i = 0; i < m; ++i) schur_(i, j) += col[i] * wj[c];
+      }
+    }
+  }
+  return luFactor(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data());
+}
+
+void Rodas3::solve(const Vector& b, Vector& x) noexcept {
+  if (blocks_ == 0) {
+    x = b;
+    luSolveAny(g_.data(), static_cast<int>(g_.rows()), n_, pivots_.data(), x.data());
+    return;
+  }
+  const int nb = blocks_ * kRosenbrockBlock;
+  const int m = border_;
+  const int ld = static_cast<int>(jac_.rows());
+  const double* jac = jac_.data();
+  for (int r = 0; r < nb; ++r) z_[r] = b[r];
+  for (int k = 0; k < blocks_; ++k) {
+    const int r = k * kRosenbrockBlock;
+    luSolveAny(block_lu_[static_cast<std::size_t>(k)].data(), 4, 4, block_piv_.data() + r, z_.data() + r);
+  }
+  // Border: S x_m = b_m - C z = b_m + J_mh z (plain loops: the blocks are tiny and sparse).
+  double* xm = x.data() + nb;
+  for (int i = 0; i < m; ++i) xm[i] = b[nb + i];
+  for (int c = 0; c < nb; ++c) {
+    const double zc = z_[c];
+    if (zc == 0.0) continue;
+    const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
+    for (int i = 0; i < m; ++i) xm[i] += col[i] * zc;
+  }
+  luSolve(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data(), xm);
+  // x_h = z - W x_m over the nonzero columns of each block.
+  for (int k = 0; k < blocks_; ++k) {
+    const int r = k * kRosenbrockBlock;
+    Eigen::Vector4d xk = z_.segment<4>(r);
+    for (int q = 0; q < nonzero_count_[static_cast<std::size_t>(k)]; ++q) {
+      const int j = nonzero_cols_[static_cast<std::size_t>(k * kMaxRosenbrockStates + q)];
+      xk -= w_.block<4, 1>(r, j) * xm[j];
+    }
+    x.segment<4>(r) = xk;
+  }
+}
+
+double Rodas3::attempt(double h) noexcept {
+  if (!factor(h)) return std::numeric_limits<double>::infinity();
+  auto solve = [this](const Vector& b, Vector& x) { this->solve(b, x); };
+  const double inv_h = 1.0 / h;
+  solve(f0_, k1_);
+  fstage_ = f0_ + (kC21 * inv_h) * k1_;  // stage 2 sits at y0 (a21 = 0): f(y0) reused
+  solve(fstage_, k2_);
+  stage_ = y0_ + 2.0 * k1_;
+  sys_.rhs(sys_.user, stage_.data(), fstage_.data());
+  ++stats_.rhs_evals;
+  fstage_ += inv_h * (kC31 * k1_ + kC32 * k2_);
+  solve(fstage_, k3_);
+  stage_ += k3_;
+  sys_.rhs(sys_.user, stage_.data(), fstage_.data());
+  ++stats_.rhs_evals;
+  fstage_ += inv_h * (kC41 * k1_ + kC42 * k2_ + kC43 * k3_);
+  solve(fstage_, k4_);
+  y1_ = stage_ + k4_;  // stiffly accurate: y1 = stage 4 + k4
+  double sum = 0.0;
+  for (int i = 0; i < n_; ++i) {
+    const double w = atol_[i] + rtol_ * std::max(std::abs(y0_[i]), std::abs(y1_[i]));
+    const double e = k4_[i] / w;
+    sum += e * e;
+  }
+  const double err = std::sqrt(sum / n_);
+  return std::isfinite(err) ? err : std::numeric_limits<double>::infinity();
+}
+
+RosenbrockStatus Rodas3::advance(double* y, double duration_s) noexcept {
+  Eigen::Map<Vector> state(y, n_);
+  y0_ = state;
+  double t = 0.0;
+  bool need_jacobian = true;
+  bool rejected_here = false;
+  long attempts = 0;
+  while (t < duration_s) {
+    const double remaining = duration_s - t;
+    // Equal subdivisions of what is left, so the last step ends on the boundary exactly.
+    const double pieces = std::ceil(remaining / h_ * (1.0 - 1e-9));
+    const bool last = pieces <= 1.0;
+    const double h = last ? remaining : remaining / pieces;
+    if (need_jacobian) {
+      sys_.jacobian(sys_.user, y0_.data(), f0_.data(), jac_.data());
+      ++stats_.jac_evals;
+      ++stats_.rhs_evals;
+      need_jacobian = false;
+      if (!f0_.allFinite()) return RosenbrockStatus::kNonFinite;
+    }
+    if (++attempts > max_steps_) return RosenbrockStatus::kTooManySteps;
+    const double err = attempt(h);
+    // Elementary controller h_new = h (0.9 / err)^(1/3), within [0.2, 5] (no growth right
+    // after a rejection).
+    const double factor = err > 0.0 ? kSafety * std::cbrt(1.0 / err) : kMaxFactor;
+    if (err <= 1.0) {
+      y0_ = y1_;
+      t = last ? duration_s : t + h;
+      ++stats_.steps;
+      need_jacobian = true;
+      h_ = h * std::clamp(factor, kMinFactor, rejected_here ? 1.0 : kMaxFactor);
+      rejected_here = false;
+    } else {
+      ++stats_.rejected;
+      rejected_here = true;
+      h_ = h * (std::isfinite(err) ? std::clamp(factor, kMinFactor, 1.0) : 0.25);
+      if (h_ < kSmallestStep_s) return RosenbrockStatus::kStepTooSmall;
+    }
+  }
+  state = y0_;
+  return RosenbrockStatus::kOk;
+}
+
+}  // namespace fullarm::plant

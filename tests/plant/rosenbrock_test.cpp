@@ -1,0 +1,169 @@
+// Rodas3 against closed-form solutions (convergence order 3 at fixed steps, tolerance-
+// proportional error when adaptive) and Eigen's matrix exponential (a stiff linear system), and
+// its block elimination against its dense LU.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "fullarm/plant/rosenbrock.hpp"
+
+namespace fullarm::plant {
+namespace {
+
+// y0' = y0 (1 - y0) (logistic), y1' = y2, y2' = -y1 (rotation): closed form
+// y0 = 1 / (1 + 9 e^-t) from 0.1, (y1, y2) = (sin t, cos t) from (0, 1).
+struct NonStiff {
+  static void rhs(void* /*user*/, const double* y, double* f) noexcept {
+    f[0] = y[0] * (1.0 - y[0]);
+    f[1] = y[2];
+    f[2] = -y[1];
+  }
+  static void jacobian(void* user, const double* y, double* f, double* j) noexcept {
+    rhs(user, y, f);
+    Eigen::Map<Eigen::Matrix3d> J(j);
+    J.setZero();
+    J(0, 0) = 1.0 - 2.0 * y[0];
+    J(1, 2) = 1.0;
+    J(2, 1) = -1.0;
+  }
+};
+
+Eigen::Vector3d nonStiffExact(double t) {
+  return {1.0 / (1.0 + 9.0 * std::exp(-t)), std::sin(t), std::cos(t)};
+}
+
+double fixedStepError(double h) {
+  Rodas3 r;
+  const double atol[3] = {1e3, 1e3, 1e3};  // every step accepted: a fixed-step run
+  r.configure(3, atol, 1e-2, 10, {&NonStiff::rhs, &NonStiff::jacobian, nullptr});
+  Eigen::Vector3d y(0.1, 0.0, 1.0);
+  const int steps = static_cast<int>(std::lround(2.0 / h));
+  for (int k = 0; k < steps; ++k) {
+    r.resetStepSize(h);
+    EXPECT_EQ(r.advance(y.data(), h), RosenbrockStatus::kOk);
+  }
+  EXPECT_EQ(r.stats().steps, steps);
+  return (y - nonStiffExact(2.0)).norm();
+}
+
+TEST(Rodas3, ConvergesWithOrderThree) {
+  const double e1 = fixedStepError(0.1);
+  const double e2 = fixedStepError(0.05);
+  const double e3 = fixedStepError(0.025);
+  const double order1 = std::log2(e1 / e2);
+  const double order2 = std::log2(e2 / e3);
+  EXPECT_NEAR(order1, 3.0, 0.3);
+  EXPECT_NEAR(order2, 3.0, 0.3);
+}
+
+TEST(Rodas3, AdaptiveErrorFollowsTheTolerance) {
+  for (const double rtol : {1e-4, 1e-6, 1e-8}) {
+    Rodas3 r;
+    const double atol[3] = {rtol, rtol, rtol};
+    r.configure(3, atol, rtol, 100000, {&NonStiff::rhs, &NonStiff::jacobian, nullptr});
+    Eigen::Vector3d y(0.1, 0.0, 1.0);
+    for (int k = 0; k < 20; ++k) ASSERT_EQ(r.advance(y.data(), 0.1), RosenbrockStatus::kOk);
+    const double err = (y - nonStiffExact(2.0)).cwiseAbs().maxCoeff();
+    EXPECT_LT(err, 100.0 * rtol) << "rtol " << rtol;
+    EXPECT_GT(r.stats().steps, 20);
+  }
+}
+
+// Stiff linear system y' = A (y - g) with eigenvalues -1e6 and -1, exact y = g + expm(A t)(y0 - g),
+// stepped at h = 1 ms (h |lambda| = 1000): L-stability damps the fast mode.
+struct Stiff {
+  Eigen::Matrix2d a;
+  Eigen::Vector2d g;
+  static void rhs(void* user, const double* y, double* f) noexcept {
+    const auto* s = static_cast<const Stiff*>(user);
+    Eigen::Map<Eigen::Vector2d> out(f);
+    out = s->a * (Eigen::Map<const Eigen::Vector2d>(y) - s->g);
+  }
+  static void jacobian(void* user, const double* y, double* f, double* j) noexcept {
+    rhs(user, y, f);
+    Eigen::Map<Eigen::Matrix2d> J(j);
+    J = static_cast<const Stiff*>(user)->a;
+  }
+};
+
+TEST(Rodas3, StiffLinearSystemMatchesMatrixExponential) {
+  Stiff s;
+  Eigen::Matrix2d v;
+  v << 1.0, 1.0, 0.5, -1.0;
+  s.a = v * Eigen::Vector2d(-1e6, -1.0).asDiagonal() * v.inverse();
+  s.g = Eigen::Vector2d(2.0, -1.0);
+  Rodas3 r;
+  const double atol[2] = {1e-9, 1e-9};
+  r.configure(2, atol, 1e-7, 1000, {&Stiff::rhs, &Stiff::jacobian, &s});
+  const Eigen::Vector2d y0(0.0, 0.0);
+  Eigen::Vector2d y = y0;
+  for (int k = 0; k < 1000; ++k) ASSERT_EQ(r.advance(y.data(), 1e-3), RosenbrockStatus::kOk);
+  const Eigen::Vector2d exact = s.g + (s.a * 1.0).exp() * (y0 - s.g);
+  EXPECT_LT((y - exact).cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_LT(r.stats().steps, 3000);  // not limited by the fast mode
+}
+
+// Two 4-state blocks coupled only through a 2-state border: block elimination = dense LU.
+struct Bordered {
+  Eigen::Matrix<double, 10, 10> a;
+  static void rhs(void* user, const double* y, double* f) noexcept {
+    const auto* s = static_cast<const Bordered*>(user);
+    const Eigen::Map<const Eigen::Matrix<double, 10, 1>> x(y);
+    Eigen::Map<Eigen::Matrix<double, 10, 1>> out(f);
+    out = s->a * x;
+    out += 0.1 * x.array().square().matrix();  // mildly nonlinear, Jacobian diagonal 0.2 x
+  }
+  static void jacobian(void* user, const double* y, double* f, double* j) noexcept {
+    rhs(user, y, f);
+    Eigen::Map<Eigen::Matrix<double, 10, 10>> J(j);
+    J = static_cast<const Bordered*>(user)->a;
+    for (int i = 0; i < 10; ++i) J(i, i) += 0.2 * y[i];
+  }
+};
+
+TEST(Rodas3, BlockEliminationMatchesDenseLu) {
+  Bordered s;
+  s.a.setZero();
+  std::srand(5);
+  const Eigen::Matrix4d b0 = Eigen::Matrix4d::Random();
+  const Eigen::Matrix4d b1 = Eigen::Matrix4d::Random();
+  s.a.block<4, 4>(0, 0) = b0 - 6.0 * Eigen::Matrix4d::Identity();
+  s.a.block<4, 4>(4, 4) = b1 - 300.0 * Eigen::Matrix4d::Identity();
+  s.a.block<4, 2>(0, 8) = Eigen::Matrix<double, 4, 2>::Random();
+  s.a.block<4, 2>(4, 8) = Eigen::Matrix<double, 4, 2>::Random();
+  s.a.block<2, 8>(8, 0) = Eigen::Matrix<double, 2, 8>::Random();
+  s.a.block<2, 2>(8, 8) = -Eigen::Matrix2d::Identity();
+  const double atol[10] = {1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8};
+  Rodas3 dense;
+  Rodas3 blocks;
+  dense.configure(10, atol, 1e-6, 10000, {&Bordered::rhs, &Bordered::jacobian, &s});
+  blocks.configure(10, atol, 1e-6, 10000, {&Bordered::rhs, &Bordered::jacobian, &s});
+  blocks.setBlockStructure(2);
+  Eigen::Matrix<double, 10, 1> yd = Eigen::Matrix<double, 10, 1>::LinSpaced(10, -0.5, 0.5);
+  Eigen::Matrix<double, 10, 1> yb = yd;
+  for (int k = 0; k < 50; ++k) {
+    ASSERT_EQ(dense.advance(yd.data(), 1e-2), RosenbrockStatus::kOk);
+    ASSERT_EQ(blocks.advance(yb.data(), 1e-2), RosenbrockStatus::kOk);
+  }
+  EXPECT_EQ(dense.stats().steps, blocks.stats().steps);
+  EXPECT_LT((yd - yb).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, yd.cwiseAbs().maxCoeff()));
+  EXPECT_GT(yd.cwiseAbs().maxCoeff(), 1e-3);  // not decayed to nothing
+}
+
+TEST(Rodas3, RejectsBadConfiguration) {
+  Rodas3 r;
+  const double atol[2] = {1e-6, 0.0};
+  const RosenbrockSystem sys{&NonStiff::rhs, &NonStiff::jacobian, nullptr};
+  EXPECT_THROW(r.configure(0, atol, 1e-6, 10, sys), std::invalid_argument);
+  EXPECT_THROW(r.configure(2, atol, 1e-6, 10, sys), std::invalid_argument);  // atol 0
+  EXPECT_THROW(r.configure(kMaxRosenbrockStates + 1, atol, 1e-6, 10, sys), std::invalid_argument);
+  const double ok[3] = {1e-6, 1e-6, 1e-6};
+  r.configure(3, ok, 1e-6, 10, sys);
+  EXPECT_THROW(r.setBlockStructure(1), std::invalid_argument);  // 4 states > 3
+}
+
+}  // namespace
+}  // namespace fullarm::plant
