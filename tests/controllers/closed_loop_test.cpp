@@ -12,6 +12,7 @@
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/controllers/closed_loop.hpp"
+#include "fullarm/controllers/validation.hpp"
 
 namespace fullarm::controllers {
 namespace {
@@ -148,6 +149,32 @@ TEST(ClosedLoop, RunsAreBitForBitRepeatable) {
   EXPECT_EQ(a.valve_v, b.valve_v);
   EXPECT_EQ(ra.free_rms_user_torque_nm, rb.free_rms_user_torque_nm);
   EXPECT_EQ(ra.solver_steps, rb.solver_steps);
+}
+
+// The same Monte-Carlo on 1 and on 2 threads gives bit-identical runs.
+TEST(MonteCarlo, ResultsDoNotDependOnTheThreadCount) {
+  ValidationConfig config = loadValidationConfig(defaultValidationConfigPath());
+  config.samples = 4;
+  const std::vector<JointScenario> nominal = {
+      makeJointScenario(test::dtsModel(), test::dtsPlant(), test::dtsGains(), "WFE"),
+      makeJointScenario(test::dtsModel(), test::dtsPlant(), test::dtsGains(), "EB")};
+  const std::vector<JointMonteCarlo> one = runMonteCarlo(nominal, config, 1);
+  const std::vector<JointMonteCarlo> two = runMonteCarlo(nominal, config, 2);
+  ASSERT_EQ(one.size(), 2u);
+  for (std::size_t j = 0; j < one.size(); ++j) {
+    ASSERT_EQ(one[j].runs.size(), 4u);
+    EXPECT_EQ(one[j].failures, two[j].failures);
+    EXPECT_EQ(one[j].worst, two[j].worst);
+    for (std::size_t i = 0; i < one[j].runs.size(); ++i) {
+      EXPECT_EQ(one[j].runs[i].result.free_rms_user_torque_nm, two[j].runs[i].result.free_rms_user_torque_nm);
+      EXPECT_EQ(one[j].runs[i].result.contact_hold_speed_rms_radps, two[j].runs[i].result.contact_hold_speed_rms_radps);
+      EXPECT_EQ(one[j].runs[i].sample.delay_samples, two[j].runs[i].sample.delay_samples);
+    }
+  }
+  // A joint's samples do not depend on which other joints run with it.
+  const std::vector<JointMonteCarlo> alone = runMonteCarlo({nominal[1]}, config, 2);
+  EXPECT_EQ(alone[0].runs[2].sample.bulk_modulus_scale, one[1].runs[2].sample.bulk_modulus_scale);
+  EXPECT_EQ(alone[0].runs[2].result.free_rms_user_torque_nm, one[1].runs[2].result.free_rms_user_torque_nm);
 }
 
 }  // namespace
