@@ -53,14 +53,14 @@ TEST(GainsConfig, DefaultFileLoads) {
 }
 
 TEST(GainsConfig, NegativeInertiaIsAClearError) {
-  expectConfigError(replaced(defaultText(), "inertia_kgm2: 0.05", "inertia_kgm2: -0.05", "R_EB"),
+  expectConfigError(replaced(defaultText(), "inertia_kgm2: 0.2", "inertia_kgm2: -0.2", "R_EB"),
                     "joints[3].impedance.inertia_kgm2", "J_m > 0");
 }
 
 TEST(GainsConfig, NonPositiveEpsilonIsAClearError) {
   for (const char* eps : {"0.0", "-0.5"}) {
     expectConfigError(
-        replaced(defaultText(), "boundary_layer_radps: 0.7", std::string("boundary_layer_radps: ") + eps, "R_WR"),
+        replaced(defaultText(), "boundary_layer_radps: 24.0", std::string("boundary_layer_radps: ") + eps, "R_WR"),
         "joints[4].sliding_mode.boundary_layer_radps", "eps > 0");
   }
 }
@@ -82,13 +82,13 @@ TEST(GainsConfig, OtherBadValuesNameTheirKey) {
                     "valve_limit_v");
   expectConfigError(replaced(text, "torque_filter_hz: 0.0", "torque_filter_hz: 600.0", "R_HR"),
                     "joints[2].torque_filter_hz", "Nyquist");
-  expectConfigError(replaced(text, "kp_v_per_nm: 0.2", "kp_v_per_nm: -0.2"), "joints[0].torque_pid.kp_v_per_nm",
+  expectConfigError(replaced(text, "kp_v_per_nm: 0.1", "kp_v_per_nm: -0.1"), "joints[0].torque_pid.kp_v_per_nm",
                     ">= 0");
   expectConfigError(replaced(text, "enabled: false", "enabled: maybe"), "joints[0].passivity.enabled", "true or false");
   expectConfigError(replaced(text, "    valve_limit_v: 10.0\n", "    valve_limit_v: 10.0\n    valve_limt_v: 1\n"),
                     "joints[0].valve_limt_v", "");
   expectConfigError(replaced(text, "    error_rate_filter_hz: 0.0\n", ""), "joints[0]", "error_rate_filter_hz");
-  expectConfigError(replaced(text, "lambda_per_s: 30.0", "lambda_per_s: .nan"), "joints[0].sliding_mode.lambda_per_s",
+  expectConfigError(replaced(text, "lambda_per_s: 300.0", "lambda_per_s: .nan"), "joints[0].sliding_mode.lambda_per_s",
                     "");
 }
 
