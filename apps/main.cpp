@@ -13,6 +13,7 @@
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/reports/report.hpp"
 #include "plant_command.hpp"
+#include "tune_command.hpp"
 
 namespace fullarm::app {
 namespace {
@@ -96,22 +97,28 @@ int runDemo(const ArmOptions& options, const std::string& out_dir) {
   reports::Section& pipeline = report.addSection("Pipeline");
   const PlantDemoStep plant_step = runPlantDemoStep(model, out_dir, report);
   std::cout << "  " << plant_step.detail << "\n";
+  std::cout << "\n[4/6] Tune the admittance controller (NLopt, all 7 joints)\n";
+  const TuneDemoStep tune_step = runTuneDemoStep(model, out_dir, report);
+  std::cout << "  " << tune_step.detail << "\n";
   const Step steps[] = {
       {"DTS arm model", summary.holds_itself ? "done" : "failed", "kinematics, dynamics, reach, gravity load"},
       {"Simulated chirp experiment (plant)", plant_step.pass ? "done" : "failed", plant_step.detail.c_str()},
       {"Identify a joint", "not built yet", "needs the identification module (issue: Identification)"},
-      {"Tune the admittance controller", "not built yet", "needs the controllers (issue: Controllers)"},
+      {"Tune the admittance controller", tune_step.pass ? "done" : "failed", tune_step.detail.c_str()},
       {"Validate stability", "not built yet", "needs the controllers (issue: Controllers)"},
       {"Valve study, full-arm vs hand-only", "not built yet", "needs haptic rendering (issue: Full-arm haptics)"},
   };
   std::cout << "\n";
-  for (int i = 2; i < 6; ++i)
+  for (int i = 2; i < 6; ++i) {
+    if (i == 3) continue;  // the tune step printed its own line
     std::cout << "[" << i + 1 << "/6] " << steps[i].name << ": " << steps[i].status << " (" << steps[i].detail << ")\n";
+  }
 
-  const bool demo_pass = summary.holds_itself && plant_step.pass;
-  report.setVerdict(demo_pass, demo_pass
-                                   ? "Every step that exists passed (2 of 6 steps built)"
-                                   : (summary.holds_itself ? "The plant step failed" : "The arm model step failed"));
+  const bool demo_pass = summary.holds_itself && plant_step.pass && tune_step.pass;
+  report.setVerdict(demo_pass, demo_pass ? "Every step that exists passed (3 of 6 steps built)"
+                                         : (!summary.holds_itself ? "The arm model step failed"
+                                                                  : (plant_step.pass ? "The tune step failed"
+                                                                                     : "The plant step failed")));
   nlohmann::json list = nlohmann::json::array();
   reports::Table table;
   table.caption = "Demo steps";
@@ -157,6 +164,9 @@ int runMain(int argc, char** argv) {
   std::string demo_out = "out/demo";
   demo->add_option("--out", demo_out, "Output folder")->capture_default_str();
 
+  app::TuneOptions tune_options;
+  CLI::App* tune = app::addTuneCommand(app, tune_options);
+
   app::PlantSimulateOptions plant_options;
   CLI::App* plant_simulate = app::addPlantCommand(app, plant_options);
 
@@ -170,6 +180,7 @@ int runMain(int argc, char** argv) {
     if (show->parsed()) return app::runArmShow(arm_options, q_text, show_out);
     if (demo->parsed()) return app::runDemo(demo_options, demo_out);
     if (plant_simulate->parsed()) return app::runPlantSimulate(plant_options);
+    if (tune->parsed()) return app::runTune(tune_options);
   } catch (const arm::ConfigError& e) {
     std::cerr << "fullarm: error: " << e.what() << "\n";
     return app::kExitBadInput;

@@ -27,8 +27,8 @@ void boxOf(const TuningBounds& b, Vector& lo, Vector& hi) {
   lo.resize(kVariables);
   hi.resize(kVariables);
   for (int i = 0; i < kVariables; ++i) {
-    if (!(pairs[i][0] > 0.0) || !(pairs[i][1] > pairs[i][0])) {
-      throw std::invalid_argument("tuning bounds: expected 0 < low < high for every variable");
+    if (!(pairs[i][0] > 0.0) || !(pairs[i][1] >= pairs[i][0]) || !std::isfinite(pairs[i][1])) {
+      throw std::invalid_argument("tuning bounds: expected 0 < low <= high for every variable (low = high fixes it)");
     }
     lo[i] = std::log10(pairs[i][0]);
     hi[i] = std::log10(pairs[i][1]);
@@ -98,6 +98,8 @@ std::pair<double, const char*> worstHard(const GoalValues& v, const TuningGoals&
 // The search state shared by the NLopt callbacks of one joint.
 struct Search {
   const std::vector<PreparedJoint>* models = nullptr;
+  std::vector<int> active;  // indices of the free variables (NLopt sees only these)
+  Vector fixed;             // full point: values of the fixed variables
   const TuningGoals* goals = nullptr;
   JointGains base;
   Vector last_x;
@@ -111,7 +113,19 @@ struct Search {
   std::vector<double>* history = nullptr;
   int evaluations = 0;
   std::string error;
-  nlopt::opt* active = nullptr;
+  nlopt::opt* running = nullptr;
+
+  // Full point from NLopt's reduced one.
+  Vector full(const double* z) const {
+    Vector x = fixed;
+    for (std::size_t i = 0; i < active.size(); ++i) x[static_cast<std::size_t>(active[i])] = z[i];
+    return x;
+  }
+  Vector reduced(const Vector& x) const {
+    Vector z;
+    for (int i : active) z.push_back(x[static_cast<std::size_t>(i)]);
+    return z;
+  }
 
   const GoalValues& at(const Vector& x) {
     if (have_last && x == last_x) return last;
@@ -141,7 +155,7 @@ struct Search {
     } catch (...) {
       error = "unknown exception";
     }
-    if (active != nullptr) active->force_stop();
+    if (running != nullptr) running->force_stop();
     return std::numeric_limits<double>::infinity();
   }
 };
@@ -149,25 +163,26 @@ struct Search {
 double penalisedObjective(unsigned /*n*/, const double* x, double* /*grad*/, void* data) {
   auto* s = static_cast<Search*>(data);
   return s->guarded([&] {
-    const GoalValues& v = s->at(Vector(x, x + kVariables));
+    const GoalValues& v = s->at(s->full(x));
     return v.feasible() ? v.soft : kInfeasiblePenalty + v.hard;
   });
 }
 
 double softObjective(unsigned /*n*/, const double* x, double* /*grad*/, void* data) {
   auto* s = static_cast<Search*>(data);
-  return s->guarded([&] { return s->at(Vector(x, x + kVariables)).soft; });
+  return s->guarded([&] { return s->at(s->full(x)).soft; });
 }
 
 double hardConstraint(unsigned /*n*/, const double* x, double* /*grad*/, void* data) {
   auto* s = static_cast<Search*>(data);
-  return s->guarded([&] { return s->at(Vector(x, x + kVariables)).hard - 1.0; });
+  return s->guarded([&] { return s->at(s->full(x)).hard - 1.0; });
 }
 
-std::string runOptimizer(nlopt::opt& opt, Search& search, Vector& x) {
-  search.active = &opt;
+std::string runOptimizer(nlopt::opt& opt, Search& search, const Vector& x_full) {
+  search.running = &opt;
   double f = 0.0;
   std::string name;
+  Vector x = search.reduced(x_full);
   try {
     name = resultName(opt.optimize(x, f));
   } catch (const nlopt::forced_stop&) {
@@ -177,32 +192,41 @@ std::string runOptimizer(nlopt::opt& opt, Search& search, Vector& x) {
   } catch (const std::exception& e) {
     name = std::string("failure: ") + e.what();
   }
-  search.active = nullptr;
+  search.running = nullptr;
   if (!search.error.empty()) throw std::runtime_error("tuner: goal evaluation failed: " + search.error);
   return name;
 }
 
+double draw(std::mt19937_64& rng, const UniformRange& r) {
+  return r.min + (r.max - r.min) * std::generate_canonical<double, 53>(rng);
+}
+
 ModelVariation sampleVariation(std::mt19937_64& rng, const UncertaintyRanges& r) {
-  const auto uniform = [&](const double* range) {
-    return range[0] + (range[1] - range[0]) * std::generate_canonical<double, 53>(rng);
-  };
   ModelVariation v;
-  v.bulk_modulus = uniform(r.bulk_modulus);
-  v.valve_flow = uniform(r.valve_flow);
-  v.inertia = uniform(r.inertia);
-  v.viscous_friction = uniform(r.viscous_friction);
-  v.user_stiffness = uniform(r.user_stiffness);
-  v.user_damping = uniform(r.user_damping);
-  const int span = r.delay_samples[1] - r.delay_samples[0] + 1;
-  v.delay_samples = r.delay_samples[0] + static_cast<int>(rng() % static_cast<std::uint64_t>(std::max(span, 1)));
+  v.bulk_modulus_scale = draw(rng, r.bulk_modulus_scale);
+  v.valve_gain_scale = draw(rng, r.valve_gain_scale);
+  v.friction_scale = draw(rng, r.friction_scale);
+  v.inertia_scale = draw(rng, r.inertia_scale);
+  v.user_stiffness_nm_per_rad = draw(rng, r.user_stiffness_nm_per_rad);
+  v.user_damping_nms_per_rad = draw(rng, r.user_damping_nms_per_rad);
+  const int span = r.delay_max_samples - r.delay_min_samples + 1;
+  v.delay_samples = r.delay_min_samples + static_cast<int>(rng() % static_cast<std::uint64_t>(std::max(span, 1)));
   return v;
 }
 
+// Two corners of the box: a stiff, fast plant with a light, soft, undamped user and the longest
+// delay, and the reverse.
 ModelVariation corner(const UncertaintyRanges& r, bool high) {
-  const int i = high ? 1 : 0;
-  const int j = high ? 0 : 1;  // stiff, fast plant with a soft user and long delay, and reverse
-  return {r.bulk_modulus[i],   r.valve_flow[i],   r.inertia[j],      r.viscous_friction[j],
-          r.user_stiffness[j], r.user_damping[j], r.delay_samples[i]};
+  ModelVariation v;
+  const auto pick = [high](const UniformRange& u, bool same) { return (high == same) ? u.max : u.min; };
+  v.bulk_modulus_scale = pick(r.bulk_modulus_scale, true);
+  v.valve_gain_scale = pick(r.valve_gain_scale, true);
+  v.friction_scale = pick(r.friction_scale, false);
+  v.inertia_scale = pick(r.inertia_scale, false);
+  v.user_stiffness_nm_per_rad = pick(r.user_stiffness_nm_per_rad, false);
+  v.user_damping_nms_per_rad = pick(r.user_damping_nms_per_rad, false);
+  v.delay_samples = high ? r.delay_max_samples : r.delay_min_samples;
+  return v;
 }
 
 }  // namespace
@@ -210,13 +234,15 @@ ModelVariation corner(const UncertaintyRanges& r, bool high) {
 PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,
                                const ModelVariation& v) {
   JointPlantModel m = nominal;
-  m.joint.fluid.oil_bulk_modulus_pa *= v.bulk_modulus;
-  m.joint.valve.rated_flow_m3ps *= v.valve_flow;
-  m.load.inertia_kgm2 *= v.inertia;
-  m.load.user_inertia_kgm2 *= v.inertia;
-  m.joint.friction.viscous_nms_per_rad *= v.viscous_friction;
-  m.load.user_stiffness_nm_per_rad *= v.user_stiffness;
-  m.load.user_damping_nms_per_rad *= v.user_damping;
+  m.joint.fluid.oil_bulk_modulus_pa *= v.bulk_modulus_scale;
+  m.joint.valve.rated_flow_m3ps *= v.valve_gain_scale;
+  m.load.inertia_kgm2 *= v.inertia_scale;
+  m.load.user_inertia_kgm2 *= v.inertia_scale;
+  m.joint.friction.viscous_nms_per_rad *= v.friction_scale;
+  m.joint.friction.coulomb_nm *= v.friction_scale;
+  m.joint.friction.static_nm *= v.friction_scale;
+  m.load.user_stiffness_nm_per_rad = v.user_stiffness_nm_per_rad;
+  m.load.user_damping_nms_per_rad = v.user_damping_nms_per_rad;
   LoopSetup s = setup;
   s.delay_samples = v.delay_samples;
   return prepareJoint(m, solveOperatingPoint(m, q_rad), s);
@@ -279,11 +305,27 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const Joint
 
   ModelVariation nominal_variation;
   nominal_variation.delay_samples = setup.delay_samples;
+  nominal_variation.user_stiffness_nm_per_rad = nominal.load.user_stiffness_nm_per_rad;
+  nominal_variation.user_damping_nms_per_rad = nominal.load.user_damping_nms_per_rad;
   result.model_set = {nominal_variation};
   std::vector<PreparedJoint> models = {prepareVariation(nominal, q_rad, s, nominal_variation)};
 
   Search search;
   search.goals = &goals;
+  search.fixed = pointOf(initial, lo, hi);
+  Vector lo_free;
+  Vector hi_free;
+  for (int i = 0; i < kVariables; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (hi[k] > lo[k]) {
+      search.active.push_back(i);
+      lo_free.push_back(lo[k]);
+      hi_free.push_back(hi[k]);
+    } else {
+      search.fixed[k] = lo[k];
+    }
+  }
+  const auto free_count = static_cast<unsigned>(search.active.size());
   search.base = initial;
   search.history = &result.history;
   Vector start = pointOf(initial, lo, hi);
@@ -296,13 +338,14 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const Joint
     for (const Vector* incumbent : {&search.best_feasible_x, &search.best_any_x, &start}) {
       if (incumbent->size() == kVariables) (void)search.at(Vector(*incumbent));
     }
+    if (free_count == 0) break;  // everything fixed: nothing to search
     // Global stage on the penalised objective (DIRECT-L is deterministic; ISRES uses the
     // thread-local NLopt generator, seeded here).
     nlopt::opt global(options.global == GlobalAlgorithm::kIsres ? nlopt::GN_ISRES : nlopt::GN_ORIG_DIRECT_L,
-                      kVariables);
+                      free_count);
     if (options.global == GlobalAlgorithm::kIsres) nlopt::srand(options.seed + static_cast<unsigned long>(round));
-    global.set_lower_bounds(lo);
-    global.set_upper_bounds(hi);
+    global.set_lower_bounds(lo_free);
+    global.set_upper_bounds(hi_free);
     global.set_min_objective(penalisedObjective, &search);
     global.set_maxeval(options.global_evaluations);
     Vector x = start;
@@ -310,9 +353,9 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const Joint
     // Local polish: COBYLA on the soft objective with the hard goals as one constraint, from
     // the best feasible point (or the least infeasible one).
     if (options.local_evaluations > 0) {
-      nlopt::opt local(nlopt::LN_COBYLA, kVariables);
-      local.set_lower_bounds(lo);
-      local.set_upper_bounds(hi);
+      nlopt::opt local(nlopt::LN_COBYLA, free_count);
+      local.set_lower_bounds(lo_free);
+      local.set_upper_bounds(hi_free);
       local.set_min_objective(softObjective, &search);
       local.add_inequality_constraint(hardConstraint, &search, 0.0);
       local.set_maxeval(options.local_evaluations);

@@ -25,6 +25,7 @@
 
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/controllers/linear_analysis.hpp"
+#include "fullarm/controllers/validation.hpp"
 
 namespace fullarm::controllers {
 
@@ -52,27 +53,9 @@ struct TuningGoals {
   double wall_accuracy = 0.2;  ///< relative error of the rendered stiffness that scores 1
 };
 
-/// Relative plant uncertainty the worst-case search samples (scales on the nominal values).
-struct UncertaintyRanges {
-  double bulk_modulus[2] = {0.6, 1.4};
-  double valve_flow[2] = {0.7, 1.3};
-  double inertia[2] = {0.8, 1.2};
-  double viscous_friction[2] = {0.5, 2.0};
-  double user_stiffness[2] = {0.0, 3.0};
-  double user_damping[2] = {0.3, 3.0};
-  int delay_samples[2] = {1, 2};
-};
-
-/// One member of the model set (scales on the nominal joint).
-struct ModelVariation {
-  double bulk_modulus = 1.0;
-  double valve_flow = 1.0;
-  double inertia = 1.0;
-  double viscous_friction = 1.0;
-  double user_stiffness = 1.0;
-  double user_damping = 1.0;
-  int delay_samples = 1;
-};
+/// A member of the model set: one draw of the validation's uncertainty (validation.hpp), so the
+/// tuner designs against the ranges `fullarm validate` checks.
+using ModelVariation = MonteCarloSample;
 
 enum class GlobalAlgorithm { kDirectL, kIsres };
 
