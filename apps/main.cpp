@@ -14,6 +14,7 @@
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/reports/report.hpp"
 #include "plant_command.hpp"
+#include "tune_command.hpp"
 #include "validate_command.hpp"
 
 namespace fullarm::app {
@@ -99,25 +100,32 @@ int runDemo(const ArmOptions& options, const std::string& out_dir, int validate_
   reports::Section& pipeline = report.addSection("Pipeline");
   const PlantDemoStep plant_step = runPlantDemoStep(model, out_dir, report);
   std::cout << "  " << plant_step.detail << "\n";
+  std::cout << "\n[4/6] Tune the admittance controller (NLopt, all 7 joints)\n";
+  const TuneDemoStep tune_step = runTuneDemoStep(model, out_dir, report);
+  std::cout << "  " << tune_step.detail << "\n";
   std::cout << "\n[5/6] Validate stability (linear checks + Monte-Carlo of nonlinear closed-loop runs)\n";
-  const ValidateDemoStep validate_step = runValidateDemoStep(model, controllers_gains_path, validate_samples, report);
+  const ValidateDemoStep validate_step = runValidateDemoStep(
+      model, tune_step.gains_file.empty() ? controllers_gains_path : tune_step.gains_file, validate_samples, report);
   std::cout << "  " << validate_step.detail << "\n";
   const Step steps[] = {
       {"DTS arm model", summary.holds_itself ? "done" : "failed", "kinematics, dynamics, reach, gravity load"},
       {"Simulated chirp experiment (plant)", plant_step.pass ? "done" : "failed", plant_step.detail.c_str()},
       {"Identify a joint", "not built yet", "needs the identification module (issue: Identification)"},
-      {"Tune the admittance controller", "not built yet", "needs the controllers (issue: Controllers)"},
+      {"Tune the admittance controller", tune_step.pass ? "done" : "failed", tune_step.detail.c_str()},
       {"Validate stability", validate_step.pass ? "done" : "failed", validate_step.detail.c_str()},
       {"Valve study, full-arm vs hand-only", "not built yet", "needs haptic rendering (issue: Full-arm haptics)"},
   };
   std::cout << "\n";
-  for (int i : {2, 3, 5})
+  for (int i = 2; i < 6; ++i) {
+    if (i == 3 || i == 4) continue;  // the tune and validate steps printed their own lines
     std::cout << "[" << i + 1 << "/6] " << steps[i].name << ": " << steps[i].status << " (" << steps[i].detail << ")\n";
+  }
 
-  const bool demo_pass = summary.holds_itself && plant_step.pass && validate_step.pass;
-  report.setVerdict(demo_pass, demo_pass               ? "Every step that exists passed (3 of 6 steps built)"
+  const bool demo_pass = summary.holds_itself && plant_step.pass && tune_step.pass && validate_step.pass;
+  report.setVerdict(demo_pass, demo_pass               ? "Every step that exists passed (4 of 6 steps built)"
                                : !summary.holds_itself ? "The arm model step failed"
                                : !plant_step.pass      ? "The plant step failed"
+                               : !tune_step.pass       ? "The tune step failed"
                                                        : "The validate step failed");
   nlohmann::json list = nlohmann::json::array();
   reports::Table table;
@@ -168,6 +176,9 @@ int runMain(int argc, char** argv) {
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
 
+  app::TuneOptions tune_options;
+  CLI::App* tune = app::addTuneCommand(app, tune_options);
+
   app::PlantSimulateOptions plant_options;
   CLI::App* plant_simulate = app::addPlantCommand(app, plant_options);
 
@@ -185,6 +196,7 @@ int runMain(int argc, char** argv) {
     if (demo->parsed()) return app::runDemo(demo_options, demo_out, demo_validate_samples);
     if (plant_simulate->parsed()) return app::runPlantSimulate(plant_options);
     if (validate->parsed()) return app::runValidate(validate_options);
+    if (tune->parsed()) return app::runTune(tune_options);
   } catch (const arm::ConfigError& e) {
     std::cerr << "fullarm: error: " << e.what() << "\n";
     return app::kExitBadInput;

@@ -236,9 +236,9 @@ double closedLoopSpectralRadius(const PreparedJoint& joint, const JointGains& ga
   return radiusOf(o, joint.setup.delay_samples, 1.0);
 }
 
-std::complex<double> renderedImpedance(const PreparedJoint& joint, const JointGains& gains, const VirtualWall& wall,
-                                       double w) {
-  const StateSpace ctrl = controllerFor(joint, gains, wall);
+namespace {
+
+Complex impedanceWith(const PreparedJoint& joint, const StateSpace& ctrl, double w) {
   const double T = joint.setup.control_period_s;
   const Eigen::MatrixXcd P = frequencyResponse(joint.device.linear.plant, w);  // [q, qd, tau_cell] x [u, tau]
   const Eigen::MatrixXcd K = frequencyResponse(ctrl, w);                       // 1 x [q, tau_meas]
@@ -256,8 +256,15 @@ std::complex<double> renderedImpedance(const PreparedJoint& joint, const JointGa
   return 1.0 / admittance;
 }
 
+}  // namespace
+
+std::complex<double> renderedImpedance(const PreparedJoint& joint, const JointGains& gains, const VirtualWall& wall,
+                                       double w) {
+  return impedanceWith(joint, controllerFor(joint, gains, wall), w);
+}
+
 LinearChecks analyzePrepared(const PreparedJoint& joint, const JointGains& gains, const VirtualWall& wall,
-                             bool with_frequency_data) {
+                             bool with_frequency_data, bool with_gain_limits) {
   const LoopSetup& setup = joint.setup;
   const StateSpace ctrl = controllerFor(joint, gains, wall);
   const OpenLoop o = openLoop(joint.coupled, ctrl);
@@ -284,14 +291,14 @@ LinearChecks analyzePrepared(const PreparedJoint& joint, const JointGains& gains
   mo.sample_time_s = T;
   r.margins = computeMargins(loop, mo);
   r.sector_ok = stableRadius(r.open_loop_spectral_radius) && r.margins.min_real > -1.0;
-  r.gain_scale_upper = r.stable ? scaleLimit(o, d, true) : 0.0;
-  r.gain_scale_lower = r.stable ? scaleLimit(o, d, false) : 0.0;
+  r.gain_scale_upper = r.stable && with_gain_limits ? scaleLimit(o, d, true) : 0.0;
+  r.gain_scale_lower = r.stable && with_gain_limits ? scaleLimit(o, d, false) : 0.0;
 
   // Rendered impedance of the device on the grid.
   const Eigen::VectorXd w = logspace(mo.w_min_radps, mo.w_max_radps, setup.grid_points);
   r.min_real_impedance = std::numeric_limits<double>::infinity();
   for (Eigen::Index i = 0; i < w.size(); ++i) {
-    const Complex z = renderedImpedance(joint, gains, wall, w[i]);
+    const Complex z = impedanceWith(joint, ctrl, w[i]);
     if (z.real() < r.min_real_impedance) {
       r.min_real_impedance = z.real();
       r.min_real_impedance_hz = w[i] / (2.0 * std::numbers::pi);

@@ -108,9 +108,10 @@ struct PreparedJoint {
 };
 [[nodiscard]] PreparedJoint prepareJoint(const JointPlantModel& model, const OperatingPoint& op,
                                          const LoopSetup& setup);
-/// analyzeJoint() on a prepared joint; `with_frequency_data` false skips the stored responses.
+/// analyzeJoint() on a prepared joint; `with_frequency_data` false skips the stored responses,
+/// `with_gain_limits` false skips the gain-scale bisection (both limits 0 then).
 [[nodiscard]] LinearChecks analyzePrepared(const PreparedJoint& joint, const JointGains& gains, const VirtualWall& wall,
-                                           bool with_frequency_data = true);
+                                           bool with_frequency_data = true, bool with_gain_limits = true);
 
 /// Spectral radius of the coupled closed loop.
 [[nodiscard]] double closedLoopSpectralRadius(const PreparedJoint& joint, const JointGains& gains,
