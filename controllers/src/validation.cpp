@@ -42,6 +42,13 @@ UniformRange readRange(const YamlMap& parent, std::string_view key, double lo, d
   return r;
 }
 
+bool readBool(const YamlMap& m, std::string_view key) {
+  const std::string v = m.string(key);
+  if (v == "true") return true;
+  if (v == "false") return false;
+  m.fail(key, "'" + v + "': expected true or false");
+}
+
 ValidationConfig build(const YamlMap& root, const std::filesystem::path& source) {
   ValidationConfig c;
   c.source = source;
@@ -75,6 +82,14 @@ ValidationConfig build(const YamlMap& root, const std::filesystem::path& source)
 
   c.oscillation_speed_radps = root.number("oscillation_speed_radps", "rad/s");
   if (!(c.oscillation_speed_radps > 0.0)) root.fail("oscillation_speed_radps", "expected a threshold > 0");
+
+  const YamlMap lin = root.map("linear");
+  c.linear.max_peak_sensitivity = lin.number("max_peak_sensitivity");
+  if (!(c.linear.max_peak_sensitivity > 1.0)) lin.fail("max_peak_sensitivity", "expected a bound > 1");
+  c.linear.gate_peak_sensitivity = readBool(lin, "gate_peak_sensitivity");
+  c.linear.gate_sector = readBool(lin, "gate_sector");
+  c.linear.gate_passivity = readBool(lin, "gate_passivity");
+  lin.finish();
 
   const YamlMap u = root.map("uncertainty");
   UncertaintyRanges& r = c.ranges;

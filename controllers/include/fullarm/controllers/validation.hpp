@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "fullarm/controllers/closed_loop.hpp"
+#include "fullarm/controllers/scenario_analysis.hpp"
 
 namespace fullarm::controllers {
 
@@ -45,6 +46,7 @@ struct ValidationConfig {
   ScenarioWall wall{};     ///< the wall rendered in every run
   double oscillation_speed_radps = 0.05;
   UncertaintyRanges ranges{};
+  LinearRequirements linear{};  ///< which linear results gate the verdict
 };
 
 /// Loads and validates a validation file (strict: missing and unknown keys are errors; every
