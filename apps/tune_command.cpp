@@ -250,7 +250,7 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
       ->check(CLI::ExistingFile);
   tune->add_option("--gains", o.gains, "Starting gains YAML (default: config/dts_gains.yaml); B_o is kept")
       ->check(CLI::ExistingFile);
-  tune->add_option("--validation", o.validation_config,
+  tune->add_option("--ranges", o.validation_config,
                    "User model and uncertainty ranges (default: config/dts_validation.yaml)")
       ->check(CLI::ExistingFile);
   tune->add_option("--joints", o.joints, "Joints to tune, e.g. EB,WR (default: all)")->delimiter(',');
