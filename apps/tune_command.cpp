@@ -72,6 +72,12 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
   options.local_evaluations = o.local_evaluations;
   options.rounds = o.rounds;
   options.seed = o.seed;
+  // The wall the tuner designs for is the one validate renders.
+  controllers::TuningGoals goals;
+  if (validation.wall.enabled) {
+    goals.wall_stiffness_nm_per_rad = validation.wall.stiffness_nm_per_rad;
+    goals.wall_damping_nms_per_rad = validation.wall.damping_nms_per_rad;
+  }
   TuneRun run;
   run.results.resize(slots.size());
   run.nominal.resize(slots.size());
@@ -86,8 +92,8 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
     const double q = model.defaultPosture()[model.jointIndex(initial.name)];
     controllers::TunerOptions joint_options = options;
     joint_options.seed = options.seed + k;
-    run.results[k] = controllers::tuneJoint(models[k], q, initial, setup, controllers::TuningGoals{},
-                                            controllers::TuningBounds{}, validation.ranges, joint_options);
+    run.results[k] = controllers::tuneJoint(models[k], q, initial, setup, goals, controllers::TuningBounds{},
+                                            validation.ranges, joint_options);
     run.nominal[k] = controllers::prepareJoint(models[k], controllers::solveOperatingPoint(models[k], q), setup);
   });
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -152,8 +158,9 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
   section.addParagraph(
       "Gains tuned per joint in the spirit of MATLAB systune (docs/analysis.md): NLopt DIRECT-L then COBYLA on "
       "log-scaled J_m, B_m, K_m, B_o/eps and lambda (B_o kept), minimising the worst soft goal (RMS user torque "
-      "to follow 0.25-2 Hz reference sines of 0.1 rad, normalised by 0.5 N m; rendered stiffness of a 100 N m/rad "
-      "wall at 1 Hz within 20 %) subject to the hard goals Ms <= 1.7, spectral radius < 1 (free and in contact), "
+      "to follow 0.25-2 Hz reference sines of 0.1 rad, normalised by 0.5 N m; rendered stiffness of the "
+      "validation file's wall at 1 Hz within 20 %) subject to the hard goals Ms <= 1.7, spectral radius < 1 (free and "
+      "in contact), "
       "Re L > -1 (saturation sector) and Re Z >= -0.05 N m s/rad (passivity) on every model of the set; the set "
       "grows by the worst-case model of the validation ranges after each round. Hard and soft values are "
       "normalised: <= 1 means met.");
@@ -244,7 +251,7 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
       ->check(CLI::ExistingFile);
   tune->add_option("--gains", o.gains, "Starting gains YAML (default: config/dts_gains.yaml); B_o is kept")
       ->check(CLI::ExistingFile);
-  tune->add_option("--validation", o.validation_config,
+  tune->add_option("--ranges", o.validation_config,
                    "User model and uncertainty ranges (default: config/dts_validation.yaml)")
       ->check(CLI::ExistingFile);
   tune->add_option("--joints", o.joints, "Joints to tune, e.g. EB,WR (default: all)")->delimiter(',');

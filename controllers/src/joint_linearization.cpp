@@ -97,8 +97,9 @@ Evaluation evaluate(const JointPlantModel& model, const OperatingPoint& op, cons
     const plant::ValueSlope f = plant::frictionTorque(p.friction, w);
     const plant::StopTorque st = plant::hardStopTorque(p, q, w);
     tau_act = x[kPressureA] * v.dva_dq + x[kPressureB] * v.dvb_dq - f.value + st.torque_nm;
-    const double friction_slope =
-        friction_mode == FrictionLinearization::kTangent ? f.slope : p.friction.viscous_nms_per_rad;
+    double friction_slope = p.friction.viscous_nms_per_rad;
+    if (friction_mode == FrictionLinearization::kTangent) friction_slope = f.slope;
+    if (friction_mode == FrictionLinearization::kStribeckWorst) friction_slope += stribeckWorstSlope(p.friction);
     dact[kPressureA] = v.dva_dq;
     dact[kPressureB] = v.dvb_dq;
     dact[kAngle] = x[kPressureA] * v.d2va_dq2 + x[kPressureB] * v.d2vb_dq2 + st.d_dq;
@@ -174,6 +175,13 @@ Evaluation evaluate(const JointPlantModel& model, const OperatingPoint& op, cons
 }
 
 }  // namespace
+
+double stribeckWorstSlope(const plant::FrictionParams& f) noexcept {
+  const double drop = f.static_nm - f.coulomb_nm;
+  if (!(drop > 0.0) || !(f.stribeck_velocity_radps > 0.0)) return 0.0;
+  // d/dw [drop exp(-(w/ws)^2)] = -2 drop w/ws^2 exp(-(w/ws)^2), steepest at w = ws/sqrt(2).
+  return -drop * std::sqrt(2.0) / f.stribeck_velocity_radps * std::exp(-0.5);
+}
 
 JointLoad jointLoadFromArm(const arm::ArmModel& model, const plant::UserArmParams& user, int joint_index,
                            const Eigen::VectorXd& posture) {

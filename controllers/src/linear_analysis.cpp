@@ -290,7 +290,9 @@ LinearChecks analyzePrepared(const PreparedJoint& joint, const JointGains& gains
   mo.grid_points = setup.grid_points;
   mo.sample_time_s = T;
   r.margins = computeMargins(loop, mo);
-  r.sector_ok = stableRadius(r.open_loop_spectral_radius) && r.margins.min_real > -1.0;
+  r.low_gain_stable = r.stable;
+  for (double kappa : kSectorScales) r.low_gain_stable = r.low_gain_stable && stableRadius(radiusOf(o, d, kappa));
+  r.sector_ok = r.low_gain_stable && r.margins.min_real > -1.0;
   r.gain_scale_upper = r.stable && with_gain_limits ? scaleLimit(o, d, true) : 0.0;
   r.gain_scale_lower = r.stable && with_gain_limits ? scaleLimit(o, d, false) : 0.0;
 

@@ -270,8 +270,8 @@ GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const JointGa
     const double wall_error = std::abs(zw.real() / goals.wall_stiffness_nm_per_rad - 1.0);
     worst.peak_sensitivity = std::max(worst.peak_sensitivity, c.margins.peak_sensitivity);
     worst.spectral_radius = std::max({worst.spectral_radius, c.spectral_radius, rho_wall});
-    const bool open_loop_stable = c.open_loop_spectral_radius < 1.0 + kMarginalPoleTolerance;
-    worst.min_real_loop = std::min(worst.min_real_loop, open_loop_stable ? c.margins.min_real : -1e3);
+    // A loop that goes unstable at a lower gain (conditional stability) fails the sector goal.
+    worst.min_real_loop = std::min(worst.min_real_loop, c.low_gain_stable || !c.stable ? c.margins.min_real : -1e3);
     worst.min_real_impedance = std::min(worst.min_real_impedance, c.min_real_impedance);
     worst.rms_user_torque_nm = std::max(worst.rms_user_torque_nm, std::sqrt(power));
     worst.wall_error = std::max(worst.wall_error, wall_error);

@@ -15,6 +15,7 @@
 #include "fullarm/controllers/lti.hpp"
 #include "fullarm/controllers/margins.hpp"
 #include "fullarm/plant/arm_plant.hpp"
+#include "fullarm/plant/hydraulics.hpp"
 #include "matrix_compare.hpp"
 
 namespace fullarm::controllers {
@@ -257,6 +258,29 @@ TEST_P(JointLinearization, MatchesFiniteDifferencesOfThePlantRhs) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllJoints, JointLinearization, ::testing::Range(0, 7));
+
+TEST(JointLinearizationFriction, StribeckWorstSlopeIsTheSteepestSlopeOfThePlantsFrictionLaw) {
+  // Far above the tanh smoothing velocity the plant's friction law (H7) is the Stribeck curve
+  // plus viscous friction: its smallest slope over a dense velocity grid (central differences)
+  // is the viscous coefficient plus stribeckWorstSlope().
+  plant::FrictionParams f;
+  f.coulomb_nm = 0.5;
+  f.static_nm = 0.75;
+  f.stribeck_velocity_radps = 0.05;
+  f.viscous_nms_per_rad = 0.1;
+  f.smoothing_velocity_radps = 1e-5;
+  double steepest = std::numeric_limits<double>::infinity();
+  for (int i = 1; i <= 20000; ++i) {
+    const double w = 0.002 + 0.2 * i / 20000.0;
+    const double h = 1e-7;
+    steepest =
+        std::min(steepest, (plant::frictionTorque(f, w + h).value - plant::frictionTorque(f, w - h).value) / (2.0 * h));
+  }
+  EXPECT_NEAR(f.viscous_nms_per_rad + stribeckWorstSlope(f), steepest, 1e-4);
+  EXPECT_LT(stribeckWorstSlope(f), 0.0);
+  f.static_nm = f.coulomb_nm;
+  EXPECT_EQ(stribeckWorstSlope(f), 0.0);
+}
 
 TEST(ControllerLinearForm, MatchesStepJointControllerInTheLinearRegion) {
   // Drive stepJointController() and the linear form with the same small inputs (inside the

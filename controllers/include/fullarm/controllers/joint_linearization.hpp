@@ -78,7 +78,15 @@ enum class FrictionLinearization {
   kViscousOnly,  ///< viscous term only: Coulomb friction is a dissipative sector nonlinearity
                  ///< left out (the conservative choice for stability; the default)
   kTangent,      ///< tangent of the smooth friction law at qd (the exact Jacobian of the RHS)
+  /// Viscous term plus the steepest (negative) slope of the Stribeck decay,
+  /// -(tau_s - tau_c) sqrt(2)/w_s e^{-1/2} at |qd| = w_s/sqrt(2): the negative damping the
+  /// joint sees while it moves slowly through the Stribeck region (stick-slip).
+  kStribeckWorst,
 };
+
+/// The steepest slope of the Stribeck term (tau_s - tau_c) exp(-(w/w_s)^2) over w >= 0
+/// [N m s/rad] (<= 0; 0 without a Stribeck peak).
+[[nodiscard]] double stribeckWorstSlope(const plant::FrictionParams& f) noexcept;
 
 /// Outputs of the linear joint model.
 enum JointOutputIndex : int { kOutAngle = 0, kOutVelocity = 1, kOutTorqueCell = 2 };

@@ -77,8 +77,13 @@ struct LinearChecks {
   double spectral_radius = 0.0;         ///< discrete closed loop with the user's arm and the wall
   double device_spectral_radius = 0.0;  ///< closed loop of the device alone (no user)
   double open_loop_spectral_radius = 0.0;
-  bool stable = false;              ///< spectral_radius < 1 (a free-position pole at 1 counts as stable)
-  bool sector_ok = false;           ///< open loop stable and min Re L > -1 (circle criterion, sat in [0, 1])
+  bool stable = false;  ///< spectral_radius < 1 (a free-position pole at 1 counts as stable)
+  /// Saturation sector: min Re L > -1 (circle criterion for sat in [0, 1]) and no conditional
+  /// stability: the loop scaled by every kappa of kSectorScales is stable too (which the circle
+  /// criterion implies when the open loop is stable; checked explicitly because a joint without
+  /// a restoring user spring has a slow open-loop pole at or just outside z = 1).
+  bool sector_ok = false;
+  bool low_gain_stable = false;     ///< the kSectorScales part of sector_ok
   bool passive = false;             ///< min Re Z >= 0 and the device loop stable
   double min_real_impedance = 0.0;  ///< min over the grid of Re Z [N m s/rad]
   double min_real_impedance_hz = 0.0;
@@ -89,6 +94,10 @@ struct LinearChecks {
   double gain_scale_upper = 0.0;
   FrequencyData frequency;
 };
+
+/// Loop-gain scales kappa at which the sector check requires stability (sat(s/eps) acts as a
+/// gain kappa in (0, 1] on the linear loop).
+inline constexpr double kSectorScales[] = {0.05, 0.1, 0.2, 0.35, 0.5, 0.7};
 
 /// Stability tolerance for the free-position pole (see LinearChecks::stable).
 inline constexpr double kMarginalPoleTolerance = 1e-7;

@@ -13,8 +13,9 @@
 ///
 /// Hard goals, each normalised so that <= 1 is met, for every model of the set:
 ///   Ms / max_peak_sensitivity;  spectral radius of the closed loop (free motion and in
-///   contact with the target wall) / 1;  sector: -min Re L / 1 (circle criterion, open loop
-///   stable);  passivity: -min Re Z / passivity_tolerance + 1 (rendered impedance of the device).
+///   contact with the target wall) / 1;  sector: -min Re L / 1, and a loop that is unstable at
+///   a gain scale of kSectorScales fails it outright (LinearChecks::sector_ok);  passivity:
+///   1 - min Re Z / passivity_tolerance (rendered impedance of the device, Re Z >= -tolerance).
 /// Soft goals (the objective is their maximum, worst model):
 ///   free-motion transparency: RMS user torque to follow the reference motion / target;
 ///   wall accuracy: |K_rendered(wall_check_hz) / K_wall - 1| / wall_accuracy.
