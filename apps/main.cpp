@@ -11,8 +11,11 @@
 #include "fullarm/arm/arm_scaling.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
+#include "fullarm/controllers/gains.hpp"
 #include "fullarm/reports/report.hpp"
 #include "plant_command.hpp"
+#include "tune_command.hpp"
+#include "validate_command.hpp"
 
 namespace fullarm::app {
 namespace {
@@ -78,7 +81,8 @@ int runArmShow(const ArmOptions& options, const std::string& q_text, const std::
   return summary.holds_itself ? 0 : kExitFail;
 }
 
-int runDemo(const ArmOptions& options, const std::string& out_dir) {
+int runDemo(const ArmOptions& options, const std::string& out_dir, int validate_samples) {
+  const std::filesystem::path controllers_gains_path = controllers::defaultGainsConfigPath();
   struct Step {
     const char* name;
     const char* status;
@@ -96,22 +100,33 @@ int runDemo(const ArmOptions& options, const std::string& out_dir) {
   reports::Section& pipeline = report.addSection("Pipeline");
   const PlantDemoStep plant_step = runPlantDemoStep(model, out_dir, report);
   std::cout << "  " << plant_step.detail << "\n";
+  std::cout << "\n[4/6] Tune the admittance controller (NLopt, all 7 joints)\n";
+  const TuneDemoStep tune_step = runTuneDemoStep(model, out_dir, report);
+  std::cout << "  " << tune_step.detail << "\n";
+  std::cout << "\n[5/6] Validate stability (linear checks + Monte-Carlo of nonlinear closed-loop runs)\n";
+  const ValidateDemoStep validate_step = runValidateDemoStep(
+      model, tune_step.gains_file.empty() ? controllers_gains_path : tune_step.gains_file, validate_samples, report);
+  std::cout << "  " << validate_step.detail << "\n";
   const Step steps[] = {
       {"DTS arm model", summary.holds_itself ? "done" : "failed", "kinematics, dynamics, reach, gravity load"},
       {"Simulated chirp experiment (plant)", plant_step.pass ? "done" : "failed", plant_step.detail.c_str()},
       {"Identify a joint", "not built yet", "needs the identification module (issue: Identification)"},
-      {"Tune the admittance controller", "not built yet", "needs the controllers (issue: Controllers)"},
-      {"Validate stability", "not built yet", "needs the controllers (issue: Controllers)"},
+      {"Tune the admittance controller", tune_step.pass ? "done" : "failed", tune_step.detail.c_str()},
+      {"Validate stability", validate_step.pass ? "done" : "failed", validate_step.detail.c_str()},
       {"Valve study, full-arm vs hand-only", "not built yet", "needs haptic rendering (issue: Full-arm haptics)"},
   };
   std::cout << "\n";
-  for (int i = 2; i < 6; ++i)
+  for (int i = 2; i < 6; ++i) {
+    if (i == 3 || i == 4) continue;  // the tune and validate steps printed their own lines
     std::cout << "[" << i + 1 << "/6] " << steps[i].name << ": " << steps[i].status << " (" << steps[i].detail << ")\n";
+  }
 
-  const bool demo_pass = summary.holds_itself && plant_step.pass;
-  report.setVerdict(demo_pass, demo_pass
-                                   ? "Every step that exists passed (2 of 6 steps built)"
-                                   : (summary.holds_itself ? "The plant step failed" : "The arm model step failed"));
+  const bool demo_pass = summary.holds_itself && plant_step.pass && tune_step.pass && validate_step.pass;
+  report.setVerdict(demo_pass, demo_pass               ? "Every step that exists passed (4 of 6 steps built)"
+                               : !summary.holds_itself ? "The arm model step failed"
+                               : !plant_step.pass      ? "The plant step failed"
+                               : !tune_step.pass       ? "The tune step failed"
+                                                       : "The validate step failed");
   nlohmann::json list = nlohmann::json::array();
   reports::Table table;
   table.caption = "Demo steps";
@@ -156,9 +171,19 @@ int runMain(int argc, char** argv) {
   demo_options.add(*demo);
   std::string demo_out = "out/demo";
   demo->add_option("--out", demo_out, "Output folder")->capture_default_str();
+  int demo_validate_samples = 300;
+  demo->add_option("--validate-samples", demo_validate_samples, "Monte-Carlo runs per joint of the validate step")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+
+  app::TuneOptions tune_options;
+  CLI::App* tune = app::addTuneCommand(app, tune_options);
 
   app::PlantSimulateOptions plant_options;
   CLI::App* plant_simulate = app::addPlantCommand(app, plant_options);
+
+  app::ValidateOptions validate_options;
+  CLI::App* validate = app::addValidateCommand(app, validate_options);
 
   try {
     app.parse(argc, argv);
@@ -168,8 +193,10 @@ int runMain(int argc, char** argv) {
   }
   try {
     if (show->parsed()) return app::runArmShow(arm_options, q_text, show_out);
-    if (demo->parsed()) return app::runDemo(demo_options, demo_out);
+    if (demo->parsed()) return app::runDemo(demo_options, demo_out, demo_validate_samples);
     if (plant_simulate->parsed()) return app::runPlantSimulate(plant_options);
+    if (validate->parsed()) return app::runValidate(validate_options);
+    if (tune->parsed()) return app::runTune(tune_options);
   } catch (const arm::ConfigError& e) {
     std::cerr << "fullarm: error: " << e.what() << "\n";
     return app::kExitBadInput;

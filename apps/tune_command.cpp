@@ -1,0 +1,326 @@
+#include "tune_command.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/arm/config_error.hpp"
+#include "fullarm/controllers/gains.hpp"
+#include "fullarm/controllers/linear_analysis.hpp"
+#include "fullarm/controllers/tuner.hpp"
+#include "fullarm/controllers/validation.hpp"
+#include "fullarm/plant/plant_config.hpp"
+
+namespace fullarm::app {
+namespace {
+
+using controllers::GainsConfig;
+using controllers::JointGains;
+using controllers::TuningResult;
+
+constexpr const char* kGainsFileName = "gains.yaml";
+constexpr int kImpedancePoints = 80;
+
+struct TuneRun {
+  GainsConfig tuned;  // the whole gains file with the tuned joints replaced
+  std::vector<TuningResult> results;
+  std::vector<controllers::PreparedJoint> nominal;  // nominal model of each tuned joint
+  double wall_s = 0.0;
+  bool pass = false;
+};
+
+// The joint model the tuner designs for: the plant's joint, its load at the default posture
+// and the validation file's nominal user (joint space), as `fullarm validate` simulates it.
+controllers::JointPlantModel jointModel(const arm::ArmModel& model, const plant::PlantConfig& plant_config,
+                                        const controllers::ValidationConfig& validation, const std::string& name) {
+  controllers::JointPlantModel jm;
+  jm.joint = plant_config.joints[static_cast<std::size_t>(plant::findPlantJoint(plant_config, name))];
+  plant::UserArmParams no_user;
+  const int idx = model.jointIndex(jm.joint.name);
+  jm.load = controllers::jointLoadFromArm(model, no_user, idx, model.defaultPosture());
+  jm.load.user_inertia_kgm2 = validation.user.inertia_kgm2;
+  jm.load.user_stiffness_nm_per_rad = validation.user.stiffness_nm_per_rad;
+  jm.load.user_damping_nms_per_rad = validation.user.damping_nms_per_rad;
+  jm.include_user = true;
+  return jm;
+}
+
+TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_config, const GainsConfig& gains,
+                const controllers::ValidationConfig& validation, std::vector<std::string> joints,
+                const TuneOptions& o) {
+  if (gains.controller != controllers::ControllerKind::kAdmittance) {
+    throw arm::ConfigError(
+        gains.source, "controller",
+        "fullarm tune tunes the admittance controller; got " + std::string(controllerKindName(gains.controller)));
+  }
+  if (joints.empty()) {
+    for (const JointGains& g : gains.joints) joints.push_back(g.name);
+  }
+  std::vector<int> slots;
+  for (const std::string& name : joints) slots.push_back(controllers::findGainsJoint(gains, name));
+  controllers::LoopSetup setup;
+  setup.control_period_s = gains.control_period_s;
+  setup.delay_samples = validation.ranges.delay_min_samples;
+  controllers::TunerOptions options;
+  options.global_evaluations = o.global_evaluations;
+  options.local_evaluations = o.local_evaluations;
+  options.rounds = o.rounds;
+  options.seed = o.seed;
+  // The wall the tuner designs for is the one validate renders.
+  controllers::TuningGoals goals;
+  if (validation.wall.enabled) {
+    goals.wall_stiffness_nm_per_rad = validation.wall.stiffness_nm_per_rad;
+    goals.wall_damping_nms_per_rad = validation.wall.damping_nms_per_rad;
+  }
+  TuneRun run;
+  run.results.resize(slots.size());
+  run.nominal.resize(slots.size());
+  std::vector<controllers::JointPlantModel> models;
+  for (int slot : slots) models.push_back(jointModel(model, plant_config, validation, gains.joints[slot].name));
+  const auto start = std::chrono::steady_clock::now();
+  // One job per joint; each tuning is self-contained and seeded, so the result does not depend
+  // on the thread count.
+  controllers::parallelFor(static_cast<int>(slots.size()), o.threads, [&](int i) {
+    const auto k = static_cast<std::size_t>(i);
+    const JointGains& initial = gains.joints[static_cast<std::size_t>(slots[k])];
+    const double q = model.defaultPosture()[model.jointIndex(initial.name)];
+    controllers::TunerOptions joint_options = options;
+    joint_options.seed = options.seed + k;
+    run.results[k] = controllers::tuneJoint(models[k], q, initial, setup, goals, controllers::TuningBounds{},
+                                            validation.ranges, joint_options);
+    run.nominal[k] = controllers::prepareJoint(models[k], controllers::solveOperatingPoint(models[k], q), setup);
+  });
+  run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.tuned = gains;
+  run.tuned.source.clear();
+  run.pass = true;
+  for (std::size_t k = 0; k < slots.size(); ++k) {
+    run.tuned.joints[static_cast<std::size_t>(slots[k])] = run.results[k].tuned;
+    run.pass = run.pass && run.results[k].feasible;
+  }
+  return run;
+}
+
+nlohmann::json gainsJson(const JointGains& g) {
+  return {{"inertia_kgm2", g.impedance.inertia_kgm2},
+          {"damping_nms_per_rad", g.impedance.damping_nms_per_rad},
+          {"stiffness_nm_per_rad", g.impedance.stiffness_nm_per_rad},
+          {"lambda_per_s", g.sliding_mode.lambda_per_s},
+          {"valve_bound_v", g.sliding_mode.valve_bound_v},
+          {"boundary_layer_radps", g.sliding_mode.boundary_layer_radps}};
+}
+
+nlohmann::json goalsJson(const controllers::GoalValues& v) {
+  return {{"peak_sensitivity", v.peak_sensitivity},
+          {"spectral_radius", v.spectral_radius},
+          {"min_real_loop", v.min_real_loop},
+          {"min_real_impedance_nms_per_rad", v.min_real_impedance},
+          {"rms_user_torque_nm", v.rms_user_torque_nm},
+          {"wall_stiffness_error", v.wall_error},
+          {"hard", v.hard},
+          {"soft", v.soft},
+          {"feasible", v.feasible()}};
+}
+
+void addToReport(const TuneRun& run, reports::Report& report, const std::string& heading) {
+  nlohmann::json joints = nlohmann::json::array();
+  for (const TuningResult& r : run.results) {
+    nlohmann::json models = nlohmann::json::array();
+    for (const controllers::ModelVariation& v : r.model_set) {
+      models.push_back({{"bulk_modulus_scale", v.bulk_modulus_scale},
+                        {"valve_gain_scale", v.valve_gain_scale},
+                        {"friction_scale", v.friction_scale},
+                        {"inertia_scale", v.inertia_scale},
+                        {"user_stiffness_nm_per_rad", v.user_stiffness_nm_per_rad},
+                        {"user_damping_nms_per_rad", v.user_damping_nms_per_rad},
+                        {"delay_samples", v.delay_samples}});
+    }
+    joints.push_back({{"joint", r.joint},
+                      {"feasible", r.feasible},
+                      {"verdict", r.verdict},
+                      {"evaluations", r.evaluations},
+                      {"initial_gains", gainsJson(r.initial)},
+                      {"tuned_gains", gainsJson(r.tuned)},
+                      {"initial_goals", goalsJson(r.initial_goals)},
+                      {"tuned_goals", goalsJson(r.tuned_goals)},
+                      {"model_set", models},
+                      {"nlopt_results", r.nlopt_results}});
+  }
+  report.results()["tune"] = {{"wall_time_s", run.wall_s}, {"pass", run.pass}, {"joints", joints}};
+
+  reports::Section& section = report.addSection(heading);
+  section.addParagraph(
+      "Gains tuned per joint in the spirit of MATLAB systune (docs/analysis.md): NLopt DIRECT-L then COBYLA on "
+      "log-scaled J_m, B_m, K_m, B_o/eps and lambda (B_o kept), minimising the worst soft goal (RMS user torque "
+      "to follow 0.25-2 Hz reference sines of 0.1 rad, normalised by 0.5 N m; rendered stiffness of the "
+      "validation file's wall at 1 Hz within 20 %) subject to the hard goals Ms <= 1.7, spectral radius < 1 (free and "
+      "in contact), "
+      "Re L > -1 (saturation sector) and Re Z >= -0.05 N m s/rad (passivity) on every model of the set; the set "
+      "grows by the worst-case model of the validation ranges after each round. Hard and soft values are "
+      "normalised: <= 1 means met.");
+  reports::Table table;
+  table.caption = "Before (starting gains) and after tuning, worst model of the final set";
+  table.columns = {"Joint",
+                   "Verdict",
+                   "J_m [kg m^2]",
+                   "B_m [N m s/rad]",
+                   "K_m [N m/rad]",
+                   "B_o/eps [V s/rad]",
+                   "lambda [1/s]",
+                   "Ms",
+                   "spectral radius",
+                   "min Re Z [N m s/rad]",
+                   "RMS user torque [N m]",
+                   "hard",
+                   "soft"};
+  const auto row = [&](const TuningResult& r, bool tuned) {
+    const JointGains& g = tuned ? r.tuned : r.initial;
+    const controllers::GoalValues& v = tuned ? r.tuned_goals : r.initial_goals;
+    table.rows.push_back({r.joint + (tuned ? " tuned" : " start"),
+                          tuned ? (r.feasible ? "feasible" : "infeasible") : (v.feasible() ? "feasible" : "infeasible"),
+                          g.impedance.inertia_kgm2, g.impedance.damping_nms_per_rad, g.impedance.stiffness_nm_per_rad,
+                          g.sliding_mode.valve_bound_v / g.sliding_mode.boundary_layer_radps,
+                          g.sliding_mode.lambda_per_s, v.peak_sensitivity, v.spectral_radius, v.min_real_impedance,
+                          v.rms_user_torque_nm, v.hard, v.soft});
+  };
+  for (const TuningResult& r : run.results) {
+    row(r, false);
+    row(r, true);
+  }
+  table.significant_digits = 4;
+  section.addTable(std::move(table));
+  for (const TuningResult& r : run.results) section.addParagraph(r.verdict);
+
+  reports::XyChart convergence;
+  convergence.title = "Convergence: best feasible objective (worst soft goal) per evaluation";
+  convergence.x_axis = {"Evaluation", "", false};
+  convergence.y_axis = {"Worst soft goal", "", true};
+  for (const TuningResult& r : run.results) {
+    reports::Series s;
+    s.name = r.joint;
+    for (std::size_t i = 0; i < r.history.size(); ++i) {
+      s.x.push_back(static_cast<double>(i + 1));
+      s.y.push_back(r.history[i] > 0.0 ? r.history[i] : std::numeric_limits<double>::quiet_NaN());
+    }
+    convergence.series.push_back(std::move(s));
+  }
+  convergence.caption = "Gaps: no feasible point yet. Steps up where a worst-case model joins the set.";
+  section.addLineChart(std::move(convergence));
+
+  reports::XyChart impedance;
+  impedance.title = "Rendered impedance in free motion |Z(f)|, nominal model: start (dashed name) vs tuned";
+  impedance.x_axis = {"Frequency", "Hz", true};
+  impedance.y_axis = {"|Z|", "N·m·s/rad", true};
+  const Eigen::VectorXd f = controllers::logspace(0.1, 200.0, kImpedancePoints);
+  for (std::size_t k = 0; k < run.results.size(); ++k) {
+    for (bool tuned : {false, true}) {
+      reports::Series s;
+      s.name = run.results[k].joint + (tuned ? " tuned" : " start");
+      const JointGains& g = tuned ? run.results[k].tuned : run.results[k].initial;
+      for (Eigen::Index i = 0; i < f.size(); ++i) {
+        const double m = std::abs(controllers::renderedImpedance(run.nominal[k], g, {}, 2.0 * std::numbers::pi * f[i]));
+        s.x.push_back(f[i]);
+        s.y.push_back(std::isfinite(m) && m > 0.0 ? m : std::numeric_limits<double>::quiet_NaN());
+      }
+      impedance.series.push_back(std::move(s));
+    }
+  }
+  section.addLineChart(std::move(impedance));
+}
+
+void writeText(const std::filesystem::path& path, const std::string& text) {
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+}  // namespace
+
+CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
+  CLI::App* tune = app.add_subcommand(
+      "tune", "Tune the admittance gains per joint (NLopt, systune-style goals); write gains.yaml and a report");
+  tune->add_option("--plant", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)")->check(CLI::ExistingFile);
+  tune->add_option("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)")
+      ->check(CLI::ExistingFile);
+  tune->add_option("--gains", o.gains, "Starting gains YAML (default: config/dts_gains.yaml); B_o is kept")
+      ->check(CLI::ExistingFile);
+  tune->add_option("--ranges", o.validation_config,
+                   "User model and uncertainty ranges (default: config/dts_validation.yaml)")
+      ->check(CLI::ExistingFile);
+  tune->add_option("--joints", o.joints, "Joints to tune, e.g. EB,WR (default: all)")->delimiter(',');
+  tune->add_option("--global-evals", o.global_evaluations, "Global-stage evaluations per round")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  tune->add_option("--local-evals", o.local_evaluations, "Local (COBYLA) evaluations per round")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
+  tune->add_option("--rounds", o.rounds, "Worst-case rounds")->check(CLI::Range(1, 20))->capture_default_str();
+  tune->add_option("--seed", o.seed, "Seed of the worst-case search")->capture_default_str();
+  tune->add_option("--threads", o.threads, "Worker threads (one joint each)")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  tune->add_option("--out", o.out_dir, "Output folder")->capture_default_str();
+  return tune;
+}
+
+int runTune(const TuneOptions& o) {
+  const arm::ArmModel model =
+      arm::loadArmModel(o.arm_config.empty() ? arm::defaultArmModelPath() : std::filesystem::path(o.arm_config));
+  const plant::PlantConfig plant_config = plant::loadPlantConfig(
+      o.plant_config.empty() ? plant::defaultPlantConfigPath() : std::filesystem::path(o.plant_config), model);
+  const GainsConfig gains = controllers::loadGainsConfig(
+      o.gains.empty() ? controllers::defaultGainsConfigPath() : std::filesystem::path(o.gains), model);
+  const controllers::ValidationConfig validation =
+      controllers::loadValidationConfig(o.validation_config.empty() ? controllers::defaultValidationConfigPath()
+                                                                    : std::filesystem::path(o.validation_config));
+  const TuneRun run = tuneArm(model, plant_config, gains, validation, o.joints, o);
+  const std::filesystem::path out(o.out_dir);
+  writeText(out / kGainsFileName, controllers::formatGainsYaml(run.tuned));
+  reports::Report report("tune", "Admittance gains tuned per joint");
+  int feasible = 0;
+  for (const TuningResult& r : run.results) feasible += r.feasible ? 1 : 0;
+  std::ostringstream headline;
+  headline << feasible << " of " << run.results.size() << " joints meet every hard goal";
+  report.setVerdict(run.pass, headline.str());
+  report.addHeadlineNumber("joints_feasible", "Joints meeting the hard goals", feasible, "");
+  report.addHeadlineNumber("wall_time_s", "Tuning wall time", run.wall_s, "s");
+  report.addFile(kGainsFileName);
+  addToReport(run, report, "Tuning");
+  report.write(out);
+  for (const TuningResult& r : run.results) std::cout << r.verdict << "\n";
+  std::cout << "Tuned gains: " << (std::filesystem::absolute(out) / kGainsFileName).string() << " (" << std::fixed
+            << std::setprecision(1) << run.wall_s << " s)\n";
+  return run.pass ? 0 : 1;
+}
+
+TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir,
+                             reports::Report& report) {
+  const plant::PlantConfig plant_config = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
+  const GainsConfig gains = controllers::loadGainsConfig(controllers::defaultGainsConfigPath(), model);
+  const controllers::ValidationConfig validation =
+      controllers::loadValidationConfig(controllers::defaultValidationConfigPath());
+  TuneOptions o;
+  const TuneRun run = tuneArm(model, plant_config, gains, validation, {}, o);
+  TuneDemoStep step;
+  step.gains_file = out_dir / "tuned_gains.yaml";
+  writeText(step.gains_file, controllers::formatGainsYaml(run.tuned));
+  report.addFile("tuned_gains.yaml");
+  addToReport(run, report, "Tune the admittance controller");
+  int feasible = 0;
+  for (const TuningResult& r : run.results) feasible += r.feasible ? 1 : 0;
+  std::ostringstream detail;
+  detail << feasible << " of " << run.results.size() << " joints meet the hard goals, " << std::fixed
+         << std::setprecision(1) << run.wall_s << " s wall";
+  step.pass = run.pass;
+  step.detail = detail.str();
+  return step;
+}
+
+}  // namespace fullarm::app

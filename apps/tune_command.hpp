@@ -1,0 +1,49 @@
+#pragma once
+// `fullarm tune` and the tune step of `fullarm demo`.
+
+#include <CLI/CLI.hpp>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "fullarm/arm/arm_model.hpp"
+#include "fullarm/reports/report.hpp"
+
+namespace fullarm::app {
+
+/// Options of `fullarm tune`.
+struct TuneOptions {
+  std::string arm_config;           ///< arm model YAML (default: dts_master.yaml)
+  std::string plant_config;         ///< --plant (default: dts_plant.yaml)
+  std::string gains;                ///< starting gains (default: dts_gains.yaml); B_o and filters are kept
+  std::string validation_config;    ///< user model and uncertainty ranges (default: dts_validation.yaml)
+  std::vector<std::string> joints;  ///< short or model names; empty = every joint of the gains file
+  std::string out_dir = "out/tune";
+  int global_evaluations = 300;
+  int local_evaluations = 150;
+  int rounds = 3;
+  std::uint64_t seed = 1;
+  int threads = 2;
+};
+
+/// Adds `tune` to `app`.
+CLI::App* addTuneCommand(CLI::App& app, TuneOptions& options);
+
+/// Runs `fullarm tune`: gains.yaml (loadable by `validate`), summary.json, report.html.
+/// @return 0 when every tuned joint met its hard goals, 1 otherwise.
+/// @throws arm::ConfigError / std::runtime_error for bad input (exit code 2 in main).
+int runTune(const TuneOptions& options);
+
+/// Result of the demo's tune step.
+struct TuneDemoStep {
+  bool pass = false;
+  std::string detail;
+  std::filesystem::path gains_file;  ///< the tuned gains, for the validate step
+};
+
+/// The demo step: tunes all 7 joints on the default plant, writes `tuned_gains.yaml` into
+/// `out_dir` and adds its section and the `results.tune` keys to `report`.
+TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir, reports::Report& report);
+
+}  // namespace fullarm::app

@@ -1,0 +1,119 @@
+#pragma once
+/// @file
+/// Gain tuning of the admittance controller, one joint at a time, in the spirit of MATLAB
+/// `systune` (research/control_hil.md section 1): minimise the worst normalised soft goal
+/// subject to every normalised hard goal <= 1 over a set of plant models, the set growing by
+/// the worst-case model found after each round (docs/analysis.md). NLopt: a deterministic
+/// global stage (GN_ORIG_DIRECT_L, or GN_ISRES with a fixed seed) on the log-scaled
+/// variables, then a local polish (LN_COBYLA); the best feasible point is tracked by the
+/// tuner itself, not taken from NLopt's return value. Offline (allocates), not @rt.
+///
+/// Variables (log10): J_m, B_m, K_m, B_o/eps, lambda. B_o stays as given (the valve and safety
+/// limit), so eps = B_o / (B_o/eps).
+///
+/// Hard goals, each normalised so that <= 1 is met, for every model of the set:
+///   Ms / max_peak_sensitivity;  spectral radius of the closed loop (free motion and in
+///   contact with the target wall) / 1;  sector: -min Re L / 1, and a loop that is unstable at
+///   a gain scale of kSectorScales fails it outright (LinearChecks::sector_ok);  passivity:
+///   1 - min Re Z / passivity_tolerance (rendered impedance of the device, Re Z >= -tolerance).
+/// Soft goals (the objective is their maximum, worst model):
+///   free-motion transparency: RMS user torque to follow the reference motion / target;
+///   wall accuracy: |K_rendered(wall_check_hz) / K_wall - 1| / wall_accuracy.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fullarm/controllers/gains.hpp"
+#include "fullarm/controllers/linear_analysis.hpp"
+#include "fullarm/controllers/validation.hpp"
+
+namespace fullarm::controllers {
+
+/// Search box of the tuned variables (the tuner works on their log10).
+struct TuningBounds {
+  double inertia_kgm2[2] = {1e-3, 1.0};
+  double damping_nms_per_rad[2] = {1e-2, 20.0};
+  double stiffness_nm_per_rad[2] = {1.0, 1e3};
+  double gain_v_s_per_rad[2] = {1e-3, 1e2};  ///< B_o / eps
+  double lambda_per_s[2] = {1.0, 300.0};
+};
+
+/// The design specification.
+struct TuningGoals {
+  // Hard.
+  double max_peak_sensitivity = 1.7;
+  double passivity_tolerance_nms_per_rad = 0.05;  ///< Re Z >= -this counts as passive
+  // Soft.
+  std::vector<double> reference_hz = {0.25, 0.5, 1.0, 2.0};  ///< reference motion: sum of sines
+  double reference_amplitude_rad = 0.1;                      ///< per sine
+  double target_rms_torque_nm = 0.5;                         ///< free-motion goal normalisation
+  double wall_stiffness_nm_per_rad = 100.0;                  ///< target wall (rendering and stability)
+  double wall_damping_nms_per_rad = 0.0;
+  double wall_check_hz = 1.0;
+  double wall_accuracy = 0.2;  ///< relative error of the rendered stiffness that scores 1
+};
+
+/// A member of the model set: one draw of the validation's uncertainty (validation.hpp), so the
+/// tuner designs against the ranges `fullarm validate` checks.
+using ModelVariation = MonteCarloSample;
+
+enum class GlobalAlgorithm { kDirectL, kIsres };
+
+/// Budget and determinism.
+struct TunerOptions {
+  GlobalAlgorithm global = GlobalAlgorithm::kDirectL;
+  int global_evaluations = 300;  ///< per round
+  int local_evaluations = 150;   ///< per round
+  int rounds = 3;                ///< worst-case rounds (models added: rounds - 1 at most)
+  int worst_case_samples = 24;   ///< random models (plus corners) searched per round
+  std::uint64_t seed = 1;
+  int grid_points = 120;  ///< frequency grid of the goal evaluations
+};
+
+/// Goal values of one gain set over a model set (worst model), each normalised.
+struct GoalValues {
+  double peak_sensitivity = 0.0;    ///< Ms (raw)
+  double spectral_radius = 0.0;     ///< worst of free motion and wall (raw)
+  double min_real_loop = 0.0;       ///< min Re L (raw)
+  double min_real_impedance = 0.0;  ///< min Re Z [N m s/rad] (raw)
+  double rms_user_torque_nm = 0.0;  ///< free-motion reference (raw)
+  double wall_error = 0.0;          ///< relative rendered-stiffness error (raw)
+  double hard = 0.0;                ///< max normalised hard goal (<= 1: met)
+  double soft = 0.0;                ///< max normalised soft goal (objective)
+  bool feasible() const noexcept { return hard <= 1.0; }
+};
+
+/// What tuneJoint() returns.
+struct TuningResult {
+  std::string joint;
+  JointGains initial;
+  JointGains tuned;  ///< the best feasible point found (the initial gains if none)
+  bool feasible = false;
+  std::string verdict;       ///< one sentence: feasible or why not
+  GoalValues initial_goals;  ///< over the final model set
+  GoalValues tuned_goals;
+  std::vector<ModelVariation> model_set;
+  /// Best feasible objective after each evaluation (NaN until the first feasible point).
+  std::vector<double> history;
+  int evaluations = 0;
+  std::vector<std::string> nlopt_results;  ///< result code of every NLopt run, in order
+};
+
+/// Builds the joint model of one variation.
+[[nodiscard]] PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,
+                                             const ModelVariation& v);
+
+/// Evaluates the goals of `gains` over `models` (worst case over the set).
+[[nodiscard]] GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const JointGains& gains,
+                                       const TuningGoals& goals);
+
+/// Tunes one joint. `nominal` carries the joint and its load (with the user's arm), `q_rad`
+/// the operating posture of the joint, `initial` the starting gains (B_o, filters and the
+/// non-tuned fields are kept). Deterministic for given inputs and options.
+/// @throws arm::ConfigError for invalid initial gains; std::invalid_argument for bad options.
+[[nodiscard]] TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const JointGains& initial,
+                                     const LoopSetup& setup, const TuningGoals& goals, const TuningBounds& bounds,
+                                     const UncertaintyRanges& ranges, const TunerOptions& options);
+
+}  // namespace fullarm::controllers
