@@ -200,6 +200,7 @@ nlohmann::json toJson(const Outcome& out) {
         {"monte_carlo",
          {{"samples", o.monte_carlo.runs.size()},
           {"failures", o.monte_carlo.failures},
+          {"wall_not_reached", o.monte_carlo.wall_not_reached},
           {"worst",
            {{"index", worst.sample.index},
             {"severity", worst.severity},
@@ -260,8 +261,10 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
       " N m/rad wall. Gains: " + out.gains_source.string() + ".");
   reports::Table t;
   t.caption = "Verdicts";
-  t.columns = {"Joint", "Verdict",  "Spectral radius (free)", "Spectral radius (wall)", "GM",          "PM [deg]",
-               "Ms",    "min Re L", "min Re Z [N m s/rad]",   "Gain limit (x)",         "MC failures", "Worst case"};
+  t.columns = {
+      "Joint",     "Verdict",  "Spectral radius (free)", "Spectral radius (wall)", "GM",          "PM [deg]",
+      "Ms",        "min Re L", "min Re Z [N m s/rad]",   "Gain limit (x)",         "MC failures", "Wall not reached",
+      "Worst case"};
   t.significant_digits = 4;
   for (const JointOutcome& o : out.joints) {
     const controllers::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
@@ -273,6 +276,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
                       std::min(o.linear.free.min_real_impedance, o.linear.contact.min_real_impedance),
                       o.linear.predicted_gain_limit,
                       std::to_string(o.monte_carlo.failures) + " / " + std::to_string(o.monte_carlo.runs.size()),
+                      std::to_string(o.monte_carlo.wall_not_reached),
                       "#" + std::to_string(worst.sample.index) + ": " + describeSample(worst.sample) +
                           (worst.result.stable ? " (stable)" : " -> " + worst.result.failure)});
   }
@@ -461,7 +465,9 @@ void printOutcome(const Outcome& out, std::ostream& os) {
        << (o.linear.pass ? "ok" : "fail") << " (rho free " << fixed(o.linear.free.spectral_radius, 5) << ", wall "
        << fixed(o.linear.contact.spectral_radius, 5) << ", Ms " << fixed(o.linear.free.margins.peak_sensitivity, 3)
        << ", gain limit x" << fixed(o.linear.predicted_gain_limit, 3) << ")  Monte-Carlo " << o.monte_carlo.failures
-       << "/" << o.monte_carlo.runs.size() << " failed\n";
+       << "/" << o.monte_carlo.runs.size() << " failed";
+    if (o.monte_carlo.wall_not_reached > 0) os << " (wall not reached in " << o.monte_carlo.wall_not_reached << ")";
+    os << "\n";
     if (!o.pass) os << "        " << o.verdict << "\n";
     if (o.has_claim) {
       os << "        paper claim: onset valve peak adm " << fixed(o.claim.admittance.onset_peak_valve_v, 3)

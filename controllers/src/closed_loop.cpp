@@ -299,6 +299,8 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
   r.contact_hold_speed_rms_radps = contact_v.late;
   r.contact_penetration_rad = contact_pen.mean();
   r.contact_wall_torque_nm = contact_env.mean();
+  r.contact_user_torque_nm = contact_user.mean();
+  r.wall_reached = r.contact_wall_torque_nm > 0.0 && r.contact_wall_torque_nm >= 0.5 * r.contact_user_torque_nm;
   r.contact_rendered_stiffness_nm_per_rad = contact_pen.mean() > 0.0 ? contact_user.mean() / contact_pen.mean() : 0.0;
   r.min_po_energy_j = min_energy;
   r.po_dissipated_j = cd.po_dissipated_j;

@@ -31,7 +31,10 @@ double largestStableWall(JointScenario scenario, double k_min, double k_max, int
     scenario.wall.enabled = true;
     scenario.wall.stiffness_nm_per_rad = k;
     if (simulations != nullptr) ++*simulations;
-    return simulateJoint(scenario).stable;
+    const ClosedLoopResult r = simulateJoint(scenario);
+    // Rendered: stable, and the wall carries the user's push (an arm that never reaches the
+    // wall renders nothing, however stiff).
+    return r.stable && r.wall_reached;
   };
   if (!stableAt(k_min)) return 0.0;
   if (stableAt(k_max)) return k_max;

@@ -255,6 +255,7 @@ std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nom
     for (int i = 0; i < static_cast<int>(m.runs.size()); ++i) {
       const MonteCarloRun& run = m.runs[static_cast<std::size_t>(i)];
       if (!run.result.stable) ++m.failures;
+      if (run.result.stable && !run.result.wall_reached) ++m.wall_not_reached;
       if (m.worst < 0 || run.severity > m.runs[static_cast<std::size_t>(m.worst)].severity) m.worst = i;
     }
   }

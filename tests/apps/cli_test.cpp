@@ -214,8 +214,9 @@ TEST(Cli, PlantSimulateRejectsAMalformedCsv) {
 
 TEST(Cli, DemoRunsAndSaysWhatIsNotBuiltYet) {
   const auto dir = tempDir("demo");
-  const Result r = runFullarm("demo --out " + dir.string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // The validate step's Monte-Carlo is kept small here; its verdict decides the exit code.
+  const Result r = runFullarm("demo --validate-samples 2 --out " + dir.string());
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
   EXPECT_NE(r.output.find("not built yet"), std::string::npos) << r.output;
   std::ifstream in(dir / "summary.json");
   const nlohmann::json summary = nlohmann::json::parse(in);
@@ -224,6 +225,43 @@ TEST(Cli, DemoRunsAndSaysWhatIsNotBuiltYet) {
   EXPECT_EQ(summary["results"]["steps"][0]["status"], "done");
   EXPECT_EQ(summary["results"]["steps"][1]["status"], "done");  // plant chirp experiment
   EXPECT_EQ(summary["results"]["steps"][2]["status"], "not built yet");
+  EXPECT_EQ(summary["verdict"]["pass"].get<bool>(), r.exit_code == 0);
+  EXPECT_EQ(summary["results"]["steps"][4]["status"], summary["results"]["validate"]["pass"].get<bool>() ? "done" : "failed");
+}
+
+// `fullarm validate`: the verdict is the exit code (0 pass, 1 fail) and summary.json names each
+// joint's result; bad input is exit 2 with the file and key path.
+TEST(Cli, ValidateWritesAVerdictPerJoint) {
+  const auto dir = tempDir("validate");
+  const Result r = runFullarm("validate --joints EB --samples 3 --out " + dir.string());
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+  std::ifstream in(dir / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary["subcommand"], "validate");
+  const nlohmann::json& v = summary["results"]["validate"];
+  ASSERT_EQ(v["joints"].size(), 1u);
+  EXPECT_EQ(v["joints"][0]["name"], "R_EB");
+  EXPECT_EQ(v["joints"][0]["monte_carlo"]["samples"], 3);
+  EXPECT_EQ(v["pass"].get<bool>(), r.exit_code == 0);
+  EXPECT_TRUE(std::filesystem::exists(dir / "report.html"));
+}
+
+TEST(Cli, ValidateRejectsBadGains) {
+  const auto dir = tempDir("validate_bad");
+  std::ifstream in(source("config/dts_gains.yaml"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  yaml.replace(yaml.find("inertia_kgm2: 0.2"), std::string("inertia_kgm2: 0.2").size(), "inertia_kgm2: -0.2");
+  const auto gains = dir / "gains.yaml";
+  std::ofstream(gains) << yaml;
+  Result r = runFullarm("validate --gains " + gains.string() + " --samples 1 --out " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("impedance.inertia_kgm2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(gains.string()), std::string::npos) << r.output;
+  r = runFullarm("validate --joints ELBOW --samples 1 --out " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("ELBOW"), std::string::npos) << r.output;
 }
 
 }  // namespace

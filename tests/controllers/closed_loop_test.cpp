@@ -18,7 +18,7 @@ namespace fullarm::controllers {
 namespace {
 
 JointScenario scenario(std::string_view joint, ControllerKind kind) {
-  JointScenario sc = makeJointScenario(test::dtsModel(), test::dtsPlant(), test::dtsGains(), joint);
+  JointScenario sc = makeJointScenario(test::dtsModel(), test::dtsPlant(), test::referenceGains(), joint);
   sc.kind = kind;
   return sc;
 }
@@ -156,8 +156,8 @@ TEST(MonteCarlo, ResultsDoNotDependOnTheThreadCount) {
   ValidationConfig config = loadValidationConfig(defaultValidationConfigPath());
   config.samples = 4;
   const std::vector<JointScenario> nominal = {
-      makeJointScenario(test::dtsModel(), test::dtsPlant(), test::dtsGains(), "WFE"),
-      makeJointScenario(test::dtsModel(), test::dtsPlant(), test::dtsGains(), "EB")};
+      makeJointScenario(test::dtsModel(), test::dtsPlant(), test::referenceGains(), "WFE"),
+      makeJointScenario(test::dtsModel(), test::dtsPlant(), test::referenceGains(), "EB")};
   const std::vector<JointMonteCarlo> one = runMonteCarlo(nominal, config, 1);
   const std::vector<JointMonteCarlo> two = runMonteCarlo(nominal, config, 2);
   ASSERT_EQ(one.size(), 2u);

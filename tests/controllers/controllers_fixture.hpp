@@ -23,4 +23,29 @@ inline const GainsConfig& dtsGains() {
   return config;
 }
 
+/// The default gains file with fixed, hand-sized gains of the development runs (J_m by link
+/// size, B_m small, B_o/eps = 5/24 V s/rad, lambda = 300/s, K_m = 20): the closed-loop tests
+/// check the harness and the analysis on known loops, independent of later retuning of
+/// config/dts_gains.yaml.
+inline const GainsConfig& referenceGains() {
+  static const GainsConfig config = [] {
+    GainsConfig g = dtsGains();
+    for (JointGains& j : g.joints) {
+      const bool shoulder = j.name == "R_SFE" || j.name == "R_SAA";
+      const bool upper = j.name == "R_HR" || j.name == "R_EB";
+      j.impedance.inertia_kgm2 = shoulder ? 0.5 : (upper ? 0.2 : 0.1);
+      j.impedance.damping_nms_per_rad = shoulder ? 4.0 : (upper ? 2.0 : 1.0);
+      j.impedance.stiffness_nm_per_rad = 20.0;
+      j.sliding_mode = {300.0, 5.0, 24.0};
+      j.torque_pid = {0.1, 5.0, 0.0, 2.0};
+      j.passivity.enabled = false;
+      j.torque_filter_hz = 0.0;
+      j.error_rate_filter_hz = 0.0;
+      j.valve_limit_v = 10.0;
+    }
+    return g;
+  }();
+  return config;
+}
+
 }  // namespace fullarm::controllers::test

@@ -60,7 +60,7 @@ TEST(GainsConfig, NegativeInertiaIsAClearError) {
 TEST(GainsConfig, NonPositiveEpsilonIsAClearError) {
   for (const char* eps : {"0.0", "-0.5"}) {
     expectConfigError(
-        replaced(defaultText(), "boundary_layer_radps: 24.0", std::string("boundary_layer_radps: ") + eps, "R_WR"),
+        replaced(defaultText(), "boundary_layer_radps: 48.0", std::string("boundary_layer_radps: ") + eps, "R_WR"),
         "joints[4].sliding_mode.boundary_layer_radps", "eps > 0");
   }
 }

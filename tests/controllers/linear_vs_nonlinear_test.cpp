@@ -26,7 +26,7 @@ class PredictedLimit : public ::testing::TestWithParam<Case> {};
 
 TEST_P(PredictedLimit, StableAt80PercentOscillatesAt120Percent) {
   const Case c = GetParam();
-  JointScenario sc = makeJointScenario(test::dtsModel(), test::dtsPlant(), test::dtsGains(), c.joint);
+  JointScenario sc = makeJointScenario(test::dtsModel(), test::dtsPlant(), test::referenceGains(), c.joint);
   sc.kind = c.kind;
   sc.delay_samples = c.delay_samples;
   const ScenarioLinearResult lin = analyzeScenario(sc, LinearRequirements{}, c.delay_samples, {});

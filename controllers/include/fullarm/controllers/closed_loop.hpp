@@ -124,6 +124,10 @@ struct ClosedLoopResult {
   double contact_penetration_rad = 0.0;                ///< mean penetration
   double contact_wall_torque_nm = 0.0;                 ///< mean |tau_env|
   double contact_wall_torque_deviation_nm = 0.0;       ///< std of tau_env over the last contact window
+  double contact_user_torque_nm = 0.0;                 ///< mean |tau_user| over the last contact window
+  /// The wall carried at least half of the user's push over the last contact window (contact was
+  /// really tested; a sluggish controller may never reach the wall).
+  bool wall_reached = false;
   double contact_rendered_stiffness_nm_per_rad = 0.0;  ///< mean |tau_user| / mean penetration
   double min_po_energy_j = 0.0;                        ///< lowest passivity-observer energy
   double po_dissipated_j = 0.0;

@@ -55,9 +55,11 @@ struct PaperClaimOptions {
   double wall_max_nm_per_rad = 1.0e5;
 };
 
-/// Largest wall stiffness K_w in [k_min, k_max] for which simulateJoint() is stable (wall
-/// damping as in `scenario`), by bisection in log K_w (`steps` halvings). Returns k_max if
-/// stable there, 0 if unstable at k_min. `simulations` (optional) counts the runs.
+/// Largest wall stiffness K_w in [k_min, k_max] that the controller renders: simulateJoint() is
+/// stable and, over the last contact window, the wall carries at least half of the user's push
+/// (an arm that never reaches the wall renders nothing, however stiff). Wall damping as in
+/// `scenario`; bisection in log K_w (`steps` halvings). Returns k_max if rendered there, 0 if not
+/// at k_min. `simulations` (optional) counts the runs.
 [[nodiscard]] double largestStableWall(JointScenario scenario, double k_min, double k_max, int steps,
                                        int* simulations = nullptr);
 

@@ -94,7 +94,8 @@ struct JointMonteCarlo {
   std::string joint_name;
   std::vector<MonteCarloRun> runs;
   int failures = 0;
-  int worst = -1;  ///< index in runs of the largest severity
+  int wall_not_reached = 0;  ///< stable runs in which the wall never carried the user's push
+  int worst = -1;            ///< index in runs of the largest severity
   [[nodiscard]] bool pass() const noexcept { return failures == 0 && !runs.empty(); }
 };
 
