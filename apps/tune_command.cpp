@@ -214,7 +214,7 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
   section.addLineChart(std::move(convergence));
 
   reports::XyChart impedance;
-  impedance.title = "Rendered impedance in free motion |Z(f)|, nominal model: start (dashed name) vs tuned";
+  impedance.title = "Rendered impedance in free motion |Z(f)|, nominal model: starting vs tuned gains";
   impedance.x_axis = {"Frequency", "Hz", true};
   impedance.y_axis = {"|Z|", "N·m·s/rad", true};
   const Eigen::VectorXd f = controllers::logspace(0.1, 200.0, kImpedancePoints);
