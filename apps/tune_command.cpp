@@ -306,7 +306,11 @@ TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::
   const GainsConfig gains = controllers::loadGainsConfig(controllers::defaultGainsConfigPath(), model);
   const controllers::ValidationConfig validation =
       controllers::loadValidationConfig(controllers::defaultValidationConfigPath());
+  // A smaller budget than `fullarm tune` keeps the demo short (about a third of the evaluations).
   TuneOptions o;
+  o.global_evaluations = 150;
+  o.local_evaluations = 75;
+  o.rounds = 2;
   const TuneRun run = tuneArm(model, plant_config, gains, validation, {}, o);
   TuneDemoStep step;
   step.gains_file = out_dir / "tuned_gains.yaml";
