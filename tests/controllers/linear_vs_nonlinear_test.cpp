@@ -42,6 +42,15 @@ TEST_P(PredictedLimit, StableAt80PercentOscillatesAt120Percent) {
   EXPECT_TRUE(above.oscillating);
 }
 
+// The linear prediction is conservative on a wrist joint: stable at 80 %.
+TEST(PredictedLimitWrist, StableAt80Percent) {
+  const JointScenario sc = makeJointScenario(test::dtsModel(), test::dtsPlant(), test::referenceGains(), "WFE");
+  const ScenarioLinearResult lin = analyzeScenario(sc, LinearRequirements{}, 1, {});
+  ASSERT_GT(lin.predicted_gain_limit, 0.0);
+  const ClosedLoopResult below = simulateJoint(scaleControllerGain(sc, 0.8 * lin.predicted_gain_limit));
+  EXPECT_TRUE(below.stable) << below.failure;
+}
+
 INSTANTIATE_TEST_SUITE_P(DtsJoints, PredictedLimit,
                          ::testing::Values(Case{"EB", ControllerKind::kAdmittance, 1},
                                            Case{"EB", ControllerKind::kTorquePid, 1},
