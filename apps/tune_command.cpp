@@ -214,7 +214,7 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
   section.addLineChart(std::move(convergence));
 
   reports::XyChart impedance;
-  impedance.title = "Rendered impedance in free motion |Z(f)|, nominal model: start (dashed name) vs tuned";
+  impedance.title = "Rendered impedance in free motion |Z(f)|, nominal model: starting vs tuned gains";
   impedance.x_axis = {"Frequency", "Hz", true};
   impedance.y_axis = {"|Z|", "N·m·s/rad", true};
   const Eigen::VectorXd f = controllers::logspace(0.1, 200.0, kImpedancePoints);
@@ -306,7 +306,11 @@ TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::
   const GainsConfig gains = controllers::loadGainsConfig(controllers::defaultGainsConfigPath(), model);
   const controllers::ValidationConfig validation =
       controllers::loadValidationConfig(controllers::defaultValidationConfigPath());
+  // A smaller budget than `fullarm tune` keeps the demo short (about a third of the evaluations).
   TuneOptions o;
+  o.global_evaluations = 150;
+  o.local_evaluations = 75;
+  o.rounds = 2;
   const TuneRun run = tuneArm(model, plant_config, gains, validation, {}, o);
   TuneDemoStep step;
   step.gains_file = out_dir / "tuned_gains.yaml";

@@ -42,7 +42,8 @@ struct TuneDemoStep {
   std::filesystem::path gains_file;  ///< the tuned gains, for the validate step
 };
 
-/// The demo step: tunes all 7 joints on the default plant, writes `tuned_gains.yaml` into
+/// The demo step: tunes all 7 joints on the default plant with a third of `fullarm tune`'s
+/// budget (150 + 75 evaluations, 2 rounds), writes `tuned_gains.yaml` into
 /// `out_dir` and adds its section and the `results.tune` keys to `report`.
 TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir, reports::Report& report);
 

@@ -392,14 +392,15 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const Joint
   const Vector best = result.feasible ? search.best_feasible_x : search.best_any_x;
   result.tuned = result.feasible ? gainsAt(initial, best) : initial;
   result.initial_goals = evaluateGoals(models, initial, goals);
-  result.tuned_goals = evaluateGoals(models, result.feasible ? result.tuned : gainsAt(initial, best), goals);
+  // The goals of the returned gains (the starting gains when nothing was feasible).
+  result.tuned_goals = evaluateGoals(models, result.tuned, goals);
   std::ostringstream v;
   if (result.feasible) {
     v << initial.name << ": every hard goal met on " << models.size() << " model(s); worst soft goal "
       << result.tuned_goals.soft << " (initial gains: " << result.initial_goals.soft
       << (result.initial_goals.feasible() ? ", feasible" : ", infeasible") << ")";
   } else {
-    const auto [value, name] = worstHard(result.tuned_goals, goals);
+    const auto [value, name] = worstHard(evaluateGoals(models, gainsAt(initial, best), goals), goals);
     v << initial.name << ": infeasible - no gains in the search box meet the hard goals; the least violating point "
       << "still fails the " << name << " goal (normalised " << value << " > 1)";
   }

@@ -92,7 +92,7 @@ struct TuningResult {
   bool feasible = false;
   std::string verdict;       ///< one sentence: feasible or why not
   GoalValues initial_goals;  ///< over the final model set
-  GoalValues tuned_goals;
+  GoalValues tuned_goals;    ///< of `tuned` (so of the starting gains when infeasible)
   std::vector<ModelVariation> model_set;
   /// Best feasible objective after each evaluation (NaN until the first feasible point).
   std::vector<double> history;
