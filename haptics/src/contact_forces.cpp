@@ -91,6 +91,9 @@ ContactData::ContactData(const arm::ArmModel& model, int max_minima)
       p_W(static_cast<std::size_t>(max_minima), Vector3d::Zero()),
       stiffness_npm(static_cast<std::size_t>(max_minima), 0.0),
       rendered(static_cast<std::size_t>(max_minima), 0),
+      magnitude_n(static_cast<std::size_t>(max_minima), 0.0),
+      patch_root(static_cast<std::size_t>(max_minima), 0),
+      patch_weight(static_cast<std::size_t>(max_minima), 0.0),
       tau_contact(Eigen::VectorXd::Zero(model.numJoints())),
       tau_gravity(Eigen::VectorXd::Zero(model.numJoints())),
       tau_total(Eigen::VectorXd::Zero(model.numJoints())),
@@ -135,29 +138,57 @@ void computeContactForces(const HapticsParams& params, const arm::ArmModel& mode
     rec.min_distance_m = std::min(rec.min_distance_m, mi.distance_m);
     if (mi.distance_m >= df) continue;
     if (params.mode == RenderMode::kHandOnly && !isHandLink(model, mi.link)) continue;
-    // Optional stiffness normalisation: k divided by the active minima on this patch.
-    double k = params.stiffness_npm;
-    if (params.normalise_per_patch) {
-      int count = 0;
-      const double r2 = params.patch_radius_m * params.patch_radius_m;
-      for (std::size_t j = 0; j < m; ++j) {
-        const LocalMinimum& mj = minima[j];
-        if (mj.link == mi.link && mj.object == mi.object && mj.distance_m < df &&
-            (mj.p_L - mi.p_L).squaredNorm() <= r2) {
-          ++count;
-        }
-      }
-      k /= std::max(count, 1);
-    }
     // Spring law: |f| = k (d_f - d) - b d_dot, pushing the link away from the object.
-    double magnitude = k * (df - mi.distance_m);
+    double magnitude = params.stiffness_npm * (df - mi.distance_m);
     if (params.damping_nspm > 0.0 && std::isfinite(mi.previous_distance_m)) {
       magnitude -= params.damping_nspm * (mi.distance_m - mi.previous_distance_m) / dt_s;
     }
-    magnitude = std::clamp(magnitude, 0.0, params.max_force_per_minimum_n);
-    data.f_W[i] = -magnitude * mi.u_W;
-    data.stiffness_npm[i] = k;
+    data.magnitude_n[i] = magnitude;
+    data.stiffness_npm[i] = params.stiffness_npm;
     data.rendered[i] = 1;
+  }
+  // Optional per-patch normalisation: minima of one link/object pair whose link points are
+  // chained within patch_radius_m form a patch; each spring is scaled by its share
+  // (d_f - d_i) / sum_patch (d_f - d_j), so a patch renders like one spring whatever the number
+  // of minima on it, and a minimum entering or leaving at d_f (weight 0) changes nothing.
+  if (params.normalise_per_patch) {
+    auto root = [&data](int i) {
+      while (data.patch_root[static_cast<std::size_t>(i)] != i) i = data.patch_root[static_cast<std::size_t>(i)];
+      return i;
+    };
+    for (std::size_t i = 0; i < m; ++i) {
+      data.patch_root[i] = static_cast<int>(i);
+      data.patch_weight[i] = 0.0;
+    }
+    const double r2 = params.patch_radius_m * params.patch_radius_m;
+    for (std::size_t i = 0; i < m; ++i) {
+      if (data.rendered[i] == 0) continue;
+      for (std::size_t j = 0; j < i; ++j) {
+        if (data.rendered[j] == 0 || minima[j].link != minima[i].link || minima[j].object != minima[i].object ||
+            (minima[j].p_L - minima[i].p_L).squaredNorm() > r2) {
+          continue;
+        }
+        const int a = root(static_cast<int>(i));
+        const int b = root(static_cast<int>(j));
+        if (a != b) data.patch_root[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+      }
+    }
+    for (std::size_t i = 0; i < m; ++i) {
+      if (data.rendered[i] != 0)
+        data.patch_weight[static_cast<std::size_t>(root(static_cast<int>(i)))] += df - minima[i].distance_m;
+    }
+    for (std::size_t i = 0; i < m; ++i) {
+      if (data.rendered[i] == 0) continue;
+      const double total = data.patch_weight[static_cast<std::size_t>(root(static_cast<int>(i)))];
+      const double share = total > 0.0 ? (df - minima[i].distance_m) / total : 1.0;
+      data.magnitude_n[i] *= share;
+      data.stiffness_npm[i] *= share;
+    }
+  }
+  for (std::size_t i = 0; i < m; ++i) {
+    if (data.rendered[i] == 0) continue;
+    const double magnitude = std::clamp(data.magnitude_n[i], 0.0, params.max_force_per_minimum_n);
+    data.f_W[i] = -magnitude * minima[i].u_W;
     ++data.active_springs;
   }
   // Contact records: in contact = inside the force layer; penetrating = touching/intersecting.

@@ -129,6 +129,17 @@ TEST_F(ContactForcesTest, DampingSaturationAndPatchNormalisation) {
   patch[2].p_L.y() += 0.01;
   computeContactForces(params_, model_, fk_, patch, 1e-3, data_);
   EXPECT_NEAR((data_.f_W[0] + data_.f_W[1] + data_.f_W[2]).norm(), params_.stiffness_npm * 0.005, 1e-9);
+  // Weighted by depth: springs at 2 mm and 6 mm share as 8:4, total k (8^2 + 4^2)/12 mm.
+  patch[1].distance_m = 0.002;
+  patch[2].distance_m = 0.006;
+  patch[0].distance_m = 0.0099999999;  // entering at d_f: weight ~0, changes nothing
+  computeContactForces(params_, model_, fk_, patch, 1e-3, data_);
+  EXPECT_NEAR((data_.f_W[0] + data_.f_W[1] + data_.f_W[2]).norm(),
+              params_.stiffness_npm * (0.008 * 0.008 + 0.004 * 0.004) / 0.012, 1e-6);
+  // A minimum on another object, or far along the link, is its own patch.
+  patch[2].object = 1;
+  computeContactForces(params_, model_, fk_, patch, 1e-3, data_);
+  EXPECT_NEAR(data_.f_W[2].norm(), params_.stiffness_npm * 0.004, 1e-9);
 }
 
 TEST_F(ContactForcesTest, HandOnlyRendersHandAndRecordsTheRest) {

@@ -24,13 +24,15 @@ enum class RenderMode { kFullArm, kHandOnly };
 /// Haptic rendering parameters. Load with loadHapticsParams(); validated (see
 /// validateHapticsParams).
 struct HapticsParams {
-  double stiffness_npm = 2000.0;           ///< spring constant k per minimum [N/m]
-  double damping_nspm = 0.0;               ///< damping on the approach rate [N s/m] (0: none)
-  double force_threshold_m = 0.01;         ///< d_f: springs act for d < d_f [m]
-  double cutoff_m = 0.03;                  ///< L: global search cutoff, > d_f [m]
-  double prune_radius_m = 0.02;            ///< r: endpoint pruning radius [m]
-  bool normalise_per_patch = false;        ///< divide k by the number of active minima on a patch
-  double patch_radius_m = 0.03;            ///< minima whose link points are this close share a patch [m]
+  double stiffness_npm = 2000.0;    ///< spring constant k per minimum [N/m]
+  double damping_nspm = 0.0;        ///< damping on the approach rate [N s/m] (0: none)
+  double force_threshold_m = 0.01;  ///< d_f: springs act for d < d_f [m]
+  double cutoff_m = 0.03;           ///< L: global search cutoff, > d_f [m]
+  double prune_radius_m = 0.02;     ///< r: endpoint pruning radius [m]
+  /// Scale each spring by its share (d_f - d_i) / sum (d_f - d_j) of its patch, so a patch
+  /// renders like one spring whatever its number of minima (see computeContactForces).
+  bool normalise_per_patch = false;
+  double patch_radius_m = 0.05;            ///< minima whose link points are this close share a patch [m]
   double max_force_per_minimum_n = 200.0;  ///< saturation of each spring [N]
   RenderMode mode = RenderMode::kFullArm;
   LocalDescentParams descent;
@@ -68,6 +70,9 @@ struct ContactData {
   std::vector<Eigen::Vector3d> p_W;      ///< contact point on the link, world [m]
   std::vector<double> stiffness_npm;     ///< stiffness used per minimum (after normalisation)
   std::vector<std::uint8_t> rendered;    ///< 1 if the minimum made a force
+  std::vector<double> magnitude_n;       ///< scratch: spring magnitude before saturation [N]
+  std::vector<int> patch_root;           ///< scratch: patch (union-find) of each minimum
+  std::vector<double> patch_weight;      ///< scratch: sum of (d_f - d) per patch root [m]
   Eigen::VectorXd tau_contact;           ///< sum of the tailored-Jacobian torques [N m], size n
   Eigen::VectorXd tau_gravity;           ///< arm gravity torques g(q) [N m]
   Eigen::VectorXd tau_total;             ///< tau_contact + tau_gravity [N m]
