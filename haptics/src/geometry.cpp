@@ -206,6 +206,7 @@ TriangleTriangleResult closestPointsTriangleTriangle(const Vector3d& a0, const V
   }
 
   // Disjoint: vertex-face candidates, then edge-edge candidates.
+  bool best_is_vertex_of_a = true;
   for (int k = 0; k < 3; ++k) {
     const PointTriangleResult r = closestPointTriangle(*A[k], b0, b1, b2);
     if (r.distance_m < best.distance_m) {
@@ -219,12 +220,22 @@ TriangleTriangleResult closestPointsTriangleTriangle(const Vector3d& a0, const V
   for (int k = 0; k < 3; ++k) {
     const PointTriangleResult r = closestPointTriangle(*B[k], a0, a1, a2);
     if (r.distance_m < best.distance_m) {
+      best_is_vertex_of_a = false;
       best.p = r.point;
       best.q = *B[k];
       best.distance_m = r.distance_m;
       best.feature_a = r.feature;
       best.feature_b = {Kind::kVertex, static_cast<std::uint8_t>(k)};
     }
+  }
+  // Early exit: the distance is convex over the pair of triangles, so the best vertex
+  // candidate is the minimum when each of its points is also the other triangle's closest
+  // point to the other (one side holds by construction; test the other exactly).
+  if (best.distance_m > 0.0) {
+    const double d2 = best.distance_m * best.distance_m;
+    const double other = best_is_vertex_of_a ? squaredDistancePointTriangle(best.q, a0, a1, a2)
+                                             : squaredDistancePointTriangle(best.p, b0, b1, b2);
+    if (other >= d2) return best;
   }
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
