@@ -90,13 +90,22 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
                              const LocalDescentParams& params, LocalDescentStats* stats) noexcept {
   LocalDescentStats st;
   int kept = 0;
+  int pose_link = -1;
+  int pose_object = -1;
+  Isometry3d X_OL = Isometry3d::Identity();
+  Isometry3d X_LO = Isometry3d::Identity();
   for (std::size_t i = 0; i < minima.size(); ++i) {
     LocalMinimum m = minima[i];
     const TriMesh& lmesh = world.linkMesh(m.link);
     const CollisionObject& obj = world.object(m.object);
     const TriMesh& omesh = obj.mesh;
-    const Isometry3d X_OL = obj.X_WO.inverse() * fk.X_WL[static_cast<std::size_t>(m.link)];
-    const Isometry3d X_LO = X_OL.inverse();
+    // Minima come grouped by link/object pair: the relative pose is computed once per pair.
+    if (m.link != pose_link || m.object != pose_object) {
+      X_OL = obj.X_WO.inverse() * fk.X_WL[static_cast<std::size_t>(m.link)];
+      X_LO = X_OL.inverse();
+      pose_link = m.link;
+      pose_object = m.object;
+    }
     int tl = m.tri_link;
     int to = m.tri_object;
     TriangleTriangleResult r = warmClosestPoints(lmesh, tl, omesh, to, X_OL, m);
