@@ -21,7 +21,7 @@ TEST(CollisionWorldTest, GlobalSearchEqualsBruteForceOverAllLinkObjectPairs) {
   arm::ArmData fk(model);
   std::mt19937 rng(77);
   int total = 0;
-  for (int trial = 0; trial < 6; ++trial) {
+  for (int trial = 0; trial < 4; ++trial) {
     arm::computeForwardKinematics(model, fk, arm::test::randomConfiguration(model, rng));
     // Objects around the forearm and the hand, within a few centimetres.
     CollisionWorld w = world;
