@@ -36,4 +36,13 @@ void pruneMinima(std::vector<LocalMinimum>& candidates, double radius_m, std::sp
   candidates = std::move(accepted);
 }
 
+int adoptGlobalMinima(std::vector<LocalMinimum>& tracked, std::vector<LocalMinimum> fresh, double radius_m) {
+  std::erase_if(fresh, [&tracked](const LocalMinimum& f) {
+    return std::any_of(tracked.begin(), tracked.end(), [&f](const LocalMinimum& t) { return sameFeaturePair(f, t); });
+  });
+  pruneMinima(fresh, radius_m, tracked);
+  tracked.insert(tracked.end(), fresh.begin(), fresh.end());
+  return static_cast<int>(fresh.size());
+}
+
 }  // namespace fullarm::haptics

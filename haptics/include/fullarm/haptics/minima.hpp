@@ -51,4 +51,10 @@ struct LocalMinimum {
 /// @param baseline minima already accepted (for example the tracked set); not modified
 void pruneMinima(std::vector<LocalMinimum>& candidates, double radius_m, std::span<const LocalMinimum> baseline = {});
 
+/// Hands a fresh global-search result to the tracked set (DTS paper section 3.2.1): fresh
+/// minima with the same feature pair as a tracked one, or whose endpoints both fall within
+/// `radius_m` of a tracked one's, are discarded; the rest are appended to `tracked` (and
+/// become part of the baseline). Returns the number appended. Not @rt (may grow `tracked`).
+int adoptGlobalMinima(std::vector<LocalMinimum>& tracked, std::vector<LocalMinimum> fresh, double radius_m);
+
 }  // namespace fullarm::haptics

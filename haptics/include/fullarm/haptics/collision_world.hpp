@@ -1,0 +1,114 @@
+#pragma once
+/// @file
+/// CollisionWorld: the arm's link meshes and the environment objects, each with its SNCH, and
+/// the scene-level global search (every link with a mesh x every object, then pruning).
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "fullarm/arm/arm_data.hpp"
+#include "fullarm/arm/arm_model.hpp"
+#include "fullarm/haptics/minima.hpp"
+#include "fullarm/haptics/snch.hpp"
+#include "fullarm/haptics/tri_mesh.hpp"
+
+namespace fullarm::haptics {
+
+/// One environment object: a mesh in its own frame O and its pose in the world.
+struct CollisionObject {
+  std::string name;
+  TriMesh mesh;
+  SnchTree tree;
+  Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+};
+
+/// Link meshes and object meshes with their hierarchies. Link meshes are expressed in their
+/// link frame (so X_WL from forward kinematics places them); object meshes in their object
+/// frame. Not thread-safe for mutation; const queries may run concurrently with separate
+/// scratch.
+class CollisionWorld {
+ public:
+  struct Options {
+    int capsule_segments = 16;  ///< around the axis of each link capsule
+    int capsule_rings = 4;      ///< per hemisphere
+  };
+
+  /// Builds a mesh for every link whose geometry is a capsule (other links have none until
+  /// setLinkMesh). Keeps a copy of the model.
+  explicit CollisionWorld(const arm::ArmModel& model);
+  CollisionWorld(const arm::ArmModel& model, const Options& options);
+
+  /// Replaces the mesh of `link` (for example an imported hand mesh). `X_LM` is the mesh
+  /// frame in the link frame; it is baked into the vertices.
+  /// @throws MeshError for a bad link index
+  void setLinkMesh(int link, const TriMesh& mesh, const Eigen::Isometry3d& X_LM = Eigen::Isometry3d::Identity());
+  /// Adds an object; returns its index.
+  int addObject(std::string name, TriMesh mesh, const Eigen::Isometry3d& X_WO);
+  void setObjectPose(int object, const Eigen::Isometry3d& X_WO);
+
+  [[nodiscard]] const arm::ArmModel& model() const noexcept { return model_; }
+  [[nodiscard]] int numLinks() const noexcept { return static_cast<int>(links_.size()); }
+  [[nodiscard]] bool hasLinkMesh(int link) const noexcept { return links_[static_cast<std::size_t>(link)] != nullptr; }
+  /// Precondition: hasLinkMesh(link).
+  [[nodiscard]] const TriMesh& linkMesh(int link) const noexcept {
+    return links_[static_cast<std::size_t>(link)]->mesh;
+  }
+  [[nodiscard]] const SnchTree& linkTree(int link) const noexcept {
+    return links_[static_cast<std::size_t>(link)]->tree;
+  }
+  [[nodiscard]] int numObjects() const noexcept { return static_cast<int>(objects_.size()); }
+  [[nodiscard]] const CollisionObject& object(int i) const noexcept { return objects_[static_cast<std::size_t>(i)]; }
+  /// Index of the object called `name`, or -1.
+  [[nodiscard]] int objectIndex(std::string_view name) const noexcept;
+
+ private:
+  struct LinkMesh {
+    TriMesh mesh;
+    SnchTree tree;
+  };
+  arm::ArmModel model_;
+  std::vector<std::shared_ptr<const LinkMesh>> links_;
+  std::vector<CollisionObject> objects_;
+};
+
+/// A global search strategy: every local minimum within the cutoff between every link mesh and
+/// every object at the configuration of `fk`, pruned with the endpoint radius. Implementations
+/// are selectable at run time (SNCH here; a Bullet-based one in bullet_search.hpp).
+class GlobalSearch {
+ public:
+  virtual ~GlobalSearch() = default;
+  GlobalSearch() = default;
+  GlobalSearch(const GlobalSearch&) = delete;
+  GlobalSearch& operator=(const GlobalSearch&) = delete;
+  /// @param fk forward kinematics of the configuration (link frames X_WL)
+  /// @param cutoff_m cutoff length L [m]
+  /// @param prune_radius_m endpoint pruning radius r [m] (0: no pruning)
+  /// @param out replaced by the minima, sorted by (link, object, distance)
+  virtual void search(const CollisionWorld& world, const arm::ArmData& fk, double cutoff_m, double prune_radius_m,
+                      std::vector<LocalMinimum>& out) = 0;
+  [[nodiscard]] virtual std::string_view name() const noexcept = 0;
+};
+
+/// The SNCH global search (querySnchPair on every link x object pair, then pruneMinima).
+class SnchGlobalSearch final : public GlobalSearch {
+ public:
+  void search(const CollisionWorld& world, const arm::ArmData& fk, double cutoff_m, double prune_radius_m,
+              std::vector<LocalMinimum>& out) override;
+  [[nodiscard]] std::string_view name() const noexcept override { return "snch"; }
+  /// Counters summed over the pairs of the last search.
+  [[nodiscard]] const SnchQueryStats& lastStats() const noexcept { return stats_; }
+
+ private:
+  SnchQueryScratch scratch_;
+  SnchQueryStats stats_;
+};
+
+/// Convenience: SnchGlobalSearch on a temporary scratch.
+void globalSearch(const CollisionWorld& world, const arm::ArmData& fk, double cutoff_m, double prune_radius_m,
+                  std::vector<LocalMinimum>& out);
+
+}  // namespace fullarm::haptics

@@ -1,0 +1,69 @@
+#pragma once
+/// @file
+/// Exact closest points between triangles, segments and points, with the closest feature of
+/// each triangle. All functions are real-time safe (@rt): no allocation, bounded time.
+
+#include <Eigen/Core>
+#include <cstdint>
+
+namespace fullarm::haptics {
+
+/// Closest feature of one triangle (a, b, c) in local numbering: vertex k (0..2), edge k
+/// joining vertex k and vertex (k+1)%3, or the face interior.
+struct LocalFeature {
+  enum class Kind : std::uint8_t { kVertex, kEdge, kFace };
+  Kind kind = Kind::kFace;
+  std::uint8_t index = 0;  ///< vertex or edge number 0..2 (0 for the face)
+};
+
+/// Closest point of a triangle to a point.
+struct PointTriangleResult {
+  Eigen::Vector3d point;  ///< closest point on the triangle [m]
+  LocalFeature feature;   ///< feature whose relative interior holds the point
+  double distance_m = 0.0;
+};
+
+/// Closest point on triangle (a, b, c) to p (Voronoi-region method, Ericson, "Real-Time
+/// Collision Detection" section 5.1.5). A degenerate triangle is not allowed.
+/// @rt
+[[nodiscard]] PointTriangleResult closestPointTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c) noexcept;
+
+/// Closest points of segments [p0,p1] and [q0,q1]: parameters s, t in [0, 1] with the points
+/// p0 + s (p1 - p0) and q0 + t (q1 - q0). Parallel segments give one of the closest pairs.
+struct SegmentSegmentResult {
+  double s = 0.0;
+  double t = 0.0;
+  Eigen::Vector3d p;
+  Eigen::Vector3d q;
+  double distance_m = 0.0;
+};
+
+/// @rt
+[[nodiscard]] SegmentSegmentResult closestPointsSegmentSegment(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                                                               const Eigen::Vector3d& q0,
+                                                               const Eigen::Vector3d& q1) noexcept;
+
+/// Closest points of two triangles A = (a0, a1, a2) and B = (b0, b1, b2).
+struct TriangleTriangleResult {
+  Eigen::Vector3d p;  ///< closest point on A [m]
+  Eigen::Vector3d q;  ///< closest point on B [m]
+  double distance_m = 0.0;
+  LocalFeature feature_a;
+  LocalFeature feature_b;
+  bool intersecting = false;  ///< the triangles intersect (p == q, distance 0)
+};
+
+/// Exact closest points of two triangles with the closest feature of each. For disjoint
+/// triangles the minimum is attained by a vertex-face or an edge-edge pair, so the 6
+/// vertex-triangle and 9 edge-edge candidates are compared (the first strictly smallest in
+/// that order wins, which makes parallel configurations deterministic). Intersecting triangles
+/// (an edge of one crossing the other) report distance 0 at a crossing point, classified as
+/// the crossing edge on one side and the crossed triangle's feature on the other.
+/// @rt
+[[nodiscard]] TriangleTriangleResult closestPointsTriangleTriangle(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1,
+                                                                   const Eigen::Vector3d& a2, const Eigen::Vector3d& b0,
+                                                                   const Eigen::Vector3d& b1,
+                                                                   const Eigen::Vector3d& b2) noexcept;
+
+}  // namespace fullarm::haptics

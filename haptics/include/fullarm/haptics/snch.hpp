@@ -1,0 +1,100 @@
+#pragma once
+/// @file
+/// Spatialized normal cone hierarchy (SNCH; Johnson & Cohen, I3D 2001) and the pair query
+/// that reports every local minimum distance (LMD) between two meshes within a cutoff.
+///
+/// Definition of a local minimum used throughout the module (and by the brute-force oracle in
+/// the tests): the closest points p (on triangle A of mesh 1) and q (on triangle B of mesh 2)
+/// of a triangle pair, classified by feature (face / edge / vertex), with d = |q - p| <= L, such
+/// that (1) no triangle incident to p's feature comes closer to q than d, and no triangle
+/// incident to q's feature comes closer to p than d (within kLocalMinimumTolerance_m): then
+/// (p, q) minimises the distance over the neighbourhood of both features, because the distance
+/// between two triangles is convex; and (2) the minimum is seen from outside: u = (q - p)/d has
+/// u . n_p >= 0 and -u . n_q >= 0 for the feature pseudo-normals n_p, n_q (this rejects the
+/// "through the body" minima that every flat back face of a polyhedron would otherwise give).
+/// Touching or intersecting triangles (d = 0) are minima with u = -n_q. Minima of the same
+/// feature pair are merged.
+
+#include <Eigen/Geometry>
+#include <utility>
+#include <vector>
+
+#include "fullarm/haptics/geometry.hpp"
+#include "fullarm/haptics/minima.hpp"
+#include "fullarm/haptics/tri_mesh.hpp"
+
+namespace fullarm::haptics {
+
+/// Distance slack of the local-minimum test [m].
+inline constexpr double kLocalMinimumTolerance_m = 1e-12;
+/// Cosine slack of the outside (pseudo-normal) test.
+inline constexpr double kOutsideCosineTolerance = 1e-9;
+/// Angle added to every cone test so rounding never prunes an accepted minimum [rad].
+inline constexpr double kConeSlack_rad = 1e-3;
+
+/// One node: bounding sphere of its triangles and bounding cone of the normals that a local
+/// minimum on them can have (mesh frame).
+struct SnchNode {
+  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();
+  double radius_m = 0.0;
+  Eigen::Vector3d cone_axis = Eigen::Vector3d::UnitZ();  ///< unit
+  double cone_half_angle_rad = 0.0;                      ///< in [0, pi]; pi = every direction
+  int left = -1;                                         ///< child nodes (-1 for a leaf)
+  int right = -1;
+  int triangle = -1;  ///< the leaf's triangle
+  [[nodiscard]] bool isLeaf() const noexcept { return left < 0; }
+};
+
+/// The hierarchy of one mesh: a binary tree with one triangle per leaf, root at index 0.
+/// Leaf cones bound the normals of the triangle and of every triangle in its vertices'
+/// one-rings (so edge and vertex minima are covered); an inner cone bounds its children's.
+struct SnchTree {
+  std::vector<SnchNode> nodes;
+};
+
+/// Builds the hierarchy (top-down median split along the longest extent of the centroids).
+[[nodiscard]] SnchTree buildSnchTree(const TriMesh& mesh);
+
+/// Reusable traversal storage for querySnchPair (grows, then stays allocated).
+struct SnchQueryScratch {
+  std::vector<std::pair<int, int>> stack;
+};
+
+/// Counters of the last querySnchPair call.
+struct SnchQueryStats {
+  long node_pairs_visited = 0;
+  long pruned_by_distance = 0;
+  long pruned_by_cone = 0;
+  long triangle_pairs_tested = 0;
+};
+
+/// Closest points of link triangle `tri_link` and object triangle `tri_object`, computed in
+/// the object frame (p and q both in the object frame). `X_OL` is the link pose in the object
+/// frame.
+/// @rt
+[[nodiscard]] TriangleTriangleResult closestPointsInObjectFrame(const TriMesh& link_mesh, int tri_link,
+                                                                const TriMesh& object_mesh, int tri_object,
+                                                                const Eigen::Isometry3d& X_OL) noexcept;
+
+/// Tests one triangle pair: when its closest points form a local minimum (definition in the
+/// file comment) at distance <= cutoff_m, fills `out` (triangles, features, p_L in the link
+/// frame, p_O in the object frame, distance, u in the OBJECT frame; link/object left as they
+/// are) and returns true.
+/// @rt
+bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh, int tri_object,
+                          const Eigen::Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept;
+
+/// Appends to `out` every local minimum between a link mesh and an object mesh within
+/// `cutoff_m`, merged by feature pair. link/object fields of the appended minima are -1 (the
+/// caller fills them); u_W is in the world frame.
+/// @param X_WL pose of the link mesh frame; @param X_WO pose of the object mesh frame
+void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Eigen::Isometry3d& X_WL,
+                   const SnchTree& obj_tree, const TriMesh& obj_mesh, const Eigen::Isometry3d& X_WO, double cutoff_m,
+                   SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats* stats = nullptr);
+
+/// Sorts minima[begin, end) by feature pair and removes repeated feature pairs (keeps the
+/// smaller distance); returns the new end. No allocation.
+/// @rt
+std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t begin) noexcept;
+
+}  // namespace fullarm::haptics

@@ -1,0 +1,89 @@
+#include "fullarm/haptics/collision_world.hpp"
+
+#include "fullarm/haptics/primitives.hpp"
+
+namespace fullarm::haptics {
+
+CollisionWorld::CollisionWorld(const arm::ArmModel& model) : CollisionWorld(model, Options{}) {}
+
+CollisionWorld::CollisionWorld(const arm::ArmModel& model, const Options& options) : model_(model) {
+  links_.resize(static_cast<std::size_t>(model_.numJoints()));
+  for (int l = 0; l < model_.numJoints(); ++l) {
+    if (model_.joints[static_cast<std::size_t>(l)].geometry.type != arm::LinkGeometry::Type::kCapsule) continue;
+    auto lm = std::make_shared<LinkMesh>();
+    lm->mesh = makeLinkCapsuleMesh(model_, l, options.capsule_segments, options.capsule_rings);
+    lm->tree = buildSnchTree(lm->mesh);
+    links_[static_cast<std::size_t>(l)] = std::move(lm);
+  }
+}
+
+void CollisionWorld::setLinkMesh(int link, const TriMesh& mesh, const Eigen::Isometry3d& X_LM) {
+  if (link < 0 || link >= numLinks()) {
+    throw MeshError(mesh.source(), "setLinkMesh: link index " + std::to_string(link) + " out of range [0, " +
+                                       std::to_string(numLinks()) + ")");
+  }
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Eigen::Vector3i> t;
+  v.reserve(static_cast<std::size_t>(mesh.numVertices()));
+  t.reserve(static_cast<std::size_t>(mesh.numTriangles()));
+  for (int i = 0; i < mesh.numVertices(); ++i) v.push_back(X_LM * mesh.vertex(i));
+  for (int i = 0; i < mesh.numTriangles(); ++i) t.push_back(mesh.triangle(i));
+  auto lm = std::make_shared<LinkMesh>();
+  lm->mesh = TriMesh::build(mesh.source(), std::move(v), std::move(t));
+  lm->tree = buildSnchTree(lm->mesh);
+  links_[static_cast<std::size_t>(link)] = std::move(lm);
+}
+
+int CollisionWorld::addObject(std::string name, TriMesh mesh, const Eigen::Isometry3d& X_WO) {
+  CollisionObject o;
+  o.name = std::move(name);
+  o.tree = buildSnchTree(mesh);
+  o.mesh = std::move(mesh);
+  o.X_WO = X_WO;
+  objects_.push_back(std::move(o));
+  return numObjects() - 1;
+}
+
+void CollisionWorld::setObjectPose(int object, const Eigen::Isometry3d& X_WO) {
+  objects_[static_cast<std::size_t>(object)].X_WO = X_WO;
+}
+
+int CollisionWorld::objectIndex(std::string_view name) const noexcept {
+  for (int i = 0; i < numObjects(); ++i) {
+    if (objects_[static_cast<std::size_t>(i)].name == name) return i;
+  }
+  return -1;
+}
+
+void SnchGlobalSearch::search(const CollisionWorld& world, const arm::ArmData& fk, double cutoff_m,
+                              double prune_radius_m, std::vector<LocalMinimum>& out) {
+  out.clear();
+  stats_ = {};
+  SnchQueryStats pair_stats;
+  for (int l = 0; l < world.numLinks(); ++l) {
+    if (!world.hasLinkMesh(l)) continue;
+    for (int o = 0; o < world.numObjects(); ++o) {
+      const CollisionObject& obj = world.object(o);
+      const std::size_t begin = out.size();
+      querySnchPair(world.linkTree(l), world.linkMesh(l), fk.X_WL[static_cast<std::size_t>(l)], obj.tree, obj.mesh,
+                    obj.X_WO, cutoff_m, scratch_, out, &pair_stats);
+      for (std::size_t i = begin; i < out.size(); ++i) {
+        out[i].link = l;
+        out[i].object = o;
+      }
+      stats_.node_pairs_visited += pair_stats.node_pairs_visited;
+      stats_.pruned_by_distance += pair_stats.pruned_by_distance;
+      stats_.pruned_by_cone += pair_stats.pruned_by_cone;
+      stats_.triangle_pairs_tested += pair_stats.triangle_pairs_tested;
+    }
+  }
+  pruneMinima(out, prune_radius_m);
+}
+
+void globalSearch(const CollisionWorld& world, const arm::ArmData& fk, double cutoff_m, double prune_radius_m,
+                  std::vector<LocalMinimum>& out) {
+  SnchGlobalSearch search;
+  search.search(world, fk, cutoff_m, prune_radius_m, out);
+}
+
+}  // namespace fullarm::haptics

@@ -1,0 +1,247 @@
+#include "fullarm/haptics/contact_forces.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "fullarm/arm/config_error.hpp"
+#include "fullarm/arm/dynamics.hpp"
+#include "fullarm/arm/yaml_reader.hpp"
+
+namespace fullarm::haptics {
+
+using Eigen::Vector3d;
+
+namespace {
+
+void require(bool ok, const std::filesystem::path& file, const char* key, const std::string& message) {
+  if (!ok) throw arm::ConfigError(file, key, message);
+}
+
+}  // namespace
+
+void validateHapticsParams(const HapticsParams& p, const std::filesystem::path& file) {
+  require(p.stiffness_npm > 0.0 && std::isfinite(p.stiffness_npm), file, "contact.stiffness_npm",
+          "expected a finite stiffness > 0 N/m");
+  require(p.damping_nspm >= 0.0 && std::isfinite(p.damping_nspm), file, "contact.damping_nspm",
+          "expected a finite damping >= 0 N s/m");
+  require(p.force_threshold_m > 0.0 && std::isfinite(p.force_threshold_m), file, "contact.force_threshold_m",
+          "expected a finite force threshold d_f > 0 m");
+  require(p.cutoff_m > p.force_threshold_m && std::isfinite(p.cutoff_m), file, "contact.cutoff_m",
+          "expected a finite cutoff L greater than force_threshold_m (the global search must look ahead)");
+  require(p.prune_radius_m >= 0.0 && std::isfinite(p.prune_radius_m), file, "contact.prune_radius_m",
+          "expected a finite pruning radius >= 0 m");
+  require(p.patch_radius_m > 0.0 && std::isfinite(p.patch_radius_m), file, "contact.patch_radius_m",
+          "expected a finite patch radius > 0 m");
+  require(p.max_force_per_minimum_n > 0.0 && std::isfinite(p.max_force_per_minimum_n), file,
+          "contact.max_force_per_minimum_n", "expected a finite force limit > 0 N");
+  require(p.descent.max_iterations >= 1 && p.descent.max_iterations <= 1000, file, "local_descent.max_iterations",
+          "expected an integer in [1, 1000]");
+  require(p.descent.min_decrease_m >= 0.0 && std::isfinite(p.descent.min_decrease_m), file,
+          "local_descent.min_decrease_m", "expected a finite value >= 0 m");
+  require(p.descent.drop_beyond_m > 0.0, file, "local_descent.drop_beyond_m", "expected a value > 0 m");
+}
+
+namespace {
+
+HapticsParams readHapticsParams(const arm::YamlMap& root) {
+  const std::filesystem::path& file = root.file();
+  HapticsParams p;
+  const std::string mode = root.string("mode");
+  if (mode == "full_arm") {
+    p.mode = RenderMode::kFullArm;
+  } else if (mode == "hand_only") {
+    p.mode = RenderMode::kHandOnly;
+  } else {
+    root.fail("mode", "expected full_arm or hand_only, got '" + mode + "'");
+  }
+  const arm::YamlMap c = root.map("contact");
+  p.stiffness_npm = c.number("stiffness_npm", "N/m");
+  p.damping_nspm = c.number("damping_nspm", "N s/m");
+  p.force_threshold_m = c.number("force_threshold_m", "metres");
+  p.cutoff_m = c.number("cutoff_m", "metres");
+  p.prune_radius_m = c.number("prune_radius_m", "metres");
+  const std::string norm = c.string("normalise_per_patch");
+  if (norm != "true" && norm != "false") c.fail("normalise_per_patch", "expected true or false, got '" + norm + "'");
+  p.normalise_per_patch = norm == "true";
+  p.patch_radius_m = c.number("patch_radius_m", "metres");
+  p.max_force_per_minimum_n = c.number("max_force_per_minimum_n", "N");
+  c.finish();
+  const arm::YamlMap d = root.map("local_descent");
+  p.descent.max_iterations = d.integer("max_iterations");
+  p.descent.min_decrease_m = d.number("min_decrease_m", "metres");
+  if (const auto drop = d.optionalNumber("drop_beyond_m", "metres")) p.descent.drop_beyond_m = *drop;
+  d.finish();
+  root.finish();
+  validateHapticsParams(p, file);
+  return p;
+}
+
+}  // namespace
+
+HapticsParams parseHapticsParams(std::string_view yaml_text, const std::filesystem::path& file) {
+  return readHapticsParams(arm::YamlMap::parse(yaml_text, file));
+}
+
+HapticsParams loadHapticsParams(const std::filesystem::path& file) {
+  return readHapticsParams(arm::YamlMap::load(file));
+}
+
+ContactData::ContactData(const arm::ArmModel& model, int max_minima)
+    : f_W(static_cast<std::size_t>(max_minima), Vector3d::Zero()),
+      p_W(static_cast<std::size_t>(max_minima), Vector3d::Zero()),
+      stiffness_npm(static_cast<std::size_t>(max_minima), 0.0),
+      rendered(static_cast<std::size_t>(max_minima), 0),
+      magnitude_n(static_cast<std::size_t>(max_minima), 0.0),
+      patch_root(static_cast<std::size_t>(max_minima), 0),
+      patch_weight(static_cast<std::size_t>(max_minima), 0.0),
+      tau_contact(Eigen::VectorXd::Zero(model.numJoints())),
+      tau_gravity(Eigen::VectorXd::Zero(model.numJoints())),
+      tau_total(Eigen::VectorXd::Zero(model.numJoints())),
+      links(static_cast<std::size_t>(model.numJoints())) {}
+
+bool isHandLink(const arm::ArmModel& model, int link) noexcept {
+  return link == model.tool_link || model.joints[static_cast<std::size_t>(link)].is_hand;
+}
+
+void resetContactRecords(ContactData& data) noexcept {
+  for (auto& r : data.links) r = LinkContactRecord{};
+}
+
+void computeContactForces(const HapticsParams& params, const arm::ArmModel& model, const arm::ArmData& fk,
+                          std::span<const LocalMinimum> minima, double dt_s, ContactData& data) noexcept {
+  const std::size_t m = minima.size();
+  data.fault = false;
+  data.active_springs = 0;
+  const int n_links = model.numJoints();
+  if (m > data.f_W.size() || !(dt_s > 0.0)) {
+    data.fault = true;
+    return;
+  }
+  // Per-link tick state.
+  for (auto& r : data.links) {
+    r.min_distance_m = std::numeric_limits<double>::infinity();
+    r.depth_m = 0.0;
+  }
+  const double df = params.force_threshold_m;
+  for (std::size_t i = 0; i < m; ++i) {
+    const LocalMinimum& mi = minima[i];
+    data.f_W[i].setZero();
+    data.rendered[i] = 0;
+    data.stiffness_npm[i] = 0.0;
+    if (mi.link < 0 || mi.link >= n_links || !std::isfinite(mi.distance_m) || !mi.p_L.allFinite() ||
+        !mi.u_W.allFinite()) {
+      data.fault = true;
+      continue;
+    }
+    data.p_W[i] = fk.X_WL[static_cast<std::size_t>(mi.link)] * mi.p_L;
+    LinkContactRecord& rec = data.links[static_cast<std::size_t>(mi.link)];
+    rec.min_distance_m = std::min(rec.min_distance_m, mi.distance_m);
+    if (mi.distance_m >= df) continue;
+    if (params.mode == RenderMode::kHandOnly && !isHandLink(model, mi.link)) continue;
+    // Spring law: |f| = k (d_f - d) - b d_dot, pushing the link away from the object.
+    double magnitude = params.stiffness_npm * (df - mi.distance_m);
+    if (params.damping_nspm > 0.0 && std::isfinite(mi.previous_distance_m)) {
+      magnitude -= params.damping_nspm * (mi.distance_m - mi.previous_distance_m) / dt_s;
+    }
+    data.magnitude_n[i] = magnitude;
+    data.stiffness_npm[i] = params.stiffness_npm;
+    data.rendered[i] = 1;
+  }
+  // Optional per-patch normalisation: minima of one link/object pair whose link points are
+  // chained within patch_radius_m form a patch; each spring is scaled by its share
+  // (d_f - d_i) / sum_patch (d_f - d_j), so a patch renders like one spring whatever the number
+  // of minima on it, and a minimum entering or leaving at d_f (weight 0) changes nothing.
+  if (params.normalise_per_patch) {
+    auto root = [&data](int i) {
+      while (data.patch_root[static_cast<std::size_t>(i)] != i) i = data.patch_root[static_cast<std::size_t>(i)];
+      return i;
+    };
+    for (std::size_t i = 0; i < m; ++i) {
+      data.patch_root[i] = static_cast<int>(i);
+      data.patch_weight[i] = 0.0;
+    }
+    const double r2 = params.patch_radius_m * params.patch_radius_m;
+    for (std::size_t i = 0; i < m; ++i) {
+      if (data.rendered[i] == 0) continue;
+      for (std::size_t j = 0; j < i; ++j) {
+        if (data.rendered[j] == 0 || minima[j].link != minima[i].link || minima[j].object != minima[i].object ||
+            (minima[j].p_L - minima[i].p_L).squaredNorm() > r2) {
+          continue;
+        }
+        const int a = root(static_cast<int>(i));
+        const int b = root(static_cast<int>(j));
+        if (a != b) data.patch_root[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+      }
+    }
+    for (std::size_t i = 0; i < m; ++i) {
+      if (data.rendered[i] != 0)
+        data.patch_weight[static_cast<std::size_t>(root(static_cast<int>(i)))] += df - minima[i].distance_m;
+    }
+    for (std::size_t i = 0; i < m; ++i) {
+      if (data.rendered[i] == 0) continue;
+      const double total = data.patch_weight[static_cast<std::size_t>(root(static_cast<int>(i)))];
+      const double share = total > 0.0 ? (df - minima[i].distance_m) / total : 1.0;
+      data.magnitude_n[i] *= share;
+      data.stiffness_npm[i] *= share;
+    }
+  }
+  for (std::size_t i = 0; i < m; ++i) {
+    if (data.rendered[i] == 0) continue;
+    const double magnitude = std::clamp(data.magnitude_n[i], 0.0, params.max_force_per_minimum_n);
+    data.f_W[i] = -magnitude * minima[i].u_W;
+    ++data.active_springs;
+  }
+  // Contact records: in contact = inside the force layer; penetrating = touching/intersecting.
+  for (auto& r : data.links) {
+    const bool contact = r.min_distance_m < df;
+    const bool penetrating = r.min_distance_m <= 0.0;
+    if (contact) {
+      if (!r.in_contact) {
+        ++r.contact_onsets;
+        r.contact_duration_s = 0.0;
+      }
+      r.contact_duration_s += dt_s;
+      r.total_contact_s += dt_s;
+      r.depth_m = df - r.min_distance_m;
+      r.max_depth_m = std::max(r.max_depth_m, r.depth_m);
+    } else {
+      r.contact_duration_s = 0.0;
+    }
+    if (penetrating) r.total_penetration_s += dt_s;
+    r.in_contact = contact;
+    r.penetrating = penetrating;
+  }
+}
+
+void addTailoredJacobianTorques(const arm::ArmModel& model, const arm::ArmData& fk, int link, const Vector3d& p_W,
+                                const Vector3d& f_W, Eigen::Ref<Eigen::VectorXd> tau) noexcept {
+  const auto n = static_cast<std::size_t>(link);
+  // The contact force moved to the contact link's joint origin o_n: force f_c, moment eta_c.
+  const Vector3d& o_n = fk.o_W[n];
+  const Vector3d eta_c = (p_W - o_n).cross(f_W);
+  // Eq. (2) of the DTS paper: tau_n = z_n . eta_c.
+  tau[link] += fk.z_W[n].dot(eta_c);
+  // Eq. (1) of the DTS paper: the tailored force Jacobian rows (z_i x b_i)^T, z_i^T of the
+  // joints proximal to the contact link, b_i = o_n - o_i.
+  for (int i = model.joints[n].parent; i >= 0; i = model.joints[static_cast<std::size_t>(i)].parent) {
+    const auto k = static_cast<std::size_t>(i);
+    const Vector3d b_i = o_n - fk.o_W[k];
+    tau[i] += fk.z_W[k].cross(b_i).dot(f_W) + fk.z_W[k].dot(eta_c);
+  }
+}
+
+void computeContactTorques(const arm::ArmModel& model, arm::ArmData& fk, std::span<const LocalMinimum> minima,
+                           ContactData& data) noexcept {
+  data.tau_contact.setZero();
+  if (!data.fault) {
+    for (std::size_t i = 0; i < minima.size() && i < data.f_W.size(); ++i) {
+      if (data.rendered[i] == 0) continue;
+      addTailoredJacobianTorques(model, fk, minima[i].link, data.p_W[i], data.f_W[i], data.tau_contact);
+    }
+  }
+  arm::computeGravityTorques(model, fk, fk.q);
+  data.tau_gravity = fk.tau_gravity;
+  data.tau_total = data.tau_contact + data.tau_gravity;
+}
+
+}  // namespace fullarm::haptics

@@ -1,0 +1,277 @@
+#include "fullarm/haptics/snch.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+#include <tuple>
+
+namespace fullarm::haptics {
+
+using Eigen::Isometry3d;
+using Eigen::Vector3d;
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+struct Cone {
+  Vector3d axis = Vector3d::UnitZ();
+  double half_angle = 0.0;
+};
+
+double angleBetween(const Vector3d& a, const Vector3d& b) noexcept {
+  // atan2 form: accurate for small and large angles.
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+// Smallest cone around both cones with the axis in their common plane (the tight merge of
+// bounding cones: keep the wider one if it covers the other, else widen towards the other).
+Cone mergeCones(const Cone& a, const Cone& b) noexcept {
+  if (a.half_angle >= kPi || b.half_angle >= kPi) return {a.axis, kPi};
+  const double theta = angleBetween(a.axis, b.axis);
+  if (theta + b.half_angle <= a.half_angle) return a;
+  if (theta + a.half_angle <= b.half_angle) return b;
+  const double alpha = 0.5 * (a.half_angle + theta + b.half_angle);
+  if (alpha >= kPi) return {a.axis, kPi};
+  // Rotate a's axis towards b's by alpha - a.half_angle.
+  Vector3d w = b.axis - a.axis.dot(b.axis) * a.axis;
+  w = w.norm() > 1e-12 ? Vector3d(w.normalized()) : a.axis.unitOrthogonal();
+  const double delta = alpha - a.half_angle;
+  return {(std::cos(delta) * a.axis + std::sin(delta) * w).normalized(), alpha};
+}
+
+struct Builder {
+  const TriMesh& mesh;
+  std::vector<Vector3d> centroid;
+  std::vector<Cone> leaf_cone;
+  std::vector<int> tris;
+  SnchTree tree;
+
+  int build(int begin, int end) {
+    const int id = static_cast<int>(tree.nodes.size());
+    tree.nodes.emplace_back();
+    // Bounding sphere: centre of the vertex box, radius to the farthest vertex.
+    Vector3d lo = Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Vector3d hi = -lo;
+    for (int i = begin; i < end; ++i) {
+      const auto& t = mesh.triangle(tris[static_cast<std::size_t>(i)]);
+      for (int k = 0; k < 3; ++k) {
+        lo = lo.cwiseMin(mesh.vertex(t[k]));
+        hi = hi.cwiseMax(mesh.vertex(t[k]));
+      }
+    }
+    const Vector3d c = 0.5 * (lo + hi);
+    double r = 0.0;
+    for (int i = begin; i < end; ++i) {
+      const auto& t = mesh.triangle(tris[static_cast<std::size_t>(i)]);
+      for (int k = 0; k < 3; ++k) r = std::max(r, (mesh.vertex(t[k]) - c).norm());
+    }
+    SnchNode node;
+    node.centre_m = c;
+    node.radius_m = r * (1.0 + 1e-12) + 1e-15;
+    if (end - begin == 1) {
+      const int t = tris[static_cast<std::size_t>(begin)];
+      node.triangle = t;
+      node.cone_axis = leaf_cone[static_cast<std::size_t>(t)].axis;
+      node.cone_half_angle_rad = leaf_cone[static_cast<std::size_t>(t)].half_angle;
+      tree.nodes[static_cast<std::size_t>(id)] = node;
+      return id;
+    }
+    // Median split along the longest extent of the centroids.
+    Vector3d clo = Vector3d::Constant(std::numeric_limits<double>::infinity());
+    Vector3d chi = -clo;
+    for (int i = begin; i < end; ++i) {
+      clo = clo.cwiseMin(centroid[static_cast<std::size_t>(tris[static_cast<std::size_t>(i)])]);
+      chi = chi.cwiseMax(centroid[static_cast<std::size_t>(tris[static_cast<std::size_t>(i)])]);
+    }
+    int axis = 0;
+    (chi - clo).maxCoeff(&axis);
+    const int mid = begin + (end - begin) / 2;
+    std::nth_element(tris.begin() + begin, tris.begin() + mid, tris.begin() + end, [&](int x, int y) {
+      return centroid[static_cast<std::size_t>(x)][axis] < centroid[static_cast<std::size_t>(y)][axis];
+    });
+    node.left = build(begin, mid);
+    node.right = build(mid, end);
+    const SnchNode& l = tree.nodes[static_cast<std::size_t>(node.left)];
+    const SnchNode& rn = tree.nodes[static_cast<std::size_t>(node.right)];
+    const Cone merged = mergeCones({l.cone_axis, l.cone_half_angle_rad}, {rn.cone_axis, rn.cone_half_angle_rad});
+    node.cone_axis = merged.axis;
+    node.cone_half_angle_rad = merged.half_angle;
+    tree.nodes[static_cast<std::size_t>(id)] = node;
+    return id;
+  }
+};
+
+}  // namespace
+
+SnchTree buildSnchTree(const TriMesh& mesh) {
+  Builder b{mesh, {}, {}, {}, {}};
+  const int nt = mesh.numTriangles();
+  b.centroid.resize(static_cast<std::size_t>(nt));
+  b.leaf_cone.resize(static_cast<std::size_t>(nt));
+  for (int t = 0; t < nt; ++t) {
+    const auto& tri = mesh.triangle(t);
+    b.centroid[static_cast<std::size_t>(t)] = (mesh.vertex(tri[0]) + mesh.vertex(tri[1]) + mesh.vertex(tri[2])) / 3.0;
+    // Leaf cone: the face normal and the normals of the one-rings of its three vertices.
+    Cone cone{mesh.faceNormal(t), 0.0};
+    for (int k = 0; k < 3; ++k) {
+      for (int s : mesh.vertexTriangles(tri[k])) cone = mergeCones(cone, {mesh.faceNormal(s), 0.0});
+    }
+    b.leaf_cone[static_cast<std::size_t>(t)] = cone;
+  }
+  b.tris.resize(static_cast<std::size_t>(nt));
+  std::iota(b.tris.begin(), b.tris.end(), 0);
+  b.tree.nodes.reserve(static_cast<std::size_t>(2 * nt));
+  b.build(0, nt);
+  return std::move(b.tree);
+}
+
+TriangleTriangleResult closestPointsInObjectFrame(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh,
+                                                  int tri_object, const Isometry3d& X_OL) noexcept {
+  const auto& a = link_mesh.triangle(tri_link);
+  const auto& b = object_mesh.triangle(tri_object);
+  return closestPointsTriangleTriangle(X_OL * link_mesh.vertex(a[0]), X_OL * link_mesh.vertex(a[1]),
+                                       X_OL * link_mesh.vertex(a[2]), object_mesh.vertex(b[0]),
+                                       object_mesh.vertex(b[1]), object_mesh.vertex(b[2]));
+}
+
+namespace {
+
+Feature globalFeature(const TriMesh& mesh, int tri, const LocalFeature& f) noexcept {
+  switch (f.kind) {
+    case LocalFeature::Kind::kVertex:
+      return {FeatureKind::kVertex, mesh.triangle(tri)[f.index]};
+    case LocalFeature::Kind::kEdge:
+      return {FeatureKind::kEdge, mesh.triangleEdge(tri, f.index)};
+    case LocalFeature::Kind::kFace:
+      break;
+  }
+  return {FeatureKind::kFace, tri};
+}
+
+}  // namespace
+
+bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh, int tri_object,
+                          const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
+  const TriangleTriangleResult r = closestPointsInObjectFrame(link_mesh, tri_link, object_mesh, tri_object, X_OL);
+  if (r.distance_m > cutoff_m) return false;
+  const Feature fl = globalFeature(link_mesh, tri_link, r.feature_a);
+  const Feature fo = globalFeature(object_mesh, tri_object, r.feature_b);
+  const double d = r.distance_m;
+  const double accept = d - kLocalMinimumTolerance_m;
+  // (1) Local minimum over both feature neighbourhoods.
+  if (d > 0.0) {
+    for (int t : link_mesh.featureTriangles(fl)) {
+      if (t == tri_link) continue;
+      const auto& a = link_mesh.triangle(t);
+      if (closestPointTriangle(r.q, X_OL * link_mesh.vertex(a[0]), X_OL * link_mesh.vertex(a[1]),
+                               X_OL * link_mesh.vertex(a[2]))
+              .distance_m < accept) {
+        return false;
+      }
+    }
+    for (int t : object_mesh.featureTriangles(fo)) {
+      if (t == tri_object) continue;
+      const auto& b = object_mesh.triangle(t);
+      if (closestPointTriangle(r.p, object_mesh.vertex(b[0]), object_mesh.vertex(b[1]), object_mesh.vertex(b[2]))
+              .distance_m < accept) {
+        return false;
+      }
+    }
+  }
+  // (2) Seen from outside on both sides.
+  const Vector3d n_o = object_mesh.featureNormal(fo);
+  Vector3d u;
+  if (d > 0.0) {
+    u = (r.q - r.p) / d;
+    const Vector3d n_l = X_OL.linear() * link_mesh.featureNormal(fl);
+    if (u.dot(n_l) < -kOutsideCosineTolerance || -u.dot(n_o) < -kOutsideCosineTolerance) return false;
+  } else {
+    u = n_o.squaredNorm() > 0.0 ? Vector3d(-n_o) : Vector3d(-object_mesh.faceNormal(tri_object));
+  }
+  out.tri_link = tri_link;
+  out.tri_object = tri_object;
+  out.feature_link = fl;
+  out.feature_object = fo;
+  out.p_L = X_OL.inverse() * r.p;
+  out.p_O = r.q;
+  out.distance_m = d;
+  out.u_W = u;
+  out.previous_distance_m = std::numeric_limits<double>::quiet_NaN();
+  return true;
+}
+
+std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t begin) noexcept {
+  auto key = [](const LocalMinimum& m) {
+    return std::make_tuple(m.link, m.object, static_cast<int>(m.feature_link.kind), m.feature_link.index,
+                           static_cast<int>(m.feature_object.kind), m.feature_object.index, m.distance_m);
+  };
+  const auto first = minima.begin() + static_cast<std::ptrdiff_t>(begin);
+  std::sort(first, minima.end(), [&](const LocalMinimum& a, const LocalMinimum& b) { return key(a) < key(b); });
+  const auto last = std::unique(first, minima.end(),
+                                [](const LocalMinimum& a, const LocalMinimum& b) { return sameFeaturePair(a, b); });
+  minima.erase(last, minima.end());
+  return minima.size();
+}
+
+void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_WL,
+                   const SnchTree& obj_tree, const TriMesh& obj_mesh, const Isometry3d& X_WO, double cutoff_m,
+                   SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats* stats) {
+  SnchQueryStats local_stats;
+  SnchQueryStats& st = stats != nullptr ? *stats : local_stats;
+  st = {};
+  const std::size_t begin = out.size();
+  if (link_tree.nodes.empty() || obj_tree.nodes.empty()) return;
+  // Everything in the object frame: only the link's nodes need transforming.
+  const Isometry3d X_OL = X_WO.inverse() * X_WL;
+  const Eigen::Matrix3d& R_OL = X_OL.linear();
+  auto& stack = scratch.stack;
+  stack.clear();
+  stack.emplace_back(0, 0);
+  LocalMinimum m;
+  while (!stack.empty()) {
+    const auto [i, j] = stack.back();
+    stack.pop_back();
+    ++st.node_pairs_visited;
+    const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(i)];
+    const SnchNode& b = obj_tree.nodes[static_cast<std::size_t>(j)];
+    const Vector3d ca = X_OL * a.centre_m;
+    const Vector3d diff = b.centre_m - ca;
+    const double dist = diff.norm();
+    const double rsum = a.radius_m + b.radius_m;
+    // Distance lower bound against the cutoff.
+    if (dist - rsum > cutoff_m) {
+      ++st.pruned_by_distance;
+      continue;
+    }
+    // Spanning-cone test: every direction from sphere A to sphere B lies within sigma of s.
+    if (dist > rsum) {
+      const Vector3d s = diff / dist;
+      const double sigma = std::asin(rsum / dist);
+      const double open_a = a.cone_half_angle_rad + sigma + kConeSlack_rad;
+      const double open_b = b.cone_half_angle_rad + sigma + kConeSlack_rad;
+      if ((open_a < kPi && (R_OL * a.cone_axis).dot(s) < std::cos(open_a)) ||
+          (open_b < kPi && -b.cone_axis.dot(s) < std::cos(open_b))) {
+        ++st.pruned_by_cone;
+        continue;
+      }
+    }
+    if (a.isLeaf() && b.isLeaf()) {
+      ++st.triangle_pairs_tested;
+      if (evaluateTrianglePair(link_mesh, a.triangle, obj_mesh, b.triangle, X_OL, cutoff_m, m)) {
+        m.u_W = X_WO.linear() * m.u_W;
+        out.push_back(m);
+      }
+    } else if (b.isLeaf() || (!a.isLeaf() && a.radius_m >= b.radius_m)) {
+      stack.emplace_back(a.left, j);
+      stack.emplace_back(a.right, j);
+    } else {
+      stack.emplace_back(i, b.left);
+      stack.emplace_back(i, b.right);
+    }
+  }
+  mergeDuplicateMinima(out, begin);
+}
+
+}  // namespace fullarm::haptics

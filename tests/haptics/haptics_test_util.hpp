@@ -1,0 +1,79 @@
+#pragma once
+// Shared helpers of the haptics tests: the brute-force local-minimum oracle, random small
+// meshes and random poses.
+
+#include <Eigen/Geometry>
+#include <random>
+#include <vector>
+
+#include "fullarm/haptics/minima.hpp"
+#include "fullarm/haptics/primitives.hpp"
+#include "fullarm/haptics/snch.hpp"
+
+namespace fullarm::haptics::test {
+
+/// Every local minimum within cutoff by testing ALL triangle pairs (no hierarchy, no cones),
+/// merged by feature pair. u_W in the world frame.
+inline std::vector<LocalMinimum> bruteForceMinima(const TriMesh& link_mesh, const Eigen::Isometry3d& X_WL,
+                                                  const TriMesh& obj_mesh, const Eigen::Isometry3d& X_WO,
+                                                  double cutoff_m) {
+  std::vector<LocalMinimum> out;
+  const Eigen::Isometry3d X_OL = X_WO.inverse() * X_WL;
+  LocalMinimum m;
+  for (int a = 0; a < link_mesh.numTriangles(); ++a) {
+    for (int b = 0; b < obj_mesh.numTriangles(); ++b) {
+      if (evaluateTrianglePair(link_mesh, a, obj_mesh, b, X_OL, cutoff_m, m)) {
+        m.u_W = X_WO.linear() * m.u_W;
+        out.push_back(m);
+      }
+    }
+  }
+  mergeDuplicateMinima(out, 0);
+  return out;
+}
+
+/// Minimum over all triangle pairs of the triangle-triangle distance (plain global minimum).
+inline double bruteForceDistance(const TriMesh& a, const Eigen::Isometry3d& X_WA, const TriMesh& b,
+                                 const Eigen::Isometry3d& X_WB) {
+  const Eigen::Isometry3d X_BA = X_WB.inverse() * X_WA;
+  double best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < a.numTriangles(); ++i) {
+    for (int j = 0; j < b.numTriangles(); ++j) {
+      best = std::min(best, closestPointsInObjectFrame(a, i, b, j, X_BA).distance_m);
+    }
+  }
+  return best;
+}
+
+inline Eigen::Isometry3d randomPose(std::mt19937& rng, double translation_scale) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Eigen::Quaterniond q(n(rng), n(rng), n(rng), n(rng));
+  q.normalize();
+  std::uniform_real_distribution<double> u(-translation_scale, translation_scale);
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = q.toRotationMatrix();
+  X.translation() = Eigen::Vector3d(u(rng), u(rng), u(rng));
+  return X;
+}
+
+/// A random small closed mesh (box, capsule, cylinder, I-beam or frame), 12..~400 triangles,
+/// about 0.1-0.3 m across.
+inline TriMesh randomSmallMesh(std::mt19937& rng) {
+  std::uniform_real_distribution<double> size(0.05, 0.25);
+  std::uniform_int_distribution<int> kind(0, 4);
+  switch (kind(rng)) {
+    case 0:
+      return makeBox({size(rng), size(rng), size(rng)}, std::uniform_real_distribution<double>(0.04, 0.3)(rng));
+    case 1:
+      return makeCapsule({0, 0, 0}, {0, 0, size(rng)}, 0.3 * size(rng), std::uniform_int_distribution<int>(5, 12)(rng),
+                         std::uniform_int_distribution<int>(1, 3)(rng));
+    case 2:
+      return makeCylinder(0.5 * size(rng), size(rng), std::uniform_int_distribution<int>(5, 14)(rng), 0.08);
+    case 3:
+      return makeIBeam(0.12, 0.08, 0.015, 0.01, size(rng), 0.06);
+    default:
+      return makeRectangularFrame(0.2, 0.16, 0.04, 0.03, 0.05);
+  }
+}
+
+}  // namespace fullarm::haptics::test

@@ -1,0 +1,188 @@
+// Local descent against a fresh global search (SNCH, itself checked against brute force):
+// after a random small motion every tracked minimum that is still a local minimum is found
+// by the fresh search with the same feature pair and the same distance (1e-9 m). Also:
+// merging, iteration bound, allocation freedom.
+#include "fullarm/haptics/local_descent.hpp"
+
+#include <gtest/gtest.h>
+
+#include "alloc_guard.hpp"
+#include "arm_test_util.hpp"
+#include "fullarm/arm/kinematics.hpp"
+#include "haptics_test_util.hpp"
+
+namespace fullarm::haptics {
+namespace {
+
+using test::randomPose;
+using test::randomSmallMesh;
+
+constexpr double kCutoff_m = 0.05;
+constexpr int kLink = 4;  // any link index: the test attaches its own mesh
+
+Eigen::Isometry3d smallMotion(std::mt19937& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Eigen::Vector3d axis = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+  const Eigen::Vector3d dir = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+  Eigen::Isometry3d dX = Eigen::Isometry3d::Identity();
+  dX.linear() = Eigen::AngleAxisd(u(rng) * 2.0 * M_PI / 180.0, axis).toRotationMatrix();
+  dX.translation() = u(rng) * 0.005 * dir;
+  return dX;
+}
+
+struct WorldFixture {
+  CollisionWorld world;
+  arm::ArmData fk;
+  explicit WorldFixture(const arm::ArmModel& model) : world(model), fk(model) {
+    // Park every link far away; each test places the links it uses.
+    for (std::size_t i = 0; i < fk.X_WL.size(); ++i) {
+      fk.X_WL[i] = Eigen::Translation3d(100.0 * static_cast<double>(i + 1), 0.0, 0.0) * Eigen::Isometry3d::Identity();
+    }
+  }
+};
+
+TEST(LocalDescentTest, TrackedMinimaMatchFreshSearchAfterSmallMotion) {
+  const arm::ArmModel& model = arm::test::defaultModel();
+  std::mt19937 rng(31);
+  int tracked_total = 0;
+  int confirmed = 0;
+  int moved = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    WorldFixture s(model);
+    s.world.setLinkMesh(kLink, randomSmallMesh(rng));
+    s.world.addObject("obj", randomSmallMesh(rng), randomPose(rng, 0.3));
+    const CollisionObject& obj = s.world.object(0);
+    // Link placed 0.1-0.35 m from the object centre in a random direction.
+    Eigen::Isometry3d X_WL = randomPose(rng, 0.0);
+    std::normal_distribution<double> n(0.0, 1.0);
+    X_WL.translation() = obj.X_WO.translation() + std::uniform_real_distribution<double>(0.1, 0.35)(rng) *
+                                                      Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+    s.fk.X_WL[kLink] = X_WL;
+    std::vector<LocalMinimum> minima;
+    SnchQueryScratch scratch;
+    querySnchPair(s.world.linkTree(kLink), s.world.linkMesh(kLink), X_WL, obj.tree, obj.mesh, obj.X_WO, kCutoff_m,
+                  scratch, minima);
+    if (minima.empty()) continue;
+    for (auto& m : minima) {
+      m.link = kLink;
+      m.object = 0;
+    }
+    const std::vector<LocalMinimum> before = minima;
+    // Small motion, then descent.
+    s.fk.X_WL[kLink] = X_WL * smallMotion(rng);
+    const int kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{});
+    minima.resize(static_cast<std::size_t>(kept));
+    // Fresh global search at the new pose with a wider cutoff (a minimum may have receded).
+    std::vector<LocalMinimum> fresh;
+    querySnchPair(s.world.linkTree(kLink), s.world.linkMesh(kLink), s.fk.X_WL[kLink], obj.tree, obj.mesh, obj.X_WO,
+                  kCutoff_m + 0.02, scratch, fresh);
+    const Eigen::Isometry3d X_OL = obj.X_WO.inverse() * s.fk.X_WL[kLink];
+    for (const LocalMinimum& m : minima) {
+      ++tracked_total;
+      // Distance and points are those of the triangle pair the descent ended on.
+      const auto r = closestPointsInObjectFrame(s.world.linkMesh(kLink), m.tri_link, obj.mesh, m.tri_object, X_OL);
+      EXPECT_NEAR(m.distance_m, r.distance_m, 1e-15);
+      EXPECT_NEAR((s.fk.X_WL[kLink] * m.p_L - obj.X_WO * m.p_O).norm(), m.distance_m, 1e-12);
+      LocalMinimum e;
+      if (!evaluateTrianglePair(s.world.linkMesh(kLink), m.tri_link, obj.mesh, m.tri_object, X_OL, 1.0, e)) continue;
+      ++confirmed;
+      const auto it = std::find_if(fresh.begin(), fresh.end(), [&](const LocalMinimum& f) {
+        return f.feature_link == m.feature_link && f.feature_object == m.feature_object;
+      });
+      ASSERT_NE(it, fresh.end()) << "trial " << trial << ": tracked minimum not found by the fresh search";
+      EXPECT_NEAR(it->distance_m, m.distance_m, 1e-9);
+    }
+    for (std::size_t i = 0; i < before.size() && i < minima.size(); ++i) {
+      if (before[i].tri_link != minima[i].tri_link || before[i].tri_object != minima[i].tri_object) ++moved;
+    }
+  }
+  EXPECT_GT(tracked_total, 200);
+  EXPECT_GT(moved, 20);  // the walk was exercised
+  // Nearly every tracked minimum is still a local minimum after a small motion.
+  EXPECT_GE(confirmed, static_cast<int>(0.9 * tracked_total));
+  RecordProperty("tracked", tracked_total);
+  RecordProperty("confirmed", confirmed);
+}
+
+TEST(LocalDescentTest, WalksAcrossAFlatWallAndMergesDuplicates) {
+  const arm::ArmModel& model = arm::test::defaultModel();
+  WorldFixture s(model);
+  // A sphere (zero-length capsule) 5 mm above a densely triangulated wall (z = 0 face).
+  s.world.setLinkMesh(kLink, makeCapsule({0, 0, 0}, {0, 0, 0}, 0.03, 16, 8));
+  Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+  X_WO.translation() = Eigen::Vector3d(0, 0, -0.01);
+  s.world.addObject("wall", makeBox({0.6, 0.6, 0.02}, 0.01), X_WO);
+  Eigen::Isometry3d X_WL = Eigen::Isometry3d::Identity();
+  X_WL.translation() = Eigen::Vector3d(0.0013, 0.0021, 0.035);
+  s.fk.X_WL[kLink] = X_WL;
+  std::vector<LocalMinimum> minima;
+  globalSearch(s.world, s.fk, 0.02, 0.0, minima);
+  ASSERT_FALSE(minima.empty());
+  // Slide 0.1 m in 1 mm steps: the sphere's lowest vertex stays 5 mm above the wall.
+  LocalDescentStats stats;
+  for (int step = 0; step < 100; ++step) {
+    X_WL.translation().x() += 0.001;
+    s.fk.X_WL[kLink] = X_WL;
+    const int kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{}, &stats);
+    minima.resize(static_cast<std::size_t>(kept));
+    const double best = std::min_element(minima.begin(), minima.end(), [](auto& a, auto& b) {
+                          return a.distance_m < b.distance_m;
+                        })->distance_m;
+    EXPECT_NEAR(best, 0.005, 1e-12) << "step " << step;
+    EXPECT_EQ(stats.minima_at_iteration_cap, 0);
+  }
+  // Two copies of one minimum converge to the same feature pair and merge.
+  std::vector<LocalMinimum> twins{minima.front(), minima.front()};
+  const int kept = updateMinimaLocalDescent(s.world, s.fk, twins, LocalDescentParams{}, &stats);
+  EXPECT_EQ(kept, 1);
+  EXPECT_EQ(stats.merged, 1);
+}
+
+TEST(LocalDescentTest, IterationCapBoundsTheWalk) {
+  const arm::ArmModel& model = arm::test::defaultModel();
+  WorldFixture s(model);
+  s.world.setLinkMesh(kLink, makeCapsule({0, 0, 0}, {0, 0, 0}, 0.03, 16, 8));
+  s.world.addObject("wall", makeBox({0.6, 0.6, 0.02}, 0.005), Eigen::Isometry3d::Identity());
+  Eigen::Isometry3d X_WL = Eigen::Isometry3d::Identity();
+  X_WL.translation() = Eigen::Vector3d(0, 0, 0.045);
+  s.fk.X_WL[kLink] = X_WL;
+  std::vector<LocalMinimum> minima;
+  globalSearch(s.world, s.fk, 0.02, 0.0, minima);
+  ASSERT_FALSE(minima.empty());
+  // Jump 10 cm sideways: the walk over 5 mm triangles needs more than 2 steps.
+  X_WL.translation().x() += 0.1;
+  s.fk.X_WL[kLink] = X_WL;
+  LocalDescentParams p;
+  p.max_iterations = 2;
+  LocalDescentStats stats;
+  (void)updateMinimaLocalDescent(s.world, s.fk, minima, p, &stats);
+  EXPECT_GT(stats.minima_at_iteration_cap, 0);
+  EXPECT_LE(stats.steps, 2 * static_cast<int>(minima.size()));
+}
+
+TEST(LocalDescentTest, UpdateDoesNotAllocate) {
+  const arm::ArmModel& model = arm::test::defaultModel();
+  WorldFixture s(model);
+  std::mt19937 rng(8);
+  s.world.addObject("beam", makeIBeam(0.2, 0.1, 0.02, 0.01, 1.0, 0.02), Eigen::Isometry3d::Identity());
+  arm::computeForwardKinematics(model, s.fk, model.defaultPosture());
+  // Put every link mesh near the beam by moving the beam next to the forearm.
+  const Eigen::Vector3d p = s.fk.X_WL[4].translation();
+  Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+  X_WO.translation() = p + Eigen::Vector3d(0.0, 0.0, -0.12);
+  s.world.setObjectPose(0, X_WO);
+  std::vector<LocalMinimum> minima;
+  globalSearch(s.world, s.fk, 0.2, 0.0, minima);
+  ASSERT_FALSE(minima.empty());
+  Eigen::VectorXd q = model.defaultPosture();
+  q[0] += 0.01;
+  arm::computeForwardKinematics(model, s.fk, q);
+  LocalDescentStats stats;
+  int kept = 0;
+  EXPECT_NO_HEAP_ALLOCATION(kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{}, &stats));
+  EXPECT_GT(kept, 0);
+}
+
+}  // namespace
+}  // namespace fullarm::haptics
