@@ -1,5 +1,7 @@
 #include "fullarm/haptics/mesh_import.hpp"
 
+#include "fullarm/haptics/mesh_subdivision.hpp"
+
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -70,6 +72,11 @@ void checkOptions(const std::string& source, const MeshImportOptions& options) {
   if (!std::isfinite(options.weld_tolerance_m) || options.weld_tolerance_m < 0.0) {
     std::ostringstream msg;
     msg << "weld tolerance must be a finite value >= 0 m, got " << options.weld_tolerance_m;
+    throw MeshError(source, msg.str());
+  }
+  if (!std::isfinite(options.max_edge_m) || options.max_edge_m < 0.0) {
+    std::ostringstream msg;
+    msg << "refinement edge length max_edge_m must be a finite value >= 0 m (0: off), got " << options.max_edge_m;
     throw MeshError(source, msg.str());
   }
   if (!std::isfinite(options.time_limit_s) || options.time_limit_s <= 0.0) {
@@ -374,7 +381,9 @@ TriMesh importMesh(const std::filesystem::path& file, const MeshImportOptions& o
   if (raw.triangles.empty()) {
     throw MeshError(source, "the file holds no triangle (only points/lines, or no geometry)");
   }
-  return TriMesh::build(source, std::move(raw.vertices), std::move(raw.triangles), options.weld_tolerance_m);
+  TriMesh mesh = TriMesh::build(source, std::move(raw.vertices), std::move(raw.triangles), options.weld_tolerance_m);
+  if (options.max_edge_m > 0.0) mesh = refineLongEdges(mesh, options.max_edge_m);
+  return mesh;
 }
 
 }  // namespace fullarm::haptics

@@ -29,6 +29,10 @@ struct MeshImportOptions {
   Eigen::Isometry3d X_OF = Eigen::Isometry3d::Identity();
   /// Vertices closer than this are merged (TriMesh::build); 0 disables welding [m].
   double weld_tolerance_m = kDefaultImportWeldToleranceM;
+  /// When > 0, edges longer than this are split at their midpoints after welding
+  /// (refineLongEdges): CAD exports often span flat faces with long sliver triangles, whose
+  /// bounding spheres are as large as the face and defeat hierarchy culling [m].
+  double max_edge_m = 0.0;
   /// Longest time the file reader may take before the file is declared malformed [s].
   double time_limit_s = 60.0;
 };
@@ -57,7 +61,7 @@ struct MeshImportOptions {
 ///   unsupported extension, is malformed or truncated (assimp's message is included), holds no
 ///   triangle, holds a non-finite coordinate or transform, makes the reader crash or run past
 ///   the time limit, or if the options are invalid (scale not finite and > 0, X_OF not a
-///   finite rigid transform, negative weld tolerance, time limit not > 0).
+///   finite rigid transform, negative weld tolerance or max_edge_m, time limit not > 0).
 [[nodiscard]] TriMesh importMesh(const std::filesystem::path& file, const MeshImportOptions& options = {});
 
 }  // namespace fullarm::haptics
