@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/yaml_reader.hpp"
@@ -80,6 +81,10 @@ HapticsParams readHapticsParams(const arm::YamlMap& root) {
 
 HapticsParams parseHapticsParams(std::string_view yaml_text, const std::filesystem::path& file) {
   return readHapticsParams(arm::YamlMap::parse(yaml_text, file));
+}
+
+std::filesystem::path defaultHapticsParamsPath() {
+  return arm::defaultConfigPath("haptics.yaml");
 }
 
 HapticsParams loadHapticsParams(const std::filesystem::path& file) {

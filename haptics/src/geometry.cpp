@@ -55,6 +55,34 @@ PointTriangleResult closestPointTriangle(const Vector3d& p, const Vector3d& a, c
   return done(a + ab * v + ac * w, Kind::kFace, 0);
 }
 
+double squaredDistancePointTriangle(const Vector3d& p, const Vector3d& a, const Vector3d& b,
+                                    const Vector3d& c) noexcept {
+  const Vector3d ab = b - a;
+  const Vector3d ac = c - a;
+  const Vector3d ap = p - a;
+  const double d1 = ab.dot(ap);
+  const double d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return ap.squaredNorm();
+  const Vector3d bp = p - b;
+  const double d3 = ab.dot(bp);
+  const double d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return bp.squaredNorm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return (ap - (d1 / (d1 - d3)) * ab).squaredNorm();
+  const Vector3d cp = p - c;
+  const double d5 = ab.dot(cp);
+  const double d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return cp.squaredNorm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return (ap - (d2 / (d2 - d6)) * ac).squaredNorm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    return (bp - ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b)).squaredNorm();
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  return (ap - ab * (vb * denom) - ac * (vc * denom)).squaredNorm();
+}
+
 SegmentSegmentResult closestPointsSegmentSegment(const Vector3d& p0, const Vector3d& p1, const Vector3d& q0,
                                                  const Vector3d& q1) noexcept {
   // Ericson 5.1.9 with clamping; the parallel case picks s = 0 then clamps.
@@ -136,8 +164,19 @@ TriangleTriangleResult closestPointsTriangleTriangle(const Vector3d& a0, const V
   TriangleTriangleResult best;
   best.distance_m = std::numeric_limits<double>::infinity();
 
-  // Intersection: an edge of one triangle crossing the other.
-  for (int k = 0; k < 3; ++k) {
+  // Intersection: an edge of one triangle crossing the other. Impossible when either
+  // triangle lies strictly on one side of the other's plane (the common, cheap case).
+  const Vector3d nA = (a1 - a0).cross(a2 - a0);
+  const Vector3d nB = (b1 - b0).cross(b2 - b0);
+  const double sa0 = nB.dot(a0 - b0);
+  const double sa1 = nB.dot(a1 - b0);
+  const double sa2 = nB.dot(a2 - b0);
+  const double sb0 = nA.dot(b0 - a0);
+  const double sb1 = nA.dot(b1 - a0);
+  const double sb2 = nA.dot(b2 - a0);
+  const bool a_one_side = (sa0 > 0.0 && sa1 > 0.0 && sa2 > 0.0) || (sa0 < 0.0 && sa1 < 0.0 && sa2 < 0.0);
+  const bool b_one_side = (sb0 > 0.0 && sb1 > 0.0 && sb2 > 0.0) || (sb0 < 0.0 && sb1 < 0.0 && sb2 < 0.0);
+  for (int k = 0; k < 3 && !a_one_side && !b_one_side; ++k) {
     double s = 0.0;
     if (segmentTriangleCrossing(*A[k], *A[(k + 1) % 3], b0, b1, b2, s)) {
       const Vector3d x = *A[k] + s * (*A[(k + 1) % 3] - *A[k]);
@@ -151,7 +190,7 @@ TriangleTriangleResult closestPointsTriangleTriangle(const Vector3d& a0, const V
       return best;
     }
   }
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 3 && !a_one_side && !b_one_side; ++k) {
     double s = 0.0;
     if (segmentTriangleCrossing(*B[k], *B[(k + 1) % 3], a0, a1, a2, s)) {
       const Vector3d x = *B[k] + s * (*B[(k + 1) % 3] - *B[k]);
@@ -167,6 +206,7 @@ TriangleTriangleResult closestPointsTriangleTriangle(const Vector3d& a0, const V
   }
 
   // Disjoint: vertex-face candidates, then edge-edge candidates.
+  bool best_is_vertex_of_a = true;
   for (int k = 0; k < 3; ++k) {
     const PointTriangleResult r = closestPointTriangle(*A[k], b0, b1, b2);
     if (r.distance_m < best.distance_m) {
@@ -180,12 +220,22 @@ TriangleTriangleResult closestPointsTriangleTriangle(const Vector3d& a0, const V
   for (int k = 0; k < 3; ++k) {
     const PointTriangleResult r = closestPointTriangle(*B[k], a0, a1, a2);
     if (r.distance_m < best.distance_m) {
+      best_is_vertex_of_a = false;
       best.p = r.point;
       best.q = *B[k];
       best.distance_m = r.distance_m;
       best.feature_a = r.feature;
       best.feature_b = {Kind::kVertex, static_cast<std::uint8_t>(k)};
     }
+  }
+  // Early exit: the distance is convex over the pair of triangles, so the best vertex
+  // candidate is the minimum when each of its points is also the other triangle's closest
+  // point to the other (one side holds by construction; test the other exactly).
+  if (best.distance_m > 0.0) {
+    const double d2 = best.distance_m * best.distance_m;
+    const double other = best_is_vertex_of_a ? squaredDistancePointTriangle(best.q, a0, a1, a2)
+                                             : squaredDistancePointTriangle(best.p, b0, b1, b2);
+    if (other >= d2) return best;
   }
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {

@@ -1,5 +1,6 @@
 #include "fullarm/haptics/local_descent.hpp"
 
+#include <array>
 #include <utility>
 
 namespace fullarm::haptics {
@@ -21,6 +22,68 @@ Feature toFeature(const TriMesh& mesh, int tri, const LocalFeature& f) noexcept 
   return {FeatureKind::kFace, tri};
 }
 
+// Local index (0..2) of a global feature within triangle `tri`, or -1 (face or not on it).
+int localIndex(const TriMesh& mesh, int tri, const Feature& f) noexcept {
+  for (int k = 0; k < 3; ++k) {
+    if (f.kind == FeatureKind::kVertex && mesh.triangle(tri)[k] == f.index) return k;
+    if (f.kind == FeatureKind::kEdge && mesh.triangleEdge(tri, k) == f.index) return k;
+  }
+  return -1;
+}
+
+// Closest points of the tracked triangle pair, warm-started from the previous features: the
+// candidate of the previous feature pair is computed alone and kept if it passes the exact
+// optimality test of a convex pair (p is the closest point of A to q and q the closest point
+// of B to p); otherwise the full triangle-triangle computation runs. Same result, about a
+// third of the work when the features did not change.
+TriangleTriangleResult warmClosestPoints(const TriMesh& lmesh, int tl, const TriMesh& omesh, int to,
+                                         const Isometry3d& X_OL, const LocalMinimum& prev) noexcept {
+  const Eigen::Vector3i& ta = lmesh.triangle(tl);
+  const Eigen::Vector3i& tb = omesh.triangle(to);
+  const std::array<Vector3d, 3> A{X_OL * lmesh.vertex(ta[0]), X_OL * lmesh.vertex(ta[1]), X_OL * lmesh.vertex(ta[2])};
+  const std::array<Vector3d, 3> B{omesh.vertex(tb[0]), omesh.vertex(tb[1]), omesh.vertex(tb[2])};
+  const int ka = localIndex(lmesh, tl, prev.feature_link);
+  const int kb = localIndex(omesh, to, prev.feature_object);
+  TriangleTriangleResult r;
+  bool have = false;
+  if (prev.feature_link.kind == FeatureKind::kVertex && ka >= 0) {
+    const PointTriangleResult c = closestPointTriangle(A[static_cast<std::size_t>(ka)], B[0], B[1], B[2]);
+    r.p = A[static_cast<std::size_t>(ka)];
+    r.q = c.point;
+    r.feature_a = {LocalFeature::Kind::kVertex, static_cast<std::uint8_t>(ka)};
+    r.feature_b = c.feature;
+    have = true;
+  } else if (prev.feature_object.kind == FeatureKind::kVertex && kb >= 0) {
+    const PointTriangleResult c = closestPointTriangle(B[static_cast<std::size_t>(kb)], A[0], A[1], A[2]);
+    r.p = c.point;
+    r.q = B[static_cast<std::size_t>(kb)];
+    r.feature_a = c.feature;
+    r.feature_b = {LocalFeature::Kind::kVertex, static_cast<std::uint8_t>(kb)};
+    have = true;
+  } else if (prev.feature_link.kind == FeatureKind::kEdge && prev.feature_object.kind == FeatureKind::kEdge &&
+             ka >= 0 && kb >= 0) {
+    const auto ia = static_cast<std::size_t>(ka);
+    const auto ib = static_cast<std::size_t>(kb);
+    const SegmentSegmentResult c = closestPointsSegmentSegment(A[ia], A[(ia + 1) % 3], B[ib], B[(ib + 1) % 3]);
+    if (c.s > 0.0 && c.s < 1.0 && c.t > 0.0 && c.t < 1.0) {
+      r.p = c.p;
+      r.q = c.q;
+      r.feature_a = {LocalFeature::Kind::kEdge, static_cast<std::uint8_t>(ka)};
+      r.feature_b = {LocalFeature::Kind::kEdge, static_cast<std::uint8_t>(kb)};
+      have = true;
+    }
+  }
+  if (have) {
+    r.distance_m = (r.q - r.p).norm();
+    const double accept = r.distance_m - 1e-15 * (1.0 + r.distance_m);
+    if (r.distance_m > 0.0 && accept > 0.0 && squaredDistancePointTriangle(r.q, A[0], A[1], A[2]) >= accept * accept &&
+        squaredDistancePointTriangle(r.p, B[0], B[1], B[2]) >= accept * accept) {
+      return r;
+    }
+  }
+  return closestPointsTriangleTriangle(A[0], A[1], A[2], B[0], B[1], B[2]);
+}
+
 }  // namespace
 
 int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk, std::span<LocalMinimum> minima,
@@ -33,9 +96,10 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     const CollisionObject& obj = world.object(m.object);
     const TriMesh& omesh = obj.mesh;
     const Isometry3d X_OL = obj.X_WO.inverse() * fk.X_WL[static_cast<std::size_t>(m.link)];
+    const Isometry3d X_LO = X_OL.inverse();
     int tl = m.tri_link;
     int to = m.tri_object;
-    TriangleTriangleResult r = closestPointsInObjectFrame(lmesh, tl, omesh, to, X_OL);
+    TriangleTriangleResult r = warmClosestPoints(lmesh, tl, omesh, to, X_OL, m);
     int it = 0;
     for (; it < params.max_iterations; ++it) {
       // Steepest move among the triangles around the closest feature on either side.
@@ -43,8 +107,17 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       int best_o = -1;
       TriangleTriangleResult best = r;
       const double threshold = r.distance_m - params.min_decrease_m;
+      const Vector3d q_L = X_LO * r.q;  // object point in the link frame, for the screening
+      // Screening: a neighbour can only lower the distance if it comes closer to the other
+      // side's closest point than d (the pair distance is convex, so (p, q) is otherwise
+      // already optimal for that neighbour); only then is the triangle pair evaluated.
       for (int t : lmesh.featureTriangles(toFeature(lmesh, tl, r.feature_a))) {
         if (t == tl) continue;
+        const Eigen::Vector3i& tri = lmesh.triangle(t);
+        if (threshold <= 0.0 || squaredDistancePointTriangle(q_L, lmesh.vertex(tri[0]), lmesh.vertex(tri[1]),
+                                                             lmesh.vertex(tri[2])) >= threshold * threshold) {
+          continue;
+        }
         const TriangleTriangleResult c = closestPointsInObjectFrame(lmesh, t, omesh, to, X_OL);
         if (c.distance_m < threshold && c.distance_m < best.distance_m) {
           best = c;
@@ -54,6 +127,11 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       }
       for (int t : omesh.featureTriangles(toFeature(omesh, to, r.feature_b))) {
         if (t == to) continue;
+        const Eigen::Vector3i& tri = omesh.triangle(t);
+        if (threshold <= 0.0 || squaredDistancePointTriangle(r.p, omesh.vertex(tri[0]), omesh.vertex(tri[1]),
+                                                             omesh.vertex(tri[2])) >= threshold * threshold) {
+          continue;
+        }
         const TriangleTriangleResult c = closestPointsInObjectFrame(lmesh, tl, omesh, t, X_OL);
         if (c.distance_m < threshold && c.distance_m < best.distance_m) {
           best = c;
@@ -74,7 +152,7 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     m.tri_object = to;
     m.feature_link = toFeature(lmesh, tl, r.feature_a);
     m.feature_object = toFeature(omesh, to, r.feature_b);
-    m.p_L = X_OL.inverse() * r.p;
+    m.p_L = X_LO * r.p;
     m.p_O = r.q;
     m.distance_m = r.distance_m;
     if (r.distance_m > 0.0) {

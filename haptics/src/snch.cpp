@@ -165,17 +165,17 @@ bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh&
     for (int t : link_mesh.featureTriangles(fl)) {
       if (t == tri_link) continue;
       const auto& a = link_mesh.triangle(t);
-      if (closestPointTriangle(r.q, X_OL * link_mesh.vertex(a[0]), X_OL * link_mesh.vertex(a[1]),
-                               X_OL * link_mesh.vertex(a[2]))
-              .distance_m < accept) {
+      if (accept > 0.0 &&
+          squaredDistancePointTriangle(r.q, X_OL * link_mesh.vertex(a[0]), X_OL * link_mesh.vertex(a[1]),
+                                       X_OL * link_mesh.vertex(a[2])) < accept * accept) {
         return false;
       }
     }
     for (int t : object_mesh.featureTriangles(fo)) {
       if (t == tri_object) continue;
       const auto& b = object_mesh.triangle(t);
-      if (closestPointTriangle(r.p, object_mesh.vertex(b[0]), object_mesh.vertex(b[1]), object_mesh.vertex(b[2]))
-              .distance_m < accept) {
+      if (accept > 0.0 && squaredDistancePointTriangle(r.p, object_mesh.vertex(b[0]), object_mesh.vertex(b[1]),
+                                                       object_mesh.vertex(b[2])) < accept * accept) {
         return false;
       }
     }

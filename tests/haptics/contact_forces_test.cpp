@@ -209,7 +209,7 @@ std::string readText(const std::string& path) {
 }
 
 TEST(HapticsParamsTest, ShippedConfigLoads) {
-  const HapticsParams p = loadHapticsParams(arm::test::sourcePath("config/haptics.yaml"));
+  const HapticsParams p = loadHapticsParams(defaultHapticsParamsPath());
   EXPECT_EQ(p.mode, RenderMode::kFullArm);
   EXPECT_GT(p.cutoff_m, p.force_threshold_m);
   EXPECT_EQ(p.descent.max_iterations, 16);

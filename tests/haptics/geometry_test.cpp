@@ -90,6 +90,7 @@ TEST(GeometryTest, PointTriangleMatchesDenseSampling) {
     EXPECT_LE(r.distance_m, best + 1e-15);
     EXPECT_GE(r.distance_m, best - h);
     expectOnFeature(r.point, T, r.feature);
+    EXPECT_NEAR(squaredDistancePointTriangle(p, T[0], T[1], T[2]), r.distance_m * r.distance_m, 1e-14);
   }
 }
 

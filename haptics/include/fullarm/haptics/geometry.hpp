@@ -29,6 +29,12 @@ struct PointTriangleResult {
 [[nodiscard]] PointTriangleResult closestPointTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                                                        const Eigen::Vector3d& b, const Eigen::Vector3d& c) noexcept;
 
+/// Squared distance from p to triangle (a, b, c) [m^2] (same regions as closestPointTriangle,
+/// no square root, no feature): the cheap screening test of local descent and SNCH acceptance.
+/// @rt
+[[nodiscard]] double squaredDistancePointTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                                  const Eigen::Vector3d& b, const Eigen::Vector3d& c) noexcept;
+
 /// Closest points of segments [p0,p1] and [q0,q1]: parameters s, t in [0, 1] with the points
 /// p0 + s (p1 - p0) and q0 + t (q1 - q0). Parallel segments give one of the closest pairs.
 struct SegmentSegmentResult {

@@ -1,0 +1,228 @@
+// The 1 kHz haptic tick for 64 tracked minima: forward kinematics, local descent, contact
+// springs and tailored-Jacobian torques (+ gravity), side by side with two peers on the same
+// scene and configuration: a fresh SNCH global search, and FCL's mesh-mesh distance (global
+// minimum only) on the same link x object pairs.
+//
+// Scene: the default DTS arm at its default posture resting on three ledges: dense boxes
+// (1 cm triangles, +-1.5 mm random relief) whose top faces run parallel to the upper arm, forearm and hand capsules,
+// 6 mm below them (the flat contact that floods a minimum-distance search). Each iteration starts
+// from the same 64 tracked minima found at q0 (cutoff 6 cm, pruning radius 2 mm) and updates
+// them at q1 = q0 + delta on every joint: delta = 0.057 deg (one 1 ms tick at 1 rad/s, Arg 57)
+// or 0.2 deg (3.5 rad/s, Arg 200). The median and p99 of the per-iteration time
+// are reported as counters (median_us, p99_us), measured with steady_clock around each tick.
+
+#include <benchmark/benchmark.h>
+
+#include <fcl/narrowphase/distance.h>
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/arm/kinematics.hpp"
+#include "fullarm/haptics/collision_world.hpp"
+#include "fullarm/haptics/contact_forces.hpp"
+#include "fullarm/haptics/local_descent.hpp"
+#include "fullarm/haptics/primitives.hpp"
+
+namespace {
+
+using namespace fullarm;
+using namespace fullarm::haptics;
+
+constexpr std::size_t kMinima = 64;
+constexpr double kPruneRadius_m = 0.002;
+
+// q1 = q0 + (state.range(0) millidegrees) on every joint: one 1 ms tick of motion.
+Eigen::VectorXd motion(const Eigen::VectorXd& q0, const benchmark::State& state) {
+  Eigen::VectorXd q1 = q0;
+  q1.array() += static_cast<double>(state.range(0)) * 1e-3 * 3.14159265358979 / 180.0;
+  return q1;
+}
+
+// A box whose top face (1 cm triangles) carries +-1.5 mm of seeded random relief: every bump
+// under a link is a separate local minimum in general position (a flat parallel face would be
+// the degenerate case where all minima slide together).
+TriMesh roughBox(const Eigen::Vector3d& size_m, std::mt19937& rng) {
+  const TriMesh box = makeBox(size_m, 0.01);
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Eigen::Vector3i> t;
+  std::uniform_real_distribution<double> bump(-0.0015, 0.0015);
+  for (int i = 0; i < box.numVertices(); ++i) {
+    Eigen::Vector3d p = box.vertex(i);
+    const bool interior_top =
+        p.z() > 0.0 && std::abs(p.x()) < 0.5 * size_m.x() - 1e-9 && std::abs(p.y()) < 0.5 * size_m.y() - 1e-9;
+    if (interior_top) p.z() += bump(rng);
+    v.push_back(p);
+  }
+  for (int i = 0; i < box.numTriangles(); ++i) t.push_back(box.triangle(i));
+  return TriMesh::build("rough ledge", std::move(v), std::move(t));
+}
+
+struct Scene {
+  arm::ArmModel model = arm::loadArmModel(arm::defaultArmModelPath());
+  CollisionWorld world{model};
+  Eigen::VectorXd q0 = model.defaultPosture();
+  std::vector<LocalMinimum> baseline;
+  HapticsParams params;
+
+  Scene() {
+    arm::ArmData fk(model);
+    arm::computeForwardKinematics(model, fk, q0);
+    std::mt19937 rng(42);
+    // A ledge under the upper arm and one under the forearm: dense flat boxes (1 cm triangles)
+    // whose top face runs parallel to the link capsule, 6 mm below it (a resting contact), and
+    // a third under the hand.
+    for (const int l : {2, 4, 6}) {
+      const arm::LinkGeometry& g = model.joints[static_cast<std::size_t>(l)].geometry;
+      const Eigen::Isometry3d& X = fk.X_WL[static_cast<std::size_t>(l)];
+      const Eigen::Vector3d a = X * g.from_m;
+      const Eigen::Vector3d b = X * g.to_m;
+      const Eigen::Vector3d axis = (b - a).normalized();
+      Eigen::Vector3d up = Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitZ().dot(axis) * axis;
+      up.normalize();
+      // One ledge below the link and one beside it (normals perpendicular to the link).
+      for (const Eigen::Vector3d& n : {up, Eigen::Vector3d(up.cross(axis))}) {
+        Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+        X_WO.linear().col(0) = axis;
+        X_WO.linear().col(1) = n.cross(axis);
+        X_WO.linear().col(2) = n;
+        X_WO.translation() = 0.5 * (a + b) - (g.radius_m + 0.006 + 0.01) * n;
+        world.addObject("ledge_" + std::to_string(l),
+                        roughBox({std::max(0.06, (b - a).norm() - 0.06), 0.08, 0.02}, rng), X_WO);
+      }
+    }
+    std::vector<LocalMinimum> all;
+    globalSearch(world, fk, 0.06, kPruneRadius_m, all);
+    if (all.size() < kMinima) throw std::runtime_error("bench scene has too few minima: " + std::to_string(all.size()));
+    for (const auto& m : all) {
+      if (m.distance_m <= 0.0) {
+        throw std::runtime_error("bench scene: link " + std::to_string(m.link) + " touches object " +
+                                 std::to_string(m.object));
+      }
+    }
+    // 64 minima spread over the whole set.
+    for (std::size_t i = 0; i < kMinima; ++i) baseline.push_back(all[i * all.size() / kMinima]);
+  }
+};
+
+Scene& scene() {
+  static Scene s;
+  return s;
+}
+
+void reportPercentiles(benchmark::State& state, std::vector<double>& us) {
+  if (us.empty()) return;
+  std::sort(us.begin(), us.end());
+  state.counters["median_us"] = us[us.size() / 2];
+  state.counters["p99_us"] = us[std::min(us.size() - 1, us.size() * 99 / 100)];
+}
+
+void BM_Haptics_LocalTick64(benchmark::State& state) {
+  Scene& s = scene();
+  arm::ArmData fk(s.model);
+  ContactData data(s.model, static_cast<int>(kMinima));
+  std::vector<LocalMinimum> minima(s.baseline);
+  const Eigen::VectorXd q1 = motion(s.q0, state);
+  std::vector<double> us;
+  us.reserve(1 << 20);
+  int kept = 0;
+  for (auto _ : state) {
+    std::copy(s.baseline.begin(), s.baseline.end(), minima.begin());
+    const auto t0 = std::chrono::steady_clock::now();
+    arm::computeForwardKinematics(s.model, fk, q1);
+    kept = updateMinimaLocalDescent(s.world, fk, minima, s.params.descent);
+    const std::span<const LocalMinimum> live(minima.data(), static_cast<std::size_t>(kept));
+    computeContactForces(s.params, s.model, fk, live, 1e-3, data);
+    computeContactTorques(s.model, fk, live, data);
+    const auto t1 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(data.tau_total.data());
+    if (us.size() < us.capacity()) us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+  }
+  state.counters["minima_kept"] = kept;
+  state.counters["active_springs"] = data.active_springs;
+  reportPercentiles(state, us);
+}
+BENCHMARK(BM_Haptics_LocalTick64)->Arg(57)->Arg(200);
+
+void BM_Peer_FreshSnchSearch(benchmark::State& state) {
+  Scene& s = scene();
+  arm::ArmData fk(s.model);
+  arm::computeForwardKinematics(s.model, fk, motion(s.q0, state));
+  SnchGlobalSearch search;
+  std::vector<LocalMinimum> out;
+  std::vector<double> us;
+  us.reserve(1 << 16);
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    search.search(s.world, fk, 0.06, kPruneRadius_m, out);
+    const auto t1 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(out.data());
+    if (us.size() < us.capacity()) us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+  }
+  state.counters["minima"] = static_cast<double>(out.size());
+  state.counters["node_pairs"] = static_cast<double>(search.lastStats().node_pairs_visited);
+  state.counters["tri_pairs"] = static_cast<double>(search.lastStats().triangle_pairs_tested);
+  state.counters["cone_pruned"] = static_cast<double>(search.lastStats().pruned_by_cone);
+  reportPercentiles(state, us);
+}
+BENCHMARK(BM_Peer_FreshSnchSearch)->Arg(57);
+
+std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> fclModel(const TriMesh& m) {
+  auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+  std::vector<fcl::Vector3d> v;
+  std::vector<fcl::Triangle> t;
+  for (int i = 0; i < m.numVertices(); ++i) v.push_back(m.vertex(i));
+  for (int i = 0; i < m.numTriangles(); ++i) {
+    t.emplace_back(static_cast<std::size_t>(m.triangle(i)[0]), static_cast<std::size_t>(m.triangle(i)[1]),
+                   static_cast<std::size_t>(m.triangle(i)[2]));
+  }
+  model->beginModel();
+  model->addSubModel(v, t);
+  model->endModel();
+  return model;
+}
+
+// FCL computes one (global) minimum per pair: here every link x object pair that holds one of
+// the 64 tracked minima, at q1.
+void BM_Peer_FclDistanceSamePairs(benchmark::State& state) {
+  Scene& s = scene();
+  arm::ArmData fk(s.model);
+  arm::computeForwardKinematics(s.model, fk, motion(s.q0, state));
+  std::vector<std::pair<int, int>> pairs;
+  for (const auto& m : s.baseline) pairs.emplace_back(m.link, m.object);
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  std::vector<std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>>> links(static_cast<std::size_t>(s.model.numJoints()));
+  std::vector<std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>>> objects;
+  for (int o = 0; o < s.world.numObjects(); ++o) objects.push_back(fclModel(s.world.object(o).mesh));
+  for (const auto& [l, o] : pairs) {
+    if (!links[static_cast<std::size_t>(l)]) links[static_cast<std::size_t>(l)] = fclModel(s.world.linkMesh(l));
+  }
+  std::vector<double> us;
+  us.reserve(1 << 16);
+  double sum = 0.0;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    for (const auto& [l, o] : pairs) {
+      fcl::CollisionObjectd a(links[static_cast<std::size_t>(l)], fk.X_WL[static_cast<std::size_t>(l)]);
+      fcl::CollisionObjectd b(objects[static_cast<std::size_t>(o)], s.world.object(o).X_WO);
+      fcl::DistanceRequestd req;
+      fcl::DistanceResultd res;
+      fcl::distance(&a, &b, req, res);
+      sum += res.min_distance;
+    }
+    const auto t1 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(sum);
+    if (us.size() < us.capacity()) us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+  }
+  state.counters["pairs"] = static_cast<double>(pairs.size());
+  reportPercentiles(state, us);
+}
+BENCHMARK(BM_Peer_FclDistanceSamePairs)->Arg(57);
+
+}  // namespace
+
+BENCHMARK_MAIN();
