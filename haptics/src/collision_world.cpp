@@ -80,6 +80,12 @@ void SnchGlobalSearch::search(const CollisionWorld& world, const arm::ArmData& f
   pruneMinima(out, prune_radius_m);
 }
 
+void CollisionWorld::globalSearch(const arm::ArmData& fk, double cutoff_m, double prune_radius_m,
+                                  std::vector<LocalMinimum>& out) const {
+  SnchGlobalSearch search;
+  search.search(*this, fk, cutoff_m, prune_radius_m, out);
+}
+
 void globalSearch(const CollisionWorld& world, const arm::ArmData& fk, double cutoff_m, double prune_radius_m,
                   std::vector<LocalMinimum>& out) {
   SnchGlobalSearch search;

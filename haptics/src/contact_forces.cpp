@@ -102,7 +102,9 @@ ContactData::ContactData(const arm::ArmModel& model, int max_minima)
       tau_contact(Eigen::VectorXd::Zero(model.numJoints())),
       tau_gravity(Eigen::VectorXd::Zero(model.numJoints())),
       tau_total(Eigen::VectorXd::Zero(model.numJoints())),
-      links(static_cast<std::size_t>(model.numJoints())) {}
+      links(static_cast<std::size_t>(model.numJoints())),
+      link_force_W(static_cast<std::size_t>(model.numJoints()), Vector3d::Zero()),
+      link_moment_W(static_cast<std::size_t>(model.numJoints()), Vector3d::Zero()) {}
 
 bool isHandLink(const arm::ArmModel& model, int link) noexcept {
   return link == model.tool_link || model.joints[static_cast<std::size_t>(link)].is_hand;
@@ -220,10 +222,15 @@ void computeContactForces(const HapticsParams& params, const arm::ArmModel& mode
 
 void addTailoredJacobianTorques(const arm::ArmModel& model, const arm::ArmData& fk, int link, const Vector3d& p_W,
                                 const Vector3d& f_W, Eigen::Ref<Eigen::VectorXd> tau) noexcept {
-  const auto n = static_cast<std::size_t>(link);
   // The contact force moved to the contact link's joint origin o_n: force f_c, moment eta_c.
+  const Vector3d eta_c = (p_W - fk.o_W[static_cast<std::size_t>(link)]).cross(f_W);
+  addTailoredJacobianWrench(model, fk, link, f_W, eta_c, tau);
+}
+
+void addTailoredJacobianWrench(const arm::ArmModel& model, const arm::ArmData& fk, int link, const Vector3d& f_W,
+                               const Vector3d& eta_c, Eigen::Ref<Eigen::VectorXd> tau) noexcept {
+  const auto n = static_cast<std::size_t>(link);
   const Vector3d& o_n = fk.o_W[n];
-  const Vector3d eta_c = (p_W - o_n).cross(f_W);
   // Eq. (2) of the DTS paper: tau_n = z_n . eta_c.
   tau[link] += fk.z_W[n].dot(eta_c);
   // Eq. (1) of the DTS paper: the tailored force Jacobian rows (z_i x b_i)^T, z_i^T of the
@@ -239,9 +246,20 @@ void computeContactTorques(const arm::ArmModel& model, arm::ArmData& fk, std::sp
                            ContactData& data) noexcept {
   data.tau_contact.setZero();
   if (!data.fault) {
+    // Eq. (1)-(2) are linear in (f_c, eta_c): the minima of one link are summed into one force
+    // at that link's joint origin and one moment about it, then mapped once per link.
+    for (auto& f : data.link_force_W) f.setZero();
+    for (auto& h : data.link_moment_W) h.setZero();
     for (std::size_t i = 0; i < minima.size() && i < data.f_W.size(); ++i) {
       if (data.rendered[i] == 0) continue;
-      addTailoredJacobianTorques(model, fk, minima[i].link, data.p_W[i], data.f_W[i], data.tau_contact);
+      const auto n = static_cast<std::size_t>(minima[i].link);
+      data.link_force_W[n] += data.f_W[i];
+      data.link_moment_W[n] += (data.p_W[i] - fk.o_W[n]).cross(data.f_W[i]);
+    }
+    for (int n = 0; n < model.numJoints(); ++n) {
+      const auto k = static_cast<std::size_t>(n);
+      if (data.link_force_W[k].squaredNorm() == 0.0 && data.link_moment_W[k].squaredNorm() == 0.0) continue;
+      addTailoredJacobianWrench(model, fk, n, data.link_force_W[k], data.link_moment_W[k], data.tau_contact);
     }
   }
   arm::computeGravityTorques(model, fk, fk.q);

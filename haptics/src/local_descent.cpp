@@ -84,19 +84,55 @@ TriangleTriangleResult warmClosestPoints(const TriMesh& lmesh, int tl, const Tri
   return closestPointsTriangleTriangle(A[0], A[1], A[2], B[0], B[1], B[2]);
 }
 
+// First-order screening of a neighbour triangle t of feature f (a vertex or an edge holding
+// the closest point x): can a point of t be closer to the target (in direction `dir` from x)
+// than x? The distance over a flat triangle is convex, so this holds exactly when some
+// direction into t from x has a positive component along dir: for a vertex, one of t's two
+// edges leaving it; for an edge, t's in-plane direction perpendicular to it.
+bool neighbourMayBeCloser(const TriMesh& mesh, const Feature& f, int t, const Vector3d& dir) noexcept {
+  const Eigen::Vector3i& tri = mesh.triangle(t);
+  if (f.kind == FeatureKind::kVertex) {
+    const Vector3d& v = mesh.vertex(f.index);
+    for (int k = 0; k < 3; ++k) {
+      if (tri[k] != f.index && dir.dot(mesh.vertex(tri[k]) - v) > 0.0) return true;
+    }
+    return false;
+  }
+  const auto ev = mesh.edgeVertices(f.index);
+  const Vector3d& a = mesh.vertex(ev[0]);
+  const Vector3d ab = mesh.vertex(ev[1]) - a;
+  int w = tri[0];
+  for (int k = 0; k < 3; ++k) {
+    if (tri[k] != ev[0] && tri[k] != ev[1]) w = tri[k];
+  }
+  const Vector3d aw = mesh.vertex(w) - a;
+  // Component of a->w perpendicular to the edge, scaled by |ab|^2 (no division).
+  const Vector3d inward = ab.squaredNorm() * aw - aw.dot(ab) * ab;
+  return dir.dot(inward) > 0.0;
+}
+
 }  // namespace
 
 int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk, std::span<LocalMinimum> minima,
                              const LocalDescentParams& params, LocalDescentStats* stats) noexcept {
   LocalDescentStats st;
   int kept = 0;
+  int pose_link = -1;
+  int pose_object = -1;
+  Isometry3d X_OL = Isometry3d::Identity();
+  Isometry3d X_LO = Isometry3d::Identity();
   for (std::size_t i = 0; i < minima.size(); ++i) {
     LocalMinimum m = minima[i];
     const TriMesh& lmesh = world.linkMesh(m.link);
     const CollisionObject& obj = world.object(m.object);
     const TriMesh& omesh = obj.mesh;
-    const Isometry3d X_OL = obj.X_WO.inverse() * fk.X_WL[static_cast<std::size_t>(m.link)];
-    const Isometry3d X_LO = X_OL.inverse();
+    // Minima come grouped by link/object pair: the relative pose is computed once per pair.
+    if (m.link != pose_link || m.object != pose_object) {
+      X_OL = obj.X_WO.inverse() * fk.X_WL[static_cast<std::size_t>(m.link)];
+      X_LO = X_OL.inverse();
+      pose_link = m.link;
+      pose_object = m.object;
+    }
     int tl = m.tri_link;
     int to = m.tri_object;
     TriangleTriangleResult r = warmClosestPoints(lmesh, tl, omesh, to, X_OL, m);
@@ -107,17 +143,16 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       int best_o = -1;
       TriangleTriangleResult best = r;
       const double threshold = r.distance_m - params.min_decrease_m;
-      const Vector3d q_L = X_LO * r.q;  // object point in the link frame, for the screening
+      if (threshold <= 0.0) break;  // touching: nothing can be closer
       // Screening: a neighbour can only lower the distance if it comes closer to the other
       // side's closest point than d (the pair distance is convex, so (p, q) is otherwise
       // already optimal for that neighbour); only then is the triangle pair evaluated.
-      for (int t : lmesh.featureTriangles(toFeature(lmesh, tl, r.feature_a))) {
-        if (t == tl) continue;
-        const Eigen::Vector3i& tri = lmesh.triangle(t);
-        if (threshold <= 0.0 || squaredDistancePointTriangle(q_L, lmesh.vertex(tri[0]), lmesh.vertex(tri[1]),
-                                                             lmesh.vertex(tri[2])) >= threshold * threshold) {
-          continue;
-        }
+      const Vector3d u_O = (r.q - r.p) / r.distance_m;
+      const Vector3d u_L = X_LO.linear() * u_O;
+      const Feature cur_l = toFeature(lmesh, tl, r.feature_a);
+      const Feature cur_o = toFeature(omesh, to, r.feature_b);
+      for (int t : lmesh.featureTriangles(cur_l)) {
+        if (t == tl || !neighbourMayBeCloser(lmesh, cur_l, t, u_L)) continue;
         const TriangleTriangleResult c = closestPointsInObjectFrame(lmesh, t, omesh, to, X_OL);
         if (c.distance_m < threshold && c.distance_m < best.distance_m) {
           best = c;
@@ -125,13 +160,8 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
           best_o = to;
         }
       }
-      for (int t : omesh.featureTriangles(toFeature(omesh, to, r.feature_b))) {
-        if (t == to) continue;
-        const Eigen::Vector3i& tri = omesh.triangle(t);
-        if (threshold <= 0.0 || squaredDistancePointTriangle(r.p, omesh.vertex(tri[0]), omesh.vertex(tri[1]),
-                                                             omesh.vertex(tri[2])) >= threshold * threshold) {
-          continue;
-        }
+      for (int t : omesh.featureTriangles(cur_o)) {
+        if (t == to || !neighbourMayBeCloser(omesh, cur_o, t, -u_O)) continue;
         const TriangleTriangleResult c = closestPointsInObjectFrame(lmesh, tl, omesh, t, X_OL);
         if (c.distance_m < threshold && c.distance_m < best.distance_m) {
           best = c;

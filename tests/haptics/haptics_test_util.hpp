@@ -56,23 +56,23 @@ inline Eigen::Isometry3d randomPose(std::mt19937& rng, double translation_scale)
   return X;
 }
 
-/// A random small closed mesh (box, capsule, cylinder, I-beam or frame), 12..~400 triangles,
-/// about 0.1-0.3 m across.
+/// A random small closed mesh (box, capsule, cylinder, I-beam or frame), 12..~200 triangles,
+/// about 0.1-0.3 m across (small enough for brute force over all triangle pairs).
 inline TriMesh randomSmallMesh(std::mt19937& rng) {
   std::uniform_real_distribution<double> size(0.05, 0.25);
   std::uniform_int_distribution<int> kind(0, 4);
   switch (kind(rng)) {
     case 0:
-      return makeBox({size(rng), size(rng), size(rng)}, std::uniform_real_distribution<double>(0.04, 0.3)(rng));
+      return makeBox({size(rng), size(rng), size(rng)}, std::uniform_real_distribution<double>(0.07, 0.3)(rng));
     case 1:
-      return makeCapsule({0, 0, 0}, {0, 0, size(rng)}, 0.3 * size(rng), std::uniform_int_distribution<int>(5, 12)(rng),
-                         std::uniform_int_distribution<int>(1, 3)(rng));
+      return makeCapsule({0, 0, 0}, {0, 0, size(rng)}, 0.3 * size(rng), std::uniform_int_distribution<int>(5, 10)(rng),
+                         std::uniform_int_distribution<int>(1, 2)(rng));
     case 2:
-      return makeCylinder(0.5 * size(rng), size(rng), std::uniform_int_distribution<int>(5, 14)(rng), 0.08);
+      return makeCylinder(0.5 * size(rng), size(rng), std::uniform_int_distribution<int>(5, 10)(rng), 0.1);
     case 3:
-      return makeIBeam(0.12, 0.08, 0.015, 0.01, size(rng), 0.06);
+      return makeIBeam(0.12, 0.08, 0.015, 0.01, size(rng), 0.1);
     default:
-      return makeRectangularFrame(0.2, 0.16, 0.04, 0.03, 0.05);
+      return makeRectangularFrame(0.2, 0.16, 0.04, 0.03, 0.08);
   }
 }
 

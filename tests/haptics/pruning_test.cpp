@@ -32,8 +32,8 @@ struct Wall {
       fk.X_WL[i] = Eigen::Translation3d(100.0 * static_cast<double>(i + 1), 50.0, 0.0) * Isometry3d::Identity();
     }
     world.setLinkMesh(kLink, makeCapsule({0, 0, 0}, {0, 0, kLength_m}, kRadius_m, 16, 4));
-    // Wall top face at z = 0, 1 cm triangles: about 20 000 triangles on the face.
-    world.addObject("wall", makeBox({1.0, 1.0, 0.02}, 0.01),
+    // Wall top face at z = 0, 1.25 cm triangles: 12 800 on the face, about 26 000 in all.
+    world.addObject("wall", makeBox({1.0, 1.0, 0.02}, 0.0125),
                     Eigen::Translation3d(0, 0, -0.01) * Isometry3d::Identity());
   }
 };
@@ -57,11 +57,11 @@ TEST(PruningTest, AcceptedMinimaBoundedByPatchAreaOverPiRSquared) {
   const double half_width = std::sqrt(std::pow(kRadius_m + kCutoff_m, 2) - std::pow(kRadius_m + kGap_m, 2));
   const double patch_area = kLength_m * 2.0 * half_width + std::numbers::pi * half_width * half_width;
   std::size_t max_unpruned = 0;
-  for (const double roll : {0.0, std::numbers::pi / 16, 0.37}) {
+  for (const double roll : {std::numbers::pi / 16, 0.37}) {
     w.fk.X_WL[kLink] = lyingPose(kGap_m, roll, 0.0);
     std::vector<LocalMinimum> unpruned;
     globalSearch(w.world, w.fk, kCutoff_m, 0.0, unpruned);
-    for (const double r : {0.01, 0.02, 0.04}) {
+    for (const double r : {0.01, 0.03}) {
       std::vector<LocalMinimum> pruned;
       globalSearch(w.world, w.fk, kCutoff_m, r, pruned);
       const double bound = patch_area / (std::numbers::pi * r * r);
@@ -82,7 +82,7 @@ TEST(PruningTest, AcceptedMinimaBoundedByPatchAreaOverPiRSquared) {
   EXPECT_GT(static_cast<double>(max_unpruned), patch_area / (std::numbers::pi * 0.02 * 0.02));
 }
 
-// Slides the link 8 cm along x in 0.5 mm steps (1 kHz ticks), global refresh every 10 ticks.
+// Slides the link 5 cm along x in 0.5 mm steps (1 kHz ticks), global refresh every 10 ticks.
 // Returns the largest step-to-step change of the total contact force relative to its size.
 double slideAndMeasureJump(Wall& w, const Isometry3d& X0, const HapticsParams& params, int* min_springs) {
   const arm::ArmModel& model = w.world.model();
@@ -92,7 +92,7 @@ double slideAndMeasureJump(Wall& w, const Isometry3d& X0, const HapticsParams& p
   Vector3d previous = Vector3d::Zero();
   double worst = 0.0;
   *min_springs = 1 << 20;
-  for (int tick = 0; tick < 160; ++tick) {
+  for (int tick = 0; tick < 100; ++tick) {
     w.fk.X_WL[kLink] = X;
     if (tick % 10 == 0) {
       std::vector<LocalMinimum> fresh;

@@ -65,6 +65,11 @@ class CollisionWorld {
   /// Index of the object called `name`, or -1.
   [[nodiscard]] int objectIndex(std::string_view name) const noexcept;
 
+  /// SNCH global search at the link frames of `fk` (a fresh SnchGlobalSearch; keep one
+  /// SnchGlobalSearch alive instead to reuse its scratch). See GlobalSearch::search.
+  void globalSearch(const arm::ArmData& fk, double cutoff_m, double prune_radius_m,
+                    std::vector<LocalMinimum>& out) const;
+
  private:
   struct LinkMesh {
     TriMesh mesh;

@@ -68,17 +68,19 @@ struct LinkContactRecord {
 struct ContactData {
   ContactData(const arm::ArmModel& model, int max_minima);
 
-  std::vector<Eigen::Vector3d> f_W;      ///< force on the link at each minimum, world [N]
-  std::vector<Eigen::Vector3d> p_W;      ///< contact point on the link, world [m]
-  std::vector<double> stiffness_npm;     ///< stiffness used per minimum (after normalisation)
-  std::vector<std::uint8_t> rendered;    ///< 1 if the minimum made a force
-  std::vector<double> magnitude_n;       ///< scratch: spring magnitude before saturation [N]
-  std::vector<int> patch_root;           ///< scratch: patch (union-find) of each minimum
-  std::vector<double> patch_weight;      ///< scratch: sum of (d_f - d) per patch root [m]
-  Eigen::VectorXd tau_contact;           ///< sum of the tailored-Jacobian torques [N m], size n
-  Eigen::VectorXd tau_gravity;           ///< arm gravity torques g(q) [N m]
-  Eigen::VectorXd tau_total;             ///< tau_contact + tau_gravity [N m]
-  std::vector<LinkContactRecord> links;  ///< one per link
+  std::vector<Eigen::Vector3d> f_W;            ///< force on the link at each minimum, world [N]
+  std::vector<Eigen::Vector3d> p_W;            ///< contact point on the link, world [m]
+  std::vector<double> stiffness_npm;           ///< stiffness used per minimum (after normalisation)
+  std::vector<std::uint8_t> rendered;          ///< 1 if the minimum made a force
+  std::vector<double> magnitude_n;             ///< scratch: spring magnitude before saturation [N]
+  std::vector<int> patch_root;                 ///< scratch: patch (union-find) of each minimum
+  std::vector<double> patch_weight;            ///< scratch: sum of (d_f - d) per patch root [m]
+  Eigen::VectorXd tau_contact;                 ///< sum of the tailored-Jacobian torques [N m], size n
+  Eigen::VectorXd tau_gravity;                 ///< arm gravity torques g(q) [N m]
+  Eigen::VectorXd tau_total;                   ///< tau_contact + tau_gravity [N m]
+  std::vector<LinkContactRecord> links;        ///< one per link
+  std::vector<Eigen::Vector3d> link_force_W;   ///< scratch: summed force per link [N]
+  std::vector<Eigen::Vector3d> link_moment_W;  ///< scratch: summed moment about o_n per link [N m]
   int active_springs = 0;
   /// Set when an input was unusable (non-finite minimum, too many minima, bad link index):
   /// the contact torques are then zero (safe output) and the caller must report it.
@@ -109,6 +111,12 @@ void computeContactForces(const HapticsParams& params, const arm::ArmModel& mode
 void addTailoredJacobianTorques(const arm::ArmModel& model, const arm::ArmData& fk, int link,
                                 const Eigen::Vector3d& p_W, const Eigen::Vector3d& f_W,
                                 Eigen::Ref<Eigen::VectorXd> tau) noexcept;
+
+/// Same with the force already moved to the joint origin o_n of `link`: force f_W and moment
+/// eta_c about o_n (Eq. (1)-(2) take exactly these).
+/// @rt
+void addTailoredJacobianWrench(const arm::ArmModel& model, const arm::ArmData& fk, int link, const Eigen::Vector3d& f_W,
+                               const Eigen::Vector3d& eta_c, Eigen::Ref<Eigen::VectorXd> tau) noexcept;
 
 /// tau_contact = sum of addTailoredJacobianTorques over the forces of computeContactForces,
 /// tau_gravity = g(q) of the arm model (fk.q), tau_total = their sum. Runs the arm's gravity
