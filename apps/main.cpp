@@ -12,6 +12,7 @@
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/reports/report.hpp"
+#include "haptics_command.hpp"
 #include "plant_command.hpp"
 
 namespace fullarm::app {
@@ -160,6 +161,9 @@ int runMain(int argc, char** argv) {
   app::PlantSimulateOptions plant_options;
   CLI::App* plant_simulate = app::addPlantCommand(app, plant_options);
 
+  app::HapticsQueryOptions haptics_options;
+  CLI::App* haptics_query = app::addHapticsCommand(app, haptics_options);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -170,6 +174,7 @@ int runMain(int argc, char** argv) {
     if (show->parsed()) return app::runArmShow(arm_options, q_text, show_out);
     if (demo->parsed()) return app::runDemo(demo_options, demo_out);
     if (plant_simulate->parsed()) return app::runPlantSimulate(plant_options);
+    if (haptics_query->parsed()) return app::runHapticsQuery(haptics_options);
   } catch (const arm::ConfigError& e) {
     std::cerr << "fullarm: error: " << e.what() << "\n";
     return app::kExitBadInput;
