@@ -13,6 +13,7 @@
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/reports/report.hpp"
+#include "haptics_command.hpp"
 #include "plant_command.hpp"
 #include "tune_command.hpp"
 #include "validate_command.hpp"
@@ -184,6 +185,8 @@ int runMain(int argc, char** argv) {
 
   app::ValidateOptions validate_options;
   CLI::App* validate = app::addValidateCommand(app, validate_options);
+  app::HapticsQueryOptions haptics_options;
+  CLI::App* haptics_query = app::addHapticsCommand(app, haptics_options);
 
   try {
     app.parse(argc, argv);
@@ -197,6 +200,7 @@ int runMain(int argc, char** argv) {
     if (plant_simulate->parsed()) return app::runPlantSimulate(plant_options);
     if (validate->parsed()) return app::runValidate(validate_options);
     if (tune->parsed()) return app::runTune(tune_options);
+    if (haptics_query->parsed()) return app::runHapticsQuery(haptics_options);
   } catch (const arm::ConfigError& e) {
     std::cerr << "fullarm: error: " << e.what() << "\n";
     return app::kExitBadInput;

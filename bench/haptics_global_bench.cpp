@@ -1,0 +1,117 @@
+// Global search of the 7-link DTS arm against scenes/valve_wall.yaml (DRC valve walls, wheel
+// valve, truss, opening frame): SNCH vs the Bullet alternative search, which returns the same
+// minima (checked before timing), in the same run; then SNCH on the same scene with every
+// object subdivided to ~100k and ~1M triangles (midpoint subdivision keeps the surfaces).
+//
+// build/release/bench/haptics_global_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+
+#include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/arm/kinematics.hpp"
+#include "fullarm/haptics/bullet_search.hpp"
+#include "fullarm/haptics/contact_forces.hpp"
+#include "fullarm/haptics/mesh_subdivision.hpp"
+#include "fullarm/haptics/scene.hpp"
+
+namespace {
+
+using namespace fullarm;
+
+constexpr double kCutoff_m = 0.03;      // config/haptics.yaml
+constexpr double kPruneRadius_m = 0.02;
+
+std::filesystem::path sourceFile(const char* relative) {
+  return std::filesystem::path(FULLARM_SOURCE_DIR) / relative;
+}
+
+struct Setup {
+  arm::ArmModel model = arm::loadArmModel(sourceFile("config/dts_master.yaml"));
+  haptics::Scene scene = haptics::loadScene(sourceFile("scenes/valve_wall.yaml"));
+  arm::ArmData fk{model};
+  Setup() { arm::computeForwardKinematics(model, fk, haptics::scenePosture(scene, "reach_valve", model)); }
+};
+
+Setup& setup() {
+  static Setup s;
+  return s;
+}
+
+// The scene with its objects midpoint-subdivided: `large` levels for the three wall panels and
+// the truss, `small` levels for the rest (x 4 triangles per level).
+haptics::Scene subdivided(int small, int large) {
+  haptics::Scene scene = setup().scene;
+  for (haptics::SceneObject& o : scene.objects) {
+    const bool big = o.mesh_file.filename() == "five_dice_wall.dae" || o.mesh_file.filename() == "truss.dae";
+    o.mesh = haptics::subdivideMidpoint(o.mesh, big ? large : small);
+  }
+  return scene;
+}
+
+void checkSameMinima(const std::vector<haptics::LocalMinimum>& a, const std::vector<haptics::LocalMinimum>& b) {
+  bool same = a.size() == b.size();
+  for (std::size_t i = 0; same && i < a.size(); ++i) {
+    same = haptics::sameFeaturePair(a[i], b[i]) && std::abs(a[i].distance_m - b[i].distance_m) < 1e-12;
+  }
+  if (!same) throw std::runtime_error("SNCH and Bullet returned different minima: the comparison is void");
+}
+
+void BM_GlobalSearch_Snch(benchmark::State& state) {
+  Setup& s = setup();
+  static const haptics::CollisionWorld world = haptics::makeCollisionWorld(s.scene, s.model);
+  haptics::SnchGlobalSearch search;
+  std::vector<haptics::LocalMinimum> out;
+  for (auto _ : state) {
+    search.search(world, s.fk, kCutoff_m, kPruneRadius_m, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["minima"] = static_cast<double>(out.size());
+  state.counters["triangles"] = static_cast<double>(s.scene.numTriangles());
+  state.counters["tri_pairs"] = static_cast<double>(search.lastStats().triangle_pairs_tested);
+}
+
+void BM_GlobalSearch_Bullet(benchmark::State& state) {
+  Setup& s = setup();
+  static const haptics::CollisionWorld world = haptics::makeCollisionWorld(s.scene, s.model);
+  haptics::BulletGlobalSearch search(world);
+  std::vector<haptics::LocalMinimum> out;
+  std::vector<haptics::LocalMinimum> reference;
+  haptics::SnchGlobalSearch snch;
+  snch.search(world, s.fk, kCutoff_m, kPruneRadius_m, reference);
+  search.search(world, s.fk, kCutoff_m, kPruneRadius_m, out);
+  checkSameMinima(reference, out);
+  for (auto _ : state) {
+    search.search(world, s.fk, kCutoff_m, kPruneRadius_m, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["minima"] = static_cast<double>(out.size());
+  state.counters["tri_pairs"] = static_cast<double>(search.lastTrianglePairs());
+}
+
+void BM_GlobalSearch_Snch_Subdivided(benchmark::State& state) {
+  Setup& s = setup();
+  const haptics::Scene scene = subdivided(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const haptics::CollisionWorld world = haptics::makeCollisionWorld(scene, s.model);
+  haptics::SnchGlobalSearch search;
+  std::vector<haptics::LocalMinimum> out;
+  for (auto _ : state) {
+    search.search(world, s.fk, kCutoff_m, kPruneRadius_m, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["minima"] = static_cast<double>(out.size());
+  state.counters["triangles"] = static_cast<double>(scene.numTriangles());
+}
+
+BENCHMARK(BM_GlobalSearch_Snch)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GlobalSearch_Bullet)->Unit(benchmark::kMillisecond);
+// 27,027 triangles x 4 = 108,108 (one level everywhere); walls and truss 3 levels, the rest 2:
+// 1,115,328 triangles.
+BENCHMARK(BM_GlobalSearch_Snch_Subdivided)->Args({1, 1})->Args({2, 3})->Unit(benchmark::kMillisecond)->Iterations(2);
+
+}  // namespace
+
+BENCHMARK_MAIN();

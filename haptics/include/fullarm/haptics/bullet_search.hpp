@@ -1,0 +1,87 @@
+#pragma once
+/// @file
+/// Bullet (double precision) beside SNCH: an alternative global search with the same output
+/// and pruning, selectable at run time through GlobalSearch, and GJK/EPA penetration depths of
+/// a link into an object (the hand-only study statistics).
+///
+/// The search asks Bullet for the closest points of every link triangle and object triangle
+/// within the cutoff: btCollisionWorld::contactPairTest between the link (a btCompoundShape of
+/// zero-margin btTriangleShape children, one per link triangle) and the object (a
+/// btBvhTriangleMeshShape, margin 0) with ContactResultCallback::m_closestDistanceThreshold = L.
+/// Bullet's bounding-volume trees pick the triangle pairs whose boxes come within L and run
+/// GJK (EPA when they intersect) on each. Every reported pair then goes through the same exact
+/// local-minimum test as an SNCH leaf (evaluateTrianglePair), the same merge of feature pairs
+/// and the same endpoint-radius pruning, so both searches return the same minima.
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "fullarm/arm/arm_data.hpp"
+#include "fullarm/haptics/collision_world.hpp"
+#include "fullarm/haptics/minima.hpp"
+
+namespace fullarm::haptics {
+
+/// Closest points of one link triangle and one object triangle as Bullet reports them.
+struct TrianglePairPoints {
+  int tri_link = -1;
+  int tri_object = -1;
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  ///< on the link triangle, world [m]
+  Eigen::Vector3d q_W = Eigen::Vector3d::Zero();  ///< on the object triangle, world [m]
+  double distance_m = 0.0;                        ///< negative when the triangles intersect (EPA depth)
+};
+
+/// Penetration of a link into an object by GJK/EPA.
+struct LinkPenetration {
+  bool penetrating = false;
+  double depth_m = 0.0;                           ///< >= 0; 0 when apart
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  ///< deepest point of the link, world [m]
+  Eigen::Vector3d q_W = Eigen::Vector3d::Zero();  ///< its counterpart on the object surface, world [m]
+  bool solid_object = false;                      ///< depth measured into a convex solid (see penetration())
+};
+
+/// The Bullet alternative global search. Built for one CollisionWorld (its meshes are copied
+/// into Bullet's structures); search() must be given that world (same meshes; object poses may
+/// change between calls).
+class BulletGlobalSearch final : public GlobalSearch {
+ public:
+  /// @throws std::invalid_argument if the world has no link mesh
+  explicit BulletGlobalSearch(const CollisionWorld& world);
+  ~BulletGlobalSearch() override;
+
+  /// Every local minimum within cutoff_m, merged by feature pair and pruned (as SNCH).
+  /// @throws std::invalid_argument if `world` does not have the link/object meshes this search
+  ///   was built for
+  void search(const CollisionWorld& world, const arm::ArmData& fk, double cutoff_m, double prune_radius_m,
+              std::vector<LocalMinimum>& out) override;
+  [[nodiscard]] std::string_view name() const noexcept override { return "bullet"; }
+
+  /// Bullet's per-triangle closest points between `link` at X_WL and `object` at X_WO, for
+  /// every triangle pair within cutoff_m (one entry per pair, sorted by (tri_link,
+  /// tri_object)). Appends to `out`.
+  void closestTrianglePairs(int link, const Eigen::Isometry3d& X_WL, int object, const Eigen::Isometry3d& X_WO,
+                            double cutoff_m, std::vector<TrianglePairPoints>& out);
+
+  /// GJK/EPA penetration depth of `link` (its convex hull: the link mesh is a capsule) into
+  /// `object`. A convex object (every vertex on the inner side of every face plane) is taken as
+  /// a solid: the depth is the EPA penetration depth of the two convex shapes, exact however
+  /// deep. Any other object is a surface: the depth is the deepest GJK/EPA penetration of the
+  /// link into one of its triangles, which equals the solid depth while the link's axis stays
+  /// outside the surface (penetration shallower than the link radius) and under-estimates it
+  /// beyond.
+  [[nodiscard]] LinkPenetration penetration(int link, const Eigen::Isometry3d& X_WL, int object,
+                                            const Eigen::Isometry3d& X_WO);
+
+  /// Number of triangle pairs Bullet reported in the last search().
+  [[nodiscard]] long lastTrianglePairs() const noexcept { return last_pairs_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::vector<TrianglePairPoints> pairs_;
+  long last_pairs_ = 0;
+};
+
+}  // namespace fullarm::haptics
