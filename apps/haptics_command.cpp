@@ -8,6 +8,7 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "cli_values.hpp"
@@ -107,6 +108,34 @@ nlohmann::json linkRecordsJson(const arm::ArmModel& model, const Eigen::Matrix3d
                     {"force_n", vectorJson(Eigen::Vector3d(R_SW * f[static_cast<std::size_t>(l)]))}});
   }
   return list;
+}
+
+// Per-link contact records (from the first rendering; they do not depend on the mode) with the
+// magnitude of the summed force on each link in each rendering.
+reports::Table linkRecordsTable(const arm::ArmModel& model, const std::vector<haptics::LocalMinimum>& minima,
+                                const std::vector<std::pair<std::string, const haptics::ContactData*>>& renderings,
+                                std::string caption) {
+  reports::Table table;
+  table.caption = std::move(caption);
+  table.columns = {"Link", "Hand link", "Min distance [mm]", "In contact", "Depth [mm]", "Penetrating"};
+  std::vector<std::vector<Eigen::Vector3d>> forces;
+  for (const auto& [label, contact] : renderings) {
+    table.columns.push_back(label);
+    forces.push_back(linkForces(model, minima, *contact));
+  }
+  for (int l = 0; l < model.numJoints(); ++l) {
+    const haptics::LinkContactRecord& rec = renderings.front().second->links[static_cast<std::size_t>(l)];
+    std::vector<reports::Cell> row = {
+        linkName(model, l),
+        haptics::isHandLink(model, l) ? "yes" : "no",
+        std::isfinite(rec.min_distance_m) ? reports::Cell(rec.min_distance_m * 1e3) : reports::Cell("beyond L"),
+        rec.in_contact ? "yes" : "no",
+        rec.depth_m * 1e3,
+        rec.penetrating ? "yes" : "no"};
+    for (const auto& f : forces) row.emplace_back(f[static_cast<std::size_t>(l)].norm());
+    table.rows.push_back(std::move(row));
+  }
+  return table;
 }
 
 }  // namespace
@@ -241,6 +270,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
     reports::Section& section = report.addSection("Minima, forces and torques");
     section.addTable(std::move(table));
     section.addTable(std::move(torques));
+    section.addTable(linkRecordsTable(model, minima, {{"Force [N]", &contact}}, "Per-link contact records"));
     report.write(o.out_dir);
     std::cout << "\nReport: " << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
   }
@@ -284,7 +314,9 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   if (!finite) detail << "; non-finite joint torque";
   step.detail = detail.str();
 
-  // Console.
+  // Console (the demo's later output keeps its own number format).
+  const std::ios_base::fmtflags cout_flags = std::cout.flags();
+  const std::streamsize cout_precision = std::cout.precision();
   std::cout << "  scene " << scene.name << " (" << scene.objects.size() << " objects, " << scene.numTriangles()
             << " triangles), posture " << kDemoPosture << ", SNCH search " << std::fixed << std::setprecision(2)
             << search_ms << " ms, " << minima.size() << " minima within L = " << full_params.cutoff_m * 1e3 << " mm\n";
@@ -296,6 +328,8 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
               << std::setw(17) << hand.contact.tau_total[j] << "\n";
   }
   std::cout << "  links in contact (d < d_f): " << linksInContactText(model, full.contact) << "\n";
+  std::cout.flags(cout_flags);
+  std::cout.precision(cout_precision);
 
   // summary.json: results.haptics_demo.
   nlohmann::json& r = report.results()["haptics_demo"];
@@ -355,22 +389,11 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
     torques.rows.push_back({linkName(model, j), full.contact.tau_contact[j], hand.contact.tau_contact[j],
                             full.contact.tau_gravity[j], full.contact.tau_total[j], hand.contact.tau_total[j]});
   }
-  const std::vector<Eigen::Vector3d> f_full = linkForces(model, minima, full.contact);
-  const std::vector<Eigen::Vector3d> f_hand = linkForces(model, minima, hand.contact);
-  reports::Table links;
   std::ostringstream df_text;
   df_text << std::fixed << std::setprecision(1) << full_params.force_threshold_m * 1e3;
-  links.caption = "Per-link contact records (recorded in both modes; d_f = " + df_text.str() + " mm)";
-  links.columns = {"Link",       "Hand link",   "Min distance [mm]",  "In contact",
-                   "Depth [mm]", "Penetrating", "Force full-arm [N]", "Force hand-only [N]"};
-  for (int l = 0; l < n; ++l) {
-    const haptics::LinkContactRecord& rec = full.contact.links[static_cast<std::size_t>(l)];
-    links.rows.push_back(
-        {linkName(model, l), haptics::isHandLink(model, l) ? "yes" : "no",
-         std::isfinite(rec.min_distance_m) ? reports::Cell(rec.min_distance_m * 1e3) : reports::Cell("beyond L"),
-         rec.in_contact ? "yes" : "no", rec.depth_m * 1e3, rec.penetrating ? "yes" : "no",
-         f_full[static_cast<std::size_t>(l)].norm(), f_hand[static_cast<std::size_t>(l)].norm()});
-  }
+  reports::Table links =
+      linkRecordsTable(model, minima, {{"Force full-arm [N]", &full.contact}, {"Force hand-only [N]", &hand.contact}},
+                       "Per-link contact records (recorded in both modes; d_f = " + df_text.str() + " mm)");
   report.addHeadlineNumber("haptics_minima", "Minima at the valve reach", static_cast<double>(minima.size()), "");
   report.addHeadlineNumber("haptics_tau_contact_full_arm_nm", "Contact torque norm, full-arm",
                            full.contact.tau_contact.norm(), "N·m");
