@@ -3,7 +3,11 @@
 // a scene.
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <string>
+
+#include "fullarm/arm/arm_model.hpp"
+#include "fullarm/reports/report.hpp"
 
 namespace fullarm::app {
 
@@ -26,5 +30,23 @@ CLI::App* addHapticsCommand(CLI::App& app, HapticsQueryOptions& options);
 /// @return 0 (a query has no failing verdict), 1 if the contact computation flagged a fault.
 /// @throws arm::ConfigError / haptics::MeshError / std::runtime_error for bad input (exit 2).
 int runHapticsQuery(const HapticsQueryOptions& options);
+
+/// Result of the demo's haptics step.
+struct HapticsDemoStep {
+  bool pass = false;
+  std::string detail;
+};
+
+/// The demo step: loads the shipped scene `valve_wall.yaml` (haptics::defaultScenePath), poses
+/// `model` at the scene's `reach_valve` posture, runs the SNCH global search once and renders the
+/// minima in full-arm and in hand-only mode with the default haptics parameters; prints both,
+/// adds a section with the two modes side by side (minima and forces, joint torques, per-link
+/// contact records) and the `results.haptics_demo` keys to `report`.
+/// Passes when neither mode flags a contact fault, the search finds at least one minimum and
+/// every joint torque is finite. `out_dir` is unused (the step writes no file of its own) and
+/// kept for the runXDemoStep signature.
+/// @throws arm::ConfigError if the scene, its meshes or the haptics parameters are invalid.
+HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir,
+                                   reports::Report& report);
 
 }  // namespace fullarm::app

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -361,6 +362,19 @@ TEST(SceneTest, TruncatedAndMutatedScenesGiveConfigErrorNeverACrash) {
 
 TEST(SceneTest, MissingSceneFileIsAConfigError) {
   EXPECT_THROW((void)loadScene("/nonexistent/scene.yaml"), arm::ConfigError);
+}
+
+// The shipped-scene lookup used by `fullarm demo`: a test program runs from the build tree, so
+// it finds the source tree's scenes/; $FULLARM_SCENE_DIR overrides it.
+TEST(SceneTest, DefaultScenePathFindsTheSourceTreeAndHonoursTheEnvironment) {
+  ASSERT_EQ(std::getenv("FULLARM_SCENE_DIR"), nullptr);
+  const fs::path found = defaultScenePath("valve_wall.yaml");
+  EXPECT_TRUE(fs::equivalent(found, valveWallFile())) << found;
+  EXPECT_EQ(loadScene(found).name, "valve_wall");
+  ASSERT_EQ(setenv("FULLARM_SCENE_DIR", "/elsewhere/scenes", 1), 0);
+  EXPECT_EQ(defaultScenePath("valve_wall.yaml"), fs::path("/elsewhere/scenes/valve_wall.yaml"));
+  ASSERT_EQ(unsetenv("FULLARM_SCENE_DIR"), 0);
+  EXPECT_TRUE(fs::equivalent(defaultScenePath("valve_wall.yaml"), valveWallFile()));
 }
 
 }  // namespace

@@ -84,4 +84,12 @@ struct Scene {
 ///   joint's range.
 [[nodiscard]] Eigen::VectorXd scenePosture(const Scene& scene, std::string_view name, const arm::ArmModel& model);
 
+/// Path of a shipped scene file `file_name` (e.g. "valve_wall.yaml"), found like the default
+/// configs (arm::defaultConfigPath): $FULLARM_SCENE_DIR/<file_name> if that variable is set;
+/// else, for a program installed under the install prefix, the installed
+/// `<datadir>/fullarm/scenes/`; else the source tree's `scenes/` (when the tree the library was
+/// built from still exists), else the installed one. The file is not opened here: loadScene()
+/// reports a missing file.
+[[nodiscard]] std::filesystem::path defaultScenePath(std::string_view file_name);
+
 }  // namespace fullarm::haptics
