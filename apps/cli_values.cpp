@@ -46,4 +46,12 @@ Eigen::VectorXd parseJointVector(std::string_view text, const arm::ArmModel& mod
   return q;
 }
 
+std::filesystem::path configPathOr(const std::string& option_value, std::filesystem::path (*default_path)()) {
+  return option_value.empty() ? default_path() : std::filesystem::path(option_value);
+}
+
+std::string shortJointName(const std::string& name) {
+  return name.starts_with("R_") ? name.substr(2) : name;
+}
+
 }  // namespace fullarm::app

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/plant/arm_plant.hpp"
@@ -25,10 +26,6 @@ constexpr double kPressureMargin_pa = 0.5e6;
 constexpr double kStopLimit_deg = 0.5;
 constexpr std::size_t kMaxChartPoints = 4000;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-
-std::string shortName(const std::string& name) {
-  return name.starts_with("R_") ? name.substr(2) : name;
-}
 
 // Per-joint trace of a run.
 struct Trace {
@@ -125,21 +122,21 @@ reports::Series series(const std::string& name, const std::vector<double>& x, co
 
 void addTraceCharts(reports::Section& section, const Trace& tr, const std::string& command_unit) {
   reports::XyChart motion;
-  motion.title = shortName(tr.joint) + ": command and angle";
+  motion.title = shortJointName(tr.joint) + ": command and angle";
   motion.x_axis = {"Time", "s"};
   motion.y_axis = {"Value", command_unit + " / deg"};
   motion.series.push_back(series("command [" + command_unit + "]", tr.t, tr.u));
   motion.series.push_back(series("q [deg]", tr.t, tr.q, kRadToDeg));
   section.addLineChart(std::move(motion));
   reports::XyChart pressure;
-  pressure.title = shortName(tr.joint) + ": chamber pressures";
+  pressure.title = shortJointName(tr.joint) + ": chamber pressures";
   pressure.x_axis = {"Time", "s"};
   pressure.y_axis = {"Pressure", "MPa"};
   pressure.series.push_back(series("p_a", tr.t, tr.pa, 1e-6));
   pressure.series.push_back(series("p_b", tr.t, tr.pb, 1e-6));
   section.addLineChart(std::move(pressure));
   reports::XyChart torque;
-  torque.title = shortName(tr.joint) + ": load-cell torque (as read: filtered, 12-bit)";
+  torque.title = shortJointName(tr.joint) + ": load-cell torque (as read: filtered, 12-bit)";
   torque.x_axis = {"Time", "s"};
   torque.y_axis = {"Torque", "N·m"};
   torque.series.push_back(series("tau measured", tr.t, tr.tau));
@@ -213,10 +210,9 @@ CLI::App* addPlantCommand(CLI::App& app, PlantSimulateOptions& o) {
 }
 
 int runPlantSimulate(const PlantSimulateOptions& o) {
-  const arm::ArmModel model =
-      arm::loadArmModel(o.arm_config.empty() ? arm::defaultArmModelPath() : std::filesystem::path(o.arm_config));
-  const plant::PlantConfig config = plant::loadPlantConfig(
-      o.plant_config.empty() ? plant::defaultPlantConfigPath() : std::filesystem::path(o.plant_config), model);
+  const arm::ArmModel model = arm::loadArmModel(configPathOr(o.arm_config, arm::defaultArmModelPath));
+  const plant::PlantConfig config =
+      plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), model);
   std::vector<plant::JointParams> joints;
   if (o.whole_arm) {
     joints = config.joints;
@@ -240,7 +236,8 @@ int runPlantSimulate(const PlantSimulateOptions& o) {
     table = plant::loadCommandCsv(o.input);
     for (std::size_t k = 0; k < joints.size(); ++k) {
       for (std::size_t c = 0; c < table.names.size(); ++c) {
-        if (table.names[c] == "command_" + joints[k].name || table.names[c] == "command_" + shortName(joints[k].name)) {
+        if (table.names[c] == "command_" + joints[k].name ||
+            table.names[c] == "command_" + shortJointName(joints[k].name)) {
           column_of[k] = c;
         }
       }
@@ -279,7 +276,7 @@ int runPlantSimulate(const PlantSimulateOptions& o) {
     pressures_ok = pressures_ok && tr.p_min >= joints[k].return_pressure_pa - kPressureMargin_pa &&
                    tr.p_max <= joints[k].supply_pressure_pa + kPressureMargin_pa;
     stops_ok = stops_ok && tr.overshoot_rad * kRadToDeg <= kStopLimit_deg;
-    const std::string name = o.whole_arm ? "plant_log_" + shortName(tr.joint) + ".csv" : "plant_log.csv";
+    const std::string name = o.whole_arm ? "plant_log_" + shortJointName(tr.joint) + ".csv" : "plant_log.csv";
     writeCsv(tr, std::filesystem::path(o.out_dir) / name);
     report.addFile(name);
   }

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/controllers/gains.hpp"
@@ -271,15 +272,13 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
 }
 
 int runTune(const TuneOptions& o) {
-  const arm::ArmModel model =
-      arm::loadArmModel(o.arm_config.empty() ? arm::defaultArmModelPath() : std::filesystem::path(o.arm_config));
-  const plant::PlantConfig plant_config = plant::loadPlantConfig(
-      o.plant_config.empty() ? plant::defaultPlantConfigPath() : std::filesystem::path(o.plant_config), model);
-  const GainsConfig gains = controllers::loadGainsConfig(
-      o.gains.empty() ? controllers::defaultGainsConfigPath() : std::filesystem::path(o.gains), model);
+  const arm::ArmModel model = arm::loadArmModel(configPathOr(o.arm_config, arm::defaultArmModelPath));
+  const plant::PlantConfig plant_config =
+      plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), model);
+  const GainsConfig gains =
+      controllers::loadGainsConfig(configPathOr(o.gains, controllers::defaultGainsConfigPath), model);
   const controllers::ValidationConfig validation =
-      controllers::loadValidationConfig(o.validation_config.empty() ? controllers::defaultValidationConfigPath()
-                                                                    : std::filesystem::path(o.validation_config));
+      controllers::loadValidationConfig(configPathOr(o.validation_config, controllers::defaultValidationConfigPath));
   const TuneRun run = tuneArm(model, plant_config, gains, validation, o.joints, o);
   const std::filesystem::path out(o.out_dir);
   writeText(out / kGainsFileName, controllers::formatGainsYaml(run.tuned));

@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/controllers/gains.hpp"
@@ -31,10 +32,6 @@ using controllers::ScenarioLinearResult;
 const std::vector<double> kZWidthDampings = {0.0, 0.5, 1.0, 2.0, 5.0, 10.0};
 // Largest number of frequency points per Bode/Nyquist series in the report.
 constexpr std::size_t kMaxFrequencyPoints = 300;
-
-std::string shortName(const std::string& name) {
-  return name.starts_with("R_") ? name.substr(2) : name;
-}
 
 std::string fixed(double v, int digits) {
   std::ostringstream os;
@@ -117,7 +114,7 @@ Outcome validate(const arm::ArmModel& model, const plant::PlantConfig& plant_con
     o.linear = controllers::analyzeScenario(o.nominal, req, config.ranges.delay_max_samples, kZWidthDampings);
     const bool claim_here =
         paper_claim && (claim_joints.empty() || std::find(claim_joints.begin(), claim_joints.end(),
-                                                          shortName(o.nominal.joint_name)) != claim_joints.end());
+                                                          shortJointName(o.nominal.joint_name)) != claim_joints.end());
     if (claim_here) {
       o.claim = controllers::measurePaperClaim(o.nominal);
       o.has_claim = true;
@@ -269,7 +266,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
   for (const JointOutcome& o : out.joints) {
     const controllers::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
     const double ms = std::max(o.linear.free.margins.peak_sensitivity, o.linear.contact.margins.peak_sensitivity);
-    t.rows.push_back({shortName(o.nominal.joint_name), o.pass ? std::string("PASS") : "FAIL: " + o.verdict,
+    t.rows.push_back({shortJointName(o.nominal.joint_name), o.pass ? std::string("PASS") : "FAIL: " + o.verdict,
                       o.linear.free.spectral_radius, o.linear.contact.spectral_radius,
                       o.linear.free.margins.gain_margin, o.linear.free.margins.phase_margin_deg, ms,
                       std::min(o.linear.free.margins.min_real, o.linear.contact.margins.min_real),
@@ -295,7 +292,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
       "Rendered impedance |Z| (free motion)", {"Frequency", "Hz", true}, {"|Z|", "N m s/rad", true}, {}, ""};
   for (const JointOutcome& o : out.joints) {
     const controllers::FrequencyData& fd = o.linear.free.frequency;
-    reports::Series m{shortName(o.nominal.joint_name), {}, {}, reports::SeriesMode::kAuto, {}};
+    reports::Series m{shortJointName(o.nominal.joint_name), {}, {}, reports::SeriesMode::kAuto, {}};
     reports::Series p = m, n = m, z = m;
     n.mode = reports::SeriesMode::kLines;
     double unwrap = 0.0, prev = 0.0;
@@ -344,7 +341,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
   reports::XyChart zc{
       "Z-width", {"Wall damping", "N m s/rad", false}, {"Largest stable wall stiffness", "N m/rad", true}, {}, ""};
   for (const JointOutcome& o : out.joints) {
-    reports::Series s{shortName(o.nominal.joint_name), {}, {}, reports::SeriesMode::kLinesMarkers, {}};
+    reports::Series s{shortJointName(o.nominal.joint_name), {}, {}, reports::SeriesMode::kLinesMarkers, {}};
     for (const controllers::ZWidthPoint& p : o.linear.z_width) {
       if (p.max_stiffness_nm_per_rad <= 0.0) continue;
       s.x.push_back(p.damping_nms_per_rad);
@@ -368,7 +365,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
   reports::Histogram h3{
       "Rendered wall stiffness", {"User torque / penetration", "N m/rad", false}, {}, 0, std::nullopt, ""};
   for (const JointOutcome& o : out.joints) {
-    reports::HistogramSeries a{shortName(o.nominal.joint_name), {}}, b = a, c = a;
+    reports::HistogramSeries a{shortJointName(o.nominal.joint_name), {}}, b = a, c = a;
     for (const controllers::MonteCarloRun& r : o.monte_carlo.runs) {
       a.samples.push_back(r.result.free_rms_user_torque_nm);
       b.samples.push_back(std::max(r.result.free_hold_speed_rms_radps, r.result.contact_hold_speed_rms_radps) /
@@ -395,7 +392,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
     const controllers::ClosedLoopTrace& tr = worst_joint->worst_trace;
     const controllers::MonteCarloRun& w =
         worst_joint->monte_carlo.runs[static_cast<std::size_t>(worst_joint->monte_carlo.worst)];
-    reports::Section& ws = report.addSection("Worst case found: " + shortName(worst_joint->nominal.joint_name) +
+    reports::Section& ws = report.addSection("Worst case found: " + shortJointName(worst_joint->nominal.joint_name) +
                                              " run #" + std::to_string(w.sample.index));
     ws.addParagraph(describeSample(w.sample) + ". " +
                     (worst_joint->worst_result.stable ? std::string("Stable.") : worst_joint->worst_result.failure));
@@ -444,7 +441,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
     ct.significant_digits = 4;
     for (const JointOutcome& o : out.joints) {
       if (!o.has_claim) continue;
-      const std::string j = shortName(o.nominal.joint_name);
+      const std::string j = shortJointName(o.nominal.joint_name);
       const controllers::ControllerFigures& a = o.claim.admittance;
       const controllers::ControllerFigures& p = o.claim.torque_pid;
       ct.rows.push_back({j, "admittance", a.free_rms_user_torque_nm, a.free_peak_user_torque_nm, a.onset_peak_valve_v,
@@ -461,7 +458,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
 void printOutcome(const Outcome& out, std::ostream& os) {
   os << std::left;
   for (const JointOutcome& o : out.joints) {
-    os << "  " << std::setw(5) << shortName(o.nominal.joint_name) << (o.pass ? "PASS" : "FAIL") << "  linear "
+    os << "  " << std::setw(5) << shortJointName(o.nominal.joint_name) << (o.pass ? "PASS" : "FAIL") << "  linear "
        << (o.linear.pass ? "ok" : "fail") << " (rho free " << fixed(o.linear.free.spectral_radius, 5) << ", wall "
        << fixed(o.linear.contact.spectral_radius, 5) << ", Ms " << fixed(o.linear.free.margins.peak_sensitivity, 3)
        << ", gain limit x" << fixed(o.linear.predicted_gain_limit, 3) << ")  Monte-Carlo " << o.monte_carlo.failures
@@ -522,14 +519,13 @@ CLI::App* addValidateCommand(CLI::App& app, ValidateOptions& o) {
 }
 
 int runValidate(const ValidateOptions& o) {
-  const arm::ArmModel model =
-      arm::loadArmModel(o.arm_config.empty() ? arm::defaultArmModelPath() : std::filesystem::path(o.arm_config));
-  const plant::PlantConfig plant_config = plant::loadPlantConfig(
-      o.plant_config.empty() ? plant::defaultPlantConfigPath() : std::filesystem::path(o.plant_config), model);
-  const controllers::GainsConfig gains = controllers::loadGainsConfig(
-      o.gains_config.empty() ? controllers::defaultGainsConfigPath() : std::filesystem::path(o.gains_config), model);
-  controllers::ValidationConfig config = controllers::loadValidationConfig(
-      o.ranges_config.empty() ? controllers::defaultValidationConfigPath() : std::filesystem::path(o.ranges_config));
+  const arm::ArmModel model = arm::loadArmModel(configPathOr(o.arm_config, arm::defaultArmModelPath));
+  const plant::PlantConfig plant_config =
+      plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), model);
+  const controllers::GainsConfig gains =
+      controllers::loadGainsConfig(configPathOr(o.gains_config, controllers::defaultGainsConfigPath), model);
+  controllers::ValidationConfig config =
+      controllers::loadValidationConfig(configPathOr(o.ranges_config, controllers::defaultValidationConfigPath));
   if (o.samples) config.samples = *o.samples;
   if (o.seed) config.seed = static_cast<std::uint64_t>(*o.seed);
   const std::vector<std::string> joints = jointList(gains, o.joints);

@@ -22,7 +22,7 @@ namespace {
 
 using namespace fullarm;
 
-constexpr double kCutoff_m = 0.03;      // config/haptics.yaml
+constexpr double kCutoff_m = 0.03;  // config/haptics.yaml
 constexpr double kPruneRadius_m = 0.02;
 
 std::filesystem::path sourceFile(const char* relative) {

@@ -20,6 +20,7 @@
 #include <random>
 #include <vector>
 
+#include "fcl_mesh.hpp"  // tests/haptics: the FCL peer's mesh
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/haptics/collision_world.hpp"
@@ -31,6 +32,7 @@ namespace {
 
 using namespace fullarm;
 using namespace fullarm::haptics;
+using fullarm::haptics::test::fclModel;
 
 constexpr std::size_t kMinima = 64;
 constexpr double kPruneRadius_m = 0.002;
@@ -169,21 +171,6 @@ void BM_Peer_FreshSnchSearch(benchmark::State& state) {
   reportPercentiles(state, us);
 }
 BENCHMARK(BM_Peer_FreshSnchSearch)->Arg(57);
-
-std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> fclModel(const TriMesh& m) {
-  auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
-  std::vector<fcl::Vector3d> v;
-  std::vector<fcl::Triangle> t;
-  for (int i = 0; i < m.numVertices(); ++i) v.push_back(m.vertex(i));
-  for (int i = 0; i < m.numTriangles(); ++i) {
-    t.emplace_back(static_cast<std::size_t>(m.triangle(i)[0]), static_cast<std::size_t>(m.triangle(i)[1]),
-                   static_cast<std::size_t>(m.triangle(i)[2]));
-  }
-  model->beginModel();
-  model->addSubModel(v, t);
-  model->endModel();
-  return model;
-}
 
 // FCL computes one (global) minimum per pair: here every link x object pair that holds one of
 // the 64 tracked minima, at q1.

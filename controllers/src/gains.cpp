@@ -4,6 +4,7 @@
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
@@ -117,16 +118,6 @@ GainsConfig build(const YamlMap& root, const std::filesystem::path& source, cons
   return config;
 }
 
-template <typename Fn>
-GainsConfig withLines(const YamlMap& root, Fn&& fn) {
-  try {
-    return fn();
-  } catch (const arm::ConfigError& e) {
-    if (e.line() != 0) throw;
-    throw arm::ConfigError(e.file(), e.keyPath(), e.message(), arm::lineOfKeyPath(root.node(), e.keyPath()));
-  }
-}
-
 }  // namespace
 
 void validateJointGains(const JointGains& g, double control_period_s, const std::string& file,
@@ -174,12 +165,12 @@ void validateJointGains(const JointGains& g, double control_period_s, const std:
 GainsConfig parseGainsConfig(std::string_view yaml_text, const std::filesystem::path& source,
                              const arm::ArmModel& model) {
   const YamlMap root = YamlMap::parse(yaml_text, source);
-  return withLines(root, [&] { return build(root, source, model); });
+  return arm::withKeyPathLines(root, [&] { return build(root, source, model); });
 }
 
 GainsConfig loadGainsConfig(const std::filesystem::path& file, const arm::ArmModel& model) {
   const YamlMap root = YamlMap::load(file);
-  return withLines(root, [&] { return build(root, file, model); });
+  return arm::withKeyPathLines(root, [&] { return build(root, file, model); });
 }
 
 std::string formatGainsYaml(const GainsConfig& config) {
@@ -216,16 +207,10 @@ std::filesystem::path defaultGainsConfigPath() {
 }
 
 int findGainsJoint(const GainsConfig& config, std::string_view name) {
-  std::string known;
-  for (std::size_t i = 0; i < config.joints.size(); ++i) {
-    const std::string& full = config.joints[i].name;
-    const std::string_view shortname =
-        full.starts_with("R_") ? std::string_view(full).substr(2) : std::string_view(full);
-    if (name == full || name == shortname) return static_cast<int>(i);
-    known += (known.empty() ? "" : ", ") + std::string(shortname);
-  }
-  throw arm::ConfigError(config.source, "joint",
-                         "unknown joint name '" + std::string(name) + "': expected one of " + known);
+  std::vector<std::string_view> names;
+  names.reserve(config.joints.size());
+  for (const JointGains& g : config.joints) names.emplace_back(g.name);
+  return arm::findJointByName(names, name, config.source);
 }
 
 std::string_view controllerKindName(ControllerKind kind) noexcept {

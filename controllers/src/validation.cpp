@@ -115,12 +115,7 @@ ValidationConfig build(const YamlMap& root, const std::filesystem::path& source)
 }
 
 ValidationConfig withLines(const YamlMap& root, const std::filesystem::path& source) {
-  try {
-    return build(root, source);
-  } catch (const arm::ConfigError& e) {
-    if (e.line() != 0) throw;
-    throw arm::ConfigError(e.file(), e.keyPath(), e.message(), arm::lineOfKeyPath(root.node(), e.keyPath()));
-  }
+  return arm::withKeyPathLines(root, [&] { return build(root, source); });
 }
 
 // SplitMix64 (Steele, Lea & Flood 2014): a counter-based stream per (seed, joint, run).

@@ -10,18 +10,6 @@ using Eigen::Vector3d;
 
 namespace {
 
-Feature toFeature(const TriMesh& mesh, int tri, const LocalFeature& f) noexcept {
-  switch (f.kind) {
-    case LocalFeature::Kind::kVertex:
-      return {FeatureKind::kVertex, mesh.triangle(tri)[f.index]};
-    case LocalFeature::Kind::kEdge:
-      return {FeatureKind::kEdge, mesh.triangleEdge(tri, f.index)};
-    case LocalFeature::Kind::kFace:
-      break;
-  }
-  return {FeatureKind::kFace, tri};
-}
-
 // Local index (0..2) of a global feature within triangle `tri`, or -1 (face or not on it).
 int localIndex(const TriMesh& mesh, int tri, const Feature& f) noexcept {
   for (int k = 0; k < 3; ++k) {
@@ -149,8 +137,8 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       // already optimal for that neighbour); only then is the triangle pair evaluated.
       const Vector3d u_O = (r.q - r.p) / r.distance_m;
       const Vector3d u_L = X_LO.linear() * u_O;
-      const Feature cur_l = toFeature(lmesh, tl, r.feature_a);
-      const Feature cur_o = toFeature(omesh, to, r.feature_b);
+      const Feature cur_l = meshFeature(lmesh, tl, r.feature_a);
+      const Feature cur_o = meshFeature(omesh, to, r.feature_b);
       for (int t : lmesh.featureTriangles(cur_l)) {
         if (t == tl || !neighbourMayBeCloser(lmesh, cur_l, t, u_L)) continue;
         const TriangleTriangleResult c = closestPointsInObjectFrame(lmesh, t, omesh, to, X_OL);
@@ -180,8 +168,8 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     m.previous_distance_m = m.distance_m;
     m.tri_link = tl;
     m.tri_object = to;
-    m.feature_link = toFeature(lmesh, tl, r.feature_a);
-    m.feature_object = toFeature(omesh, to, r.feature_b);
+    m.feature_link = meshFeature(lmesh, tl, r.feature_a);
+    m.feature_object = meshFeature(omesh, to, r.feature_b);
     m.p_L = X_LO * r.p;
     m.p_O = r.q;
     m.distance_m = r.distance_m;

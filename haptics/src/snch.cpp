@@ -136,9 +136,7 @@ TriangleTriangleResult closestPointsInObjectFrame(const TriMesh& link_mesh, int 
                                        object_mesh.vertex(b[1]), object_mesh.vertex(b[2]));
 }
 
-namespace {
-
-Feature globalFeature(const TriMesh& mesh, int tri, const LocalFeature& f) noexcept {
+Feature meshFeature(const TriMesh& mesh, int tri, const LocalFeature& f) noexcept {
   switch (f.kind) {
     case LocalFeature::Kind::kVertex:
       return {FeatureKind::kVertex, mesh.triangle(tri)[f.index]};
@@ -150,14 +148,12 @@ Feature globalFeature(const TriMesh& mesh, int tri, const LocalFeature& f) noexc
   return {FeatureKind::kFace, tri};
 }
 
-}  // namespace
-
 bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh, int tri_object,
                           const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
   const TriangleTriangleResult r = closestPointsInObjectFrame(link_mesh, tri_link, object_mesh, tri_object, X_OL);
   if (r.distance_m > cutoff_m) return false;
-  const Feature fl = globalFeature(link_mesh, tri_link, r.feature_a);
-  const Feature fo = globalFeature(object_mesh, tri_object, r.feature_b);
+  const Feature fl = meshFeature(link_mesh, tri_link, r.feature_a);
+  const Feature fo = meshFeature(object_mesh, tri_object, r.feature_b);
   const double d = r.distance_m;
   const double accept = d - kLocalMinimumTolerance_m;
   // (1) Local minimum over both feature neighbourhoods.

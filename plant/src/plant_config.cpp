@@ -1,6 +1,7 @@
 #include "fullarm/plant/plant_config.hpp"
 
 #include <cstdlib>
+#include <vector>
 
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
@@ -219,22 +220,12 @@ PlantConfig build(const YamlMap& root, const std::filesystem::path& source, cons
 PlantConfig parsePlantConfig(std::string_view yaml_text, const std::filesystem::path& source,
                              const arm::ArmModel& model) {
   const YamlMap root = YamlMap::parse(yaml_text, source);
-  try {
-    return build(root, source, model);
-  } catch (const arm::ConfigError& e) {
-    if (e.line() != 0) throw;
-    throw arm::ConfigError(e.file(), e.keyPath(), e.message(), arm::lineOfKeyPath(root.node(), e.keyPath()));
-  }
+  return arm::withKeyPathLines(root, [&] { return build(root, source, model); });
 }
 
 PlantConfig loadPlantConfig(const std::filesystem::path& file, const arm::ArmModel& model) {
   const YamlMap root = YamlMap::load(file);
-  try {
-    return build(root, file, model);
-  } catch (const arm::ConfigError& e) {
-    if (e.line() != 0) throw;
-    throw arm::ConfigError(e.file(), e.keyPath(), e.message(), arm::lineOfKeyPath(root.node(), e.keyPath()));
-  }
+  return arm::withKeyPathLines(root, [&] { return build(root, file, model); });
 }
 
 std::filesystem::path defaultPlantConfigPath() {
@@ -242,16 +233,10 @@ std::filesystem::path defaultPlantConfigPath() {
 }
 
 int findPlantJoint(const PlantConfig& config, std::string_view name) {
-  std::string known;
-  for (std::size_t i = 0; i < config.joints.size(); ++i) {
-    const std::string& full = config.joints[i].name;
-    const std::string_view shortname =
-        full.starts_with("R_") ? std::string_view(full).substr(2) : std::string_view(full);
-    if (name == full || name == shortname) return static_cast<int>(i);
-    known += (known.empty() ? "" : ", ") + std::string(shortname);
-  }
-  throw arm::ConfigError(config.source, "joint",
-                         "unknown joint name '" + std::string(name) + "': expected one of " + known);
+  std::vector<std::string_view> names;
+  names.reserve(config.joints.size());
+  for (const JointParams& p : config.joints) names.emplace_back(p.name);
+  return arm::findJointByName(names, name, config.source);
 }
 
 }  // namespace fullarm::plant

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "config_text.hpp"
 #include "controllers_fixture.hpp"
 #include "fullarm/arm/config_error.hpp"
 
@@ -15,31 +16,18 @@ namespace fullarm::controllers {
 namespace {
 
 std::string defaultText() {
-  std::ifstream in(defaultGainsConfigPath());
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+  return testing::fileText(defaultGainsConfigPath());
 }
 
 // Replaces the first occurrence of `from` at or after the joint called `joint` (or the file start).
 std::string replaced(std::string text, const std::string& from, const std::string& to, const std::string& joint = {}) {
   const std::size_t start = joint.empty() ? 0 : text.find("name: " + joint);
-  const std::size_t at = text.find(from, start == std::string::npos ? 0 : start);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
+  return testing::replacedFirst(std::move(text), from, to, start == std::string::npos ? 0 : start);
 }
 
 void expectConfigError(const std::string& text, const std::string& key_fragment, const std::string& message_fragment) {
-  try {
-    (void)parseGainsConfig(text, "test_gains.yaml", test::dtsModel());
-    ADD_FAILURE() << "no error for " << key_fragment;
-  } catch (const arm::ConfigError& e) {
-    EXPECT_NE(e.keyPath().find(key_fragment), std::string::npos) << e.what();
-    EXPECT_NE(e.message().find(message_fragment), std::string::npos) << e.what();
-    EXPECT_GT(e.line(), 0) << e.what();
-    EXPECT_NE(std::string(e.what()).find("test_gains.yaml"), std::string::npos) << e.what();
-  }
+  testing::expectConfigError([&] { (void)parseGainsConfig(text, "test_gains.yaml", test::dtsModel()); },
+                             "test_gains.yaml", key_fragment, message_fragment);
 }
 
 TEST(GainsConfig, DefaultFileLoads) {

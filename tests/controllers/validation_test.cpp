@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "config_text.hpp"
 #include "controllers_fixture.hpp"
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/controllers/validation.hpp"
@@ -19,29 +20,16 @@ namespace fullarm::controllers {
 namespace {
 
 std::string defaultText() {
-  std::ifstream in(defaultValidationConfigPath());
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+  return testing::fileText(defaultValidationConfigPath());
 }
 
 std::string replaced(std::string text, const std::string& from, const std::string& to) {
-  const std::size_t at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
+  return testing::replacedFirst(std::move(text), from, to);
 }
 
 void expectConfigError(const std::string& text, const std::string& key_fragment, const std::string& message_fragment) {
-  try {
-    (void)parseValidationConfig(text, "test_validation.yaml");
-    ADD_FAILURE() << "no error for " << key_fragment;
-  } catch (const arm::ConfigError& e) {
-    EXPECT_NE(e.keyPath().find(key_fragment), std::string::npos) << e.what();
-    EXPECT_NE(e.message().find(message_fragment), std::string::npos) << e.what();
-    EXPECT_GT(e.line(), 0) << e.what();
-    EXPECT_NE(std::string(e.what()).find("test_validation.yaml"), std::string::npos) << e.what();
-  }
+  testing::expectConfigError([&] { (void)parseValidationConfig(text, "test_validation.yaml"); }, "test_validation.yaml",
+                             key_fragment, message_fragment);
 }
 
 TEST(ValidationConfig, DefaultFileLoads) {

@@ -11,12 +11,14 @@
 #include <algorithm>
 #include <memory>
 
+#include "fcl_mesh.hpp"
 #include "haptics_test_util.hpp"
 
 namespace fullarm::haptics {
 namespace {
 
 using test::bruteForceMinima;
+using test::fclModel;
 using test::randomPose;
 using test::randomSmallMesh;
 
@@ -68,21 +70,6 @@ TEST(SnchTest, FindsExactlyTheBruteForceLocalMinima) {
   EXPECT_GT(pruned_by_cone, 0);
   RecordProperty("cases_with_minima", cases_with_minima);
   RecordProperty("total_minima", total_minima);
-}
-
-std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> fclModel(const TriMesh& m) {
-  auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
-  std::vector<fcl::Vector3d> v;
-  std::vector<fcl::Triangle> t;
-  for (int i = 0; i < m.numVertices(); ++i) v.push_back(m.vertex(i));
-  for (int i = 0; i < m.numTriangles(); ++i) {
-    t.emplace_back(static_cast<std::size_t>(m.triangle(i)[0]), static_cast<std::size_t>(m.triangle(i)[1]),
-                   static_cast<std::size_t>(m.triangle(i)[2]));
-  }
-  model->beginModel();
-  model->addSubModel(v, t);
-  model->endModel();
-  return model;
 }
 
 double fclDistance(const std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>>& a, const Eigen::Isometry3d& X_WA,

@@ -34,6 +34,16 @@ std::vector<JointParams> idealJoints(const arm::ArmModel& model) {
   return joints;
 }
 
+// The seven arm joints at the default posture, swinging at 0.3 rad/s in alternating directions.
+std::vector<JointState> swingingStart(const arm::ArmModel& model) {
+  std::vector<JointState> s(7);
+  for (int k = 0; k < 7; ++k) {
+    s[static_cast<std::size_t>(k)].q_rad = model.defaultPosture()[k];
+    s[static_cast<std::size_t>(k)].qd_radps = 0.3 * (k % 2 == 0 ? 1.0 : -1.0);
+  }
+  return s;
+}
+
 // With ideal torque sources, the plant's accelerations satisfy fullarm::arm's inverse
 // dynamics: ID(q, qd, qdd_plant) = tau_command (hand joints locked at their posture).
 TEST(ArmPlant, IdealTorqueSourcesReproduceRigidBodyDynamics) {
@@ -81,12 +91,7 @@ TEST(ArmPlant, IdealTorqueFreeMotionConservesArmEnergy) {
   o.atol_velocity_radps = 1e-10;
   ArmPlant plant;
   plant.configure(model, idealJoints(model), model.defaultPosture(), UserArmParams{}, o);
-  std::vector<JointState> s(7);
-  for (int k = 0; k < 7; ++k) {
-    s[static_cast<std::size_t>(k)].q_rad = model.defaultPosture()[k];
-    s[static_cast<std::size_t>(k)].qd_radps = 0.3 * (k % 2 == 0 ? 1.0 : -1.0);
-  }
-  plant.reset(s);
+  plant.reset(swingingStart(model));
   arm::ArmData data(model);
   auto energy = [&] {
     Eigen::VectorXd q = model.defaultPosture();
@@ -181,12 +186,7 @@ TEST(ArmPlant, Rodas3FollowsTightCvodesOnIdealTorqueFreeMotion) {
   auto run = [&](const SolverOptions& o) {
     ArmPlant plant;
     plant.configure(model, idealJoints(model), model.defaultPosture(), UserArmParams{}, o);
-    std::vector<JointState> s(7);
-    for (int k = 0; k < 7; ++k) {
-      s[static_cast<std::size_t>(k)].q_rad = model.defaultPosture()[k];
-      s[static_cast<std::size_t>(k)].qd_radps = 0.3 * (k % 2 == 0 ? 1.0 : -1.0);
-    }
-    plant.reset(s);
+    plant.reset(swingingStart(model));
     const PlantCommand cmd = PlantCommand::zero(7);
     for (int k = 0; k < 1000; ++k) EXPECT_EQ(plant.step(1e-3, cmd), PlantStatus::kOk) << plant.lastError();
     Eigen::VectorXd q(7);

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "config_text.hpp"
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/plant/signals.hpp"
 #include "plant_fixture.hpp"
@@ -15,31 +16,18 @@ namespace fullarm::plant {
 namespace {
 
 std::string defaultText() {
-  std::ifstream in(defaultPlantConfigPath());
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+  return testing::fileText(defaultPlantConfigPath());
 }
 
 std::string replaced(std::string text, const std::string& from, const std::string& to) {
-  const std::size_t at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
+  return testing::replacedFirst(std::move(text), from, to);
 }
 
 // Expects a ConfigError whose key path and message contain the given fragments and which
 // carries a line number.
 void expectConfigError(const std::string& text, const std::string& key_fragment, const std::string& message_fragment) {
-  try {
-    (void)parsePlantConfig(text, "test_plant.yaml", test::dtsModel());
-    ADD_FAILURE() << "no error for " << key_fragment;
-  } catch (const arm::ConfigError& e) {
-    EXPECT_NE(e.keyPath().find(key_fragment), std::string::npos) << e.what();
-    EXPECT_NE(e.message().find(message_fragment), std::string::npos) << e.what();
-    EXPECT_GT(e.line(), 0) << e.what();
-    EXPECT_NE(std::string(e.what()).find("test_plant.yaml"), std::string::npos) << e.what();
-  }
+  testing::expectConfigError([&] { (void)parsePlantConfig(text, "test_plant.yaml", test::dtsModel()); },
+                             "test_plant.yaml", key_fragment, message_fragment);
 }
 
 TEST(PlantConfig, DefaultFileLoadsWithArmGeometry) {

@@ -13,6 +13,10 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <type_traits>
+#include <vector>
+
+#include "fullarm/arm/config_error.hpp"
 
 namespace fullarm::arm {
 
@@ -80,5 +84,26 @@ class YamlList {
 /// 1-based line of the value at a dotted key path such as `joints[2].link.mass_kg` in a parsed
 /// document, or 0 when the path does not exist.
 [[nodiscard]] int lineOfKeyPath(const YAML::Node& root, std::string_view key_path);
+
+/// Runs `build()` (which reads `root`) and returns its result. A ConfigError thrown without a
+/// line (a semantic check that knows only the key path) is rethrown with the line of that key
+/// path in `root`'s document; errors that already carry a line pass through unchanged.
+/// @throws ConfigError
+template <typename Build>
+[[nodiscard]] std::invoke_result_t<Build&> withKeyPathLines(const YamlMap& root, Build&& build) {
+  try {
+    return build();
+  } catch (const ConfigError& e) {
+    if (e.line() != 0) throw;
+    throw ConfigError(e.file(), e.keyPath(), e.message(), lineOfKeyPath(root.node(), e.keyPath()));
+  }
+}
+
+/// Index in `joint_names` (model names such as "R_EB") of the joint called `name`, given either
+/// as the model name or as the short name without the "R_" side prefix ("EB").
+/// @throws ConfigError (file `source`, key path `joint`) naming `name` and listing the short
+/// names it could have been.
+[[nodiscard]] int findJointByName(const std::vector<std::string_view>& joint_names, std::string_view name,
+                                  const std::filesystem::path& source);
 
 }  // namespace fullarm::arm

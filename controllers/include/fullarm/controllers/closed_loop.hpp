@@ -121,10 +121,10 @@ struct ClosedLoopResult {
   double free_peak_user_torque_nm = 0.0;  ///< peak |tau_user| over the free move (onset spike)
   double onset_peak_valve_v = 0.0;        ///< peak |valve command| in the first 0.1 s of the free move
   // Wall rendering (contact hold window).
-  double contact_penetration_rad = 0.0;                ///< mean penetration
-  double contact_wall_torque_nm = 0.0;                 ///< mean |tau_env|
-  double contact_wall_torque_deviation_nm = 0.0;       ///< std of tau_env over the last contact window
-  double contact_user_torque_nm = 0.0;                 ///< mean |tau_user| over the last contact window
+  double contact_penetration_rad = 0.0;           ///< mean penetration
+  double contact_wall_torque_nm = 0.0;            ///< mean |tau_env|
+  double contact_wall_torque_deviation_nm = 0.0;  ///< std of tau_env over the last contact window
+  double contact_user_torque_nm = 0.0;            ///< mean |tau_user| over the last contact window
   /// The wall carried at least half of the user's push over the last contact window (contact was
   /// really tested; a sluggish controller may never reach the wall).
   bool wall_reached = false;

@@ -76,6 +76,11 @@ struct SnchQueryStats {
                                                                 const TriMesh& object_mesh, int tri_object,
                                                                 const Eigen::Isometry3d& X_OL) noexcept;
 
+/// The mesh feature (TriMesh vertex id, edge id, or the triangle itself) that `f`, a feature of
+/// triangle `tri` in the triangle's local numbering, names.
+/// @rt
+[[nodiscard]] Feature meshFeature(const TriMesh& mesh, int tri, const LocalFeature& f) noexcept;
+
 /// Tests one triangle pair: when its closest points form a local minimum (definition in the
 /// file comment) at distance <= cutoff_m, fills `out` (triangles, features, p_L in the link
 /// frame, p_O in the object frame, distance, u in the OBJECT frame; link/object left as they

@@ -1,0 +1,35 @@
+#pragma once
+/// @file
+/// The FCL peer's view of a fullarm mesh, shared by the haptics tests (FCL as the distance
+/// oracle) and bench/haptics_local_bench.cpp (FCL as the timed peer). FCL is never linked into
+/// fullarm::haptics; only targets that link `fcl` include this header.
+
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/math/bv/OBBRSS.h>
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+#include "fullarm/haptics/primitives.hpp"
+
+namespace fullarm::haptics::test {
+
+/// An FCL OBBRSS bounding-volume hierarchy over the vertices and triangles of `mesh` (mesh
+/// frame, metres), ready to be placed with an fcl::CollisionObjectd.
+inline std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> fclModel(const TriMesh& mesh) {
+  auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+  std::vector<fcl::Vector3d> v;
+  std::vector<fcl::Triangle> t;
+  for (int i = 0; i < mesh.numVertices(); ++i) v.push_back(mesh.vertex(i));
+  for (int i = 0; i < mesh.numTriangles(); ++i) {
+    t.emplace_back(static_cast<std::size_t>(mesh.triangle(i)[0]), static_cast<std::size_t>(mesh.triangle(i)[1]),
+                   static_cast<std::size_t>(mesh.triangle(i)[2]));
+  }
+  model->beginModel();
+  model->addSubModel(v, t);
+  model->endModel();
+  return model;
+}
+
+}  // namespace fullarm::haptics::test
