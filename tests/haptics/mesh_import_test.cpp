@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cstdint>
@@ -32,8 +33,11 @@ constexpr double kFloatTolerance = 1e-6;
 class MeshImportTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("fullarm_mesh_import_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    // The process id keeps two concurrent runs of the suite (two build trees) out of each other's files.
+    std::string name = "fullarm_mesh_import_";
+    name.append(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    name.append("_").append(std::to_string(::getpid()));
+    dir_ = fs::temp_directory_path() / name;
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
