@@ -29,7 +29,10 @@ std::vector<int> weldVertices(std::vector<Eigen::Vector3d>& vertices, double tol
   struct KeyHash {
     std::size_t operator()(const std::tuple<long long, long long, long long>& k) const noexcept {
       const auto [x, y, z] = k;
-      return static_cast<std::size_t>(x * 73856093LL ^ y * 19349663LL ^ z * 83492791LL);
+      // Unsigned arithmetic: the products wrap instead of overflowing.
+      return static_cast<std::size_t>(static_cast<unsigned long long>(x) * 73856093ULL ^
+                                      static_cast<unsigned long long>(y) * 19349663ULL ^
+                                      static_cast<unsigned long long>(z) * 83492791ULL);
     }
   };
   std::unordered_map<std::tuple<long long, long long, long long>, std::vector<int>, KeyHash> cells;
@@ -96,6 +99,17 @@ TriMesh TriMesh::build(std::string source, std::vector<Eigen::Vector3d> vertices
     }
   }
   if (weld_tolerance_m > 0.0) {
+    // Welding bins vertices into integer cells of the tolerance's size: a coordinate more than
+    // 2^50 cells from the origin has no exact cell index (and would overflow it), so it is an error.
+    const double max_cells = std::ldexp(1.0, 50);
+    for (int v = 0; v < nv; ++v) {
+      if (vertices_m[static_cast<std::size_t>(v)].cwiseAbs().maxCoeff() / weld_tolerance_m >= max_cells) {
+        throw MeshError(mesh.source_,
+                        "vertex " + std::to_string(v) + " " + vecString(vertices_m[static_cast<std::size_t>(v)]) +
+                            " is too far from the origin to weld at a tolerance of " +
+                            std::to_string(weld_tolerance_m) + " m: expected |coordinate| / tolerance < 2^50");
+      }
+    }
     const std::vector<int> remap = weldVertices(vertices_m, weld_tolerance_m, mesh.welded_vertices_);
     for (auto& tri : triangles) {
       for (int k = 0; k < 3; ++k) tri[k] = remap[static_cast<std::size_t>(tri[k])];

@@ -68,6 +68,20 @@ TEST(TriMeshTest, NonFiniteCoordinateNamesVertexAndSource) {
   }
 }
 
+// Found by UBSan on a mutated PLY file: a coordinate of 1e10 m at a 1 um weld tolerance (2^53 cells out) has no
+// integer cell index. It must be a MeshError naming the vertex, not undefined behaviour.
+TEST(TriMeshTest, CoordinateTooLargeToWeldNamesVertex) {
+  try {
+    (void)TriMesh::build("huge.ply", {{0, 0, 0}, {1e10, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}, 1e-6);
+    FAIL() << "expected MeshError";
+  } catch (const MeshError& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 1"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("too far from the origin to weld"), std::string::npos) << e.what();
+  }
+  // Without welding the same coordinates are accepted (they are finite).
+  EXPECT_NO_THROW((void)TriMesh::build("huge.ply", {{0, 0, 0}, {1e10, 0, 0}, {0, 1, 0}}, {{0, 1, 2}}));
+}
+
 TEST(TriMeshTest, IndexOutOfRangeNamesTriangle) {
   try {
     (void)TriMesh::build("b", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 3, 1}});
