@@ -1,5 +1,7 @@
 // The fullarm program end to end: exit codes, messages on bad input, output folders.
 
+#include "cli_runner.hpp"
+
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -13,29 +15,11 @@
 
 namespace {
 
-struct Result {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
-
-Result runFullarm(const std::string& args) {
-  const std::string command = std::string(FULLARM_EXE) + " " + args + " 2>&1";
-  Result r;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return r;
-  std::array<char, 4096> buffer{};
-  std::size_t n = 0;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using Result = fullarm::test::CliResult;
+using fullarm::test::runFullarm;
 
 std::filesystem::path tempDir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "fullarm_cli_test" / name;
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
+  return fullarm::test::cliTempDir("fullarm_cli_test", name);
 }
 
 std::string source(const std::string& rel) {
@@ -226,7 +210,8 @@ TEST(Cli, DemoRunsAndSaysWhatIsNotBuiltYet) {
   EXPECT_EQ(summary["results"]["steps"][1]["status"], "done");  // plant chirp experiment
   EXPECT_EQ(summary["results"]["steps"][2]["status"], "not built yet");
   EXPECT_EQ(summary["verdict"]["pass"].get<bool>(), r.exit_code == 0);
-  EXPECT_EQ(summary["results"]["steps"][4]["status"], summary["results"]["validate"]["pass"].get<bool>() ? "done" : "failed");
+  EXPECT_EQ(summary["results"]["steps"][4]["status"],
+            summary["results"]["validate"]["pass"].get<bool>() ? "done" : "failed");
   // Haptics step: the valve scene at its reach posture, both modes; the valve study is not built.
   const nlohmann::json& haptics = summary["results"]["haptics_demo"];
   EXPECT_EQ(summary["results"]["steps"][5]["status"], haptics["pass"].get<bool>() ? "done" : "failed");

@@ -1,6 +1,8 @@
 // `fullarm tune` end to end: the tuned gains file loads with the gains loader `validate` uses,
 // summary.json carries the per-joint results, bad input exits 2 with a message.
 
+#include "cli_runner.hpp"
+
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -16,29 +18,11 @@
 
 namespace {
 
-struct Result {
-  int exit_code = -1;
-  std::string output;
-};
-
-Result runFullarm(const std::string& args) {
-  const std::string command = std::string(FULLARM_EXE) + " " + args + " 2>&1";
-  Result r;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return r;
-  std::array<char, 4096> buffer{};
-  std::size_t n = 0;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) r.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using Result = fullarm::test::CliResult;
+using fullarm::test::runFullarm;
 
 std::filesystem::path tempDir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "fullarm_tune_cli_test" / name;
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
+  return fullarm::test::cliTempDir("fullarm_tune_cli_test", name);
 }
 
 TEST(TuneCli, WritesLoadableGainsAndSummary) {
