@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <string>
 
+#include "scratch_dir.hpp"
+
 namespace fullarm::test {
 
 struct CliResult {
@@ -30,12 +32,9 @@ inline CliResult runFullarm(const std::string& args) {
   return r;
 }
 
-/// An empty scratch folder `<tmp>/<suite>/<name>`, created afresh.
+/// An empty scratch folder `<tmp>/<suite>_<name>_<pid>`, created afresh (see scratchDir).
 inline std::filesystem::path cliTempDir(const std::string& suite, const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / suite / name;
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
+  return scratchDir(suite + "_" + name);
 }
 
 }  // namespace fullarm::test

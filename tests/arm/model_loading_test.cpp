@@ -11,6 +11,7 @@
 #include "arm_test_util.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
+#include "scratch_dir.hpp"
 
 namespace fullarm::arm {
 namespace {
@@ -32,8 +33,7 @@ std::string edited(const std::string& from, const std::string& to) {
 }
 
 std::filesystem::path writeTemp(const std::string& name, const std::string& text) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "fullarm_model_loading_test";
-  std::filesystem::create_directories(dir);
+  static const std::filesystem::path dir = fullarm::test::scratchDir("fullarm_model_loading_test");
   const std::filesystem::path file = dir / name;
   std::ofstream(file) << text;
   return file;

@@ -12,6 +12,7 @@
 #include "arm_test_util.hpp"
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/kinematics.hpp"
+#include "scratch_dir.hpp"
 
 namespace fullarm::arm {
 namespace {
@@ -84,8 +85,7 @@ TEST(ArmScaling, NonPositiveLengthIsRejectedWithItsKey) {
 }
 
 TEST(ArmScaling, LoadsSizeFileAndRejectsUnknownKeys) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "fullarm_scaling_test";
-  std::filesystem::create_directories(dir);
+  const std::filesystem::path dir = fullarm::test::scratchDir("fullarm_scaling_test");
   const auto good = dir / "size.yaml";
   std::ofstream(good) << "arm_size:\n  upper_arm_length_m: 0.30\n  hand_length_m: 0.09\n";
   const ArmSize size = loadArmSize(good);
@@ -102,6 +102,7 @@ TEST(ArmScaling, LoadsSizeFileAndRejectsUnknownKeys) {
     EXPECT_EQ(e.keyPath(), "arm_size.upper_arm_lenght_m");
     EXPECT_EQ(e.file(), bad);
   }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

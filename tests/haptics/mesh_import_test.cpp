@@ -6,7 +6,6 @@
 
 #include <gtest/gtest.h>
 
-#include <unistd.h>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cstdint>
@@ -18,6 +17,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "scratch_dir.hpp"
 
 namespace fullarm::haptics {
 namespace {
@@ -33,13 +34,8 @@ constexpr double kFloatTolerance = 1e-6;
 class MeshImportTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    // The process id keeps two concurrent runs of the suite (two build trees) out of each other's files.
-    std::string name = "fullarm_mesh_import_";
-    name.append(::testing::UnitTest::GetInstance()->current_test_info()->name());
-    name.append("_").append(std::to_string(::getpid()));
-    dir_ = fs::temp_directory_path() / name;
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = fullarm::test::scratchDir(std::string("fullarm_mesh_import_") +
+                                     ::testing::UnitTest::GetInstance()->current_test_info()->name());
   }
   void TearDown() override { fs::remove_all(dir_); }
 
@@ -447,7 +443,8 @@ TEST(MeshImportDrcTest, TruncatedDrcWallGivesMeshError) {
   std::ifstream in(repoMesh("drc_practice_valve_wall/five_dice_wall.dae"), std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_GT(bytes.size(), 100000u);
-  const fs::path path = fs::temp_directory_path() / "fullarm_truncated_wall.dae";
+  const fs::path dir = fullarm::test::scratchDir("fullarm_truncated_wall");
+  const fs::path path = dir / "five_dice_wall.dae";
   for (int i = 1; i < 8; ++i) {
     {
       std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -455,7 +452,7 @@ TEST(MeshImportDrcTest, TruncatedDrcWallGivesMeshError) {
     }
     EXPECT_THROW((void)importMesh(path), MeshError) << "truncated at " << i << "/8";
   }
-  fs::remove(path);
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -20,6 +20,7 @@
 #include "fullarm/haptics/mesh_import.hpp"
 #include "fullarm/haptics/primitives.hpp"
 #include "matrix_compare.hpp"
+#include "scratch_dir.hpp"
 
 namespace fullarm::haptics {
 namespace {
@@ -289,8 +290,7 @@ TEST(SceneTest, ErrorsCarryTheLineOfTheBadValue) {
 }
 
 TEST(SceneTest, MeshErrorsBecomeConfigErrorsWithTheMeshMessage) {
-  const fs::path dir = fs::temp_directory_path() / "fullarm_scene_test_mesh";
-  fs::create_directories(dir);
+  const fs::path dir = fullarm::test::scratchDir("fullarm_scene_test_mesh");
   { std::ofstream(dir / "broken.obj") << "v 0 0 0\nv 1 0 0\nf 1 2 7\n"; }
   const std::string text =
       edited("shape: {type: box, size_m: [0.2, 0.1, 0.3], max_edge_m: 0.1}", "shape: {type: mesh, file: broken.obj}");
@@ -305,7 +305,7 @@ TEST(SceneTest, MeshErrorsBecomeConfigErrorsWithTheMeshMessage) {
 }
 
 TEST(SceneTest, RelativeMeshPathsResolveAgainstTheSceneFolderAndShareOneImport) {
-  const fs::path dir = fs::temp_directory_path() / "fullarm_scene_test_relative";
+  const fs::path dir = fullarm::test::scratchDir("fullarm_scene_test_relative");
   fs::create_directories(dir / "meshes");
   {
     std::ofstream(dir / "meshes" / "tri.stl")
