@@ -226,13 +226,15 @@ ArmModel loadArmModel(const std::filesystem::path& file) {
   return buildAndValidate(YamlMap::load(file), file);
 }
 
-std::filesystem::path defaultConfigPath(std::string_view file_name) {
-  if (const char* dir = std::getenv("FULLARM_CONFIG_DIR"); dir != nullptr && *dir != '\0') {
+std::filesystem::path defaultDataPath(std::string_view file_name, const char* env_var,
+                                      const std::filesystem::path& source_dir,
+                                      const std::filesystem::path& installed_dir) {
+  if (const char* dir = std::getenv(env_var); dir != nullptr && *dir != '\0') {
     return std::filesystem::path(dir) / file_name;
   }
-  std::filesystem::path installed = std::filesystem::path(FULLARM_INSTALL_CONFIG_DIR) / file_name;
-  std::filesystem::path source = std::filesystem::path(FULLARM_SOURCE_CONFIG_DIR) / file_name;
-  // A program installed under the install prefix reads the installed config; anything else (the
+  const std::filesystem::path installed = installed_dir / file_name;
+  const std::filesystem::path source = source_dir / file_name;
+  // A program installed under the install prefix reads the installed file; anything else (the
   // build tree's programs and tests) reads the source tree's, when that tree still exists.
   std::error_code ec;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
@@ -241,6 +243,10 @@ std::filesystem::path defaultConfigPath(std::string_view file_name) {
   if (!running_installed && std::filesystem::is_regular_file(source)) return source;
   if (std::filesystem::is_regular_file(installed)) return installed;
   return source;
+}
+
+std::filesystem::path defaultConfigPath(std::string_view file_name) {
+  return defaultDataPath(file_name, "FULLARM_CONFIG_DIR", FULLARM_SOURCE_CONFIG_DIR, FULLARM_INSTALL_CONFIG_DIR);
 }
 
 std::filesystem::path defaultArmModelPath() {

@@ -1,15 +1,14 @@
 #include "fullarm/haptics/scene.hpp"
 
 #include <cmath>
-#include <cstdlib>
 #include <memory>
 #include <numbers>
 #include <set>
 #include <sstream>
 #include <string>
-#include <system_error>
 #include <utility>
 
+#include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/yaml_reader.hpp"
 #include "fullarm/haptics/mesh_import.hpp"
@@ -283,20 +282,7 @@ Eigen::VectorXd scenePosture(const Scene& scene, std::string_view name, const ar
 }
 
 std::filesystem::path defaultScenePath(std::string_view file_name) {
-  if (const char* dir = std::getenv("FULLARM_SCENE_DIR"); dir != nullptr && *dir != '\0') {
-    return std::filesystem::path(dir) / file_name;
-  }
-  const std::filesystem::path installed = std::filesystem::path(FULLARM_INSTALL_SCENE_DIR) / file_name;
-  const std::filesystem::path source = std::filesystem::path(FULLARM_SOURCE_SCENE_DIR) / file_name;
-  // Same rule as arm::defaultConfigPath: a program installed under the install prefix reads the
-  // installed scenes, anything else (build-tree programs and tests) the source tree's.
-  std::error_code ec;
-  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  const std::string prefix = std::filesystem::path(FULLARM_INSTALL_PREFIX).lexically_normal().string() + "/";
-  const bool running_installed = !ec && exe.lexically_normal().string().rfind(prefix, 0) == 0;
-  if (!running_installed && std::filesystem::is_regular_file(source)) return source;
-  if (std::filesystem::is_regular_file(installed)) return installed;
-  return source;
+  return arm::defaultDataPath(file_name, "FULLARM_SCENE_DIR", FULLARM_SOURCE_SCENE_DIR, FULLARM_INSTALL_SCENE_DIR);
 }
 
 }  // namespace fullarm::haptics

@@ -19,6 +19,14 @@ namespace fullarm::arm {
 /// @throws ConfigError
 [[nodiscard]] ArmModel parseArmModel(std::string_view yaml_text, const std::filesystem::path& source);
 
+/// Path of a data file `file_name` shipped with fullarm: $<env_var>/<file_name> if that variable is
+/// set and not empty; else, for a program installed under the install prefix, `installed_dir`'s
+/// copy; else `source_dir`'s (the source tree the library was built from, while it exists); else
+/// the installed one. defaultConfigPath and haptics::defaultScenePath are this rule.
+[[nodiscard]] std::filesystem::path defaultDataPath(std::string_view file_name, const char* env_var,
+                                                    const std::filesystem::path& source_dir,
+                                                    const std::filesystem::path& installed_dir);
+
 /// Path of a default configuration file `file_name` (e.g. "dts_plant.yaml"):
 /// $FULLARM_CONFIG_DIR/<file_name> if that variable is set; else, for a program installed under the install prefix, the
 /// installed config; else the source tree's config/ (when the tree the library was built from still exists), else the
