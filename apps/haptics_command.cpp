@@ -162,10 +162,9 @@ CLI::App* addHapticsCommand(CLI::App& app, HapticsQueryOptions& o) {
 }
 
 int runHapticsQuery(const HapticsQueryOptions& o) {
-  const arm::ArmModel model =
-      arm::loadArmModel(o.arm_config.empty() ? arm::defaultArmModelPath() : std::filesystem::path(o.arm_config));
-  haptics::HapticsParams params = haptics::loadHapticsParams(
-      o.haptics_config.empty() ? haptics::defaultHapticsParamsPath() : std::filesystem::path(o.haptics_config));
+  const arm::ArmModel model = arm::loadArmModel(configPathOr(o.arm_config, arm::defaultArmModelPath));
+  haptics::HapticsParams params =
+      haptics::loadHapticsParams(configPathOr(o.haptics_config, haptics::defaultHapticsParamsPath));
   params.mode = o.mode == "hand-only" ? haptics::RenderMode::kHandOnly : haptics::RenderMode::kFullArm;
   const Eigen::VectorXd q = parseJointVector(o.q_text, model, "--q");
   const haptics::Scene scene = haptics::loadScene(o.scene);

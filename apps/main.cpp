@@ -50,8 +50,7 @@ struct ArmOptions {
   }
 
   arm::ArmModel load() const {
-    arm::ArmModel model =
-        arm::loadArmModel(config.empty() ? arm::defaultArmModelPath() : std::filesystem::path(config));
+    arm::ArmModel model = arm::loadArmModel(configPathOr(config, arm::defaultArmModelPath));
     arm::ArmSize size;
     if (!arm_size_file.empty()) size = arm::loadArmSize(arm_size_file);
     if (upper_arm_m) size.upper_arm_length_m = upper_arm_m;
