@@ -151,8 +151,8 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     int tl = m.tri_link;
     int to = m.tri_object;
     // The tracked pair, warm-started from the previous features (same distance as the full
-    // computation, about a third of the work when the features did not change). Each side's
-    // prepared triangle is reused for every neighbour evaluated against it.
+    // computation; one candidate and its optimality test when the features did not change).
+    // Each side's prepared triangle is reused for every neighbour evaluated against it.
     PreparedTriangle A = linkTriangle(lmesh, tl, X_OL);
     PreparedTriangle B = objectTriangle(omesh, to);
     TriangleTriangleResult r = closestPointsTriangleTriangleWarm(A, B, localGuess(lmesh, tl, m.feature_link),

@@ -145,7 +145,7 @@ std::array<LocalFeature, 7> allLocalFeatures() {
           LocalFeature{Kind::kFace, 0}};
 }
 
-TEST(GeometryTest, PreparedAndWarmStartedQueriesMatchFclAndTheColdComputation) {
+TEST(GeometryTest, PreparedAndWarmStartedQueriesMatchFcl) {
   std::mt19937 rng(23);
   int intersecting = 0;
   for (int trial = 0; trial < 4000; ++trial) {
