@@ -433,6 +433,45 @@ bool vertexCandidate(const PreparedTriangle& v_tri, int k, const PreparedTriangl
   return true;
 }
 
+// Closest pair of edge k of E and triangle T (the segment against T: its two endpoints against
+// T and the segment against T's three edges, unless it crosses T), kept when the point on E is
+// also E's closest point to the point on T (E's Voronoi-region test; the point on T is T's
+// closest point by construction, since the pair minimises over the edge and T).
+bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, Vector3d& e_point, Vector3d& t_point,
+                   double& distance_sq, LocalFeature& e_feature, LocalFeature& t_feature) noexcept {
+  const int k1 = (k + 1) % 3;
+  double s_cross = 0.0;
+  if (segmentCrossesPrepared(E.v[k], E.v[k1], T, s_cross)) return false;
+  double best = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < 3; ++j) {
+    const SquaredSegmentResult c =
+        closestSegmentSegmentSquared(E.v[k], E.edge[k], E.edge_sq[k], T.v[j], T.edge[j], T.edge_sq[j]);
+    if (c.distance_sq < best) {
+      best = c.distance_sq;
+      e_point = c.p;
+      t_point = c.q;
+      e_feature = edgeFeature(k, c.s);
+      t_feature = edgeFeature(j, c.t);
+    }
+  }
+  for (const int end : {k, k1}) {
+    const SquaredPointResult c = closestPointSquared(E.v[end], T);
+    if (c.distance_sq < best) {
+      best = c.distance_sq;
+      e_point = E.v[end];
+      t_point = c.point;
+      e_feature = {Kind::kVertex, static_cast<std::uint8_t>(end)};
+      t_feature = c.feature;
+    }
+  }
+  if (!(best > 0.0)) return false;
+  const Vector3d w = t_point - e_point;
+  const bool optimal =
+      e_feature.kind == Kind::kVertex ? vertexRegionHolds(E, e_feature.index, w) : edgeRegionHolds(E, k, w);
+  distance_sq = best;
+  return optimal;
+}
+
 }  // namespace
 
 TriangleTriangleResult closestPointsTriangleTriangleWarm(const PreparedTriangle& A, const PreparedTriangle& B,
@@ -471,11 +510,15 @@ TriangleTriangleResult closestPointsTriangleTriangleWarm(const PreparedTriangle&
       r.feature_b = guess_b;
       found = true;
     }
+  } else if (guess_a.kind == Kind::kEdge) {
+    // An edge against an unknown feature: the edge against the whole other triangle.
+    found = edgeCandidate(A, guess_a.index, B, r.p, r.q, d_sq, r.feature_a, r.feature_b);
+  } else if (guess_b.kind == Kind::kEdge) {
+    found = edgeCandidate(B, guess_b.index, A, r.q, r.p, d_sq, r.feature_b, r.feature_a);
   } else {
-    // A face guess: the closest point lies inside that face, so the other side's closest
-    // feature is its vertex nearest to the face's plane.
-    if (guess_a.kind == Kind::kFace) found = vertexOfB(vertexNearestPlane(B, A));
-    if (!found && guess_b.kind == Kind::kFace) found = vertexOfA(vertexNearestPlane(A, B));
+    // Face guesses: the closest point lies inside a face, so the other side's closest feature
+    // is its vertex nearest to that face's plane.
+    found = vertexOfB(vertexNearestPlane(B, A)) || vertexOfA(vertexNearestPlane(A, B));
   }
   if (!found) return closestPointsTriangleTriangle(A, B);
   r.distance_m = std::sqrt(d_sq);

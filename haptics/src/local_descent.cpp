@@ -177,7 +177,9 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
         const NeighbourScreen screen(lmesh, cur_l, u_L);
         for (int t : lmesh.featureTriangles(cur_l)) {
           if (t == tl || !screen.mayBeCloser(t)) continue;
-          const TriangleTriangleResult c = closestPointsTriangleTriangle(linkTriangle(lmesh, t, X_OL), B);
+          // Warm-started: B and its closest feature are unchanged, t's is unknown (face).
+          const TriangleTriangleResult c =
+              closestPointsTriangleTriangleWarm(linkTriangle(lmesh, t, X_OL), B, LocalFeature{}, r.feature_b);
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
             best = c;
             best_t = t;
@@ -189,7 +191,8 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
         const NeighbourScreen screen(omesh, cur_o, -u_O);
         for (int t : omesh.featureTriangles(cur_o)) {
           if (t == to || !screen.mayBeCloser(t)) continue;
-          const TriangleTriangleResult c = closestPointsTriangleTriangle(A, objectTriangle(omesh, t));
+          const TriangleTriangleResult c =
+              closestPointsTriangleTriangleWarm(A, objectTriangle(omesh, t), r.feature_a, LocalFeature{});
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
             best = c;
             best_t = t;
