@@ -116,10 +116,11 @@ struct PreparedTriangle {
                                                                    const PreparedTriangle& B) noexcept;
 
 /// Closest points warm-started from a guess of the closest feature pair (for example the pair
-/// of the previous tick). The candidate of the guess is computed alone: a vertex guess gives
-/// the vertex against the other triangle; an edge-edge guess the two edges; a face guess
-/// (with no vertex guess on the other side) the other triangle's vertex nearest to that face's
-/// plane. It is returned when it passes the exact optimality test of two convex sets: p is the
+/// of the previous tick; a face guess also stands for "unknown"). The candidate of the guess is
+/// computed alone, in this order: a vertex guess gives the vertex against the other triangle;
+/// an edge-edge guess the two edges; an edge against a face guess the edge against the whole
+/// other triangle (unless it crosses it); two face guesses the vertex of either triangle
+/// nearest to the other's plane. It is returned when it passes the exact optimality test of two convex sets: p is the
 /// point of A closest to q and q the point of B closest to p (tested on the Voronoi region of
 /// the feature: two dot products for a vertex, one per side for an edge interior). Otherwise
 /// the full closestPointsTriangleTriangle runs. The distance always equals the cold
