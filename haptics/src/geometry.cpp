@@ -129,25 +129,6 @@ SegmentSegmentResult closestPointsSegmentSegment(const Vector3d& p0, const Vecto
 
 namespace {
 
-// Intersection of segment [p0, p1] with triangle (a, b, c): true and the crossing parameter
-// when the open-or-closed segment meets the closed triangle at one point (coplanar overlaps
-// are left to the distance candidates, which then find distance 0).
-bool segmentTriangleCrossing(const Vector3d& p0, const Vector3d& p1, const Vector3d& a, const Vector3d& b,
-                             const Vector3d& c, double& s_out) noexcept {
-  const Vector3d n = (b - a).cross(c - a);
-  const double h0 = n.dot(p0 - a);
-  const double h1 = n.dot(p1 - a);
-  if ((h0 > 0.0 && h1 > 0.0) || (h0 < 0.0 && h1 < 0.0) || h0 == h1) return false;
-  const double s = h0 / (h0 - h1);
-  const Vector3d x = p0 + s * (p1 - p0);
-  // Inside test by signed areas against the normal.
-  if (n.dot((b - a).cross(x - a)) < 0.0) return false;
-  if (n.dot((c - b).cross(x - b)) < 0.0) return false;
-  if (n.dot((a - c).cross(x - c)) < 0.0) return false;
-  s_out = s;
-  return true;
-}
-
 LocalFeature edgeFeature(int k, double s) noexcept {
   if (s <= 0.0) return {Kind::kVertex, static_cast<std::uint8_t>(k)};
   if (s >= 1.0) return {Kind::kVertex, static_cast<std::uint8_t>((k + 1) % 3)};
@@ -159,97 +140,389 @@ LocalFeature edgeFeature(int k, double s) noexcept {
 TriangleTriangleResult closestPointsTriangleTriangle(const Vector3d& a0, const Vector3d& a1, const Vector3d& a2,
                                                      const Vector3d& b0, const Vector3d& b1,
                                                      const Vector3d& b2) noexcept {
-  const std::array<const Vector3d*, 3> A{&a0, &a1, &a2};
-  const std::array<const Vector3d*, 3> B{&b0, &b1, &b2};
-  TriangleTriangleResult best;
-  best.distance_m = std::numeric_limits<double>::infinity();
+  return closestPointsTriangleTriangle(prepareTriangle(a0, a1, a2), prepareTriangle(b0, b1, b2));
+}
 
-  // Intersection: an edge of one triangle crossing the other. Impossible when either
-  // triangle lies strictly on one side of the other's plane (the common, cheap case).
-  const Vector3d nA = (a1 - a0).cross(a2 - a0);
-  const Vector3d nB = (b1 - b0).cross(b2 - b0);
-  const double sa0 = nB.dot(a0 - b0);
-  const double sa1 = nB.dot(a1 - b0);
-  const double sa2 = nB.dot(a2 - b0);
-  const double sb0 = nA.dot(b0 - a0);
-  const double sb1 = nA.dot(b1 - a0);
-  const double sb2 = nA.dot(b2 - a0);
+// ---------------------------------------------------------------------------------------------
+// Prepared triangles: the arithmetic of closestPointTriangle and closestPointsSegmentSegment,
+// with the edge vectors computed once per triangle, squared distances compared and one square
+// root per triangle pair.
+
+namespace {
+
+// Closest point of a prepared triangle to p with its squared distance and feature (Ericson
+// 5.1.5, the same region tests as closestPointTriangle).
+struct SquaredPointResult {
+  Vector3d point;
+  double distance_sq;
+  LocalFeature feature;
+};
+
+inline SquaredPointResult closestPointSquared(const Vector3d& p, const PreparedTriangle& t) noexcept {
+  const Vector3d& a = t.v[0];
+  const Vector3d& ab = t.edge[0];
+  const Vector3d& ac = t.ac;
+  const Vector3d ap = p - a;
+  const double d1 = ab.dot(ap);
+  const double d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return {a, ap.squaredNorm(), {Kind::kVertex, 0}};
+  const Vector3d bp = p - t.v[1];
+  const double d3 = ab.dot(bp);
+  const double d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return {t.v[1], bp.squaredNorm(), {Kind::kVertex, 1}};
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const Vector3d x = a + (d1 / (d1 - d3)) * ab;
+    return {x, (p - x).squaredNorm(), {Kind::kEdge, 0}};
+  }
+  const Vector3d cp = p - t.v[2];
+  const double d5 = ab.dot(cp);
+  const double d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return {t.v[2], cp.squaredNorm(), {Kind::kVertex, 2}};
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const Vector3d x = a + (d2 / (d2 - d6)) * ac;
+    return {x, (p - x).squaredNorm(), {Kind::kEdge, 2}};
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const Vector3d x = t.v[1] + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * t.edge[1];
+    return {x, (p - x).squaredNorm(), {Kind::kEdge, 1}};
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const Vector3d x = a + ab * (vb * denom) + ac * (vc * denom);
+  return {x, (p - x).squaredNorm(), {Kind::kFace, 0}};
+}
+
+// closestPointsSegmentSegment with the segment directions and squared lengths given.
+struct SquaredSegmentResult {
+  double s;
+  double t;
+  Vector3d p;
+  Vector3d q;
+  double distance_sq;
+};
+
+inline SquaredSegmentResult closestSegmentSegmentSquared(const Vector3d& p0, const Vector3d& d1, double a,
+                                                         const Vector3d& q0, const Vector3d& d2, double e) noexcept {
+  const Vector3d r = p0 - q0;
+  const double f = d2.dot(r);
+  double s = 0.0;
+  double t = 0.0;
+  constexpr double kTiny = 1e-300;
+  if (a <= kTiny && e <= kTiny) {
+    s = t = 0.0;
+  } else if (a <= kTiny) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= kTiny) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2);
+      const double denom = a * e - b * b;
+      s = denom > 1e-20 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  SquaredSegmentResult out{s, t, p0 + s * d1, q0 + t * d2, 0.0};
+  out.distance_sq = (out.p - out.q).squaredNorm();
+  return out;
+}
+
+// segmentTriangleCrossing against a prepared triangle (same arithmetic).
+bool segmentCrossesPrepared(const Vector3d& p0, const Vector3d& p1, const PreparedTriangle& t, double& s_out) noexcept {
+  const Vector3d& n = t.normal;
+  const double h0 = n.dot(p0 - t.v[0]);
+  const double h1 = n.dot(p1 - t.v[0]);
+  if ((h0 > 0.0 && h1 > 0.0) || (h0 < 0.0 && h1 < 0.0) || h0 == h1) return false;
+  const double s = h0 / (h0 - h1);
+  const Vector3d x = p0 + s * (p1 - p0);
+  for (int k = 0; k < 3; ++k) {
+    if (n.dot(t.edge[k].cross(x - t.v[k])) < 0.0) return false;
+  }
+  s_out = s;
+  return true;
+}
+
+// Relative slack of the plane-distance bounds that skip candidates (rounding of the bound).
+constexpr double kBoundSlack = 1e-12;
+
+// Relative slack of the warm-start optimality tests: a cosine this small counts as
+// perpendicular (parallel edges and faces keep their feature pair instead of flickering
+// between equally close representatives); the distance it can hide is ~1e-24 relative.
+constexpr double kWarmCosineSlackSq = 1e-24;
+
+// w . e <= 0 with the slack above.
+inline bool notTowards(const Vector3d& w, const Vector3d& e) noexcept {
+  const double dot = w.dot(e);
+  return dot <= 0.0 || dot * dot <= kWarmCosineSlackSq * w.squaredNorm() * e.squaredNorm();
+}
+
+// Is vertex k of t the closest point of t to the point at offset w from it?
+inline bool vertexRegionHolds(const PreparedTriangle& t, int k, const Vector3d& w) noexcept {
+  // Ericson's vertex region: w . (v[k+1] - v[k]) <= 0 and w . (v[k+2] - v[k]) <= 0.
+  return notTowards(w, t.edge[k]) && notTowards(w, -t.edge[(k + 2) % 3]);
+}
+
+// Is the interior point of edge k of t at offset w (perpendicular to the edge) from the
+// target's closest point? Then w must not point into the triangle.
+inline bool edgeRegionHolds(const PreparedTriangle& t, int k, const Vector3d& w) noexcept {
+  return notTowards(w, t.normal.cross(t.edge[k]));
+}
+
+}  // namespace
+
+double squaredDistancePointTriangle(const Vector3d& p, const PreparedTriangle& t) noexcept {
+  return closestPointSquared(p, t).distance_sq;
+}
+
+PointTriangleResult closestPointTriangle(const Vector3d& p, const PreparedTriangle& t) noexcept {
+  const SquaredPointResult r = closestPointSquared(p, t);
+  PointTriangleResult out;
+  out.point = r.point;
+  out.feature = r.feature;
+  out.distance_m = std::sqrt(r.distance_sq);
+  return out;
+}
+
+TriangleTriangleResult closestPointsTriangleTriangle(const PreparedTriangle& A, const PreparedTriangle& B) noexcept {
+  TriangleTriangleResult best;
+  // Intersection: an edge of one triangle crossing the other; impossible when either lies
+  // strictly on one side of the other's plane.
+  const double sa0 = B.normal.dot(A.v[0] - B.v[0]);
+  const double sa1 = B.normal.dot(A.v[1] - B.v[0]);
+  const double sa2 = B.normal.dot(A.v[2] - B.v[0]);
+  const double sb0 = A.normal.dot(B.v[0] - A.v[0]);
+  const double sb1 = A.normal.dot(B.v[1] - A.v[0]);
+  const double sb2 = A.normal.dot(B.v[2] - A.v[0]);
   const bool a_one_side = (sa0 > 0.0 && sa1 > 0.0 && sa2 > 0.0) || (sa0 < 0.0 && sa1 < 0.0 && sa2 < 0.0);
   const bool b_one_side = (sb0 > 0.0 && sb1 > 0.0 && sb2 > 0.0) || (sb0 < 0.0 && sb1 < 0.0 && sb2 < 0.0);
-  for (int k = 0; k < 3 && !a_one_side && !b_one_side; ++k) {
-    double s = 0.0;
-    if (segmentTriangleCrossing(*A[k], *A[(k + 1) % 3], b0, b1, b2, s)) {
-      const Vector3d x = *A[k] + s * (*A[(k + 1) % 3] - *A[k]);
-      const PointTriangleResult on_b = closestPointTriangle(x, b0, b1, b2);
-      best.p = x;
-      best.q = on_b.point;
-      best.distance_m = 0.0;
-      best.feature_a = edgeFeature(k, s);
-      best.feature_b = on_b.feature;
-      best.intersecting = true;
-      return best;
+  if (!a_one_side && !b_one_side) {
+    for (int k = 0; k < 3; ++k) {
+      double s = 0.0;
+      if (segmentCrossesPrepared(A.v[k], A.v[(k + 1) % 3], B, s)) {
+        const Vector3d x = A.v[k] + s * (A.v[(k + 1) % 3] - A.v[k]);
+        const SquaredPointResult on_b = closestPointSquared(x, B);
+        best.p = x;
+        best.q = on_b.point;
+        best.distance_m = 0.0;
+        best.feature_a = edgeFeature(k, s);
+        best.feature_b = on_b.feature;
+        best.intersecting = true;
+        return best;
+      }
     }
-  }
-  for (int k = 0; k < 3 && !a_one_side && !b_one_side; ++k) {
-    double s = 0.0;
-    if (segmentTriangleCrossing(*B[k], *B[(k + 1) % 3], a0, a1, a2, s)) {
-      const Vector3d x = *B[k] + s * (*B[(k + 1) % 3] - *B[k]);
-      const PointTriangleResult on_a = closestPointTriangle(x, a0, a1, a2);
-      best.p = on_a.point;
-      best.q = x;
-      best.distance_m = 0.0;
-      best.feature_a = on_a.feature;
-      best.feature_b = edgeFeature(k, s);
-      best.intersecting = true;
-      return best;
+    for (int k = 0; k < 3; ++k) {
+      double s = 0.0;
+      if (segmentCrossesPrepared(B.v[k], B.v[(k + 1) % 3], A, s)) {
+        const Vector3d x = B.v[k] + s * (B.v[(k + 1) % 3] - B.v[k]);
+        const SquaredPointResult on_a = closestPointSquared(x, A);
+        best.p = on_a.point;
+        best.q = x;
+        best.distance_m = 0.0;
+        best.feature_a = on_a.feature;
+        best.feature_b = edgeFeature(k, s);
+        best.intersecting = true;
+        return best;
+      }
     }
   }
 
-  // Disjoint: vertex-face candidates, then edge-edge candidates.
+  // Disjoint: vertex-face candidates, then edge-edge candidates. A candidate whose distance
+  // to the other triangle's plane (a lower bound) already exceeds the best is skipped; the
+  // slack keeps rounding-level ties computed, so the first strictly smallest still wins.
+  const std::array<double, 3> sa{sa0, sa1, sa2};
+  const std::array<double, 3> sb{sb0, sb1, sb2};
+  const double inv_nb = B.normal_sq > 0.0 ? 1.0 / B.normal_sq : 0.0;  // 0: no bound
+  const double inv_na = A.normal_sq > 0.0 ? 1.0 / A.normal_sq : 0.0;
+  double best_sq = std::numeric_limits<double>::infinity();
+  auto beyond = [&best_sq](double lower_bound_sq) noexcept { return lower_bound_sq > best_sq * (1.0 + kBoundSlack); };
   bool best_is_vertex_of_a = true;
   for (int k = 0; k < 3; ++k) {
-    const PointTriangleResult r = closestPointTriangle(*A[k], b0, b1, b2);
-    if (r.distance_m < best.distance_m) {
-      best.p = *A[k];
+    if (beyond(sa[k] * sa[k] * inv_nb)) continue;
+    const SquaredPointResult r = closestPointSquared(A.v[k], B);
+    if (r.distance_sq < best_sq) {
+      best.p = A.v[k];
       best.q = r.point;
-      best.distance_m = r.distance_m;
+      best_sq = r.distance_sq;
       best.feature_a = {Kind::kVertex, static_cast<std::uint8_t>(k)};
       best.feature_b = r.feature;
     }
   }
   for (int k = 0; k < 3; ++k) {
-    const PointTriangleResult r = closestPointTriangle(*B[k], a0, a1, a2);
-    if (r.distance_m < best.distance_m) {
+    if (beyond(sb[k] * sb[k] * inv_na)) continue;
+    const SquaredPointResult r = closestPointSquared(B.v[k], A);
+    if (r.distance_sq < best_sq) {
       best_is_vertex_of_a = false;
       best.p = r.point;
-      best.q = *B[k];
-      best.distance_m = r.distance_m;
+      best.q = B.v[k];
+      best_sq = r.distance_sq;
       best.feature_a = r.feature;
       best.feature_b = {Kind::kVertex, static_cast<std::uint8_t>(k)};
     }
   }
-  // Early exit: the distance is convex over the pair of triangles, so the best vertex
-  // candidate is the minimum when each of its points is also the other triangle's closest
-  // point to the other (one side holds by construction; test the other exactly).
-  if (best.distance_m > 0.0) {
-    const double d2 = best.distance_m * best.distance_m;
-    const double other = best_is_vertex_of_a ? squaredDistancePointTriangle(best.q, a0, a1, a2)
-                                             : squaredDistancePointTriangle(best.p, b0, b1, b2);
-    if (other >= d2) return best;
+  // Early exit (convexity): the best vertex candidate is the minimum when its other point is
+  // also the closest point of the other triangle.
+  if (best_sq > 0.0) {
+    const double other =
+        best_is_vertex_of_a ? closestPointSquared(best.q, A).distance_sq : closestPointSquared(best.p, B).distance_sq;
+    if (other >= best_sq) {
+      best.distance_m = std::sqrt(best_sq);
+      return best;
+    }
   }
+  // Plane-distance bound of each edge: its nearer endpoint when both lie on one side.
+  auto edgeBound = [](const std::array<double, 3>& s, int i, double inv) noexcept {
+    const double s0 = s[static_cast<std::size_t>(i)];
+    const double s1 = s[static_cast<std::size_t>((i + 1) % 3)];
+    if ((s0 > 0.0) != (s1 > 0.0) || s0 == 0.0 || s1 == 0.0) return 0.0;
+    const double m = std::min(std::abs(s0), std::abs(s1));
+    return m * m * inv;
+  };
+  const std::array<double, 3> bound_a{edgeBound(sa, 0, inv_nb), edgeBound(sa, 1, inv_nb), edgeBound(sa, 2, inv_nb)};
+  const std::array<double, 3> bound_b{edgeBound(sb, 0, inv_na), edgeBound(sb, 1, inv_na), edgeBound(sb, 2, inv_na)};
   for (int i = 0; i < 3; ++i) {
+    if (beyond(bound_a[static_cast<std::size_t>(i)])) continue;
     for (int j = 0; j < 3; ++j) {
-      const SegmentSegmentResult r = closestPointsSegmentSegment(*A[i], *A[(i + 1) % 3], *B[j], *B[(j + 1) % 3]);
-      if (r.distance_m < best.distance_m) {
+      if (beyond(bound_b[static_cast<std::size_t>(j)])) continue;
+      const SquaredSegmentResult r =
+          closestSegmentSegmentSquared(A.v[i], A.edge[i], A.edge_sq[i], B.v[j], B.edge[j], B.edge_sq[j]);
+      if (r.distance_sq < best_sq) {
         best.p = r.p;
         best.q = r.q;
-        best.distance_m = r.distance_m;
+        best_sq = r.distance_sq;
         best.feature_a = edgeFeature(i, r.s);
         best.feature_b = edgeFeature(j, r.t);
       }
     }
   }
+  best.distance_m = std::sqrt(best_sq);
   return best;
+}
+
+namespace {
+
+// Vertex of `t` nearest to the plane of `face` when t lies strictly on one side of it, else -1.
+int vertexNearestPlane(const PreparedTriangle& t, const PreparedTriangle& face) noexcept {
+  const double s0 = face.normal.dot(t.v[0] - face.v[0]);
+  const double s1 = face.normal.dot(t.v[1] - face.v[0]);
+  const double s2 = face.normal.dot(t.v[2] - face.v[0]);
+  if (s0 > 0.0 && s1 > 0.0 && s2 > 0.0) return s0 <= s1 ? (s0 <= s2 ? 0 : 2) : (s1 <= s2 ? 1 : 2);
+  if (s0 < 0.0 && s1 < 0.0 && s2 < 0.0) return s0 >= s1 ? (s0 >= s2 ? 0 : 2) : (s1 >= s2 ? 1 : 2);
+  return -1;
+}
+
+// Candidate of vertex k of `v_tri` against triangle `other`, kept when the vertex is also the
+// closest point of v_tri to the other point (q = closest point of `other` by construction).
+bool vertexCandidate(const PreparedTriangle& v_tri, int k, const PreparedTriangle& other, Vector3d& vertex_point,
+                     Vector3d& other_point, double& distance_sq, LocalFeature& other_feature) noexcept {
+  const SquaredPointResult c = closestPointSquared(v_tri.v[k], other);
+  if (!(c.distance_sq > 0.0) || !vertexRegionHolds(v_tri, k, c.point - v_tri.v[k])) return false;
+  vertex_point = v_tri.v[k];
+  other_point = c.point;
+  distance_sq = c.distance_sq;
+  other_feature = c.feature;
+  return true;
+}
+
+// Closest pair of edge k of E and triangle T (the segment against T: its two endpoints against
+// T and the segment against T's three edges, unless it crosses T), kept when the point on E is
+// also E's closest point to the point on T (E's Voronoi-region test; the point on T is T's
+// closest point by construction, since the pair minimises over the edge and T).
+bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, Vector3d& e_point, Vector3d& t_point,
+                   double& distance_sq, LocalFeature& e_feature, LocalFeature& t_feature) noexcept {
+  const int k1 = (k + 1) % 3;
+  double s_cross = 0.0;
+  if (segmentCrossesPrepared(E.v[k], E.v[k1], T, s_cross)) return false;
+  double best = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < 3; ++j) {
+    const SquaredSegmentResult c =
+        closestSegmentSegmentSquared(E.v[k], E.edge[k], E.edge_sq[k], T.v[j], T.edge[j], T.edge_sq[j]);
+    if (c.distance_sq < best) {
+      best = c.distance_sq;
+      e_point = c.p;
+      t_point = c.q;
+      e_feature = edgeFeature(k, c.s);
+      t_feature = edgeFeature(j, c.t);
+    }
+  }
+  for (const int end : {k, k1}) {
+    const SquaredPointResult c = closestPointSquared(E.v[end], T);
+    if (c.distance_sq < best) {
+      best = c.distance_sq;
+      e_point = E.v[end];
+      t_point = c.point;
+      e_feature = {Kind::kVertex, static_cast<std::uint8_t>(end)};
+      t_feature = c.feature;
+    }
+  }
+  if (!(best > 0.0)) return false;
+  const Vector3d w = t_point - e_point;
+  const bool optimal =
+      e_feature.kind == Kind::kVertex ? vertexRegionHolds(E, e_feature.index, w) : edgeRegionHolds(E, k, w);
+  distance_sq = best;
+  return optimal;
+}
+
+}  // namespace
+
+TriangleTriangleResult closestPointsTriangleTriangleWarm(const PreparedTriangle& A, const PreparedTriangle& B,
+                                                         const LocalFeature& guess_a,
+                                                         const LocalFeature& guess_b) noexcept {
+  TriangleTriangleResult r;
+  double d_sq = 0.0;
+  auto vertexOfA = [&](int k) noexcept {
+    if (k < 0 || !vertexCandidate(A, k, B, r.p, r.q, d_sq, r.feature_b)) return false;
+    r.feature_a = {Kind::kVertex, static_cast<std::uint8_t>(k)};
+    return true;
+  };
+  auto vertexOfB = [&](int k) noexcept {
+    if (k < 0 || !vertexCandidate(B, k, A, r.q, r.p, d_sq, r.feature_a)) return false;
+    r.feature_b = {Kind::kVertex, static_cast<std::uint8_t>(k)};
+    return true;
+  };
+  bool found = false;
+  if (guess_a.kind == Kind::kVertex) {
+    found = vertexOfA(guess_a.index);
+  } else if (guess_b.kind == Kind::kVertex) {
+    found = vertexOfB(guess_b.index);
+  } else if (guess_a.kind == Kind::kEdge && guess_b.kind == Kind::kEdge) {
+    const int i = guess_a.index;
+    const int j = guess_b.index;
+    const SquaredSegmentResult c =
+        closestSegmentSegmentSquared(A.v[i], A.edge[i], A.edge_sq[i], B.v[j], B.edge[j], B.edge_sq[j]);
+    // Interior points of both edges: the offset is perpendicular to both edges, so each point
+    // is its triangle's closest point iff the offset does not point into that triangle.
+    if (c.s > 0.0 && c.s < 1.0 && c.t > 0.0 && c.t < 1.0 && c.distance_sq > 0.0 && edgeRegionHolds(A, i, c.q - c.p) &&
+        edgeRegionHolds(B, j, c.p - c.q)) {
+      r.p = c.p;
+      r.q = c.q;
+      d_sq = c.distance_sq;
+      r.feature_a = guess_a;
+      r.feature_b = guess_b;
+      found = true;
+    }
+  } else if (guess_a.kind == Kind::kEdge) {
+    // An edge against an unknown feature: the edge against the whole other triangle.
+    found = edgeCandidate(A, guess_a.index, B, r.p, r.q, d_sq, r.feature_a, r.feature_b);
+  } else if (guess_b.kind == Kind::kEdge) {
+    found = edgeCandidate(B, guess_b.index, A, r.q, r.p, d_sq, r.feature_b, r.feature_a);
+  } else {
+    // Face guesses: the closest point lies inside a face, so the other side's closest feature
+    // is its vertex nearest to that face's plane.
+    found = vertexOfB(vertexNearestPlane(B, A)) || vertexOfA(vertexNearestPlane(A, B));
+  }
+  if (!found) return closestPointsTriangleTriangle(A, B);
+  r.distance_m = std::sqrt(d_sq);
+  return r;
 }
 
 }  // namespace fullarm::haptics

@@ -1,6 +1,8 @@
 #include "fullarm/haptics/local_descent.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cstdint>
 #include <utility>
 
 namespace fullarm::haptics {
@@ -19,85 +21,95 @@ int localIndex(const TriMesh& mesh, int tri, const Feature& f) noexcept {
   return -1;
 }
 
-// Closest points of the tracked triangle pair, warm-started from the previous features: the
-// candidate of the previous feature pair is computed alone and kept if it passes the exact
-// optimality test of a convex pair (p is the closest point of A to q and q the closest point
-// of B to p); otherwise the full triangle-triangle computation runs. Same result, about a
-// third of the work when the features did not change.
-TriangleTriangleResult warmClosestPoints(const TriMesh& lmesh, int tl, const TriMesh& omesh, int to,
-                                         const Isometry3d& X_OL, const LocalMinimum& prev) noexcept {
-  const Eigen::Vector3i& ta = lmesh.triangle(tl);
-  const Eigen::Vector3i& tb = omesh.triangle(to);
-  const std::array<Vector3d, 3> A{X_OL * lmesh.vertex(ta[0]), X_OL * lmesh.vertex(ta[1]), X_OL * lmesh.vertex(ta[2])};
-  const std::array<Vector3d, 3> B{omesh.vertex(tb[0]), omesh.vertex(tb[1]), omesh.vertex(tb[2])};
-  const int ka = localIndex(lmesh, tl, prev.feature_link);
-  const int kb = localIndex(omesh, to, prev.feature_object);
-  TriangleTriangleResult r;
-  bool have = false;
-  if (prev.feature_link.kind == FeatureKind::kVertex && ka >= 0) {
-    const PointTriangleResult c = closestPointTriangle(A[static_cast<std::size_t>(ka)], B[0], B[1], B[2]);
-    r.p = A[static_cast<std::size_t>(ka)];
-    r.q = c.point;
-    r.feature_a = {LocalFeature::Kind::kVertex, static_cast<std::uint8_t>(ka)};
-    r.feature_b = c.feature;
-    have = true;
-  } else if (prev.feature_object.kind == FeatureKind::kVertex && kb >= 0) {
-    const PointTriangleResult c = closestPointTriangle(B[static_cast<std::size_t>(kb)], A[0], A[1], A[2]);
-    r.p = c.point;
-    r.q = B[static_cast<std::size_t>(kb)];
-    r.feature_a = c.feature;
-    r.feature_b = {LocalFeature::Kind::kVertex, static_cast<std::uint8_t>(kb)};
-    have = true;
-  } else if (prev.feature_link.kind == FeatureKind::kEdge && prev.feature_object.kind == FeatureKind::kEdge &&
-             ka >= 0 && kb >= 0) {
-    const auto ia = static_cast<std::size_t>(ka);
-    const auto ib = static_cast<std::size_t>(kb);
-    const SegmentSegmentResult c = closestPointsSegmentSegment(A[ia], A[(ia + 1) % 3], B[ib], B[(ib + 1) % 3]);
-    if (c.s > 0.0 && c.s < 1.0 && c.t > 0.0 && c.t < 1.0) {
-      r.p = c.p;
-      r.q = c.q;
-      r.feature_a = {LocalFeature::Kind::kEdge, static_cast<std::uint8_t>(ka)};
-      r.feature_b = {LocalFeature::Kind::kEdge, static_cast<std::uint8_t>(kb)};
-      have = true;
-    }
-  }
-  if (have) {
-    r.distance_m = (r.q - r.p).norm();
-    const double accept = r.distance_m - 1e-15 * (1.0 + r.distance_m);
-    if (r.distance_m > 0.0 && accept > 0.0 && squaredDistancePointTriangle(r.q, A[0], A[1], A[2]) >= accept * accept &&
-        squaredDistancePointTriangle(r.p, B[0], B[1], B[2]) >= accept * accept) {
-      return r;
-    }
-  }
-  return closestPointsTriangleTriangle(A[0], A[1], A[2], B[0], B[1], B[2]);
+// Local numbering (in triangle `tri`) of a mesh feature of the previous tick: the warm-start
+// guess of closestPointsTriangleTriangleWarm (the face when the feature is not on `tri`).
+LocalFeature localGuess(const TriMesh& mesh, int tri, const Feature& f) noexcept {
+  const int k = localIndex(mesh, tri, f);
+  if (k < 0) return {};
+  return {f.kind == FeatureKind::kVertex ? LocalFeature::Kind::kVertex : LocalFeature::Kind::kEdge,
+          static_cast<std::uint8_t>(k)};
 }
 
-// First-order screening of a neighbour triangle t of feature f (a vertex or an edge holding
-// the closest point x): can a point of t be closer to the target (in direction `dir` from x)
-// than x? The distance over a flat triangle is convex, so this holds exactly when some
-// direction into t from x has a positive component along dir: for a vertex, one of t's two
-// edges leaving it; for an edge, t's in-plane direction perpendicular to it.
-bool neighbourMayBeCloser(const TriMesh& mesh, const Feature& f, int t, const Vector3d& dir) noexcept {
-  const Eigen::Vector3i& tri = mesh.triangle(t);
-  if (f.kind == FeatureKind::kVertex) {
-    const Vector3d& v = mesh.vertex(f.index);
-    for (int k = 0; k < 3; ++k) {
-      if (tri[k] != f.index && dir.dot(mesh.vertex(tri[k]) - v) > 0.0) return true;
-    }
-    return false;
-  }
-  const auto ev = mesh.edgeVertices(f.index);
-  const Vector3d& a = mesh.vertex(ev[0]);
-  const Vector3d ab = mesh.vertex(ev[1]) - a;
-  int w = tri[0];
-  for (int k = 0; k < 3; ++k) {
-    if (tri[k] != ev[0] && tri[k] != ev[1]) w = tri[k];
-  }
-  const Vector3d aw = mesh.vertex(w) - a;
-  // Component of a->w perpendicular to the edge, scaled by |ab|^2 (no division).
-  const Vector3d inward = ab.squaredNorm() * aw - aw.dot(ab) * ab;
-  return dir.dot(inward) > 0.0;
+// A link triangle moved into the object frame, prepared for repeated queries.
+PreparedTriangle linkTriangle(const TriMesh& mesh, int t, const Isometry3d& X_OL) noexcept {
+  const Eigen::Vector3i& v = mesh.triangle(t);
+  return prepareTriangle(X_OL * mesh.vertex(v[0]), X_OL * mesh.vertex(v[1]), X_OL * mesh.vertex(v[2]));
 }
+
+PreparedTriangle objectTriangle(const TriMesh& mesh, int t) noexcept {
+  const Eigen::Vector3i& v = mesh.triangle(t);
+  return prepareTriangle(mesh.vertex(v[0]), mesh.vertex(v[1]), mesh.vertex(v[2]));
+}
+
+// meshFeature (snch.hpp), inlined here: called several times per minimum and tick.
+inline Feature globalFeature(const TriMesh& mesh, int tri, const LocalFeature& f) noexcept {
+  if (f.kind == LocalFeature::Kind::kVertex) return {FeatureKind::kVertex, mesh.triangle(tri)[f.index]};
+  if (f.kind == LocalFeature::Kind::kEdge) return {FeatureKind::kEdge, mesh.triangleEdge(tri, f.index)};
+  return {FeatureKind::kFace, tri};
+}
+
+// Link/object pairs whose runs the merge remembers (see updateMinimaLocalDescent); beyond
+// this many runs every survivor is compared.
+constexpr int kMaxRuns = 64;
+
+inline std::uint64_t pairKey(int link, int object) noexcept {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(link)) << 32) | static_cast<std::uint32_t>(object);
+}
+
+// First-order screening of the neighbour triangles t of feature f (a vertex or an edge
+// holding the closest point x): can a point of t be closer to the target (in direction `dir`
+// from x) than x? The distance over a flat triangle is convex, so this holds exactly when some
+// direction into t from x has a positive component along dir: for a vertex, one of t's two
+// edges leaving it; for an edge, t's in-plane direction perpendicular to it. The per-feature
+// terms are computed once for all neighbours.
+class NeighbourScreen {
+ public:
+  NeighbourScreen(const TriMesh& mesh, const Feature& f, const Vector3d& dir) noexcept
+      : mesh_(mesh), feature_(f), dir_(dir) {
+    if (f.kind == FeatureKind::kVertex) {
+      dir_a_ = dir.dot(mesh.vertex(f.index));
+    } else if (f.kind == FeatureKind::kEdge) {
+      const auto ev = mesh.edgeVertices(f.index);
+      v0_ = ev[0];
+      v1_ = ev[1];
+      a_ = mesh.vertex(v0_);
+      ab_ = mesh.vertex(v1_) - a_;
+      ab_sq_ = ab_.squaredNorm();
+      dir_ab_ = dir.dot(ab_);
+    }
+  }
+
+  [[nodiscard]] bool mayBeCloser(int t) const noexcept {
+    const Eigen::Vector3i& tri = mesh_.triangle(t);
+    if (feature_.kind == FeatureKind::kVertex) {
+      // dir . (w - v) > 0 for one of the two other vertices w.
+      for (int k = 0; k < 3; ++k) {
+        if (tri[k] != feature_.index && dir_.dot(mesh_.vertex(tri[k])) > dir_a_) return true;
+      }
+      return false;
+    }
+    int w = tri[0];
+    for (int k = 0; k < 3; ++k) {
+      if (tri[k] != v0_ && tri[k] != v1_) w = tri[k];
+    }
+    // dir . inward with inward = |ab|^2 aw - (aw . ab) ab, the component of a->w
+    // perpendicular to the edge scaled by |ab|^2 (no division).
+    const Vector3d aw = mesh_.vertex(w) - a_;
+    return ab_sq_ * dir_.dot(aw) - aw.dot(ab_) * dir_ab_ > 0.0;
+  }
+
+ private:
+  const TriMesh& mesh_;
+  Feature feature_;
+  Vector3d dir_;
+  double dir_a_ = 0.0;
+  int v0_ = -1;
+  int v1_ = -1;
+  Vector3d a_ = Vector3d::Zero();
+  Vector3d ab_ = Vector3d::Zero();
+  double ab_sq_ = 0.0;
+  double dir_ab_ = 0.0;
+};
 
 }  // namespace
 
@@ -109,6 +121,12 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
   int pose_object = -1;
   Isometry3d X_OL = Isometry3d::Identity();
   Isometry3d X_LO = Isometry3d::Identity();
+  // Runs of equal link/object pairs in input order (minima normally come grouped by pair).
+  std::array<std::uint64_t, kMaxRuns> runs;
+  int num_runs = 0;
+  bool runs_overflowed = false;
+  int run_begin = 0;       // first survivor of the current run
+  bool full_scan = false;  // the current pair had an earlier run: compare every survivor
   for (std::size_t i = 0; i < minima.size(); ++i) {
     LocalMinimum m = minima[i];
     const TriMesh& lmesh = world.linkMesh(m.link);
@@ -116,6 +134,15 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     const TriMesh& omesh = obj.mesh;
     // Minima come grouped by link/object pair: the relative pose is computed once per pair.
     if (m.link != pose_link || m.object != pose_object) {
+      const std::uint64_t key = pairKey(m.link, m.object);
+      full_scan = runs_overflowed;
+      for (int k = 0; k < num_runs && !full_scan; ++k) full_scan = runs[static_cast<std::size_t>(k)] == key;
+      if (num_runs < kMaxRuns) {
+        runs[static_cast<std::size_t>(num_runs++)] = key;
+      } else {
+        runs_overflowed = true;
+      }
+      run_begin = kept;
       X_OL = obj.X_WO.inverse() * fk.X_WL[static_cast<std::size_t>(m.link)];
       X_LO = X_OL.inverse();
       pose_link = m.link;
@@ -123,13 +150,18 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     }
     int tl = m.tri_link;
     int to = m.tri_object;
-    TriangleTriangleResult r = warmClosestPoints(lmesh, tl, omesh, to, X_OL, m);
+    // The tracked pair, warm-started from the previous features (same distance as the full
+    // computation; one candidate and its optimality test when the features did not change).
+    // Each side's prepared triangle is reused for every neighbour evaluated against it.
+    PreparedTriangle A = linkTriangle(lmesh, tl, X_OL);
+    PreparedTriangle B = objectTriangle(omesh, to);
+    TriangleTriangleResult r = closestPointsTriangleTriangleWarm(A, B, localGuess(lmesh, tl, m.feature_link),
+                                                                 localGuess(omesh, to, m.feature_object));
+    Feature cur_l = globalFeature(lmesh, tl, r.feature_a);
+    Feature cur_o = globalFeature(omesh, to, r.feature_b);
     int it = 0;
     for (; it < params.max_iterations; ++it) {
       // Steepest move among the triangles around the closest feature on either side.
-      int best_l = -1;
-      int best_o = -1;
-      TriangleTriangleResult best = r;
       const double threshold = r.distance_m - params.min_decrease_m;
       if (threshold <= 0.0) break;  // touching: nothing can be closer
       // Screening: a neighbour can only lower the distance if it comes closer to the other
@@ -137,30 +169,48 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       // already optimal for that neighbour); only then is the triangle pair evaluated.
       const Vector3d u_O = (r.q - r.p) / r.distance_m;
       const Vector3d u_L = X_LO.linear() * u_O;
-      const Feature cur_l = meshFeature(lmesh, tl, r.feature_a);
-      const Feature cur_o = meshFeature(omesh, to, r.feature_b);
-      for (int t : lmesh.featureTriangles(cur_l)) {
-        if (t == tl || !neighbourMayBeCloser(lmesh, cur_l, t, u_L)) continue;
-        const TriangleTriangleResult c = closestPointsInObjectFrame(lmesh, t, omesh, to, X_OL);
-        if (c.distance_m < threshold && c.distance_m < best.distance_m) {
-          best = c;
-          best_l = t;
-          best_o = to;
+      TriangleTriangleResult best = r;
+      int best_t = -1;
+      bool best_link_side = false;
+      // A face feature has no neighbours to screen.
+      if (cur_l.kind != FeatureKind::kFace) {
+        const NeighbourScreen screen(lmesh, cur_l, u_L);
+        for (int t : lmesh.featureTriangles(cur_l)) {
+          if (t == tl || !screen.mayBeCloser(t)) continue;
+          // Warm-started: B and its closest feature are unchanged, t's is unknown (face).
+          const TriangleTriangleResult c =
+              closestPointsTriangleTriangleWarm(linkTriangle(lmesh, t, X_OL), B, LocalFeature{}, r.feature_b);
+          if (c.distance_m < threshold && c.distance_m < best.distance_m) {
+            best = c;
+            best_t = t;
+            best_link_side = true;
+          }
         }
       }
-      for (int t : omesh.featureTriangles(cur_o)) {
-        if (t == to || !neighbourMayBeCloser(omesh, cur_o, t, -u_O)) continue;
-        const TriangleTriangleResult c = closestPointsInObjectFrame(lmesh, tl, omesh, t, X_OL);
-        if (c.distance_m < threshold && c.distance_m < best.distance_m) {
-          best = c;
-          best_l = tl;
-          best_o = t;
+      if (cur_o.kind != FeatureKind::kFace) {
+        const NeighbourScreen screen(omesh, cur_o, -u_O);
+        for (int t : omesh.featureTriangles(cur_o)) {
+          if (t == to || !screen.mayBeCloser(t)) continue;
+          const TriangleTriangleResult c =
+              closestPointsTriangleTriangleWarm(A, objectTriangle(omesh, t), r.feature_a, LocalFeature{});
+          if (c.distance_m < threshold && c.distance_m < best.distance_m) {
+            best = c;
+            best_t = t;
+            best_link_side = false;
+          }
         }
       }
-      if (best_l < 0) break;
-      tl = best_l;
-      to = best_o;
+      if (best_t < 0) break;
+      if (best_link_side) {
+        tl = best_t;
+        A = linkTriangle(lmesh, tl, X_OL);
+      } else {
+        to = best_t;
+        B = objectTriangle(omesh, to);
+      }
       r = best;
+      cur_l = globalFeature(lmesh, tl, r.feature_a);
+      cur_o = globalFeature(omesh, to, r.feature_b);
       ++st.steps;
     }
     if (it == params.max_iterations) ++st.minima_at_iteration_cap;
@@ -168,8 +218,8 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     m.previous_distance_m = m.distance_m;
     m.tri_link = tl;
     m.tri_object = to;
-    m.feature_link = meshFeature(lmesh, tl, r.feature_a);
-    m.feature_object = meshFeature(omesh, to, r.feature_b);
+    m.feature_link = cur_l;
+    m.feature_object = cur_o;
     m.p_L = X_LO * r.p;
     m.p_O = r.q;
     m.distance_m = r.distance_m;
@@ -183,13 +233,12 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       ++st.dropped;
       continue;
     }
-    // Merge with an earlier survivor that reached the same feature pair.
+    // Merge with an earlier survivor that reached the same feature pair. Only survivors of
+    // the same link/object pair can match: those of the current run of that pair, unless the
+    // pair already had an earlier run (input not grouped) or the run table overflowed.
     bool duplicate = false;
-    for (int k = 0; k < kept; ++k) {
-      if (sameFeaturePair(minima[static_cast<std::size_t>(k)], m)) {
-        duplicate = true;
-        break;
-      }
+    for (int k = full_scan ? 0 : run_begin; k < kept && !duplicate; ++k) {
+      duplicate = sameFeaturePair(minima[static_cast<std::size_t>(k)], m);
     }
     if (duplicate) {
       ++st.merged;

@@ -6,6 +6,7 @@
 
 #include <fcl/narrowphase/detail/primitive_shape_algorithm/triangle_distance.h>
 
+#include <array>
 #include <random>
 
 namespace fullarm::haptics {
@@ -135,6 +136,68 @@ TEST(GeometryTest, AnalyticFeatureClasses) {
   EXPECT_NEAR((r.p - Vector3d(0.2, 0.2, 0)).norm(), 0.0, kTol);
   EXPECT_EQ(r.feature_a.kind, Kind::kFace);
   EXPECT_EQ(r.feature_b.kind, Kind::kEdge);
+}
+
+// Every feature of a triangle in local numbering: three vertices, three edges, the face.
+std::array<LocalFeature, 7> allLocalFeatures() {
+  return {LocalFeature{Kind::kVertex, 0}, LocalFeature{Kind::kVertex, 1}, LocalFeature{Kind::kVertex, 2},
+          LocalFeature{Kind::kEdge, 0},   LocalFeature{Kind::kEdge, 1},   LocalFeature{Kind::kEdge, 2},
+          LocalFeature{Kind::kFace, 0}};
+}
+
+TEST(GeometryTest, PreparedAndWarmStartedQueriesMatchFcl) {
+  std::mt19937 rng(23);
+  int intersecting = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const double spread = trial % 4 == 0 ? 0.3 : 1.5;
+    std::array<Vector3d, 3> A{randomPoint(rng, 1.0), randomPoint(rng, 1.0), randomPoint(rng, 1.0)};
+    const Vector3d shift = randomPoint(rng, spread);
+    std::array<Vector3d, 3> B{randomPoint(rng, 1.0) + shift, randomPoint(rng, 1.0) + shift,
+                              randomPoint(rng, 1.0) + shift};
+    const PreparedTriangle pa = prepareTriangle(A[0], A[1], A[2]);
+    const PreparedTriangle pb = prepareTriangle(B[0], B[1], B[2]);
+    Vector3d P;
+    Vector3d Q;
+    const double d_fcl = fcl::detail::TriangleDistance<double>::triDistance(A[0], A[1], A[2], B[0], B[1], B[2], P, Q);
+    const TriangleTriangleResult prepared = closestPointsTriangleTriangle(pa, pb);
+    ASSERT_NEAR(prepared.distance_m, d_fcl, kTol) << "trial " << trial;
+    expectOnFeature(prepared.p, A, prepared.feature_a);
+    expectOnFeature(prepared.q, B, prepared.feature_b);
+    intersecting += prepared.intersecting ? 1 : 0;
+    // Warm start from every guess pair, including the true one: same distance, points on the
+    // reported features, features a closest pair.
+    for (const LocalFeature& ga : allLocalFeatures()) {
+      for (const LocalFeature& gb : allLocalFeatures()) {
+        const TriangleTriangleResult w = closestPointsTriangleTriangleWarm(pa, pb, ga, gb);
+        ASSERT_NEAR(w.distance_m, d_fcl, kTol) << "trial " << trial;
+        EXPECT_NEAR((w.p - w.q).norm(), w.distance_m, kTol);
+        expectOnFeature(w.p, A, w.feature_a);
+        expectOnFeature(w.q, B, w.feature_b);
+      }
+    }
+    // Point queries on the prepared triangle against the unprepared ones (checked above
+    // against dense sampling).
+    const Vector3d p = randomPoint(rng, 2.0);
+    const PointTriangleResult pt = closestPointTriangle(p, A[0], A[1], A[2]);
+    EXPECT_NEAR(closestPointTriangle(p, pa).distance_m, pt.distance_m, kTol);
+    EXPECT_NEAR(squaredDistancePointTriangle(p, pa), squaredDistancePointTriangle(p, A[0], A[1], A[2]), 1e-14);
+  }
+  EXPECT_GT(intersecting, 20);
+}
+
+TEST(GeometryTest, WarmStartKeepsTheGuessedPairOfParallelFeatures) {
+  // Parallel faces 0.25 apart: every vertex of B above A's interior is a closest pair; the
+  // warm start keeps the guessed one instead of flickering to the first in candidate order.
+  const PreparedTriangle A = prepareTriangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  const PreparedTriangle B = prepareTriangle({0.1, 0.1, 0.25}, {0.5, 0.1, 0.25}, {0.1, 0.5, 0.25});
+  for (std::uint8_t k = 0; k < 3; ++k) {
+    const TriangleTriangleResult r =
+        closestPointsTriangleTriangleWarm(A, B, LocalFeature{Kind::kFace, 0}, LocalFeature{Kind::kVertex, k});
+    EXPECT_NEAR(r.distance_m, 0.25, kTol);
+    EXPECT_EQ(r.feature_b.kind, Kind::kVertex);
+    EXPECT_EQ(r.feature_b.index, k);
+    EXPECT_EQ(r.feature_a.kind, Kind::kFace);
+  }
 }
 
 TEST(GeometryTest, SegmentSegmentParallelAndDegenerate) {

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "alloc_guard.hpp"
 #include "arm_test_util.hpp"
 #include "fullarm/arm/kinematics.hpp"
@@ -137,6 +139,35 @@ TEST(LocalDescentTest, WalksAcrossAFlatWallAndMergesDuplicates) {
   const int kept = updateMinimaLocalDescent(s.world, s.fk, twins, LocalDescentParams{}, &stats);
   EXPECT_EQ(kept, 1);
   EXPECT_EQ(stats.merged, 1);
+}
+
+TEST(LocalDescentTest, MergesDuplicatesThatAreNotAdjacent) {
+  // Minima usually come grouped by link/object pair, but adoptGlobalMinima appends fresh ones
+  // after the tracked set: a pair can reappear after another pair's run. Duplicates across such
+  // runs must still merge.
+  const arm::ArmModel& model = arm::test::defaultModel();
+  WorldFixture s(model);
+  constexpr int kOther = kLink + 1;
+  s.world.setLinkMesh(kLink, makeCapsule({0, 0, 0}, {0, 0, 0}, 0.03, 16, 8));
+  s.world.setLinkMesh(kOther, makeCapsule({0, 0, 0}, {0, 0, 0}, 0.03, 16, 8));
+  Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+  X_WO.translation() = Eigen::Vector3d(0, 0, -0.01);
+  s.world.addObject("wall", makeBox({0.6, 0.6, 0.02}, 0.01), X_WO);
+  s.fk.X_WL[kLink] = Eigen::Translation3d(0.0013, 0.0021, 0.035) * Eigen::Isometry3d::Identity();
+  s.fk.X_WL[kOther] = Eigen::Translation3d(0.2013, 0.0021, 0.035) * Eigen::Isometry3d::Identity();
+  std::vector<LocalMinimum> found;
+  globalSearch(s.world, s.fk, 0.02, 0.0, found);
+  const auto a = std::find_if(found.begin(), found.end(), [](const LocalMinimum& m) { return m.link == kLink; });
+  const auto b = std::find_if(found.begin(), found.end(), [](const LocalMinimum& m) { return m.link == kOther; });
+  ASSERT_NE(a, found.end());
+  ASSERT_NE(b, found.end());
+  std::vector<LocalMinimum> minima{*a, *b, *a, *b, *a};
+  LocalDescentStats stats;
+  const int kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{}, &stats);
+  EXPECT_EQ(kept, 2);
+  EXPECT_EQ(stats.merged, 3);
+  EXPECT_EQ(minima[0].link, kLink);
+  EXPECT_EQ(minima[1].link, kOther);
 }
 
 TEST(LocalDescentTest, IterationCapBoundsTheWalk) {

@@ -72,4 +72,64 @@ struct TriangleTriangleResult {
                                                                    const Eigen::Vector3d& b1,
                                                                    const Eigen::Vector3d& b2) noexcept;
 
+/// A triangle with the edge vectors that the closest-point routines reuse: prepare it once,
+/// then query it against many points or triangles (local descent evaluates one triangle
+/// against each neighbour of the other side). Vertices are copied, so the source may change.
+struct PreparedTriangle {
+  Eigen::Vector3d v[3];     ///< vertices a, b, c [m]
+  Eigen::Vector3d edge[3];  ///< edge k = v[(k+1)%3] - v[k]
+  Eigen::Vector3d ac;       ///< c - a (= -edge[2])
+  Eigen::Vector3d normal;   ///< (b - a) x (c - a), not normalised
+  double normal_sq;         ///< |normal|^2
+  double edge_sq[3];        ///< |edge k|^2
+};
+
+/// @rt
+[[nodiscard]] inline PreparedTriangle prepareTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                                      const Eigen::Vector3d& c) noexcept {
+  PreparedTriangle t;
+  t.v[0] = a;
+  t.v[1] = b;
+  t.v[2] = c;
+  t.edge[0] = b - a;
+  t.edge[1] = c - b;
+  t.edge[2] = a - c;
+  t.ac = c - a;
+  t.normal = t.edge[0].cross(t.ac);
+  t.normal_sq = t.normal.squaredNorm();
+  for (int k = 0; k < 3; ++k) t.edge_sq[k] = t.edge[k].squaredNorm();
+  return t;
+}
+
+/// Same as squaredDistancePointTriangle on a prepared triangle.
+/// @rt
+[[nodiscard]] double squaredDistancePointTriangle(const Eigen::Vector3d& p, const PreparedTriangle& t) noexcept;
+
+/// Same as closestPointTriangle on a prepared triangle.
+/// @rt
+[[nodiscard]] PointTriangleResult closestPointTriangle(const Eigen::Vector3d& p, const PreparedTriangle& t) noexcept;
+
+/// Same result as closestPointsTriangleTriangle(a0, ..., b2) on prepared triangles (the same
+/// candidates in the same order; squared distances are compared, one square root at the end).
+/// @rt
+[[nodiscard]] TriangleTriangleResult closestPointsTriangleTriangle(const PreparedTriangle& A,
+                                                                   const PreparedTriangle& B) noexcept;
+
+/// Closest points warm-started from a guess of the closest feature pair (for example the pair
+/// of the previous tick; a face guess also stands for "unknown"). The candidate of the guess is
+/// computed alone, in this order: a vertex guess gives the vertex against the other triangle;
+/// an edge-edge guess the two edges; an edge against a face guess the edge against the whole
+/// other triangle (unless it crosses it); two face guesses the vertex of either triangle
+/// nearest to the other's plane. It is returned when it passes the exact optimality test of two convex sets: p is the
+/// point of A closest to q and q the point of B closest to p (tested on the Voronoi region of
+/// the feature: two dot products for a vertex, one per side for an edge interior). Otherwise
+/// the full closestPointsTriangleTriangle runs. The distance always equals the cold
+/// computation's (to rounding); in degenerate configurations with several closest pairs
+/// (parallel edges or faces) the representative may differ.
+/// @rt
+[[nodiscard]] TriangleTriangleResult closestPointsTriangleTriangleWarm(const PreparedTriangle& A,
+                                                                       const PreparedTriangle& B,
+                                                                       const LocalFeature& guess_a,
+                                                                       const LocalFeature& guess_b) noexcept;
+
 }  // namespace fullarm::haptics
