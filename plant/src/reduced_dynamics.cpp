@@ -15,35 +15,36 @@ namespace {
 
 // Spatial algebra at the world origin (Featherstone 2008, sec. 2.9-2.13), on 3-vector pairs.
 // Motion cross product: (w, v) x (w', v') = (w x w', w x v' + v x w').
-SpatialVector crossMotion(const SpatialVector& a, const SpatialVector& b) noexcept {
+[[gnu::always_inline]] inline SpatialVector crossMotion(const SpatialVector& a, const SpatialVector& b) noexcept {
   return {a.top.cross(b.top), a.top.cross(b.bottom) + a.bottom.cross(b.top)};
 }
 // Force cross product: (w, v) x* (n, f) = (w x n + v x f, w x f).
-SpatialVector crossForce(const SpatialVector& a, const SpatialVector& f) noexcept {
+[[gnu::always_inline]] inline SpatialVector crossForce(const SpatialVector& a, const SpatialVector& f) noexcept {
   return {a.top.cross(f.top) + a.bottom.cross(f.bottom), a.top.cross(f.bottom)};
 }
 // Spatial inertia (mass m, first moment h = m c, rotational inertia I_O about the origin)
 // applied to a motion: (I_O w + h x v, m v - h x w).
-SpatialVector applyInertia(double m, const Eigen::Vector3d& h, const Eigen::Matrix3d& inertia_O,
-                           const SpatialVector& v) noexcept {
+[[gnu::always_inline]] inline SpatialVector applyInertia(double m, const Eigen::Vector3d& h,
+                                                         const Eigen::Matrix3d& inertia_O,
+                                                         const SpatialVector& v) noexcept {
   return {inertia_O * v.top + h.cross(v.bottom), m * v.bottom - h.cross(v.top)};
 }
-SpatialVector operator+(const SpatialVector& a, const SpatialVector& b) noexcept {
+[[gnu::always_inline]] inline SpatialVector operator+(const SpatialVector& a, const SpatialVector& b) noexcept {
   return {a.top + b.top, a.bottom + b.bottom};
 }
-SpatialVector operator-(const SpatialVector& a, const SpatialVector& b) noexcept {
+[[gnu::always_inline]] inline SpatialVector operator-(const SpatialVector& a, const SpatialVector& b) noexcept {
   return {a.top - b.top, a.bottom - b.bottom};
 }
-SpatialVector& operator+=(SpatialVector& a, const SpatialVector& b) noexcept {
+[[gnu::always_inline]] inline SpatialVector& operator+=(SpatialVector& a, const SpatialVector& b) noexcept {
   a.top += b.top;
   a.bottom += b.bottom;
   return a;
 }
-SpatialVector scaled(const SpatialVector& a, double k) noexcept {
+[[gnu::always_inline]] inline SpatialVector scaled(const SpatialVector& a, double k) noexcept {
   return {k * a.top, k * a.bottom};
 }
 // Power pairing of a motion and a force.
-double dot(const SpatialVector& motion, const SpatialVector& force) noexcept {
+[[gnu::always_inline]] inline double dot(const SpatialVector& motion, const SpatialVector& force) noexcept {
   return motion.top.dot(force.top) + motion.bottom.dot(force.bottom);
 }
 
@@ -211,7 +212,8 @@ void computeReducedKinematics(const ReducedArmModel& model, ReducedArmData& data
 
 namespace {
 
-SpatialVector inertiaTimes(const ReducedArmData& data, std::size_t k, const SpatialVector& v) noexcept {
+[[gnu::always_inline]] inline SpatialVector inertiaTimes(const ReducedArmData& data, std::size_t k,
+                                                         const SpatialVector& v) noexcept {
   return applyInertia(data.mass_kg[k], data.first_moment_kgm[k], data.inertia_O_kgm2[k], v);
 }
 
@@ -227,8 +229,9 @@ void newtonEulerPass(const ReducedArmModel& model, ReducedArmData& data, const R
     const SpatialVector& A_p = p < 0 ? ground_accel : data.A[static_cast<std::size_t>(p)];
     // A_b = A_p + s qdd + V_b x s qd (the axis is fixed in the parent: s' = V_p x s = V_b x s).
     data.A[k] = A_p + scaled(data.s[k], qdd[b]) + scaled(crossMotion(data.V[k], data.s[k]), data.qd[k]);
-    const SpatialVector IV = inertiaTimes(data, k, data.V[k]);
-    data.F[k] = inertiaTimes(data, k, data.A[k]) + crossForce(data.V[k], IV);
+    data.IV[k] = inertiaTimes(data, k, data.V[k]);
+    data.IA[k] = inertiaTimes(data, k, data.A[k]);
+    data.F[k] = data.IA[k] + crossForce(data.V[k], data.IV[k]);
     data.F_tot[k] = data.F[k];
   }
   for (int o = model.n - 1; o >= 0; --o) {
@@ -297,8 +300,15 @@ void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, Redu
     const SpatialVector& s = data.s[kj];
     const SpatialVector& V_p = pj < 0 ? zero : data.V[static_cast<std::size_t>(pj)];
     const SpatialVector& A_p = pj < 0 ? ground_accel : data.A[static_cast<std::size_t>(pj)];
-    const SpatialVector Vp_x_s = crossMotion(V_p, s);
-    // Per body k moved by joint j: d F_k / d q_j and d F_k / d qd_j (R7, R8).
+    // Per-joint constants: w = V_p x s, t = s x V_p, u = -s x A_p - w x V_p.
+    const SpatialVector w = crossMotion(V_p, s);
+    const SpatialVector t = crossMotion(s, V_p);
+    const SpatialVector u = scaled(crossMotion(s, A_p) + crossMotion(w, V_p), -1.0);
+    // Per body k moved by joint j: d F_k / d q_j and d F_k / d qd_j (R7, R8). Turning the
+    // subtree about s gives dV = s x (V - V_p), dA = s x (A - A_p) + w x (V - V_p) and
+    // d(I) X = s x* (I X) - I (s x X); collected:
+    //   dF/dq  = s x* (I A) + I (u + w x V) + (s x V - t) x* (I V) + V x* (s x* (I V) - I t)
+    //   dF/dqd = I (w + s x V - t) + s x* (I V) + V x* (I s)
     for (int b = 0; b < n; ++b) {
       const auto k = static_cast<std::size_t>(b);
       if (!model.supports[kj][k]) {
@@ -307,21 +317,12 @@ void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, Redu
         continue;
       }
       const SpatialVector& V = data.V[k];
-      const SpatialVector& A = data.A[k];
-      const SpatialVector V_rel = V - V_p;
-      const SpatialVector IV = inertiaTimes(data, k, V);
-      const SpatialVector IA = inertiaTimes(data, k, A);
-      // q_j turns the subtree about s: dV = s x (V - V_p), dA = s x (A - A_p) + (V_p x s) x (V - V_p),
-      // d(I) X = s x* (I X) - I (s x X).
-      const SpatialVector dV = crossMotion(s, V_rel);
-      const SpatialVector dA = crossMotion(s, A - A_p) + crossMotion(Vp_x_s, V_rel);
-      const SpatialVector dI_A = crossForce(s, IA) - inertiaTimes(data, k, crossMotion(s, A));
-      const SpatialVector dI_V = crossForce(s, IV) - inertiaTimes(data, k, crossMotion(s, V));
-      dq_sum[k] =
-          dI_A + inertiaTimes(data, k, dA) + crossForce(dV, IV) + crossForce(V, dI_V + inertiaTimes(data, k, dV));
-      // qd_j: dV = s, dA = V_p x s + s x (V - V_p).
-      const SpatialVector dA_qd = Vp_x_s + dV;
-      dqd_sum[k] = inertiaTimes(data, k, dA_qd) + crossForce(s, IV) + crossForce(V, inertiaTimes(data, k, s));
+      const SpatialVector& IV = data.IV[k];
+      const SpatialVector s_x_V = crossMotion(s, V);
+      const SpatialVector s_x_IV = crossForce(s, IV);
+      dq_sum[k] = crossForce(s, data.IA[k]) + inertiaTimes(data, k, u + crossMotion(w, V)) + crossForce(s_x_V - t, IV) +
+                  crossForce(V, s_x_IV - inertiaTimes(data, k, t));
+      dqd_sum[k] = inertiaTimes(data, k, w + s_x_V - t) + s_x_IV + crossForce(V, inertiaTimes(data, k, s));
     }
     // Subtree sums: joint i sees the bodies of its subtree that joint j moves.
     for (int o = n - 1; o >= 0; --o) {

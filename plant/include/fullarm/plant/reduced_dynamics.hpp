@@ -94,7 +94,9 @@ struct ReducedArmData {
   std::array<Eigen::Matrix3d, kMaxReducedBodies> inertia_O_kgm2{};
   // Newton-Euler at some qdd (computeReducedInverseDynamics).
   std::array<SpatialVector, kMaxReducedBodies> A{};      ///< body accelerations
-  std::array<SpatialVector, kMaxReducedBodies> F{};      ///< body inertial forces
+  std::array<SpatialVector, kMaxReducedBodies> IV{};     ///< body momenta I V
+  std::array<SpatialVector, kMaxReducedBodies> IA{};     ///< I A
+  std::array<SpatialVector, kMaxReducedBodies> F{};      ///< body inertial forces I A + V x* I V
   std::array<SpatialVector, kMaxReducedBodies> F_tot{};  ///< subtree force through each joint
 };
 
