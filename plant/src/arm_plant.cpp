@@ -80,15 +80,16 @@ constexpr int kMaxEventsPerPeriod = 64;
 // First Rodas3 step after a reset [s]; the controller adapts it from there.
 constexpr double kRodasInitialStep_s = 1e-4;
 
-// Cholesky factor M = L L^T of the small SPD joint-space inertia (lower triangle of l; plain
-// loops: at n <= 10 a library call's dispatch costs more than the arithmetic).
+// Cholesky factor M = L L^T of the small SPD joint-space inertia (strict lower triangle of l,
+// with 1 / L_jj on its diagonal so the solves multiply instead of divide; plain loops: at
+// n <= 10 a library call's dispatch costs more than the arithmetic).
 template <typename Matrix>
 void choleskyFactor(const Matrix& m, Matrix& l, int n) noexcept {
   for (int j = 0; j < n; ++j) {
     double d = m(j, j);
     for (int k = 0; k < j; ++k) d -= l(j, k) * l(j, k);
-    l(j, j) = std::sqrt(d);
-    const double inv = 1.0 / l(j, j);
+    const double inv = 1.0 / std::sqrt(d);
+    l(j, j) = inv;
     for (int i = j + 1; i < n; ++i) {
       double v = m(i, j);
       for (int k = 0; k < j; ++k) v -= l(i, k) * l(j, k);
@@ -103,12 +104,34 @@ void choleskySolve(const Matrix& l, const Vector& b, Vector& x, int n) noexcept 
   for (int i = 0; i < n; ++i) {
     double v = b[i];
     for (int k = 0; k < i; ++k) v -= l(i, k) * x[k];
-    x[i] = v / l(i, i);
+    x[i] = v * l(i, i);
   }
   for (int i = n - 1; i >= 0; --i) {
     double v = x[i];
     for (int k = i + 1; k < n; ++k) v -= l(k, i) * x[k];
-    x[i] = v / l(i, i);
+    x[i] = v * l(i, i);
+  }
+}
+
+// M^-1 from the factor of choleskyFactor: column k solves M x = e_k, whose forward
+// substitution is zero above row k.
+template <typename Matrix>
+void choleskyInverse(const Matrix& l, Matrix& inv, int n) noexcept {
+  for (int k = 0; k < n; ++k) {
+    double x[kMaxPlantJoints];
+    for (int i = 0; i < k; ++i) x[i] = 0.0;
+    x[k] = l(k, k);
+    for (int i = k + 1; i < n; ++i) {
+      double v = 0.0;
+      for (int j = k; j < i; ++j) v -= l(i, j) * x[j];
+      x[i] = v * l(i, i);
+    }
+    for (int i = n - 1; i >= 0; --i) {
+      double v = x[i];
+      for (int j = i + 1; j < n; ++j) v -= l(j, i) * x[j];
+      x[i] = v * l(i, i);
+    }
+    for (int i = 0; i < n; ++i) inv(i, k) = x[i];
   }
 }
 
@@ -422,7 +445,6 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   // Rodas3 on the whole arm takes the rigid-body gradients into its Jacobian (see
   // rigidBodyGradients); one joint's load is exact already (a fixed axis).
   rigid_body_gradients_ = rodas_ != nullptr && !single_axis_;
-  rigid_block_.setZero(n_, 2 * n_);
   rigid_dq_.setZero(n_, n_);
   rigid_dqd_.setZero(n_, n_);
   rigid_tau_.setZero(n_);
@@ -669,14 +691,8 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
   if (n == 1) {
     mass_inv_(0, 0) = 1.0 / mass_(0, 0);
   } else {
-    // Columns of M^-1 from the factor of the evaluateRhs() pass above.
-    JointVector e = JointVector::Zero(n);
-    for (int k = 0; k < n; ++k) {
-      e.setZero();
-      e[k] = 1.0;
-      choleskySolve(chol_, e, e, n);
-      mass_inv_.col(k) = e;
-    }
+    // M^-1 from the factor of the evaluateRhs() pass above.
+    choleskyInverse(chol_, mass_inv_, n);
   }
   // d(generalised torque)/dy: joint k's actuator torque depends on its own p_a, p_b, q, qd
   // (t_pa, t_pb, and the diagonals of Tq, Tqd); the cuff spring/damper and the single-axis
@@ -810,12 +826,18 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
 void ArmPlant::rigidBodyGradients(const double* /*y*/, double* Jdata, int ld) noexcept {
   const int n = n_;
   computeReducedInverseDynamicsDerivatives(*reduced_, *reduced_data_, qdd_, rigid_tau_, rigid_dq_, rigid_dqd_);
-  rigid_block_.leftCols(n).noalias() = -mass_inv_ * rigid_dq_;
-  rigid_block_.rightCols(n).noalias() = -mass_inv_ * rigid_dqd_;
+  // J(qd rows, q and qd columns) -= M^-1 [d ID/dq, d ID/dqd] (plain loops: at n = 7 a general
+  // matrix product's dispatch costs more than the arithmetic).
   for (int c = 0; c < 2 * n; ++c) {
-    const int col = c < n ? angleIndex(n, c) : velocityIndex(n, c - n);
-    for (int r = 0; r < n; ++r)
-      Jdata[velocityIndex(n, r) + static_cast<std::ptrdiff_t>(col) * ld] += rigid_block_(r, c);
+    const ReducedMatrix& d = c < n ? rigid_dq_ : rigid_dqd_;
+    const int j = c < n ? c : c - n;
+    double* out =
+        Jdata + velocityIndex(n, 0) + static_cast<std::ptrdiff_t>(c < n ? angleIndex(n, c) : velocityIndex(n, j)) * ld;
+    for (int k = 0; k < n; ++k) {
+      const double djk = d(k, j);
+      if (djk == 0.0) continue;
+      for (int r = 0; r < n; ++r) out[r] -= mass_inv_(r, k) * djk;
+    }
   }
 }
 

@@ -226,8 +226,6 @@ class ArmPlant {
   ReducedPoint cuff_point_{};
   JointVector q_, qd_, zero_;
   bool rigid_body_gradients_ = false;
-  // -M^-1 d ID / d(q, qd) (n x 2n) of the last Jacobian.
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, 2 * kMaxPlantJoints> rigid_block_;
   ReducedMatrix rigid_dq_, rigid_dqd_;
   JointVector rigid_tau_;
   UserArmParams user_{};
