@@ -77,21 +77,19 @@ T* checkPtr(T* p, const char* call) {
 }
 
 constexpr int kMaxEventsPerPeriod = 64;
-// Refresh thresholds of the rigid-body block of the Rodas3 Jacobian (ArmPlant::rigidBodyGradients).
-constexpr double kRigidRefreshAngle_rad = 1e-3;
-constexpr double kRigidRefreshVelocity_radps = 1e-2;
 // First Rodas3 step after a reset [s]; the controller adapts it from there.
 constexpr double kRodasInitialStep_s = 1e-4;
 
-// Cholesky factor M = L L^T of the small SPD joint-space inertia (lower triangle of l; plain
-// loops: at n <= 10 a library call's dispatch costs more than the arithmetic).
+// Cholesky factor M = L L^T of the small SPD joint-space inertia (strict lower triangle of l,
+// with 1 / L_jj on its diagonal so the solves multiply instead of divide; plain loops: at
+// n <= 10 a library call's dispatch costs more than the arithmetic).
 template <typename Matrix>
 void choleskyFactor(const Matrix& m, Matrix& l, int n) noexcept {
   for (int j = 0; j < n; ++j) {
     double d = m(j, j);
     for (int k = 0; k < j; ++k) d -= l(j, k) * l(j, k);
-    l(j, j) = std::sqrt(d);
-    const double inv = 1.0 / l(j, j);
+    const double inv = 1.0 / std::sqrt(d);
+    l(j, j) = inv;
     for (int i = j + 1; i < n; ++i) {
       double v = m(i, j);
       for (int k = 0; k < j; ++k) v -= l(i, k) * l(j, k);
@@ -106,12 +104,34 @@ void choleskySolve(const Matrix& l, const Vector& b, Vector& x, int n) noexcept 
   for (int i = 0; i < n; ++i) {
     double v = b[i];
     for (int k = 0; k < i; ++k) v -= l(i, k) * x[k];
-    x[i] = v / l(i, i);
+    x[i] = v * l(i, i);
   }
   for (int i = n - 1; i >= 0; --i) {
     double v = x[i];
     for (int k = i + 1; k < n; ++k) v -= l(k, i) * x[k];
-    x[i] = v / l(i, i);
+    x[i] = v * l(i, i);
+  }
+}
+
+// M^-1 from the factor of choleskyFactor: column k solves M x = e_k, whose forward
+// substitution is zero above row k.
+template <typename Matrix>
+void choleskyInverse(const Matrix& l, Matrix& inv, int n) noexcept {
+  for (int k = 0; k < n; ++k) {
+    double x[kMaxPlantJoints];
+    for (int i = 0; i < k; ++i) x[i] = 0.0;
+    x[k] = l(k, k);
+    for (int i = k + 1; i < n; ++i) {
+      double v = 0.0;
+      for (int j = k; j < i; ++j) v -= l(i, j) * x[j];
+      x[i] = v * l(i, i);
+    }
+    for (int i = n - 1; i >= 0; --i) {
+      double v = x[i];
+      for (int j = i + 1; j < n; ++j) v -= l(j, i) * x[j];
+      x[i] = v * l(i, i);
+    }
+    for (int i = 0; i < n; ++i) inv(i, k) = x[i];
   }
 }
 
@@ -308,26 +328,14 @@ void ArmPlant::configure(const arm::ArmModel& model, const std::vector<JointPara
     mergePointMass(model_->joints[static_cast<std::size_t>(user.link)].inertial, user.mass_kg, user.point_L);
   data_ = std::make_unique<arm::ArmData>(*model_);
   posture_ = posture;
-  q_full_ = posture;
-  qd_full_ = Eigen::VectorXd::Zero(model.numJoints());
-  zero_full_ = Eigen::VectorXd::Zero(model.numJoints());
-  acc_full_ = Eigen::VectorXd::Zero(model.numJoints());
   single_axis_ = n_ == 1;
   single_axis_cuff_ = false;
-  ancestry_.fill(0);
-  for (int a = 0; a < n_; ++a) {
-    for (int b = 0; b < n_; ++b) {
-      const int i = active_[static_cast<std::size_t>(a)];
-      const int j = active_[static_cast<std::size_t>(b)];
-      signed char r = 0;
-      if (arm::jointMovesLink(*model_, j, i)) {
-        r = 1;
-      } else if (arm::jointMovesLink(*model_, i, j)) {
-        r = -1;
-      }
-      ancestry_[static_cast<std::size_t>(a * kMaxPlantJoints + b)] = r;
-    }
-  }
+  // The per-step dynamics runs on the arm reduced to the active joints: every locked link
+  // (the hand, and the arm joints a partial plant does not drive) merged into the body that
+  // carries it (reduced_dynamics.hpp; equal to fullarm::arm's Newton-Euler to 1e-12, tested).
+  reduced_ = std::make_unique<ReducedArmModel>(reduceArmModel(*model_, active_, posture));
+  reduced_data_ = std::make_unique<ReducedArmData>();
+  cuff_point_ = user.enabled ? reducePoint(*model_, active_, posture, user.link, user.point_L) : ReducedPoint{};
   if (single_axis_) {
     // One joint turning with the rest of the arm locked: a rigid body about a fixed axis, so
     // the inertia is constant and gravity is a cos q + b sin q (exact; evaluated once here).
@@ -363,6 +371,8 @@ void ArmPlant::configure(const JointParams& joint, const RigidLoad& load, const 
   user_ = {};
   model_.reset();
   data_.reset();
+  reduced_.reset();
+  reduced_data_.reset();
   single_axis_ = true;
   single_axis_cuff_ = false;
   load_ = load;
@@ -435,9 +445,12 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   // Rodas3 on the whole arm takes the rigid-body gradients into its Jacobian (see
   // rigidBodyGradients); one joint's load is exact already (a fixed axis).
   rigid_body_gradients_ = rodas_ != nullptr && !single_axis_;
-  rigid_block_.setZero(n_, 2 * n_);
-  rigid_q_.setZero(n_);
-  rigid_qd_.setZero(n_);
+  rigid_dq_.setZero(n_, n_);
+  rigid_dqd_.setZero(n_, n_);
+  rigid_tau_.setZero(n_);
+  q_.setZero(n_);
+  qd_.setZero(n_);
+  zero_.setZero(n_);
   reset();
 }
 
@@ -471,19 +484,21 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
   cmd_ = last_cmd_ = PlantCommand::zero(n_);
   need_reinit_ = true;
   error_[0] = '\0';
-  rigid_block_age_ = -1;
   if (rodas_) {
     rodas_->resetStepSize(kRodasInitialStep_s);
     rodas_->resetCounters();
   }
   for (int k = 0; k < n_; ++k)
     stop_side_[static_cast<std::size_t>(k)] = stopSide(params_[static_cast<std::size_t>(k)], y[angleIndex(n_, k)]);
-  if (model_) {
+  if (reduced_ && user_.enabled) {
     // The cuff spring rests where the cuff is at the initial state.
-    q_full_ = posture_;
-    for (int k = 0; k < n_; ++k) q_full_[active_[static_cast<std::size_t>(k)]] = y[angleIndex(n_, k)];
-    arm::computeForwardKinematics(*model_, *data_, q_full_);
-    if (user_.enabled) cuff_anchor_W_ = arm::pointInWorld(*data_, user_.link, user_.point_L);
+    for (int k = 0; k < n_; ++k) {
+      q_[k] = y[angleIndex(n_, k)];
+      qd_[k] = 0.0;
+    }
+    computeReducedKinematics(*reduced_, *reduced_data_, q_, qd_);
+    cuff_anchor_W_ =
+        cuff_point_.body < 0 ? cuff_point_.p_B : reducedPointInWorld(*reduced_data_, cuff_point_.body, cuff_point_.p_B);
   }
   noise_.reseed(seed_);
   for (JointSensorState& s : sensor_state_) s = {};
@@ -547,92 +562,33 @@ void ArmPlant::mechanics(const double* y) noexcept {
     return;
   }
   for (int k = 0; k < n; ++k) {
-    const int i = active_[static_cast<std::size_t>(k)];
-    q_full_[i] = y[angleIndex(n, k)];
-    qd_full_[i] = y[velocityIndex(n, k)];
+    q_[k] = y[angleIndex(n, k)];
+    qd_[k] = y[velocityIndex(n, k)];
   }
-  // Newton-Euler (fullarm::arm): h = C(q, qd) qd + g(q), then M(q).
-  arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, zero_full_);
-  for (int k = 0; k < n; ++k) h_[k] = data_->tau[active_[static_cast<std::size_t>(k)]];
-  if (user_.enabled) {
-    // Cuff spring and damper through the point Jacobian (frames from the Newton-Euler FK).
-    arm::PointJacobian& J = point_jac_;  // fixed capacity: no heap
-    const Eigen::Vector3d p = arm::pointInWorld(*data_, user_.link, user_.point_L);
-    arm::computePointJacobian(*model_, *data_, user_.link, p, J);
-    for (int k = 0; k < n; ++k) cuff_jac_.col(k) = J.block<3, 1>(0, active_[static_cast<std::size_t>(k)]);
-    const Eigen::Vector3d v = J.topRows<3>() * qd_full_;
+  // Newton-Euler on the reduced arm: h = C(q, qd) qd + g(q) (ID at qdd = 0), then M(q) by
+  // composite rigid bodies (reduced_dynamics.hpp, R1-R5).
+  ReducedArmData& d = *reduced_data_;
+  computeReducedKinematics(*reduced_, d, q_, qd_);
+  computeReducedInverseDynamics(*reduced_, d, zero_, h_);
+  computeReducedMassMatrix(*reduced_, d, mass_);
+  for (int a = 0; a < n; ++a) mass_(a, a) += params_[static_cast<std::size_t>(a)].actuator.inertia_kgm2;
+  if (user_.enabled && cuff_point_.body >= 0) {
+    // Cuff spring and damper through the point Jacobian: column k = z_k x (p - o_k) for the
+    // joints that move the cuff's body.
+    const auto body = static_cast<std::size_t>(cuff_point_.body);
+    const Eigen::Vector3d p = reducedPointInWorld(d, cuff_point_.body, cuff_point_.p_B);
+    for (int k = 0; k < n; ++k) {
+      const auto kk = static_cast<std::size_t>(k);
+      cuff_jac_.col(k) =
+          reduced_->supports[kk][body] ? Eigen::Vector3d(d.s[kk].top.cross(p - d.o_W[kk])) : Eigen::Vector3d::Zero();
+    }
+    const Eigen::Vector3d v = cuff_jac_ * qd_;
     const Eigen::Vector3d f = -user_.stiffness_n_per_m * (p - cuff_anchor_W_) - user_.damping_ns_per_m * v;
     tau_cuff_.noalias() = cuff_jac_.transpose() * f;
   } else {
+    cuff_jac_.setZero();
     tau_cuff_.setZero();
   }
-  compositeRigidBodyMass();
-}
-
-// Joint-space inertia of the active joints by the composite-rigid-body method (Featherstone,
-// Rigid Body Dynamics Algorithms, 2008, sec. 6.2) in world coordinates, reusing the frames and
-// world inertias of the Newton-Euler pass: a unit acceleration of joint i turns the composite
-// body C_i (its subtree) about z_i through o_i; M_ji = z_j . [I_C z_i + (c_C - o_j) x m_C (z_i x (c_C - o_i))].
-void ArmPlant::compositeRigidBodyMass() noexcept {
-  const int nm = model_->numJoints();
-  const arm::ArmData& d = *data_;
-  std::array<double, arm::kMaxJoints> mass{};
-  std::array<Eigen::Vector3d, arm::kMaxJoints> first{};    // sum m c
-  std::array<Eigen::Matrix3d, arm::kMaxJoints> inertia{};  // about the world origin
-  for (int l = 0; l < nm; ++l) {
-    const auto k = static_cast<std::size_t>(l);
-    const double m = model_->joints[k].inertial.mass_kg;
-    const Eigen::Vector3d& c = d.com_W[k];
-    mass[k] = m;
-    first[k] = m * c;
-    inertia[k] = d.inertia_W[k] + m * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
-  }
-  for (int l = nm - 1; l >= 0; --l) {  // parents precede children
-    const int parent = model_->joints[static_cast<std::size_t>(l)].parent;
-    if (parent < 0) continue;
-    const auto k = static_cast<std::size_t>(l);
-    const auto p = static_cast<std::size_t>(parent);
-    mass[p] += mass[k];
-    first[p] += first[k];
-    inertia[p] += inertia[k];
-  }
-  const int n = n_;
-  // Descendant y, ancestor-or-self x: M_xy = z_x . [I_Cy z_y + (c_y - o_x) x f_y] with
-  // f_y = m_y (z_y x (c_y - o_y)) and I_Cy about the composite COM c_y; with
-  // g_y = I_Cy z_y + c_y x f_y this is z_x . g_y - f_y . (z_x x o_x): per joint once, then two
-  // dot products per pair.
-  std::array<Eigen::Vector3d, kMaxPlantJoints> g{};
-  std::array<Eigen::Vector3d, kMaxPlantJoints> f{};
-  std::array<Eigen::Vector3d, kMaxPlantJoints> zxo{};
-  for (int a = 0; a < n; ++a) {
-    const auto y = static_cast<std::size_t>(active_[static_cast<std::size_t>(a)]);
-    const auto ka = static_cast<std::size_t>(a);
-    const double m = mass[y];
-    const Eigen::Vector3d c = m > 0.0 ? Eigen::Vector3d(first[y] / m) : d.o_W[y];
-    const Eigen::Vector3d& z = d.z_W[y];
-    // I_Cy z = I_O z - m (|c|^2 z - c (c . z))  (parallel axis from the world origin to c)
-    const Eigen::Vector3d icz = inertia[y] * z - m * (c.squaredNorm() * z - c * c.dot(z));
-    f[ka] = m * z.cross(c - d.o_W[y]);
-    g[ka] = icz + c.cross(f[ka]);
-    zxo[ka] = z.cross(d.o_W[y]);
-  }
-  for (int a = 0; a < n; ++a) {
-    const auto ka = static_cast<std::size_t>(a);
-    const Eigen::Vector3d& za = d.z_W[static_cast<std::size_t>(active_[ka])];
-    for (int b = 0; b <= a; ++b) {
-      const auto kb = static_cast<std::size_t>(b);
-      const Eigen::Vector3d& zb = d.z_W[static_cast<std::size_t>(active_[kb])];
-      double value = 0.0;
-      const int relation = ancestry_[ka * kMaxPlantJoints + kb];
-      if (relation == 1) {  // active b moves link a: x = b, y = a
-        value = zb.dot(g[ka]) - f[ka].dot(zxo[kb]);
-      } else if (relation == -1) {  // a moves b: x = a, y = b
-        value = za.dot(g[kb]) - f[kb].dot(zxo[ka]);
-      }
-      mass_(a, b) = mass_(b, a) = value;
-    }
-  }
-  for (int a = 0; a < n; ++a) mass_(a, a) += params_[static_cast<std::size_t>(a)].actuator.inertia_kgm2;
 }
 
 void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {
@@ -735,14 +691,8 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
   if (n == 1) {
     mass_inv_(0, 0) = 1.0 / mass_(0, 0);
   } else {
-    // Columns of M^-1 from the factor of the evaluateRhs() pass above.
-    JointVector e = JointVector::Zero(n);
-    for (int k = 0; k < n; ++k) {
-      e.setZero();
-      e[k] = 1.0;
-      choleskySolve(chol_, e, e, n);
-      mass_inv_.col(k) = e;
-    }
+    // M^-1 from the factor of the evaluateRhs() pass above.
+    choleskyInverse(chol_, mass_inv_, n);
   }
   // d(generalised torque)/dy: joint k's actuator torque depends on its own p_a, p_b, q, qd
   // (t_pa, t_pb, and the diagonals of Tq, Tqd); the cuff spring/damper and the single-axis
@@ -866,52 +816,28 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
 }
 
 // The configuration and velocity gradients of the rigid-body dynamics that the analytic
-// Jacobian leaves out: M qdd = tau - h(q, qd) gives M d qdd/dq_k = d tau/dq_k - d ID/dq_k and
-// M d qdd/dqd_k = d tau/dqd_k - d ID/dqd_k, with ID(q, qd, a) = M(q) a + h(q, qd) taken at
-// a = qdd (fullarm::arm's Newton-Euler, forward differences, one pass per column). Subtracts
-// M^-1 d ID into the qd rows of J (column-major, leading dimension ld). Rodas3 needs them:
-// without them a Rosenbrock method drops to order one on the arm's slow mechanics and its
-// error estimate no longer sees the error.
-void ArmPlant::rigidBodyGradients(const double* y, double* Jdata, int ld) noexcept {
+// Jacobian leaves out: M qdd = tau - h(q, qd) gives M d qdd/dq = d tau/dq - d ID/dq and
+// M d qdd/dqd = d tau/dqd - d ID/dqd, with ID(q, qd, a) = M(q) a + h(q, qd) taken at a = qdd,
+// from the analytic derivatives of the reduced Newton-Euler (reduced_dynamics.hpp, R6-R8; one
+// pass, exact). Subtracts M^-1 d ID into the qd rows of J (column-major, leading dimension
+// ld). Rodas3 needs them: without them a Rosenbrock method drops to order one on the arm's slow
+// mechanics and its error estimate no longer sees the error. Uses the kinematics, qdd_ and
+// mass_inv_ of the evaluateRhs() pass at y that jacobianEntries() has just run.
+void ArmPlant::rigidBodyGradients(const double* /*y*/, double* Jdata, int ld) noexcept {
   const int n = n_;
-  // The block changes slowly with the configuration: it is recomputed when q or qd has moved
-  // by more than kRigidRefresh* since the last evaluation, and reused otherwise (an O(dq, dqd)
-  // approximation of a term that is itself small next to the hydraulic stiffness).
-  bool fresh = rigid_block_age_ < 0;
-  for (int k = 0; k < n && !fresh; ++k) {
-    fresh = std::abs(y[angleIndex(n, k)] - rigid_q_[k]) > kRigidRefreshAngle_rad ||
-            std::abs(y[velocityIndex(n, k)] - rigid_qd_[k]) > kRigidRefreshVelocity_radps;
-  }
-  if (fresh) {
-    for (int k = 0; k < n; ++k) {
-      const int i = active_[static_cast<std::size_t>(k)];
-      q_full_[i] = rigid_q_[k] = y[angleIndex(n, k)];
-      qd_full_[i] = rigid_qd_[k] = y[velocityIndex(n, k)];
-      acc_full_[i] = qdd_[k];
-    }
-    arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, acc_full_);
-    JointVector base(n);
-    for (int k = 0; k < n; ++k) base[k] = data_->tau[active_[static_cast<std::size_t>(k)]];
-    JointVector column(n);
-    for (int c = 0; c < 2 * n; ++c) {
-      const int k = c % n;
-      const int i = active_[static_cast<std::size_t>(k)];
-      Eigen::VectorXd& v = c < n ? q_full_ : qd_full_;
-      const double saved = v[i];
-      const double eps = 1e-7 * std::max(1.0, std::abs(saved));
-      v[i] = saved + eps;
-      arm::computeInverseDynamics(*model_, *data_, q_full_, qd_full_, acc_full_);
-      v[i] = saved;
-      for (int r = 0; r < n; ++r) column[r] = (data_->tau[active_[static_cast<std::size_t>(r)]] - base[r]) / eps;
-      rigid_block_.col(c) = -(mass_inv_ * column);
-    }
-    rigid_block_age_ = 0;
-    ++rigid_refreshes_;
-  }
+  computeReducedInverseDynamicsDerivatives(*reduced_, *reduced_data_, qdd_, rigid_tau_, rigid_dq_, rigid_dqd_);
+  // J(qd rows, q and qd columns) -= M^-1 [d ID/dq, d ID/dqd] (plain loops: at n = 7 a general
+  // matrix product's dispatch costs more than the arithmetic).
   for (int c = 0; c < 2 * n; ++c) {
-    const int col = c < n ? angleIndex(n, c) : velocityIndex(n, c - n);
-    for (int r = 0; r < n; ++r)
-      Jdata[velocityIndex(n, r) + static_cast<std::ptrdiff_t>(col) * ld] += rigid_block_(r, c);
+    const ReducedMatrix& d = c < n ? rigid_dq_ : rigid_dqd_;
+    const int j = c < n ? c : c - n;
+    double* out =
+        Jdata + velocityIndex(n, 0) + static_cast<std::ptrdiff_t>(c < n ? angleIndex(n, c) : velocityIndex(n, j)) * ld;
+    for (int k = 0; k < n; ++k) {
+      const double djk = d(k, j);
+      if (djk == 0.0) continue;
+      for (int r = 0; r < n; ++r) out[r] -= mass_inv_(r, k) * djk;
+    }
   }
 }
 

@@ -1,5 +1,6 @@
 #include "fullarm/plant/rosenbrock.hpp"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -55,6 +56,7 @@ void Rodas3::setBlockStructure(int blocks) {
   if (blocks_ > 0) {
     w_.setZero(blocks_ * kRosenbrockBlock, border_);
     schur_.setZero(border_, border_);
+    schur_reduced_.setZero(border_ / 2, border_ / 2);
     z_.setZero(n_);
   }
 }
@@ -182,37 +184,59 @@ bool Rodas3::factor(double h) noexcept {
     g_.diagonal().array() += d;
     return luFactorAny(g_.data(), static_cast<int>(g_.rows()), n_, pivots_.data());
   }
-  // G = [D B; C E] with D block diagonal: factor each D_k, W = D^-1 B, S = E - C W. B_k (the
+  // G = [D B; C E] with D block diagonal: invert each D_k, W = D^-1 B, S = E - C W. B_k (the
   // border columns of block k's rows) and C (the block columns of the border rows) are mostly
-  // exact zeros; only nonzero columns of B_k are solved for and used.
+  // exact zeros; only nonzero columns of B_k are solved for and used. The 4 x 4 blocks are
+  // inverted explicitly (cofactors: invariant under the rows' very different scales), so every
+  // later solve with them is a matrix-vector product.
   const int nb = blocks_ * kRosenbrockBlock;
   const int m = border_;
   const int ld = static_cast<int>(jac_.rows());
   const double* jac = jac_.data();
   schur_ = -jac_.block(nb, nb, m, m);
   schur_.diagonal().array() += d;
+  // Second-order border [x; v] with x' = v exactly (J's x rows hold only the 1 at v): the x rows
+  // of S are (d I, -I) and C has no x rows, so x = (b_x + v) / d and the v rows reduce to the
+  // half-size system (S_vv + S_vx / d) v = b_v - S_vx b_x / d.
+  const int p = m / 2;
+  second_order_border_ = m % 2 == 0 && p > 0;
+  for (int i = 0; i < p && second_order_border_; ++i) {
+    for (int c = 0; c < n_ && second_order_border_; ++c) {
+      const double value = jac[static_cast<std::ptrdiff_t>(c) * ld + nb + i];
+      second_order_border_ = value == (c == nb + p + i ? 1.0 : 0.0);
+    }
+  }
+  const int first_row = second_order_border_ ? p : 0;  // border rows C can reach
   for (int k = 0; k < blocks_; ++k) {
     const int r = k * kRosenbrockBlock;
-    Eigen::Matrix4d& dk = block_lu_[static_cast<std::size_t>(k)];
-    dk = -jac_.block<4, 4>(r, r);
+    Eigen::Matrix4d dk = -jac_.block<4, 4>(r, r);
     dk.diagonal().array() += d;
-    int* piv = block_piv_.data() + r;
-    if (!luFactorAny(dk.data(), 4, 4, piv)) return false;
+    Eigen::Matrix4d& inv = block_inv_[static_cast<std::size_t>(k)];
+    double det = 0.0;
+    bool invertible = false;
+    dk.computeInverseAndDetWithCheck(inv, det, invertible, 0.0);
+    if (!invertible || !std::isfinite(det) || !inv.allFinite()) return false;
     int& count = nonzero_count_[static_cast<std::size_t>(k)];
     count = 0;
     for (int j = 0; j < m; ++j) {
       const Eigen::Vector4d bj = -jac_.block<4, 1>(r, nb + j);
       if (bj.isZero(0.0)) continue;
       nonzero_cols_[static_cast<std::size_t>(k * kMaxRosenbrockStates + count++)] = j;
-      Eigen::Vector4d wj = bj;
-      luSolveAny(dk.data(), 4, 4, piv, wj.data());
+      const Eigen::Vector4d wj = inv * bj;
       w_.block<4, 1>(r, j) = wj;
       // S -= C_k w_j with C = -J_mh: S(:, j) += J(border, block k) w_j.
       for (int c = 0; c < kRosenbrockBlock; ++c) {
         const double* col = jac + static_cast<std::ptrdiff_t>(r + c) * ld + nb;
-        for (int i = 0; i < m; ++i) schur_(i, j) += col[i] * wj[c];
+        for (int i = first_row; i < m; ++i) schur_(i, j) += col[i] * wj[c];
       }
     }
+  }
+  if (second_order_border_) {
+    inv_d_ = 1.0 / d;
+    for (int j = 0; j < p; ++j) {
+      for (int i = 0; i < p; ++i) schur_reduced_(i, j) = schur_(p + i, p + j) + schur_(p + i, j) * inv_d_;
+    }
+    return luFactor(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data());
   }
   return luFactor(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data());
 }
@@ -227,21 +251,32 @@ void Rodas3::solve(const Vector& b, Vector& x) noexcept {
   const int m = border_;
   const int ld = static_cast<int>(jac_.rows());
   const double* jac = jac_.data();
-  for (int r = 0; r < nb; ++r) z_[r] = b[r];
   for (int k = 0; k < blocks_; ++k) {
     const int r = k * kRosenbrockBlock;
-    luSolveAny(block_lu_[static_cast<std::size_t>(k)].data(), 4, 4, block_piv_.data() + r, z_.data() + r);
+    z_.segment<4>(r).noalias() = block_inv_[static_cast<std::size_t>(k)] * b.segment<4>(r);
   }
   // Border: S x_m = b_m - C z = b_m + J_mh z (plain loops: the blocks are tiny and sparse).
   double* xm = x.data() + nb;
   for (int i = 0; i < m; ++i) xm[i] = b[nb + i];
+  const int first_row = second_order_border_ ? m / 2 : 0;  // border rows C can reach
   for (int c = 0; c < nb; ++c) {
     const double zc = z_[c];
     if (zc == 0.0) continue;
     const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
-    for (int i = 0; i < m; ++i) xm[i] += col[i] * zc;
+    for (int i = first_row; i < m; ++i) xm[i] += col[i] * zc;
   }
-  luSolve(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data(), xm);
+  if (second_order_border_) {
+    const int p = m / 2;
+    double* xv = xm + p;
+    for (int j = 0; j < p; ++j) {
+      const double bx = xm[j] * inv_d_;
+      for (int i = 0; i < p; ++i) xv[i] -= schur_(p + i, j) * bx;
+    }
+    luSolve(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data(), xv);
+    for (int i = 0; i < p; ++i) xm[i] = (xm[i] + xv[i]) * inv_d_;
+  } else {
+    luSolve(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data(), xm);
+  }
   // x_h = z - W x_m over the nonzero columns of each block.
   for (int k = 0; k < blocks_; ++k) {
     const int r = k * kRosenbrockBlock;

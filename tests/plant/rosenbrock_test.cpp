@@ -151,6 +151,61 @@ TEST(Rodas3, BlockEliminationMatchesDenseLu) {
   EXPECT_EQ(dense.stats().steps, blocks.stats().steps);
   EXPECT_LT((yd - yb).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, yd.cwiseAbs().maxCoeff()));
   EXPECT_GT(yd.cwiseAbs().maxCoeff(), 1e-3);  // not decayed to nothing
+  EXPECT_FALSE(blocks.halvedBorder());        // this border is not [x; v]
+}
+
+// Two 4-state blocks and a second-order border [x1 x2 v1 v2] with x' = v exactly, as the
+// plant's joint angles and velocities: the half-size Schur system gives the dense-LU solution.
+struct SecondOrderBordered {
+  Eigen::Matrix<double, 12, 12> a;
+  static void rhs(void* user, const double* y, double* f) noexcept {
+    const auto* s = static_cast<const SecondOrderBordered*>(user);
+    const Eigen::Map<const Eigen::Matrix<double, 12, 1>> x(y);
+    Eigen::Map<Eigen::Matrix<double, 12, 1>> out(f);
+    out = s->a * x;
+    // mildly nonlinear in every state but the positions (whose rows must stay x' = v)
+    for (int i = 0; i < 12; ++i) {
+      if (i != 8 && i != 9) out[i] += 0.1 * x[i] * x[i];
+    }
+  }
+  static void jacobian(void* user, const double* y, double* f, double* j) noexcept {
+    rhs(user, y, f);
+    Eigen::Map<Eigen::Matrix<double, 12, 12>> J(j);
+    J = static_cast<const SecondOrderBordered*>(user)->a;
+    for (int i = 0; i < 12; ++i) {
+      if (i != 8 && i != 9) J(i, i) += 0.2 * y[i];
+    }
+  }
+};
+
+TEST(Rodas3, BlockEliminationWithSecondOrderBorderMatchesDenseLu) {
+  SecondOrderBordered s;
+  s.a.setZero();
+  std::srand(7);
+  s.a.block<4, 4>(0, 0) = Eigen::Matrix4d::Random() - 8.0 * Eigen::Matrix4d::Identity();
+  s.a.block<4, 4>(4, 4) = Eigen::Matrix4d::Random() - 500.0 * Eigen::Matrix4d::Identity();
+  s.a.block<4, 2>(0, 8) = Eigen::Matrix<double, 4, 2>::Random();   // blocks see x
+  s.a.block<4, 2>(4, 10) = Eigen::Matrix<double, 4, 2>::Random();  // and v
+  s.a.block<2, 8>(10, 0) = Eigen::Matrix<double, 2, 8>::Random();  // v' sees both blocks
+  s.a.block<2, 2>(10, 8) = -4.0 * Eigen::Matrix2d::Identity();     // springs
+  s.a.block<2, 2>(10, 10) = -0.5 * Eigen::Matrix2d::Identity();    // dampers
+  s.a.block<2, 2>(8, 10) = Eigen::Matrix2d::Identity();            // x' = v
+  const double atol[12] = {1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8, 1e-8};
+  Rodas3 dense;
+  Rodas3 blocks;
+  dense.configure(12, atol, 1e-6, 10000, {&SecondOrderBordered::rhs, &SecondOrderBordered::jacobian, &s});
+  blocks.configure(12, atol, 1e-6, 10000, {&SecondOrderBordered::rhs, &SecondOrderBordered::jacobian, &s});
+  blocks.setBlockStructure(2);
+  Eigen::Matrix<double, 12, 1> yd = Eigen::Matrix<double, 12, 1>::LinSpaced(12, -0.5, 0.5);
+  Eigen::Matrix<double, 12, 1> yb = yd;
+  for (int k = 0; k < 50; ++k) {
+    ASSERT_EQ(dense.advance(yd.data(), 1e-2), RosenbrockStatus::kOk);
+    ASSERT_EQ(blocks.advance(yb.data(), 1e-2), RosenbrockStatus::kOk);
+  }
+  EXPECT_EQ(dense.stats().steps, blocks.stats().steps);
+  EXPECT_LT((yd - yb).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, yd.cwiseAbs().maxCoeff()));
+  EXPECT_GT(yd.cwiseAbs().maxCoeff(), 1e-3);  // not decayed to nothing
+  EXPECT_TRUE(blocks.halvedBorder());
 }
 
 TEST(Rodas3, RejectsBadConfiguration) {

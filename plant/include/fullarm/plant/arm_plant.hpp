@@ -26,6 +26,7 @@
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/plant/hydraulics.hpp"
 #include "fullarm/plant/joint_params.hpp"
+#include "fullarm/plant/reduced_dynamics.hpp"
 #include "fullarm/plant/rosenbrock.hpp"
 #include "fullarm/plant/sensor_model.hpp"
 
@@ -193,7 +194,6 @@ class ArmPlant {
   void evaluateRates(const double* y, double* ydot) noexcept;
   void jacobianEntries(const double* y, double* J) noexcept;
   void rigidBodyGradients(const double* y, double* J, int ld) noexcept;
-  void compositeRigidBodyMass() noexcept;
   void reinitSolver() noexcept;
   void harvestStats() noexcept;
   void initialiseSensors() noexcept;
@@ -219,13 +219,15 @@ class ArmPlant {
   std::unique_ptr<arm::ArmModel> model_;  // copy with the user mass merged into its link
   std::unique_ptr<arm::ArmData> data_;
   Eigen::VectorXd posture_;
-  Eigen::VectorXd q_full_, qd_full_, zero_full_, acc_full_;
+  // The arm reduced to the active joints (locked links merged): the per-step rigid-body
+  // dynamics and its analytic derivatives (reduced_dynamics.hpp).
+  std::unique_ptr<ReducedArmModel> reduced_;
+  std::unique_ptr<ReducedArmData> reduced_data_;
+  ReducedPoint cuff_point_{};
+  JointVector q_, qd_, zero_;
   bool rigid_body_gradients_ = false;
-  // -M^-1 d ID / d(q, qd) (n x 2n) at (rigid_q_, rigid_qd_); age -1: not evaluated yet.
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, 2 * kMaxPlantJoints> rigid_block_;
-  JointVector rigid_q_, rigid_qd_;
-  int rigid_block_age_ = -1;
-  long rigid_refreshes_ = 0;
+  ReducedMatrix rigid_dq_, rigid_dqd_;
+  JointVector rigid_tau_;
   UserArmParams user_{};
   Eigen::Vector3d cuff_anchor_W_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d axis_W_ = Eigen::Vector3d::UnitZ();  // single axis from an arm model
@@ -233,7 +235,6 @@ class ArmPlant {
   Eigen::Vector3d cuff0_W_ = Eigen::Vector3d::Zero();
   bool single_axis_cuff_ = false;
   Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, kMaxPlantJoints> cuff_jac_;
-  arm::PointJacobian point_jac_;
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints> mass_, mass_inv_;
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints> chol_;  // M = L L^T
   JointVector qdd_, tau_cell_, tau_hyd_, tau_act_, h_, tau_cuff_;
@@ -247,8 +248,6 @@ class ArmPlant {
   };
   std::vector<JointTerms> terms_;
   std::vector<double> air_root_;  // p_atm^(1/n) per joint (H3)
-  // ancestry_[a * kMaxPlantJoints + b]: 1 if active joint b moves link a, -1 if a moves b, else 0.
-  std::array<signed char, kMaxPlantJoints * kMaxPlantJoints> ancestry_{};
   double ydot_scratch_[kMaxPlantStates] = {};
 
   // Sensors.

@@ -72,7 +72,9 @@ class Rodas3 {
   /// kRosenbrockBlock states (J has no entries between two different leading blocks), coupled
   /// only through the remaining "border" states. The Newton matrix is then factorised by block
   /// elimination (a Schur complement on the border) instead of a dense LU: the plant's
-  /// hydraulic states of one joint couple to the other joints only through q and qd.
+  /// hydraulic states of one joint couple to the other joints only through q and qd. When the
+  /// border is [x; v] with x' = v exactly (detected at every factorisation), the Schur system
+  /// is halved to the v unknowns.
   /// blocks = 0 restores the dense LU. @throws std::invalid_argument if it does not fit.
   void setBlockStructure(int blocks);
 
@@ -81,6 +83,8 @@ class Rodas3 {
   /// Step size the controller proposes for the next step [s].
   [[nodiscard]] double proposedStep() const noexcept { return h_; }
   [[nodiscard]] const RosenbrockStats& stats() const noexcept { return stats_; }
+  /// True if the last factorisation used the half-size Schur system of a second-order border.
+  [[nodiscard]] bool halvedBorder() const noexcept { return blocks_ > 0 && second_order_border_; }
   void resetCounters() noexcept { stats_ = {}; }
 
  private:
@@ -100,14 +104,15 @@ class Rodas3 {
   Vector atol_, y0_, f0_, y1_, k1_, k2_, k3_, k4_, stage_, fstage_;
   Matrix jac_, g_;
   std::array<int, kMaxRosenbrockStates> pivots_{};
-  // Block elimination: per-block LU of D_k, W = D^-1 B (blocks x border), Schur S = E - C W.
+  // Block elimination: per-block inverse of D_k, W = D^-1 B (blocks x border), Schur S = E - C W.
   using BorderMatrix =
       Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRosenbrockStates, kMaxRosenbrockStates>;
   int blocks_ = 0;
   int border_ = 0;
-  std::array<Eigen::Matrix4d, kMaxRosenbrockStates / kRosenbrockBlock> block_lu_{};
-  std::array<int, kMaxRosenbrockStates> block_piv_{};
-  BorderMatrix w_, schur_;
+  std::array<Eigen::Matrix4d, kMaxRosenbrockStates / kRosenbrockBlock> block_inv_{};
+  BorderMatrix w_, schur_, schur_reduced_;
+  bool second_order_border_ = false;  // border = [x; v] with x' = v: half-size Schur system
+  double inv_d_ = 0.0;                // h gamma of the last factorisation
   Vector z_, stage_scratch_;
   std::array<int, kMaxRosenbrockStates / kRosenbrockBlock> nonzero_count_{};
   std::array<int, kMaxRosenbrockStates / kRosenbrockBlock * kMaxRosenbrockStates> nonzero_cols_{};

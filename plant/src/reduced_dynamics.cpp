@@ -1,0 +1,346 @@
+#include "fullarm/plant/reduced_dynamics.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "fullarm/arm/arm_data.hpp"
+#include "fullarm/arm/kinematics.hpp"
+
+namespace fullarm::plant {
+
+namespace {
+
+// Spatial algebra at the world origin (Featherstone 2008, sec. 2.9-2.13), on 3-vector pairs.
+// Motion cross product: (w, v) x (w', v') = (w x w', w x v' + v x w').
+[[gnu::always_inline]] inline SpatialVector crossMotion(const SpatialVector& a, const SpatialVector& b) noexcept {
+  return {a.top.cross(b.top), a.top.cross(b.bottom) + a.bottom.cross(b.top)};
+}
+// Force cross product: (w, v) x* (n, f) = (w x n + v x f, w x f).
+[[gnu::always_inline]] inline SpatialVector crossForce(const SpatialVector& a, const SpatialVector& f) noexcept {
+  return {a.top.cross(f.top) + a.bottom.cross(f.bottom), a.top.cross(f.bottom)};
+}
+// Spatial inertia (mass m, first moment h = m c, rotational inertia I_O about the origin)
+// applied to a motion: (I_O w + h x v, m v - h x w).
+[[gnu::always_inline]] inline SpatialVector applyInertia(double m, const Eigen::Vector3d& h,
+                                                         const Eigen::Matrix3d& inertia_O,
+                                                         const SpatialVector& v) noexcept {
+  return {inertia_O * v.top + h.cross(v.bottom), m * v.bottom - h.cross(v.top)};
+}
+[[gnu::always_inline]] inline SpatialVector operator+(const SpatialVector& a, const SpatialVector& b) noexcept {
+  return {a.top + b.top, a.bottom + b.bottom};
+}
+[[gnu::always_inline]] inline SpatialVector operator-(const SpatialVector& a, const SpatialVector& b) noexcept {
+  return {a.top - b.top, a.bottom - b.bottom};
+}
+[[gnu::always_inline]] inline SpatialVector& operator+=(SpatialVector& a, const SpatialVector& b) noexcept {
+  a.top += b.top;
+  a.bottom += b.bottom;
+  return a;
+}
+[[gnu::always_inline]] inline SpatialVector scaled(const SpatialVector& a, double k) noexcept {
+  return {k * a.top, k * a.bottom};
+}
+// Power pairing of a motion and a force.
+[[gnu::always_inline]] inline double dot(const SpatialVector& motion, const SpatialVector& force) noexcept {
+  return motion.top.dot(force.top) + motion.bottom.dot(force.bottom);
+}
+
+Eigen::Matrix3d skewSquare(const Eigen::Vector3d& c) {
+  return c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose();
+}
+
+std::vector<int> owners(const arm::ArmModel& model, const std::vector<int>& active) {
+  // owner[l]: body whose joint is the nearest active ancestor-or-self of link l, or -1.
+  std::vector<int> owner(static_cast<std::size_t>(model.numJoints()), -1);
+  for (int l = 0; l < model.numJoints(); ++l) {
+    for (int j = l; j >= 0; j = model.joints[static_cast<std::size_t>(j)].parent) {
+      const auto it = std::find(active.begin(), active.end(), j);
+      if (it != active.end()) {
+        owner[static_cast<std::size_t>(l)] = static_cast<int>(it - active.begin());
+        break;
+      }
+    }
+  }
+  return owner;
+}
+
+void checkActive(const arm::ArmModel& model, const std::vector<int>& active, const Eigen::VectorXd& posture) {
+  if (active.empty() || static_cast<int>(active.size()) > kMaxReducedBodies) {
+    throw std::invalid_argument("reduceArmModel: expected 1 to " + std::to_string(kMaxReducedBodies) +
+                                " active joints");
+  }
+  if (posture.size() != model.numJoints()) {
+    throw std::invalid_argument("reduceArmModel: posture has " + std::to_string(posture.size()) + " angles, expected " +
+                                std::to_string(model.numJoints()));
+  }
+  for (std::size_t k = 0; k < active.size(); ++k) {
+    if (active[k] < 0 || active[k] >= model.numJoints()) {
+      throw std::invalid_argument("reduceArmModel: active joint index " + std::to_string(active[k]) + " out of range");
+    }
+    if (std::find(active.begin(), active.begin() + static_cast<std::ptrdiff_t>(k), active[k]) !=
+        active.begin() + static_cast<std::ptrdiff_t>(k)) {
+      throw std::invalid_argument("reduceArmModel: active joint " + std::to_string(active[k]) + " listed twice");
+    }
+  }
+}
+
+// Body k's frame in the world at the posture, with its own joint at q = 0.
+Eigen::Isometry3d bodyFrameAtZero(const arm::ArmData& d, const std::vector<int>& active, const Eigen::VectorXd& posture,
+                                  int k) {
+  const int i = active[static_cast<std::size_t>(k)];
+  return d.X_WL[static_cast<std::size_t>(i)] * Eigen::AngleAxisd(-posture[i], Eigen::Vector3d::UnitZ());
+}
+
+}  // namespace
+
+ReducedArmModel reduceArmModel(const arm::ArmModel& model, const std::vector<int>& active,
+                               const Eigen::VectorXd& posture) {
+  checkActive(model, active, posture);
+  arm::ArmData d(model);
+  arm::computeForwardKinematics(model, d, posture);
+  const std::vector<int> owner = owners(model, active);
+  ReducedArmModel r;
+  r.n = static_cast<int>(active.size());
+  r.gravity_W_mps2 = model.gravity_W_mps2;
+  for (int k = 0; k < r.n; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    const int i = active[kk];
+    const int model_parent = model.joints[static_cast<std::size_t>(i)].parent;
+    const int p = model_parent < 0 ? -1 : owner[static_cast<std::size_t>(model_parent)];
+    r.parent[kk] = p;
+    // X_PB0 = X_WP^-1 X_WB0, both at the posture (the locked joints in between are rigid).
+    const Eigen::Isometry3d X_WB0 = bodyFrameAtZero(d, active, posture, k);
+    const Eigen::Isometry3d X_PB0 =
+        p < 0 ? X_WB0
+              : Eigen::Isometry3d(d.X_WL[static_cast<std::size_t>(active[static_cast<std::size_t>(p)])].inverse() *
+                                  X_WB0);
+    r.rotation0[kk] = X_PB0.linear();
+    r.translation0_m[kk] = X_PB0.translation();
+    // Merge every link the body carries rigidly: mass, first moment and inertia about the
+    // body origin in the body frame (at the posture), then about the merged centre of mass.
+    const Eigen::Isometry3d X_BW = d.X_WL[static_cast<std::size_t>(i)].inverse();
+    double m = 0.0;
+    Eigen::Vector3d first = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d inertia_B = Eigen::Matrix3d::Zero();
+    for (int l = 0; l < model.numJoints(); ++l) {
+      if (owner[static_cast<std::size_t>(l)] != k) continue;
+      const arm::LinkInertial& in = model.joints[static_cast<std::size_t>(l)].inertial;
+      const Eigen::Isometry3d X_BL = X_BW * d.X_WL[static_cast<std::size_t>(l)];
+      const Eigen::Vector3d c = X_BL * in.com_m;
+      const Eigen::Matrix3d R = X_BL.linear();
+      m += in.mass_kg;
+      first += in.mass_kg * c;
+      inertia_B += R * in.inertia_com_kgm2 * R.transpose() + in.mass_kg * skewSquare(c);
+    }
+    r.mass_kg[kk] = m;
+    r.com_m[kk] = m > 0.0 ? Eigen::Vector3d(first / m) : Eigen::Vector3d::Zero();
+    r.inertia_com_kgm2[kk] = inertia_B - m * skewSquare(r.com_m[kk]);
+  }
+  // Topological order: the arm model lists parents before children.
+  std::vector<int> order(static_cast<std::size_t>(r.n));
+  for (int k = 0; k < r.n; ++k) order[static_cast<std::size_t>(k)] = k;
+  std::sort(order.begin(), order.end(), [&active](int a, int b) {
+    return active[static_cast<std::size_t>(a)] < active[static_cast<std::size_t>(b)];
+  });
+  std::copy(order.begin(), order.end(), r.order.begin());
+  for (int k = 0; k < r.n; ++k) {
+    for (int b = 0; b < r.n; ++b)
+      r.supports[static_cast<std::size_t>(k)][static_cast<std::size_t>(b)] =
+          arm::jointMovesLink(model, active[static_cast<std::size_t>(k)], active[static_cast<std::size_t>(b)]);
+  }
+  return r;
+}
+
+ReducedPoint reducePoint(const arm::ArmModel& model, const std::vector<int>& active, const Eigen::VectorXd& posture,
+                         int link, const Eigen::Vector3d& p_L) {
+  checkActive(model, active, posture);
+  if (link < 0 || link >= model.numJoints())
+    throw std::invalid_argument("reducePoint: link index " + std::to_string(link) + " out of range");
+  arm::ArmData d(model);
+  arm::computeForwardKinematics(model, d, posture);
+  ReducedPoint point;
+  point.body = owners(model, active)[static_cast<std::size_t>(link)];
+  const Eigen::Vector3d p_W = arm::pointInWorld(d, link, p_L);
+  point.p_B = point.body < 0
+                  ? p_W
+                  : Eigen::Vector3d(
+                        d.X_WL[static_cast<std::size_t>(active[static_cast<std::size_t>(point.body)])].inverse() * p_W);
+  return point;
+}
+
+void computeReducedKinematics(const ReducedArmModel& model, ReducedArmData& data, const ReducedVector& q,
+                              const ReducedVector& qd) noexcept {
+  for (int o = 0; o < model.n; ++o) {
+    const int b = model.order[static_cast<std::size_t>(o)];
+    const auto k = static_cast<std::size_t>(b);
+    const int p = model.parent[k];
+    Eigen::Matrix3d R0;
+    Eigen::Vector3d o_W;
+    if (p < 0) {
+      R0 = model.rotation0[k];
+      o_W = model.translation0_m[k];
+    } else {
+      const auto pk = static_cast<std::size_t>(p);
+      R0.noalias() = data.R_WB[pk] * model.rotation0[k];
+      o_W = data.o_W[pk] + data.R_WB[pk] * model.translation0_m[k];
+    }
+    // R_WB = R0 Rz(q): one sincos per joint.
+    const double c = std::cos(q[b]);
+    const double s = std::sin(q[b]);
+    Eigen::Matrix3d& R = data.R_WB[k];
+    R.col(0) = c * R0.col(0) + s * R0.col(1);
+    R.col(1) = c * R0.col(1) - s * R0.col(0);
+    R.col(2) = R0.col(2);
+    data.o_W[k] = o_W;
+    const Eigen::Vector3d z = R.col(2);
+    data.s[k] = {z, o_W.cross(z)};
+    data.qd[k] = qd[b];
+    data.V[k] = scaled(data.s[k], qd[b]);
+    if (p >= 0) data.V[k] += data.V[static_cast<std::size_t>(p)];
+    // Spatial inertia about the world origin (R2).
+    const double m = model.mass_kg[k];
+    const Eigen::Vector3d com = o_W + R * model.com_m[k];
+    data.mass_kg[k] = m;
+    data.first_moment_kgm[k] = m * com;
+    data.inertia_O_kgm2[k].noalias() = R * model.inertia_com_kgm2[k] * R.transpose();
+    data.inertia_O_kgm2[k] += m * skewSquare(com);
+  }
+}
+
+namespace {
+
+[[gnu::always_inline]] inline SpatialVector inertiaTimes(const ReducedArmData& data, std::size_t k,
+                                                         const SpatialVector& v) noexcept {
+  return applyInertia(data.mass_kg[k], data.first_moment_kgm[k], data.inertia_O_kgm2[k], v);
+}
+
+// Newton-Euler at qdd over the current kinematics: A, F, F_tot and tau (R1-R4).
+void newtonEulerPass(const ReducedArmModel& model, ReducedArmData& data, const ReducedVector& qdd,
+                     ReducedVector& tau) noexcept {
+  tau.resize(model.n);  // within the fixed capacity: no allocation
+  const SpatialVector ground_accel{Eigen::Vector3d::Zero(), -model.gravity_W_mps2};
+  for (int o = 0; o < model.n; ++o) {
+    const int b = model.order[static_cast<std::size_t>(o)];
+    const auto k = static_cast<std::size_t>(b);
+    const int p = model.parent[k];
+    const SpatialVector& A_p = p < 0 ? ground_accel : data.A[static_cast<std::size_t>(p)];
+    // A_b = A_p + s qdd + V_b x s qd (the axis is fixed in the parent: s' = V_p x s = V_b x s).
+    data.A[k] = A_p + scaled(data.s[k], qdd[b]) + scaled(crossMotion(data.V[k], data.s[k]), data.qd[k]);
+    data.IV[k] = inertiaTimes(data, k, data.V[k]);
+    data.IA[k] = inertiaTimes(data, k, data.A[k]);
+    data.F[k] = data.IA[k] + crossForce(data.V[k], data.IV[k]);
+    data.F_tot[k] = data.F[k];
+  }
+  for (int o = model.n - 1; o >= 0; --o) {
+    const int b = model.order[static_cast<std::size_t>(o)];
+    const auto k = static_cast<std::size_t>(b);
+    tau[b] = dot(data.s[k], data.F_tot[k]);
+    const int p = model.parent[k];
+    if (p >= 0) data.F_tot[static_cast<std::size_t>(p)] += data.F_tot[k];
+  }
+}
+
+}  // namespace
+
+void computeReducedInverseDynamics(const ReducedArmModel& model, ReducedArmData& data, const ReducedVector& qdd,
+                                   ReducedVector& tau) noexcept {
+  newtonEulerPass(model, data, qdd, tau);
+}
+
+void computeReducedMassMatrix(const ReducedArmModel& model, const ReducedArmData& data, ReducedMatrix& mass) noexcept {
+  const int n = model.n;
+  mass.setZero(n, n);
+  // Composite inertias I^C_b = sum over the subtree (additive at the world origin).
+  std::array<double, kMaxReducedBodies> m{};
+  std::array<Eigen::Vector3d, kMaxReducedBodies> h{};
+  std::array<Eigen::Matrix3d, kMaxReducedBodies> inertia{};
+  for (int b = 0; b < n; ++b) {
+    const auto k = static_cast<std::size_t>(b);
+    m[k] = data.mass_kg[k];
+    h[k] = data.first_moment_kgm[k];
+    inertia[k] = data.inertia_O_kgm2[k];
+  }
+  for (int o = n - 1; o >= 0; --o) {
+    const auto k = static_cast<std::size_t>(model.order[static_cast<std::size_t>(o)]);
+    const int p = model.parent[k];
+    if (p < 0) continue;
+    const auto pk = static_cast<std::size_t>(p);
+    m[pk] += m[k];
+    h[pk] += h[k];
+    inertia[pk] += inertia[k];
+  }
+  for (int j = 0; j < n; ++j) {
+    const auto kj = static_cast<std::size_t>(j);
+    const SpatialVector Y = applyInertia(m[kj], h[kj], inertia[kj], data.s[kj]);
+    for (int i = j; i >= 0; i = model.parent[static_cast<std::size_t>(i)]) {
+      const double value = dot(data.s[static_cast<std::size_t>(i)], Y);
+      mass(i, j) = value;
+      mass(j, i) = value;
+    }
+  }
+}
+
+void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, ReducedArmData& data,
+                                              const ReducedVector& qdd, ReducedVector& tau, ReducedMatrix& dtau_dq,
+                                              ReducedMatrix& dtau_dqd) noexcept {
+  const int n = model.n;
+  computeReducedInverseDynamics(model, data, qdd, tau);
+  dtau_dq.setZero(n, n);
+  dtau_dqd.setZero(n, n);
+  const SpatialVector ground_accel{Eigen::Vector3d::Zero(), -model.gravity_W_mps2};
+  const SpatialVector zero{};
+  std::array<SpatialVector, kMaxReducedBodies> dq_sum{};
+  std::array<SpatialVector, kMaxReducedBodies> dqd_sum{};
+  for (int j = 0; j < n; ++j) {
+    const auto kj = static_cast<std::size_t>(j);
+    const int pj = model.parent[kj];
+    const SpatialVector& s = data.s[kj];
+    const SpatialVector& V_p = pj < 0 ? zero : data.V[static_cast<std::size_t>(pj)];
+    const SpatialVector& A_p = pj < 0 ? ground_accel : data.A[static_cast<std::size_t>(pj)];
+    // Per-joint constants: w = V_p x s, t = s x V_p, u = -s x A_p - w x V_p.
+    const SpatialVector w = crossMotion(V_p, s);
+    const SpatialVector t = crossMotion(s, V_p);
+    const SpatialVector u = scaled(crossMotion(s, A_p) + crossMotion(w, V_p), -1.0);
+    // Per body k moved by joint j: d F_k / d q_j and d F_k / d qd_j (R7, R8). Turning the
+    // subtree about s gives dV = s x (V - V_p), dA = s x (A - A_p) + w x (V - V_p) and
+    // d(I) X = s x* (I X) - I (s x X); collected:
+    //   dF/dq  = s x* (I A) + I (u + w x V) + (s x V - t) x* (I V) + V x* (s x* (I V) - I t)
+    //   dF/dqd = I (w + s x V - t) + s x* (I V) + V x* (I s)
+    for (int b = 0; b < n; ++b) {
+      const auto k = static_cast<std::size_t>(b);
+      if (!model.supports[kj][k]) {
+        dq_sum[k] = zero;
+        dqd_sum[k] = zero;
+        continue;
+      }
+      const SpatialVector& V = data.V[k];
+      const SpatialVector& IV = data.IV[k];
+      const SpatialVector s_x_V = crossMotion(s, V);
+      const SpatialVector s_x_IV = crossForce(s, IV);
+      dq_sum[k] = crossForce(s, data.IA[k]) + inertiaTimes(data, k, u + crossMotion(w, V)) + crossForce(s_x_V - t, IV) +
+                  crossForce(V, s_x_IV - inertiaTimes(data, k, t));
+      dqd_sum[k] = inertiaTimes(data, k, w + s_x_V - t) + s_x_IV + crossForce(V, inertiaTimes(data, k, s));
+    }
+    // Subtree sums: joint i sees the bodies of its subtree that joint j moves.
+    for (int o = n - 1; o >= 0; --o) {
+      const auto k = static_cast<std::size_t>(model.order[static_cast<std::size_t>(o)]);
+      const int p = model.parent[k];
+      if (p < 0) continue;
+      dq_sum[static_cast<std::size_t>(p)] += dq_sum[k];
+      dqd_sum[static_cast<std::size_t>(p)] += dqd_sum[k];
+    }
+    // tau_i = s_i . F_tot_i; s_i itself turns with q_j when joint j moves body i (R6).
+    for (int i = 0; i < n; ++i) {
+      const auto ki = static_cast<std::size_t>(i);
+      double dq = dot(data.s[ki], dq_sum[ki]);
+      if (model.supports[kj][ki] && i != j) dq += dot(crossMotion(s, data.s[ki]), data.F_tot[ki]);
+      dtau_dq(i, j) = dq;
+      dtau_dqd(i, j) = dot(data.s[ki], dqd_sum[ki]);
+    }
+  }
+}
+
+}  // namespace fullarm::plant
