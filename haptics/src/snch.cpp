@@ -41,6 +41,12 @@ Cone mergeCones(const Cone& a, const Cone& b) noexcept {
   return {(std::cos(delta) * a.axis + std::sin(delta) * w).normalized(), alpha};
 }
 
+void setConeTrig(SnchNode& node) noexcept {
+  const double open = node.cone_half_angle_rad + kConeSlack_rad;
+  node.cone_cos = open < kPi ? std::cos(open) : -1.0;
+  node.cone_sin = open < kPi ? std::sin(open) : 0.0;
+}
+
 struct Builder {
   const TriMesh& mesh;
   std::vector<Vector3d> centroid;
@@ -70,11 +76,14 @@ struct Builder {
     SnchNode node;
     node.centre_m = c;
     node.radius_m = r * (1.0 + 1e-12) + 1e-15;
+    // Half extents grown like the radius, so rounding in the query never cuts a vertex off.
+    node.box_half_m = (0.5 * (hi - lo)).cwiseMax(Vector3d::Zero()) * (1.0 + 1e-12) + Vector3d::Constant(1e-15);
     if (end - begin == 1) {
       const int t = tris[static_cast<std::size_t>(begin)];
       node.triangle = t;
       node.cone_axis = leaf_cone[static_cast<std::size_t>(t)].axis;
       node.cone_half_angle_rad = leaf_cone[static_cast<std::size_t>(t)].half_angle;
+      setConeTrig(node);
       tree.nodes[static_cast<std::size_t>(id)] = node;
       return id;
     }
@@ -98,6 +107,7 @@ struct Builder {
     const Cone merged = mergeCones({l.cone_axis, l.cone_half_angle_rad}, {rn.cone_axis, rn.cone_half_angle_rad});
     node.cone_axis = merged.axis;
     node.cone_half_angle_rad = merged.half_angle;
+    setConeTrig(node);
     tree.nodes[static_cast<std::size_t>(id)] = node;
     return id;
   }
@@ -110,12 +120,22 @@ SnchTree buildSnchTree(const TriMesh& mesh) {
   const int nt = mesh.numTriangles();
   b.centroid.resize(static_cast<std::size_t>(nt));
   b.leaf_cone.resize(static_cast<std::size_t>(nt));
+  // Vertices on a boundary or non-manifold edge: their normal cone (the directions u with
+  // u . e <= 0 for every edge e leaving the vertex) is not bounded by the one-ring normals. At a
+  // boundary edge it reaches the in-plane direction away from the face (an open sheet's rim is
+  // approached edge-on), so a triangle touching such a vertex gets a full cone.
+  std::vector<char> irregular_vertex(static_cast<std::size_t>(mesh.numVertices()), 0);
+  for (int e = 0; e < mesh.numEdges(); ++e) {
+    if (mesh.edgeTriangles(e).size() == 2) continue;
+    for (int v : mesh.edgeVertices(e)) irregular_vertex[static_cast<std::size_t>(v)] = 1;
+  }
   for (int t = 0; t < nt; ++t) {
     const auto& tri = mesh.triangle(t);
     b.centroid[static_cast<std::size_t>(t)] = (mesh.vertex(tri[0]) + mesh.vertex(tri[1]) + mesh.vertex(tri[2])) / 3.0;
     // Leaf cone: the face normal and the normals of the one-rings of its three vertices.
     Cone cone{mesh.faceNormal(t), 0.0};
     for (int k = 0; k < 3; ++k) {
+      if (irregular_vertex[static_cast<std::size_t>(tri[k])] != 0) cone.half_angle = kPi;
       for (int s : mesh.vertexTriangles(tri[k])) cone = mergeCones(cone, {mesh.faceNormal(s), 0.0});
     }
     b.leaf_cone[static_cast<std::size_t>(t)] = cone;
@@ -199,9 +219,12 @@ bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh&
 }
 
 std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t begin) noexcept {
+  // The triangles close the key: the kept representative (its triangle pair, and u_W for a
+  // touching pair, which comes from that triangle) does not depend on the order of discovery.
   auto key = [](const LocalMinimum& m) {
     return std::make_tuple(m.link, m.object, static_cast<int>(m.feature_link.kind), m.feature_link.index,
-                           static_cast<int>(m.feature_object.kind), m.feature_object.index, m.distance_m);
+                           static_cast<int>(m.feature_object.kind), m.feature_object.index, m.distance_m,
+                           m.tri_link, m.tri_object);
   };
   const auto first = minima.begin() + static_cast<std::ptrdiff_t>(begin);
   std::sort(first, minima.end(), [&](const LocalMinimum& a, const LocalMinimum& b) { return key(a) < key(b); });
@@ -210,6 +233,55 @@ std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t 
   minima.erase(last, minima.end());
   return minima.size();
 }
+
+namespace {
+
+// Normal-cone tests of a node pair proven at least `gap_m` > 0 apart (every point pair under it
+// is then separated, so a local minimum's direction u = (q - p)/|q - p| must lie in A's cone
+// and -u in B's cone). Returns false when no local minimum can exist under the pair. All
+// vectors in the object frame except where noted; `diff` = c_B - c_A.
+bool conesAdmit(const SnchNode& a, const SnchNode& b, const Eigen::Matrix3d& R_OL, const Vector3d& diff, double dist,
+                double gap_m) noexcept {
+  const bool a_bounded = a.cone_cos > -1.0;
+  const bool b_bounded = b.cone_cos > -1.0;
+  if (!a_bounded && !b_bounded) return true;
+  const Vector3d a_axis = R_OL * a.cone_axis;
+  const Vector3d& b_axis = b.cone_axis;
+  // (1) u in cone A and -u in cone B: angle(a_A, -a_B) <= alpha_A + alpha_B (with the slack).
+  if (a_bounded && b_bounded && a.cone_half_angle_rad + b.cone_half_angle_rad + 2.0 * kConeSlack_rad < kPi) {
+    const double cos_sum = a.cone_cos * b.cone_cos - a.cone_sin * b.cone_sin;
+    if (-a_axis.dot(b_axis) < cos_sum) return false;
+  }
+  // (2) Spanning cone of the two spheres (Johnson & Cohen): every direction from sphere A to
+  // sphere B lies within sigma = asin((r_A + r_B)/D) of s = diff/D.
+  const double rsum = a.radius_m + b.radius_m;
+  if (dist > rsum) {
+    const double sin_sigma = rsum / dist;
+    const double cos_sigma = std::sqrt(std::max(0.0, 1.0 - sin_sigma * sin_sigma));
+    // cos(alpha + sigma), valid while alpha + sigma < pi (sigma <= pi/2).
+    if (a_bounded && (a.cone_cos >= 0.0 || sin_sigma < a.cone_sin)) {
+      if (a_axis.dot(diff) < dist * (a.cone_cos * cos_sigma - a.cone_sin * sin_sigma)) return false;
+    }
+    if (b_bounded && (b.cone_cos >= 0.0 || sin_sigma < b.cone_sin)) {
+      if (-b_axis.dot(diff) < dist * (b.cone_cos * cos_sigma - b.cone_sin * sin_sigma)) return false;
+    }
+  }
+  // (3) Support along the axes: (q - p) . a_A >= cos(alpha_A) |q - p| >= cos(alpha_A) gap, and
+  // the largest (q - p) . a_A over the two boxes is diff . a_A plus both boxes' support.
+  if (a.cone_cos > 0.0) {
+    const double reach =
+        a_axis.dot(diff) + a_axis.cwiseAbs().dot(b.box_half_m) + a.cone_axis.cwiseAbs().dot(a.box_half_m);
+    if (reach < a.cone_cos * gap_m) return false;
+  }
+  if (b.cone_cos > 0.0) {
+    const double reach = -b_axis.dot(diff) + b_axis.cwiseAbs().dot(b.box_half_m) +
+                         (R_OL.transpose() * b_axis).cwiseAbs().dot(a.box_half_m);
+    if (reach < b.cone_cos * gap_m) return false;
+  }
+  return true;
+}
+
+}  // namespace
 
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_WL,
                    const SnchTree& obj_tree, const TriMesh& obj_mesh, const Isometry3d& X_WO, double cutoff_m,
@@ -221,7 +293,8 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
   if (link_tree.nodes.empty() || obj_tree.nodes.empty()) return;
   // Everything in the object frame: only the link's nodes need transforming.
   const Isometry3d X_OL = X_WO.inverse() * X_WL;
-  const Eigen::Matrix3d& R_OL = X_OL.linear();
+  const Eigen::Matrix3d R_OL = X_OL.linear();
+  const Eigen::Matrix3d abs_R_OL = R_OL.cwiseAbs();
   auto& stack = scratch.stack;
   stack.clear();
   stack.emplace_back(0, 0);
@@ -232,26 +305,23 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
     ++st.node_pairs_visited;
     const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(i)];
     const SnchNode& b = obj_tree.nodes[static_cast<std::size_t>(j)];
-    const Vector3d ca = X_OL * a.centre_m;
-    const Vector3d diff = b.centre_m - ca;
+    const Vector3d diff = b.centre_m - X_OL * a.centre_m;
     const double dist = diff.norm();
-    const double rsum = a.radius_m + b.radius_m;
-    // Distance lower bound against the cutoff.
-    if (dist - rsum > cutoff_m) {
+    // Distance lower bounds: the spheres, then the separating gaps of the two boxes along the
+    // three object axes and the three link axes (any unit direction bounds the distance).
+    double gap = dist - a.radius_m - b.radius_m;
+    if (gap <= cutoff_m) {
+      const Vector3d gap_o = diff.cwiseAbs() - b.box_half_m - abs_R_OL * a.box_half_m;
+      const Vector3d gap_l = (R_OL.transpose() * diff).cwiseAbs() - a.box_half_m - abs_R_OL.transpose() * b.box_half_m;
+      gap = std::max(gap, std::max(gap_o.maxCoeff(), gap_l.maxCoeff()));
+    }
+    if (gap > cutoff_m) {
       ++st.pruned_by_distance;
       continue;
     }
-    // Spanning-cone test: every direction from sphere A to sphere B lies within sigma of s.
-    if (dist > rsum) {
-      const Vector3d s = diff / dist;
-      const double sigma = std::asin(rsum / dist);
-      const double open_a = a.cone_half_angle_rad + sigma + kConeSlack_rad;
-      const double open_b = b.cone_half_angle_rad + sigma + kConeSlack_rad;
-      if ((open_a < kPi && (R_OL * a.cone_axis).dot(s) < std::cos(open_a)) ||
-          (open_b < kPi && -b.cone_axis.dot(s) < std::cos(open_b))) {
-        ++st.pruned_by_cone;
-        continue;
-      }
+    if (gap > kConeTestMinGap_m && !conesAdmit(a, b, R_OL, diff, dist, gap)) {
+      ++st.pruned_by_cone;
+      continue;
     }
     if (a.isLeaf() && b.isLeaf()) {
       ++st.triangle_pairs_tested;
