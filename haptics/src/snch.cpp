@@ -223,8 +223,8 @@ std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t 
   // touching pair, which comes from that triangle) does not depend on the order of discovery.
   auto key = [](const LocalMinimum& m) {
     return std::make_tuple(m.link, m.object, static_cast<int>(m.feature_link.kind), m.feature_link.index,
-                           static_cast<int>(m.feature_object.kind), m.feature_object.index, m.distance_m,
-                           m.tri_link, m.tri_object);
+                           static_cast<int>(m.feature_object.kind), m.feature_object.index, m.distance_m, m.tri_link,
+                           m.tri_object);
   };
   const auto first = minima.begin() + static_cast<std::ptrdiff_t>(begin);
   std::sort(first, minima.end(), [&](const LocalMinimum& a, const LocalMinimum& b) { return key(a) < key(b); });
@@ -281,6 +281,32 @@ bool conesAdmit(const SnchNode& a, const SnchNode& b, const Eigen::Matrix3d& R_O
   return true;
 }
 
+// True when triangles A and B (same frame) are proven farther apart than `cutoff_m` by a
+// separating axis: the two face normals, then the six in-plane edge normals (a projection on
+// an axis never lengthens a distance). Axes are left unnormalised: the gap along a is compared
+// with cutoff_m |a|, squared.
+bool trianglesFartherThan(const Vector3d (&a)[3], const Vector3d& n_a, const Vector3d (&b)[3], const Vector3d& n_b,
+                          double cutoff_m) noexcept {
+  auto gapAlong = [&](const Vector3d& axis) {
+    const double a0 = a[0].dot(axis);
+    const double a1 = a[1].dot(axis);
+    const double a2 = a[2].dot(axis);
+    const double b0 = b[0].dot(axis);
+    const double b1 = b[1].dot(axis);
+    const double b2 = b[2].dot(axis);
+    return std::max(std::min({b0, b1, b2}) - std::max({a0, a1, a2}), std::min({a0, a1, a2}) - std::max({b0, b1, b2}));
+  };
+  auto separates = [&](const Vector3d& axis) {
+    const double gap = gapAlong(axis);
+    return gap > 0.0 && gap * gap > cutoff_m * cutoff_m * axis.squaredNorm();
+  };
+  if (separates(n_a) || separates(n_b)) return true;
+  for (int k = 0; k < 3; ++k) {
+    if (separates(n_a.cross(a[(k + 1) % 3] - a[k])) || separates(n_b.cross(b[(k + 1) % 3] - b[k]))) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_WL,
@@ -324,6 +350,17 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
       continue;
     }
     if (a.isLeaf() && b.isLeaf()) {
+      // Exact separating-axis bound of the two triangles before the closest-point computation.
+      const auto& ta = link_mesh.triangle(a.triangle);
+      const auto& tb = obj_mesh.triangle(b.triangle);
+      const Vector3d va[3] = {X_OL * link_mesh.vertex(ta[0]), X_OL * link_mesh.vertex(ta[1]),
+                              X_OL * link_mesh.vertex(ta[2])};
+      const Vector3d vb[3] = {obj_mesh.vertex(tb[0]), obj_mesh.vertex(tb[1]), obj_mesh.vertex(tb[2])};
+      if (trianglesFartherThan(va, R_OL * link_mesh.faceNormal(a.triangle), vb, obj_mesh.faceNormal(b.triangle),
+                               cutoff_m)) {
+        ++st.pruned_by_distance;
+        continue;
+      }
       ++st.triangle_pairs_tested;
       if (evaluateTrianglePair(link_mesh, a.triangle, obj_mesh, b.triangle, X_OL, cutoff_m, m)) {
         m.u_W = X_WO.linear() * m.u_W;
