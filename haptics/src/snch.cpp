@@ -240,12 +240,11 @@ namespace {
 // is then separated, so a local minimum's direction u = (q - p)/|q - p| must lie in A's cone
 // and -u in B's cone). Returns false when no local minimum can exist under the pair. All
 // vectors in the object frame except where noted; `diff` = c_B - c_A.
-bool conesAdmit(const SnchNode& a, const SnchNode& b, const Eigen::Matrix3d& R_OL, const Vector3d& diff, double dist,
-                double gap_m) noexcept {
+bool conesAdmit(const SnchNode& a, const Vector3d& a_axis, const SnchNode& b, const Eigen::Matrix3d& R_OL,
+                const Vector3d& diff, double dist, double gap_m) noexcept {
   const bool a_bounded = a.cone_cos > -1.0;
   const bool b_bounded = b.cone_cos > -1.0;
   if (!a_bounded && !b_bounded) return true;
-  const Vector3d a_axis = R_OL * a.cone_axis;
   const Vector3d& b_axis = b.cone_axis;
   // (1) u in cone A and -u in cone B: angle(a_A, -a_B) <= alpha_A + alpha_B (with the slack).
   if (a_bounded && b_bounded && a.cone_half_angle_rad + b.cone_half_angle_rad + 2.0 * kConeSlack_rad < kPi) {
@@ -321,6 +320,15 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
   const Isometry3d X_OL = X_WO.inverse() * X_WL;
   const Eigen::Matrix3d R_OL = X_OL.linear();
   const Eigen::Matrix3d abs_R_OL = R_OL.cwiseAbs();
+  // The link's nodes in the object frame, once (the link tree is the small one).
+  auto& centre_O = scratch.link_centre_O;
+  auto& axis_O = scratch.link_axis_O;
+  centre_O.resize(link_tree.nodes.size());
+  axis_O.resize(link_tree.nodes.size());
+  for (std::size_t k = 0; k < link_tree.nodes.size(); ++k) {
+    centre_O[k] = X_OL * link_tree.nodes[k].centre_m;
+    axis_O[k] = R_OL * link_tree.nodes[k].cone_axis;
+  }
   auto& stack = scratch.stack;
   stack.clear();
   stack.emplace_back(0, 0);
@@ -331,7 +339,7 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
     ++st.node_pairs_visited;
     const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(i)];
     const SnchNode& b = obj_tree.nodes[static_cast<std::size_t>(j)];
-    const Vector3d diff = b.centre_m - X_OL * a.centre_m;
+    const Vector3d diff = b.centre_m - centre_O[static_cast<std::size_t>(i)];
     const double dist = diff.norm();
     // Distance lower bounds: the spheres, then the separating gaps of the two boxes along the
     // three object axes and the three link axes (any unit direction bounds the distance).
@@ -345,7 +353,7 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
       ++st.pruned_by_distance;
       continue;
     }
-    if (gap > kConeTestMinGap_m && !conesAdmit(a, b, R_OL, diff, dist, gap)) {
+    if (gap > kConeTestMinGap_m && !conesAdmit(a, axis_O[static_cast<std::size_t>(i)], b, R_OL, diff, dist, gap)) {
       ++st.pruned_by_cone;
       continue;
     }

@@ -76,6 +76,9 @@ struct SnchTree {
 /// Reusable traversal storage for querySnchPair (grows, then stays allocated).
 struct SnchQueryScratch {
   std::vector<std::pair<int, int>> stack;
+  /// Per link node, its centre and cone axis in the object frame (filled once per query).
+  std::vector<Eigen::Vector3d> link_centre_O;
+  std::vector<Eigen::Vector3d> link_axis_O;
 };
 
 /// Counters of the last querySnchPair call.
