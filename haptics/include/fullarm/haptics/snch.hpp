@@ -57,6 +57,10 @@ struct SnchNode {
   /// pi): the query's cone tests use them instead of trigonometric calls.
   double cone_cos = -1.0;
   double cone_sin = 0.0;
+  /// The normals are bounded by the double cone +-cone_axis (half angle below pi/2), not by the
+  /// cone: set on leaves of double-sided surfaces (each triangle also present with the opposite
+  /// winding, as the DRC CAD exports are) and on every node above one.
+  bool cone_two_sided = false;
   [[nodiscard]] bool isLeaf() const noexcept { return left < 0; }
 };
 
@@ -65,7 +69,10 @@ struct SnchNode {
 /// one-rings (so edge and vertex minima are covered); an inner cone bounds its children's.
 /// A triangle with a vertex on a boundary or non-manifold edge (not exactly two triangles) gets
 /// a full cone: at a boundary the minimum direction can lie in the plane of the sheet, outside
-/// every one-ring normal.
+/// every one-ring normal. A triangle of a double-sided surface (its twin, the same vertices in
+/// the opposite winding, is in the mesh) gets a cone or double cone around the exact normal
+/// cones of its face, edges and vertices (the directions u with u . e <= 0 for every direction
+/// e from the feature into an incident triangle), or a full cone when they do not fit in one.
 struct SnchTree {
   std::vector<SnchNode> nodes;
 };
