@@ -1,10 +1,12 @@
 // SNCH pair query against brute force over all triangle pairs on the meshes real CAD exports
 // give: open surfaces (boundary edges), double-sided surfaces (every triangle also present with
-// the opposite winding, as in the DRC valve wall and wheel), and both. The hierarchy's box
-// bounds and cone tests must lose no local minimum and add none.
+// the opposite winding, as in the DRC valve wall and wheel), and both, on the random primitives
+// and on folded sheets (acute and obtuse folds). The hierarchy's box bounds and cone tests must
+// lose no local minimum and add none.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "fullarm/haptics/snch.hpp"
@@ -20,6 +22,43 @@ using test::randomSmallMesh;
 constexpr double kCutoff_m = 0.05;
 
 enum class Variant { kClosed, kOpen, kDoubleSided, kOpenDoubleSided };
+
+// An open sheet of two 0.1 x 0.1 m panels folded along a shared edge by a random angle between
+// the panels of 15-165 degrees (acute folds: the outside normal wedge spans more than 90
+// degrees), gridded so it has interior vertices.
+TriMesh foldedSheet(std::mt19937& rng) {
+  const double fold = std::uniform_real_distribution<double>(0.26, 2.88)(rng);
+  const int n = 5;
+  std::vector<Eigen::Vector3d> v;
+  for (int panel = 0; panel < 2; ++panel) {
+    for (int i = 0; i <= n; ++i) {
+      for (int j = 0; j <= n; ++j) {
+        const double x = 0.1 * i / n;
+        const double r = 0.1 * j / n;
+        v.emplace_back(x, panel == 0 ? r : r * std::cos(fold), panel == 0 ? 0.0 : r * std::sin(fold));
+      }
+    }
+  }
+  auto id = [n](int panel, int i, int j) { return panel * (n + 1) * (n + 1) + i * (n + 1) + j; };
+  std::vector<Eigen::Vector3i> t;
+  for (int panel = 0; panel < 2; ++panel) {
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        // Panel 1 wound the other way, so both panels face the outside of the fold.
+        Eigen::Vector3i a(id(panel, i, j), id(panel, i + 1, j), id(panel, i + 1, j + 1));
+        Eigen::Vector3i b(id(panel, i, j), id(panel, i + 1, j + 1), id(panel, i, j + 1));
+        if (panel == 1) {
+          std::swap(a[1], a[2]);
+          std::swap(b[1], b[2]);
+        }
+        t.push_back(a);
+        t.push_back(b);
+      }
+    }
+  }
+  // The fold line (j = 0) is shared: weld the duplicated vertices.
+  return TriMesh::build("folded sheet", std::move(v), std::move(t), 1e-9);
+}
 
 // `mesh` with a random 10-40 % of its triangles removed (kOpen), with every triangle repeated
 // in the opposite winding (kDoubleSided), or both.
@@ -74,7 +113,8 @@ TEST(SnchOpenMeshTest, FindsExactlyTheBruteForceLocalMinimaOnOpenAndDoubleSidedM
   std::uniform_int_distribution<int> pick(0, 3);
   for (int trial = 0; trial < 600; ++trial) {
     const TriMesh link = variantOf(randomSmallMesh(rng), static_cast<Variant>(pick(rng)), rng);
-    const TriMesh obj = variantOf(randomSmallMesh(rng), static_cast<Variant>(pick(rng)), rng);
+    const bool fold = std::uniform_real_distribution<double>(0.0, 1.0)(rng) < 0.3;
+    const TriMesh obj = variantOf(fold ? foldedSheet(rng) : randomSmallMesh(rng), static_cast<Variant>(pick(rng)), rng);
     const auto [X_WL, X_WO] = nearVertexPair(link, obj, rng);
     std::vector<LocalMinimum> snch;
     SnchQueryStats stats;
