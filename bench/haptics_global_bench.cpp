@@ -1,7 +1,8 @@
 // Global search of the 7-link DTS arm against scenes/valve_wall.yaml (DRC valve walls, wheel
 // valve, truss, opening frame): SNCH vs the Bullet alternative search, which returns the same
-// minima (checked before timing), in the same run; then SNCH on the same scene with every
+// minima (checked before timing), in the same run; then both on the same scene with every
 // object subdivided to ~100k and ~1M triangles (midpoint subdivision keeps the surfaces).
+// Counters: minima, triangle pairs given to the exact test, node pairs visited and pruned.
 //
 // build/release/bench/haptics_global_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
@@ -60,6 +61,13 @@ void checkSameMinima(const std::vector<haptics::LocalMinimum>& a, const std::vec
   if (!same) throw std::runtime_error("SNCH and Bullet returned different minima: the comparison is void");
 }
 
+void setSnchCounters(benchmark::State& state, const haptics::SnchQueryStats& st) {
+  state.counters["tri_pairs"] = static_cast<double>(st.triangle_pairs_tested);
+  state.counters["node_pairs"] = static_cast<double>(st.node_pairs_visited);
+  state.counters["dist_pruned"] = static_cast<double>(st.pruned_by_distance);
+  state.counters["cone_pruned"] = static_cast<double>(st.pruned_by_cone);
+}
+
 void BM_GlobalSearch_Snch(benchmark::State& state) {
   Setup& s = setup();
   static const haptics::CollisionWorld world = haptics::makeCollisionWorld(s.scene, s.model);
@@ -71,7 +79,7 @@ void BM_GlobalSearch_Snch(benchmark::State& state) {
   }
   state.counters["minima"] = static_cast<double>(out.size());
   state.counters["triangles"] = static_cast<double>(s.scene.numTriangles());
-  state.counters["tri_pairs"] = static_cast<double>(search.lastStats().triangle_pairs_tested);
+  setSnchCounters(state, search.lastStats());
 }
 
 void BM_GlobalSearch_Bullet(benchmark::State& state) {
@@ -104,6 +112,27 @@ void BM_GlobalSearch_Snch_Subdivided(benchmark::State& state) {
   }
   state.counters["minima"] = static_cast<double>(out.size());
   state.counters["triangles"] = static_cast<double>(scene.numTriangles());
+  setSnchCounters(state, search.lastStats());
+}
+
+void BM_GlobalSearch_Bullet_Subdivided(benchmark::State& state) {
+  Setup& s = setup();
+  const haptics::Scene scene = subdivided(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const haptics::CollisionWorld world = haptics::makeCollisionWorld(scene, s.model);
+  haptics::BulletGlobalSearch search(world);
+  std::vector<haptics::LocalMinimum> out;
+  std::vector<haptics::LocalMinimum> reference;
+  haptics::SnchGlobalSearch snch;
+  snch.search(world, s.fk, kCutoff_m, kPruneRadius_m, reference);
+  search.search(world, s.fk, kCutoff_m, kPruneRadius_m, out);
+  checkSameMinima(reference, out);
+  for (auto _ : state) {
+    search.search(world, s.fk, kCutoff_m, kPruneRadius_m, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["minima"] = static_cast<double>(out.size());
+  state.counters["triangles"] = static_cast<double>(scene.numTriangles());
+  state.counters["tri_pairs"] = static_cast<double>(search.lastTrianglePairs());
 }
 
 BENCHMARK(BM_GlobalSearch_Snch)->Unit(benchmark::kMillisecond);
@@ -111,6 +140,7 @@ BENCHMARK(BM_GlobalSearch_Bullet)->Unit(benchmark::kMillisecond);
 // 27,027 triangles x 4 = 108,108 (one level everywhere); walls and truss 3 levels, the rest 2:
 // 1,115,328 triangles.
 BENCHMARK(BM_GlobalSearch_Snch_Subdivided)->Args({1, 1})->Args({2, 3})->Unit(benchmark::kMillisecond)->Iterations(2);
+BENCHMARK(BM_GlobalSearch_Bullet_Subdivided)->Args({1, 1})->Args({2, 3})->Unit(benchmark::kMillisecond)->Iterations(2);
 
 }  // namespace
 

@@ -18,6 +18,7 @@ constexpr double kPi = std::numbers::pi;
 struct Cone {
   Vector3d axis = Vector3d::UnitZ();
   double half_angle = 0.0;
+  bool two_sided = false;  // the double cone +-axis
 };
 
 double angleBetween(const Vector3d& a, const Vector3d& b) noexcept {
@@ -27,7 +28,7 @@ double angleBetween(const Vector3d& a, const Vector3d& b) noexcept {
 
 // Smallest cone around both cones with the axis in their common plane (the tight merge of
 // bounding cones: keep the wider one if it covers the other, else widen towards the other).
-Cone mergeCones(const Cone& a, const Cone& b) noexcept {
+Cone mergeOneSided(const Cone& a, const Cone& b) noexcept {
   if (a.half_angle >= kPi || b.half_angle >= kPi) return {a.axis, kPi};
   const double theta = angleBetween(a.axis, b.axis);
   if (theta + b.half_angle <= a.half_angle) return a;
@@ -39,6 +40,178 @@ Cone mergeCones(const Cone& a, const Cone& b) noexcept {
   w = w.norm() > 1e-12 ? Vector3d(w.normalized()) : a.axis.unitOrthogonal();
   const double delta = alpha - a.half_angle;
   return {(std::cos(delta) * a.axis + std::sin(delta) * w).normalized(), alpha};
+}
+
+// A double cone holds every direction once its half angle (with the slack) reaches pi/2.
+Cone fullIfWide(Cone c) noexcept {
+  if (c.two_sided && c.half_angle + kConeSlack_rad >= 0.5 * kPi) return {c.axis, kPi};
+  return c;
+}
+
+// Merge; with a double cone on either side the result is a double cone around both (b's axis
+// turned towards a's first).
+Cone mergeCones(const Cone& a, Cone b) noexcept {
+  if (!a.two_sided && !b.two_sided) return mergeOneSided(a, b);
+  if (a.half_angle >= kPi || b.half_angle >= kPi) return {a.axis, kPi};
+  if (a.axis.dot(b.axis) < 0.0) b.axis = -b.axis;
+  Cone m = mergeOneSided(a, b);
+  m.two_sided = true;
+  return fullIfWide(m);
+}
+
+// Feasibility slack of the normal-cone constraints u . e <= 0 (unit vectors).
+constexpr double kRayTolerance = 1e-9;
+
+// Spanning rays of the normal cone {u : u . e <= 0 for every e in `dirs`} (unit directions from
+// a vertex along its edges). Returns false when that cone is neither pointed nor a line (then
+// no bounded cone holds it); a line gives its two opposite rays; an empty `rays` is the cone
+// {0}.
+bool vertexNormalConeRays(const std::vector<Vector3d>& dirs, std::vector<Vector3d>& rays) {
+  rays.clear();
+  auto feasible = [&](const Vector3d& r) {
+    return std::all_of(dirs.begin(), dirs.end(), [&](const Vector3d& e) { return r.dot(e) <= kRayTolerance; });
+  };
+  Vector3d plane_normal = Vector3d::Zero();
+  double best = 0.0;
+  for (std::size_t i = 0; i < dirs.size(); ++i) {
+    for (std::size_t j = i + 1; j < dirs.size(); ++j) {
+      const Vector3d c = dirs[i].cross(dirs[j]);
+      const double n = c.norm();
+      if (n < 1e-9) continue;
+      if (n > best) {
+        best = n;
+        plane_normal = c / n;
+      }
+      for (const double sign : {1.0, -1.0}) {
+        const Vector3d r = sign * c / n;
+        if (feasible(r)) rays.push_back(r);
+      }
+    }
+  }
+  if (best == 0.0) return false;  // collinear edges: not a surface vertex
+  const bool coplanar = std::all_of(dirs.begin(), dirs.end(),
+                                    [&](const Vector3d& e) { return std::abs(e.dot(plane_normal)) <= kRayTolerance; });
+  if (!coplanar) return true;  // edges span space: the cone is pointed, spanned by these rays
+  // Flat vertex: the cone holds the line of the normal, and more unless the edges surround it.
+  for (const Vector3d& e : dirs) {
+    const Vector3d w = plane_normal.cross(e).normalized();
+    if (feasible(w) || feasible(-w)) return false;
+  }
+  rays = {plane_normal, -plane_normal};
+  return true;
+}
+
+// Same for an edge: u is perpendicular to the edge and u . t <= 0 for the in-plane direction t
+// of every incident triangle (perpendicular to the edge, into the triangle).
+bool edgeNormalConeRays(const Vector3d& along, const std::vector<Vector3d>& into, std::vector<Vector3d>& rays) {
+  rays.clear();
+  auto feasible = [&](const Vector3d& r) {
+    return std::all_of(into.begin(), into.end(), [&](const Vector3d& t) { return r.dot(t) <= kRayTolerance; });
+  };
+  bool opposite = false;
+  for (const Vector3d& t : into) {
+    const Vector3d c = along.cross(t).normalized();
+    const bool plus = feasible(c);
+    const bool minus = feasible(-c);
+    if (plus) rays.push_back(c);
+    if (minus) rays.push_back(-c);
+    opposite = opposite || (plus && minus);
+  }
+  if (!opposite) return true;  // a wedge narrower than pi (or {0})
+  // Two opposite rays: a line (flat edge) unless a half-plane is feasible (an open rim).
+  for (const Vector3d& t : into) {
+    if (feasible(-t)) return false;
+  }
+  return true;
+}
+
+// Per vertex, the spanning rays of its exact normal cone, computed once (state 1) or found
+// unbounded (state 0); state -1 not computed yet.
+struct VertexConeCache {
+  std::vector<signed char> state;
+  std::vector<std::vector<Vector3d>> rays;
+};
+
+// Cone (or double cone) around the exact normal cones of triangle t's face, edges and
+// vertices; full when they do not fit in one of half angle below pi/2.
+Cone exactFeatureCone(const TriMesh& mesh, int t, VertexConeCache& cache) {
+  const auto& tri = mesh.triangle(t);
+  const Vector3d n = mesh.faceNormal(t);
+  std::vector<std::vector<Vector3d>> sets{{n}};
+  std::vector<Vector3d> dirs;
+  std::vector<Vector3d> rays;
+  std::vector<int> ring;
+  for (int k = 0; k < 3; ++k) {
+    const int v = tri[k];
+    const auto vi = static_cast<std::size_t>(v);
+    if (cache.state[vi] < 0) {
+      ring.clear();
+      for (int s : mesh.vertexTriangles(v)) {
+        for (int m = 0; m < 3; ++m) {
+          if (mesh.triangle(s)[m] != v) ring.push_back(mesh.triangle(s)[m]);
+        }
+      }
+      std::sort(ring.begin(), ring.end());
+      ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+      dirs.clear();
+      for (int w : ring) dirs.push_back((mesh.vertex(w) - mesh.vertex(v)).normalized());
+      cache.state[vi] = vertexNormalConeRays(dirs, cache.rays[vi]) ? 1 : 0;
+    }
+    if (cache.state[vi] == 0) return {n, kPi};
+    sets.push_back(cache.rays[vi]);
+    const int e = mesh.triangleEdge(t, k);
+    const auto ev = mesh.edgeVertices(e);
+    const Vector3d p0 = mesh.vertex(ev[0]);
+    const Vector3d along = (mesh.vertex(ev[1]) - p0).normalized();
+    dirs.clear();
+    for (int s : mesh.edgeTriangles(e)) {
+      for (int m = 0; m < 3; ++m) {
+        const int w = mesh.triangle(s)[m];
+        if (w == ev[0] || w == ev[1]) continue;
+        const Vector3d d = mesh.vertex(w) - p0;
+        dirs.push_back((d - d.dot(along) * along).normalized());
+      }
+    }
+    if (!edgeNormalConeRays(along, dirs, rays)) return {n, kPi};
+    sets.push_back(rays);
+  }
+  // One-sided: every ray in one cap narrower than pi/2 (a convex cap holds each feature's cone).
+  Cone one{n, 0.0};
+  for (const auto& set : sets) {
+    for (const Vector3d& r : set) one = mergeOneSided(one, {r, 0.0});
+  }
+  if (one.half_angle + kConeSlack_rad < 0.5 * kPi) return one;
+  // Double-sided: each feature's rays all on one side of the face plane; turned to the face
+  // normal's side, all in one cap narrower than pi/2 (a line feature contributes either ray).
+  Cone two{n, 0.0, true};
+  for (const auto& set : sets) {
+    const bool line = set.size() == 2 && set[0].dot(set[1]) < -1.0 + 1e-12;
+    bool up = true;
+    bool down = true;
+    for (const Vector3d& r : set) {
+      up = up && r.dot(n) > kRayTolerance;
+      down = down && r.dot(n) < -kRayTolerance;
+    }
+    if (line) {
+      const Vector3d r = set[0].dot(n) >= 0.0 ? set[0] : set[1];
+      if (std::abs(r.dot(n)) <= kRayTolerance) return {n, kPi};
+      two = mergeOneSided(two, {r, 0.0});
+      two.two_sided = true;
+      continue;
+    }
+    if (!up && !down && !set.empty()) return {n, kPi};
+    for (const Vector3d& r : set) {
+      two = mergeOneSided(two, {up ? r : Vector3d(-r), 0.0});
+      two.two_sided = true;
+    }
+  }
+  return fullIfWide(two);
+}
+
+void setConeTrig(SnchNode& node) noexcept {
+  const double open = node.cone_half_angle_rad + kConeSlack_rad;
+  node.cone_cos = open < kPi ? std::cos(open) : -1.0;
+  node.cone_sin = open < kPi ? std::sin(open) : 0.0;
 }
 
 struct Builder {
@@ -70,11 +243,15 @@ struct Builder {
     SnchNode node;
     node.centre_m = c;
     node.radius_m = r * (1.0 + 1e-12) + 1e-15;
+    // Half extents grown like the radius, so rounding in the query never cuts a vertex off.
+    node.box_half_m = (0.5 * (hi - lo)).cwiseMax(Vector3d::Zero()) * (1.0 + 1e-12) + Vector3d::Constant(1e-15);
     if (end - begin == 1) {
       const int t = tris[static_cast<std::size_t>(begin)];
       node.triangle = t;
       node.cone_axis = leaf_cone[static_cast<std::size_t>(t)].axis;
       node.cone_half_angle_rad = leaf_cone[static_cast<std::size_t>(t)].half_angle;
+      node.cone_two_sided = leaf_cone[static_cast<std::size_t>(t)].two_sided;
+      setConeTrig(node);
       tree.nodes[static_cast<std::size_t>(id)] = node;
       return id;
     }
@@ -95,9 +272,12 @@ struct Builder {
     node.right = build(mid, end);
     const SnchNode& l = tree.nodes[static_cast<std::size_t>(node.left)];
     const SnchNode& rn = tree.nodes[static_cast<std::size_t>(node.right)];
-    const Cone merged = mergeCones({l.cone_axis, l.cone_half_angle_rad}, {rn.cone_axis, rn.cone_half_angle_rad});
+    const Cone merged = mergeCones({l.cone_axis, l.cone_half_angle_rad, l.cone_two_sided},
+                                   {rn.cone_axis, rn.cone_half_angle_rad, rn.cone_two_sided});
     node.cone_axis = merged.axis;
     node.cone_half_angle_rad = merged.half_angle;
+    node.cone_two_sided = merged.two_sided;
+    setConeTrig(node);
     tree.nodes[static_cast<std::size_t>(id)] = node;
     return id;
   }
@@ -110,14 +290,29 @@ SnchTree buildSnchTree(const TriMesh& mesh) {
   const int nt = mesh.numTriangles();
   b.centroid.resize(static_cast<std::size_t>(nt));
   b.leaf_cone.resize(static_cast<std::size_t>(nt));
+  // Vertices on a boundary or non-manifold edge: their normal cone (the directions u with
+  // u . e <= 0 for every edge e leaving the vertex) is not bounded by the one-ring normals. At a
+  // boundary edge it reaches the in-plane direction away from the face (an open sheet's rim is
+  // approached edge-on), so a triangle touching such a vertex gets a full cone.
+  std::vector<char> irregular_vertex(static_cast<std::size_t>(mesh.numVertices()), 0);
+  for (int e = 0; e < mesh.numEdges(); ++e) {
+    if (mesh.edgeTriangles(e).size() == 2) continue;
+    for (int v : mesh.edgeVertices(e)) irregular_vertex[static_cast<std::size_t>(v)] = 1;
+  }
+  VertexConeCache vertex_cones{std::vector<signed char>(static_cast<std::size_t>(mesh.numVertices()), -1),
+                               std::vector<std::vector<Vector3d>>(static_cast<std::size_t>(mesh.numVertices()))};
   for (int t = 0; t < nt; ++t) {
     const auto& tri = mesh.triangle(t);
     b.centroid[static_cast<std::size_t>(t)] = (mesh.vertex(tri[0]) + mesh.vertex(tri[1]) + mesh.vertex(tri[2])) / 3.0;
     // Leaf cone: the face normal and the normals of the one-rings of its three vertices.
     Cone cone{mesh.faceNormal(t), 0.0};
     for (int k = 0; k < 3; ++k) {
+      if (irregular_vertex[static_cast<std::size_t>(tri[k])] != 0) cone.half_angle = kPi;
       for (int s : mesh.vertexTriangles(tri[k])) cone = mergeCones(cone, {mesh.faceNormal(s), 0.0});
     }
+    // Where the one-ring bound is void (double-sided surfaces, whose one-rings hold opposite
+    // normals; rims; thin parts), bound the features' exact normal cones instead.
+    if (cone.half_angle >= kPi) cone = exactFeatureCone(mesh, t, vertex_cones);
     b.leaf_cone[static_cast<std::size_t>(t)] = cone;
   }
   b.tris.resize(static_cast<std::size_t>(nt));
@@ -199,9 +394,12 @@ bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh&
 }
 
 std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t begin) noexcept {
+  // The triangles close the key: the kept representative (its triangle pair, and u_W for a
+  // touching pair, which comes from that triangle) does not depend on the order of discovery.
   auto key = [](const LocalMinimum& m) {
     return std::make_tuple(m.link, m.object, static_cast<int>(m.feature_link.kind), m.feature_link.index,
-                           static_cast<int>(m.feature_object.kind), m.feature_object.index, m.distance_m);
+                           static_cast<int>(m.feature_object.kind), m.feature_object.index, m.distance_m, m.tri_link,
+                           m.tri_object);
   };
   const auto first = minima.begin() + static_cast<std::ptrdiff_t>(begin);
   std::sort(first, minima.end(), [&](const LocalMinimum& a, const LocalMinimum& b) { return key(a) < key(b); });
@@ -210,6 +408,121 @@ std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t 
   minima.erase(last, minima.end());
   return minima.size();
 }
+
+namespace {
+
+// Normal-cone tests of a node pair proven at least `gap_m` > 0 apart (every point pair under it
+// is then separated, so a local minimum's direction u = (q - p)/|q - p| must lie in A's cone
+// and -u in B's cone). Returns false when no local minimum can exist under the pair. All
+// vectors in the object frame except where noted; `diff` = c_B - c_A.
+bool conesAdmit(const SnchNode& a, const Vector3d& a_axis, const SnchNode& b, const Eigen::Matrix3d& R_OL,
+                const Vector3d& diff, double dist, double gap_m) noexcept {
+  const bool a_bounded = a.cone_cos > -1.0;
+  const bool b_bounded = b.cone_cos > -1.0;
+  if (!a_bounded && !b_bounded) return true;
+  const Vector3d& b_axis = b.cone_axis;
+  // (1) u in cone A and -u in cone B: angle(a_A, -a_B) <= alpha_A + alpha_B (with the slack);
+  // with a double cone on either side, the angle between the axes' lines.
+  if (a_bounded && b_bounded && a.cone_half_angle_rad + b.cone_half_angle_rad + 2.0 * kConeSlack_rad < kPi) {
+    const double cos_sum = a.cone_cos * b.cone_cos - a.cone_sin * b.cone_sin;
+    const double c = -a_axis.dot(b_axis);
+    if ((a.cone_two_sided || b.cone_two_sided ? std::abs(c) : c) < cos_sum) return false;
+  }
+  // (2) Spanning cone of the two spheres (Johnson & Cohen): every direction from sphere A to
+  // sphere B lies within sigma = asin((r_A + r_B)/D) of s = diff/D.
+  const double rsum = a.radius_m + b.radius_m;
+  if (dist > rsum) {
+    const double sin_sigma = rsum / dist;
+    const double cos_sigma = std::sqrt(std::max(0.0, 1.0 - sin_sigma * sin_sigma));
+    // cos(alpha + sigma), valid while alpha + sigma < pi (sigma <= pi/2).
+    if (a_bounded && (a.cone_cos >= 0.0 || sin_sigma < a.cone_sin)) {
+      const double c = a_axis.dot(diff);
+      if ((a.cone_two_sided ? std::abs(c) : c) < dist * (a.cone_cos * cos_sigma - a.cone_sin * sin_sigma)) return false;
+    }
+    if (b_bounded && (b.cone_cos >= 0.0 || sin_sigma < b.cone_sin)) {
+      const double c = -b_axis.dot(diff);
+      if ((b.cone_two_sided ? std::abs(c) : c) < dist * (b.cone_cos * cos_sigma - b.cone_sin * sin_sigma)) return false;
+    }
+  }
+  // (3) Support along the axes: (q - p) . a_A >= cos(alpha_A) |q - p| >= cos(alpha_A) gap, and
+  // the largest (q - p) . a_A over the two boxes is diff . a_A plus both boxes' support.
+  if (a.cone_cos > 0.0 && !a.cone_two_sided) {
+    const double reach =
+        a_axis.dot(diff) + a_axis.cwiseAbs().dot(b.box_half_m) + a.cone_axis.cwiseAbs().dot(a.box_half_m);
+    if (reach < a.cone_cos * gap_m) return false;
+  }
+  if (b.cone_cos > 0.0 && !b.cone_two_sided) {
+    const double reach = -b_axis.dot(diff) + b_axis.cwiseAbs().dot(b.box_half_m) +
+                         (R_OL.transpose() * b_axis).cwiseAbs().dot(a.box_half_m);
+    if (reach < b.cone_cos * gap_m) return false;
+  }
+  // Double cones: |(q - p) . a| >= cos(alpha) gap; the boxes bound (q - p) . a on both sides.
+  if (a.cone_cos > 0.0 && a.cone_two_sided) {
+    const double extent = a_axis.cwiseAbs().dot(b.box_half_m) + a.cone_axis.cwiseAbs().dot(a.box_half_m);
+    if (std::abs(a_axis.dot(diff)) + extent < a.cone_cos * gap_m) return false;
+  }
+  if (b.cone_cos > 0.0 && b.cone_two_sided) {
+    const double extent =
+        b_axis.cwiseAbs().dot(b.box_half_m) + (R_OL.transpose() * b_axis).cwiseAbs().dot(a.box_half_m);
+    if (std::abs(b_axis.dot(diff)) + extent < b.cone_cos * gap_m) return false;
+  }
+
+  return true;
+}
+
+// True when triangles A and B (same frame) are proven farther apart than `cutoff_m` by a
+// separating axis: the two face normals, then the six in-plane edge normals (a projection on
+// an axis never lengthens a distance). Axes are left unnormalised: the gap along a is compared
+// with cutoff_m |a|, squared.
+bool trianglesFartherThan(const Vector3d (&a)[3], const Vector3d& n_a, const Vector3d (&b)[3], const Vector3d& n_b,
+                          double cutoff_m) noexcept {
+  auto gapAlong = [&](const Vector3d& axis) {
+    const double a0 = a[0].dot(axis);
+    const double a1 = a[1].dot(axis);
+    const double a2 = a[2].dot(axis);
+    const double b0 = b[0].dot(axis);
+    const double b1 = b[1].dot(axis);
+    const double b2 = b[2].dot(axis);
+    return std::max(std::min({b0, b1, b2}) - std::max({a0, a1, a2}), std::min({a0, a1, a2}) - std::max({b0, b1, b2}));
+  };
+  auto separates = [&](const Vector3d& axis) {
+    const double gap = gapAlong(axis);
+    return gap > 0.0 && gap * gap > cutoff_m * cutoff_m * axis.squaredNorm();
+  };
+  if (separates(n_a) || separates(n_b)) return true;
+  for (int k = 0; k < 3; ++k) {
+    if (separates(n_a.cross(a[(k + 1) % 3] - a[k])) || separates(n_b.cross(b[(k + 1) % 3] - b[k]))) return true;
+  }
+  return false;
+}
+
+// The support tests of conesAdmit on the two triangles themselves (vertices in the object
+// frame): over p in A and q in B, (q - p) . a_A must reach cos(alpha_A) gap (either sign for a
+// double cone), and (p - q) . a_B likewise.
+bool leafConesAdmit(const SnchNode& a, const Vector3d& a_axis, const SnchNode& b, const Vector3d (&va)[3],
+                    const Vector3d (&vb)[3], double gap_m) noexcept {
+  auto span = [&](const Vector3d& axis, double& lo, double& hi) {  // of (q - p) . axis
+    const double p0 = va[0].dot(axis), p1 = va[1].dot(axis), p2 = va[2].dot(axis);
+    const double q0 = vb[0].dot(axis), q1 = vb[1].dot(axis), q2 = vb[2].dot(axis);
+    hi = std::max({q0, q1, q2}) - std::min({p0, p1, p2});
+    lo = std::min({q0, q1, q2}) - std::max({p0, p1, p2});
+  };
+  double lo = 0.0;
+  double hi = 0.0;
+  if (a.cone_cos > 0.0) {
+    span(a_axis, lo, hi);
+    const double reach = a.cone_two_sided ? std::max(hi, -lo) : hi;
+    if (reach < a.cone_cos * gap_m) return false;
+  }
+  if (b.cone_cos > 0.0) {
+    span(b.cone_axis, lo, hi);
+    const double reach = b.cone_two_sided ? std::max(hi, -lo) : -lo;
+    if (reach < b.cone_cos * gap_m) return false;
+  }
+  return true;
+}
+
+}  // namespace
 
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_WL,
                    const SnchTree& obj_tree, const TriMesh& obj_mesh, const Isometry3d& X_WO, double cutoff_m,
@@ -221,7 +534,17 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
   if (link_tree.nodes.empty() || obj_tree.nodes.empty()) return;
   // Everything in the object frame: only the link's nodes need transforming.
   const Isometry3d X_OL = X_WO.inverse() * X_WL;
-  const Eigen::Matrix3d& R_OL = X_OL.linear();
+  const Eigen::Matrix3d R_OL = X_OL.linear();
+  const Eigen::Matrix3d abs_R_OL = R_OL.cwiseAbs();
+  // The link's nodes in the object frame, once (the link tree is the small one).
+  auto& centre_O = scratch.link_centre_O;
+  auto& axis_O = scratch.link_axis_O;
+  centre_O.resize(link_tree.nodes.size());
+  axis_O.resize(link_tree.nodes.size());
+  for (std::size_t k = 0; k < link_tree.nodes.size(); ++k) {
+    centre_O[k] = X_OL * link_tree.nodes[k].centre_m;
+    axis_O[k] = R_OL * link_tree.nodes[k].cone_axis;
+  }
   auto& stack = scratch.stack;
   stack.clear();
   stack.emplace_back(0, 0);
@@ -232,28 +555,40 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
     ++st.node_pairs_visited;
     const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(i)];
     const SnchNode& b = obj_tree.nodes[static_cast<std::size_t>(j)];
-    const Vector3d ca = X_OL * a.centre_m;
-    const Vector3d diff = b.centre_m - ca;
+    const Vector3d diff = b.centre_m - centre_O[static_cast<std::size_t>(i)];
     const double dist = diff.norm();
-    const double rsum = a.radius_m + b.radius_m;
-    // Distance lower bound against the cutoff.
-    if (dist - rsum > cutoff_m) {
+    // Distance lower bounds: the spheres, then the separating gaps of the two boxes along the
+    // three object axes and the three link axes (any unit direction bounds the distance).
+    double gap = dist - a.radius_m - b.radius_m;
+    if (gap <= cutoff_m) {
+      const Vector3d gap_o = diff.cwiseAbs() - b.box_half_m - abs_R_OL * a.box_half_m;
+      const Vector3d gap_l = (R_OL.transpose() * diff).cwiseAbs() - a.box_half_m - abs_R_OL.transpose() * b.box_half_m;
+      gap = std::max(gap, std::max(gap_o.maxCoeff(), gap_l.maxCoeff()));
+    }
+    if (gap > cutoff_m) {
       ++st.pruned_by_distance;
       continue;
     }
-    // Spanning-cone test: every direction from sphere A to sphere B lies within sigma of s.
-    if (dist > rsum) {
-      const Vector3d s = diff / dist;
-      const double sigma = std::asin(rsum / dist);
-      const double open_a = a.cone_half_angle_rad + sigma + kConeSlack_rad;
-      const double open_b = b.cone_half_angle_rad + sigma + kConeSlack_rad;
-      if ((open_a < kPi && (R_OL * a.cone_axis).dot(s) < std::cos(open_a)) ||
-          (open_b < kPi && -b.cone_axis.dot(s) < std::cos(open_b))) {
+    if (gap > kConeTestMinGap_m && !conesAdmit(a, axis_O[static_cast<std::size_t>(i)], b, R_OL, diff, dist, gap)) {
+      ++st.pruned_by_cone;
+      continue;
+    }
+    if (a.isLeaf() && b.isLeaf()) {
+      // Exact separating-axis bound of the two triangles before the closest-point computation.
+      const auto& ta = link_mesh.triangle(a.triangle);
+      const auto& tb = obj_mesh.triangle(b.triangle);
+      const Vector3d va[3] = {X_OL * link_mesh.vertex(ta[0]), X_OL * link_mesh.vertex(ta[1]),
+                              X_OL * link_mesh.vertex(ta[2])};
+      const Vector3d vb[3] = {obj_mesh.vertex(tb[0]), obj_mesh.vertex(tb[1]), obj_mesh.vertex(tb[2])};
+      if (trianglesFartherThan(va, R_OL * link_mesh.faceNormal(a.triangle), vb, obj_mesh.faceNormal(b.triangle),
+                               cutoff_m)) {
+        ++st.pruned_by_distance;
+        continue;
+      }
+      if (gap > kConeTestMinGap_m && !leafConesAdmit(a, axis_O[static_cast<std::size_t>(i)], b, va, vb, gap)) {
         ++st.pruned_by_cone;
         continue;
       }
-    }
-    if (a.isLeaf() && b.isLeaf()) {
       ++st.triangle_pairs_tested;
       if (evaluateTrianglePair(link_mesh, a.triangle, obj_mesh, b.triangle, X_OL, cutoff_m, m)) {
         m.u_W = X_WO.linear() * m.u_W;

@@ -31,23 +31,48 @@ inline constexpr double kLocalMinimumTolerance_m = 1e-12;
 inline constexpr double kOutsideCosineTolerance = 1e-9;
 /// Angle added to every cone test so rounding never prunes an accepted minimum [rad].
 inline constexpr double kConeSlack_rad = 1e-3;
+/// Cone tests run only on node pairs proven at least this far apart [m]. The local-minimum
+/// test accepts a direction u up to sqrt(2 kLocalMinimumTolerance_m / d) outside the exact
+/// normal cone of its feature; above this gap that is below 4.5e-4 rad < kConeSlack_rad.
+/// Closer pairs (touching, intersecting) are always descended.
+inline constexpr double kConeTestMinGap_m = 1e-5;
 
-/// One node: bounding sphere of its triangles and bounding cone of the normals that a local
-/// minimum on them can have (mesh frame).
+/// One node: bounding sphere and axis-aligned box of its triangles, and bounding cone of the
+/// normals that a local minimum on them can have (all in the mesh frame).
+///
+/// The sphere and the box share their centre (the centre of the vertex box). The box bounds
+/// thin and sliver-shaped nodes far more tightly than the sphere: the query takes the larger of
+/// the two distance lower bounds.
 struct SnchNode {
-  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();  ///< sphere and box centre [m]
   double radius_m = 0.0;
   Eigen::Vector3d cone_axis = Eigen::Vector3d::UnitZ();  ///< unit
   double cone_half_angle_rad = 0.0;                      ///< in [0, pi]; pi = every direction
   int left = -1;                                         ///< child nodes (-1 for a leaf)
   int right = -1;
   int triangle = -1;  ///< the leaf's triangle
+  /// Half extents of the axis-aligned box around the vertices, mesh frame [m].
+  Eigen::Vector3d box_half_m = Eigen::Vector3d::Zero();
+  /// cos and sin of cone_half_angle_rad + kConeSlack_rad (cos = -1, sin = 0 when that reaches
+  /// pi): the query's cone tests use them instead of trigonometric calls.
+  double cone_cos = -1.0;
+  double cone_sin = 0.0;
+  /// The normals are bounded by the double cone +-cone_axis (half angle below pi/2), not by the
+  /// cone: set on leaves of double-sided surfaces (each triangle also present with the opposite
+  /// winding, as the DRC CAD exports are) and on every node above one.
+  bool cone_two_sided = false;
   [[nodiscard]] bool isLeaf() const noexcept { return left < 0; }
 };
 
 /// The hierarchy of one mesh: a binary tree with one triangle per leaf, root at index 0.
 /// Leaf cones bound the normals of the triangle and of every triangle in its vertices'
 /// one-rings (so edge and vertex minima are covered); an inner cone bounds its children's.
+/// A triangle with a vertex on a boundary or non-manifold edge (not exactly two triangles) gets
+/// a full cone: at a boundary the minimum direction can lie in the plane of the sheet, outside
+/// every one-ring normal. A triangle of a double-sided surface (its twin, the same vertices in
+/// the opposite winding, is in the mesh) gets a cone or double cone around the exact normal
+/// cones of its face, edges and vertices (the directions u with u . e <= 0 for every direction
+/// e from the feature into an incident triangle), or a full cone when they do not fit in one.
 struct SnchTree {
   std::vector<SnchNode> nodes;
 };
@@ -58,14 +83,17 @@ struct SnchTree {
 /// Reusable traversal storage for querySnchPair (grows, then stays allocated).
 struct SnchQueryScratch {
   std::vector<std::pair<int, int>> stack;
+  /// Per link node, its centre and cone axis in the object frame (filled once per query).
+  std::vector<Eigen::Vector3d> link_centre_O;
+  std::vector<Eigen::Vector3d> link_axis_O;
 };
 
 /// Counters of the last querySnchPair call.
 struct SnchQueryStats {
   long node_pairs_visited = 0;
-  long pruned_by_distance = 0;
-  long pruned_by_cone = 0;
-  long triangle_pairs_tested = 0;
+  long pruned_by_distance = 0;     ///< distance lower bound (sphere or box) above the cutoff
+  long pruned_by_cone = 0;         ///< any normal-cone test
+  long triangle_pairs_tested = 0;  ///< leaf pairs given to the exact test (evaluateTrianglePair)
 };
 
 /// Closest points of link triangle `tri_link` and object triangle `tri_object`, computed in
@@ -98,7 +126,8 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Ei
                    SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats* stats = nullptr);
 
 /// Sorts minima[begin, end) by feature pair and removes repeated feature pairs (keeps the
-/// smaller distance); returns the new end. No allocation.
+/// smaller distance, then the smaller triangle ids, so the result does not depend on the input
+/// order); returns the new end. No allocation.
 /// @rt
 std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t begin) noexcept;
 
