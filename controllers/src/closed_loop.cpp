@@ -329,7 +329,18 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
   }
   if (contact_v.end > contact_v.begin) true_mean /= static_cast<double>(contact_v.end - contact_v.begin);
   r.contact_wall_torque_deviation_nm = env_dev;
-  const bool chatter = env_dev > kChatterFloorNm && env_dev > kChatterRatio * true_mean;
+  // The wall switches on and off: contact made, then lost, inside the window (a late first
+  // contact, the wall torque rising from zero once, is not chatter).
+  bool touched = false;
+  for (std::size_t i = contact_v.begin; i < std::min(contact_v.end, tau_wall_true_log.size()); ++i) {
+    if (tau_wall_true_log[i] != 0.0) {
+      touched = true;
+    } else if (touched) {
+      r.contact_lost = true;
+      break;
+    }
+  }
+  const bool chatter = r.contact_lost && env_dev > kChatterFloorNm && env_dev > kChatterRatio * true_mean;
   const bool contact_osc = contact_v.oscillating || chatter;
   r.oscillating = free_osc || contact_osc;
   const HoldVerdict& worst = contact_v.late >= free_v.late ? contact_v : free_v;

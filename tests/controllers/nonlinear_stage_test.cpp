@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "controllers_fixture.hpp"
 #include "fullarm/controllers/closed_loop.hpp"
@@ -20,6 +21,16 @@ ValidationConfig defaultValidation() {
   return loadValidationConfig(defaultValidationConfigPath());
 }
 
+// Fixed, hand-sized EB gains (the conservative defaults of commit 784533d: J_m 0.2, B_m 12,
+// K_m 20, lambda 300, B_o/eps = 5/48), so that these tests do not move with config/dts_gains.yaml.
+GainsConfig handSized() {
+  GainsConfig g = test::referenceGains();
+  JointGains& eb = g.joints[static_cast<std::size_t>(findGainsJoint(g, "R_EB"))];
+  eb.impedance = {0.2, 12.0, 20.0};
+  eb.sliding_mode = {300.0, 5.0, 48.0};
+  return g;
+}
+
 JointScenario validationEb(const GainsConfig& gains) {
   return validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), gains, "EB"), defaultValidation());
 }
@@ -28,7 +39,7 @@ JointScenario validationEb(const GainsConfig& gains) {
 // damping (B_w times the backward-difference speed of a noisy angle: sqrt(2) sigma / T for white
 // noise of sigma); the chatter criterion must judge the true motion instead.
 TEST(ValidationDetector, ChatterIsJudgedOnTheTrueMotionNotOnTheSensorNoiseFloor) {
-  JointScenario sc = validationEb(test::dtsGains());
+  JointScenario sc = validationEb(handSized());
   sc.wall.damping_nms_per_rad = 3.0;
   ClosedLoopTrace trace;
   const ClosedLoopResult r = simulateJoint(sc, &trace);
@@ -47,7 +58,7 @@ TEST(ValidationDetector, ChatterIsJudgedOnTheTrueMotionNotOnTheSensorNoiseFloor)
 // although the push is far above the breakaway friction - a failure ("too sluggish"). A user who
 // does not push (K_h = B_h = 0) does not reach the wall either, and that is no failure.
 TEST(ValidationDetector, SluggishGainsFailButAUserWhoDoesNotPushDoesNot) {
-  GainsConfig g = test::dtsGains();
+  GainsConfig g = handSized();
   g.joints[static_cast<std::size_t>(findGainsJoint(g, "R_EB"))].impedance.damping_nms_per_rad = 2000.0;
   JointScenario sc = validationEb(g);
   const double breakaway = sc.joint.friction.static_nm;
@@ -65,6 +76,25 @@ TEST(ValidationDetector, SluggishGainsFailButAUserWhoDoesNotPushDoesNot) {
   EXPECT_LT(idle.contact_user_torque_nm, 2.0 * breakaway);
   EXPECT_FALSE(idle.sluggish);
   EXPECT_TRUE(idle.acceptable()) << idle.failure;
+}
+
+// A first contact inside the last window (the wall torque rising from zero once) is not chatter;
+// the criterion needs contact made and then lost. Oracle: the trace's own wall torque.
+TEST(ValidationDetector, ALateFirstContactIsNotChatter) {
+  JointScenario sc = validationEb(handSized());
+  sc.timing.contact_hold_s = 0.35;  // the last window (0.5 s) begins before the wall is reached
+  ClosedLoopTrace trace;
+  const ClosedLoopResult r = simulateJoint(sc, &trace);
+  ASSERT_GT(r.contact_wall_torque_nm, 0.0) << r.failure;
+  const std::size_t n = trace.tau_env_nm.size();
+  const auto window = static_cast<std::size_t>(std::lround(sc.timing.detect_window_s / sc.dt_s));
+  EXPECT_EQ(trace.tau_env_nm[n - window], 0.0);  // no contact at the start of the window
+  EXPECT_FALSE(r.contact_lost);
+  // The old criterion (deviation above half the mean and 0.5 N m) alone would have flagged it.
+  EXPECT_GT(r.contact_wall_torque_deviation_nm, 0.5);
+  EXPECT_GT(r.contact_wall_torque_deviation_nm, 0.5 * r.contact_wall_torque_nm);
+  // (The window still holds the end of the move, so the speed criterion may object; chatter not.)
+  EXPECT_EQ(r.failure.find("chatter"), std::string::npos) << r.failure;
 }
 
 TEST(NonlinearStage, SamplesAreItsOwnStreamInsideTheRangesAndRepeatable) {
@@ -93,7 +123,7 @@ TEST(NonlinearStage, SamplesAreItsOwnStreamInsideTheRangesAndRepeatable) {
 // draws the stage never saw, where the rejected candidate fails. The stage is deterministic.
 TEST(NonlinearStage, RejectsAnOscillatingCandidateAndIsDeterministic) {
   const ValidationConfig vc = defaultValidation();
-  const JointScenario sc = validationEb(test::dtsGains());
+  const JointScenario sc = validationEb(handSized());
   JointGains bad = sc.gains;
   bad.sliding_mode.boundary_layer_radps /= 8.0;
   NonlinearStageOptions o;

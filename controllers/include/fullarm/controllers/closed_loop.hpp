@@ -20,10 +20,11 @@
 /// exceeds `oscillation_speed_radps` and is at least half that of the window before (with a
 /// static reference a stable loop comes to rest or creeps slowly, and a transient decays; a limit
 /// cycle or a divergence does neither). In contact the wall also must not chatter: over the last
-/// window the standard deviation of the rendered wall torque must stay below half its mean
-/// magnitude (or 0.5 N m), i.e. the wall must not switch on and off (a quantisation-driven limit
-/// cycle of a too-stiff wall, Abbott & Okamura 2005). The chatter criterion is evaluated on the
-/// wall torque of the true joint state (K_w p + B_w p' on the true angle and speed), not on the
+/// window the wall must not switch on and off (a quantisation-driven limit cycle of a too-stiff
+/// wall, Abbott & Okamura 2005): it chatters when contact is made and then lost inside the window
+/// and the standard deviation of the wall torque exceeds half its mean magnitude (and 0.5 N m).
+/// A first contact late in the window (the torque rising from zero once) is not chatter. The chatter criterion is
+/// evaluated on the wall torque of the true joint state (K_w p + B_w p' on the true angle and speed), not on the
 /// rendered tau_env: the rendered torque carries the sensor noise floor B_w * std of the
 /// backward-difference speed of the noisy, 12-bit angle (about 0.3-0.6 N m for B_w = 1 N m s/rad
 /// at 1 kHz) even when the arm rests against the wall; the user feels the arm, not that signal.
@@ -140,6 +141,8 @@ struct ClosedLoopResult {
   /// Std of the rendered tau_env (measured angle, backward-difference speed) over the same
   /// window; includes the sensor noise floor B_w * std(backward-difference speed).
   double contact_rendered_wall_torque_deviation_nm = 0.0;
+  /// In the last contact window the true state touched the wall and then left it again.
+  bool contact_lost = false;
   double contact_user_torque_nm = 0.0;  ///< mean |tau_user| over the last contact window
   /// The wall carried at least half of the user's push over the last contact window (contact was
   /// really tested; a sluggish controller may never reach the wall).
