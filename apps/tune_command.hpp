@@ -25,13 +25,15 @@ struct TuneOptions {
   int rounds = 3;
   std::uint64_t seed = 1;
   int threads = 2;
+  int nonlinear_rounds = 3;  ///< rounds of the nonlinear verification stage (0: linear stage only)
 };
 
 /// Adds `tune` to `app`.
 CLI::App* addTuneCommand(CLI::App& app, TuneOptions& options);
 
 /// Runs `fullarm tune`: gains.yaml (loadable by `validate`), summary.json, report.html.
-/// @return 0 when every tuned joint met its hard goals, 1 otherwise.
+/// @return 0 when every tuned joint passed the nonlinear verification stage (or, with
+/// nonlinear_rounds = 0, met its linear hard goals), 1 otherwise.
 /// @throws arm::ConfigError / std::runtime_error for bad input (exit code 2 in main).
 int runTune(const TuneOptions& options);
 

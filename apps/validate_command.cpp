@@ -197,6 +197,7 @@ nlohmann::json toJson(const Outcome& out) {
         {"monte_carlo",
          {{"samples", o.monte_carlo.runs.size()},
           {"failures", o.monte_carlo.failures},
+          {"too_sluggish", o.monte_carlo.sluggish},
           {"wall_not_reached", o.monte_carlo.wall_not_reached},
           {"worst",
            {{"index", worst.sample.index},
@@ -250,7 +251,8 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
   reports::Section& verdict = report.addSection("Validation verdict per joint");
   verdict.addParagraph(
       "Each joint passes when its linear checks pass (discrete closed loop stable, free and against the wall, for "
-      "every computation delay of the Monte-Carlo range; plus any gated margin) and every Monte-Carlo run is stable: "
+      "every computation delay of the Monte-Carlo range; plus any gated margin) and every Monte-Carlo run is stable "
+      "and not too sluggish (a push above twice the breakaway friction must reach the wall): "
       "the nonlinear CVODES plant with the controller at " +
       fixed(1.0 / out.joints.front().nominal.dt_s, 4) + " Hz, " + std::to_string(out.config.samples) +
       " runs per joint, seed " + std::to_string(out.config.seed) +
@@ -275,7 +277,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
                       std::to_string(o.monte_carlo.failures) + " / " + std::to_string(o.monte_carlo.runs.size()),
                       std::to_string(o.monte_carlo.wall_not_reached),
                       "#" + std::to_string(worst.sample.index) + ": " + describeSample(worst.sample) +
-                          (worst.result.stable ? " (stable)" : " -> " + worst.result.failure)});
+                          (worst.result.acceptable() ? " (stable)" : " -> " + worst.result.failure)});
   }
   verdict.addTable(std::move(t));
 
@@ -394,8 +396,9 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
         worst_joint->monte_carlo.runs[static_cast<std::size_t>(worst_joint->monte_carlo.worst)];
     reports::Section& ws = report.addSection("Worst case found: " + shortJointName(worst_joint->nominal.joint_name) +
                                              " run #" + std::to_string(w.sample.index));
-    ws.addParagraph(describeSample(w.sample) + ". " +
-                    (worst_joint->worst_result.stable ? std::string("Stable.") : worst_joint->worst_result.failure));
+    ws.addParagraph(
+        describeSample(w.sample) + ". " +
+        (worst_joint->worst_result.acceptable() ? std::string("Stable.") : worst_joint->worst_result.failure));
     reports::XyChart qc{"Joint angle",
                         {"Time", "s", false},
                         {"Angle", "rad", false},
@@ -463,6 +466,7 @@ void printOutcome(const Outcome& out, std::ostream& os) {
        << fixed(o.linear.contact.spectral_radius, 5) << ", Ms " << fixed(o.linear.free.margins.peak_sensitivity, 3)
        << ", gain limit x" << fixed(o.linear.predicted_gain_limit, 3) << ")  Monte-Carlo " << o.monte_carlo.failures
        << "/" << o.monte_carlo.runs.size() << " failed";
+    if (o.monte_carlo.sluggish > 0) os << " (" << o.monte_carlo.sluggish << " too sluggish)";
     if (o.monte_carlo.wall_not_reached > 0) os << " (wall not reached in " << o.monte_carlo.wall_not_reached << ")";
     os << "\n";
     if (!o.pass) os << "        " << o.verdict << "\n";

@@ -101,6 +101,16 @@ plant::JointState holdingState(const plant::JointParams& p, double q_rad, double
   return s;
 }
 
+// The wall torque the true joint state would meet (what the arm physically does against the
+// wall, free of the sensor noise that the rendered wall sees through its damping term).
+double trueWallTorque(const JointScenario& sc, double q_wall, const plant::JointState& st) {
+  const double d = sc.direction;
+  const double pen = d * (st.q_rad - q_wall);
+  if (!sc.wall.enabled || pen <= 0.0) return 0.0;
+  const double push = sc.wall.stiffness_nm_per_rad * pen + sc.wall.damping_nms_per_rad * d * st.qd_radps;
+  return -d * std::max(0.0, push);
+}
+
 }  // namespace
 
 MinJerk minimumJerk(double t_s, double duration_s) noexcept {
@@ -205,8 +215,10 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
   if (trace != nullptr) *trace = ClosedLoopTrace{};
 
   Window free_torque, contact_pen, contact_env, contact_user, contact_env_dev;
-  std::vector<double> tau_env_log;
+  std::vector<double> tau_env_log;  // rendered (measured angle) wall torque
   tau_env_log.reserve(static_cast<std::size_t>(steps));
+  std::vector<double> tau_wall_true_log;  // the wall torque of the true joint state
+  tau_wall_true_log.reserve(static_cast<std::size_t>(steps));
   std::vector<double> qd_true;
   qd_true.reserve(static_cast<std::size_t>(steps));
   const auto window = static_cast<std::size_t>(std::lround(tm.detect_window_s / T));
@@ -271,6 +283,7 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
     }
     qd_true.push_back(st.qd_radps);
     tau_env_log.push_back(tau_env);
+    tau_wall_true_log.push_back(trueWallTorque(sc, q_wall, st));
     if (t >= t_end - tm.detect_window_s) {
       contact_pen.add(d * (st.q_rad - q_wall));
       contact_env.add(std::abs(tau_env));
@@ -306,9 +319,28 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
   r.po_dissipated_j = cd.po_dissipated_j;
   r.solver_steps = plant.stats().steps;
   const bool free_osc = free_v.oscillating;
-  const double env_dev = contact_env_dev.rms() > 0.0 ? deviation(tau_env_log, contact_v.begin, contact_v.end) : 0.0;
+  r.contact_rendered_wall_torque_deviation_nm =
+      contact_env_dev.rms() > 0.0 ? deviation(tau_env_log, contact_v.begin, contact_v.end) : 0.0;
+  // Chatter is judged on the wall torque of the true joint motion (see closed_loop.hpp).
+  const double env_dev = deviation(tau_wall_true_log, contact_v.begin, contact_v.end);
+  double true_mean = 0.0;
+  for (std::size_t i = contact_v.begin; i < std::min(contact_v.end, tau_wall_true_log.size()); ++i) {
+    true_mean += std::abs(tau_wall_true_log[i]);
+  }
+  if (contact_v.end > contact_v.begin) true_mean /= static_cast<double>(contact_v.end - contact_v.begin);
   r.contact_wall_torque_deviation_nm = env_dev;
-  const bool chatter = env_dev > kChatterFloorNm && env_dev > kChatterRatio * contact_env.mean();
+  // The wall switches on and off: contact made, then lost, inside the window (a late first
+  // contact, the wall torque rising from zero once, is not chatter).
+  bool touched = false;
+  for (std::size_t i = contact_v.begin; i < std::min(contact_v.end, tau_wall_true_log.size()); ++i) {
+    if (tau_wall_true_log[i] != 0.0) {
+      touched = true;
+    } else if (touched) {
+      r.contact_lost = true;
+      break;
+    }
+  }
+  const bool chatter = r.contact_lost && env_dev > kChatterFloorNm && env_dev > kChatterRatio * true_mean;
   const bool contact_osc = contact_v.oscillating || chatter;
   r.oscillating = free_osc || contact_osc;
   const HoldVerdict& worst = contact_v.late >= free_v.late ? contact_v : free_v;
@@ -316,7 +348,7 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
   if (r.oscillating && r.failure.empty()) {
     if (chatter && !contact_v.oscillating && !free_osc) {
       r.failure = "wall chatter (wall torque deviation " + std::to_string(env_dev) + " N m about a mean of " +
-                  std::to_string(contact_env.mean()) + " N m)";
+                  std::to_string(true_mean) + " N m)";
     } else {
       r.failure = std::string(contact_osc ? "oscillation in contact" : "oscillation in free space") +
                   " (speed deviation " +
@@ -325,6 +357,13 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
   }
   if (r.controller_faults != kFaultNone && r.failure.empty()) r.failure = "controller fault";
   r.stable = r.solver_ok && !r.hit_stop && !r.oscillating && r.controller_faults == kFaultNone;
+  const double breakaway_nm = std::max(sc.joint.friction.static_nm, sc.joint.friction.coulomb_nm);
+  r.sluggish = r.stable && sc.wall.enabled && !r.wall_reached &&
+               r.contact_user_torque_nm > sc.sluggish_push_friction_ratio * breakaway_nm;
+  if (r.sluggish) {
+    r.failure = "too sluggish: wall not reached under a mean push of " + std::to_string(r.contact_user_torque_nm) +
+                " N m (breakaway " + std::to_string(breakaway_nm) + " N m)";
+  }
   return r;
 }
 

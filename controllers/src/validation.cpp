@@ -196,7 +196,7 @@ JointScenario applySample(const JointScenario& nominal, const MonteCarloSample& 
 
 double runSeverity(const ClosedLoopResult& r, double threshold) noexcept {
   const double speed = std::max(r.free_hold_speed_rms_radps, r.contact_hold_speed_rms_radps) / threshold;
-  if (!r.stable) return 1.0 + speed;
+  if (!r.acceptable()) return 1.0 + speed;
   return std::min(speed, 1.0);
 }
 
@@ -224,16 +224,22 @@ void parallelFor(int jobs, int threads, const std::function<void(int)>& job) {
   if (error) std::rethrow_exception(error);
 }
 
+JointScenario validationScenario(const JointScenario& nominal, const ValidationConfig& config) {
+  JointScenario b = nominal;
+  b.load.inertia_kgm2 += config.user.inertia_kgm2 - b.user.inertia_kgm2;
+  b.user = config.user;
+  b.wall = config.wall;
+  b.oscillation_speed_radps = config.oscillation_speed_radps;
+  return b;
+}
+
 std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nominal, const ValidationConfig& config,
                                            int threads) {
   std::vector<JointScenario> bases = nominal;
   std::vector<JointMonteCarlo> out(bases.size());
   for (std::size_t j = 0; j < bases.size(); ++j) {
     JointScenario& b = bases[j];
-    b.load.inertia_kgm2 += config.user.inertia_kgm2 - b.user.inertia_kgm2;
-    b.user = config.user;
-    b.wall = config.wall;
-    b.oscillation_speed_radps = config.oscillation_speed_radps;
+    b = validationScenario(b, config);
     out[j].joint_name = b.joint_name;
     out[j].runs.resize(static_cast<std::size_t>(config.samples));
   }
@@ -249,8 +255,9 @@ std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nom
   for (JointMonteCarlo& m : out) {
     for (int i = 0; i < static_cast<int>(m.runs.size()); ++i) {
       const MonteCarloRun& run = m.runs[static_cast<std::size_t>(i)];
-      if (!run.result.stable) ++m.failures;
-      if (run.result.stable && !run.result.wall_reached) ++m.wall_not_reached;
+      if (!run.result.acceptable()) ++m.failures;
+      if (run.result.sluggish) ++m.sluggish;
+      if (run.result.acceptable() && !run.result.wall_reached) ++m.wall_not_reached;
       if (m.worst < 0 || run.severity > m.runs[static_cast<std::size_t>(m.worst)].severity) m.worst = i;
     }
   }

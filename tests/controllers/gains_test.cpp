@@ -19,10 +19,35 @@ std::string defaultText() {
   return testing::fileText(defaultGainsConfigPath());
 }
 
-// Replaces the first occurrence of `from` at or after the joint called `joint` (or the file start).
+// Replaces the first `from` at or after the joint called `joint` (or the file start); when the
+// literal is not there, the first `key: value` of `from` = "key: value" by `to`, whatever the
+// file's value is (the default file may be written by
+// `fullarm tune`, so its values are not fixed). A `from` ending in a newline names a whole line
+// "    key: value\n", replaced whole.
 std::string replaced(std::string text, const std::string& from, const std::string& to, const std::string& joint = {}) {
-  const std::size_t start = joint.empty() ? 0 : text.find("name: " + joint);
-  return testing::replacedFirst(std::move(text), from, to, start == std::string::npos ? 0 : start);
+  std::size_t start = joint.empty() ? 0 : text.find("name: " + joint);
+  if (start == std::string::npos) start = 0;
+  const std::size_t colon = from.find(':');
+  // The literal, as a whole value (not the prefix of a longer number).
+  for (std::size_t at = text.find(from, start); at != std::string::npos; at = text.find(from, at + 1)) {
+    const std::size_t after = at + from.size();
+    if (colon == std::string::npos || from.back() == '\n' || after >= text.size() ||
+        std::string(",} \n").find(text[after]) != std::string::npos) {
+      return text.replace(at, from.size(), to);
+    }
+  }
+  if (colon == std::string::npos) return text;
+  const std::string key = from.substr(0, colon + 1);
+  if (!from.empty() && from.back() == '\n') {
+    const std::size_t line = text.find("\n" + key, start);
+    if (line == std::string::npos) return text;
+    const std::size_t end = text.find('\n', line + 1);
+    return text.replace(line + 1, end - line, to);
+  }
+  const std::size_t at = text.find(key, start);
+  if (at == std::string::npos) return text;
+  const std::size_t end = text.find_first_of(",}\n", at);
+  return text.replace(at, end - at, to);
 }
 
 void expectConfigError(const std::string& text, const std::string& key_fragment, const std::string& message_fragment) {

@@ -84,7 +84,7 @@ struct MonteCarloSample {
 struct MonteCarloRun {
   MonteCarloSample sample;
   ClosedLoopResult result;
-  /// How close to failing: 1 + |result| badness for a failed run; otherwise the largest hold
+  /// How close to failing: 1 + |result| badness for a failed (unstable or sluggish) run; otherwise the largest hold
   /// speed deviation over the detector threshold (in [0, 1]). The worst case maximises it.
   double severity = 0.0;
 };
@@ -93,14 +93,19 @@ struct MonteCarloRun {
 struct JointMonteCarlo {
   std::string joint_name;
   std::vector<MonteCarloRun> runs;
-  int failures = 0;
-  int wall_not_reached = 0;  ///< stable runs in which the wall never carried the user's push
+  int failures = 0;          ///< runs not acceptable(): unstable, or too sluggish
+  int sluggish = 0;          ///< of the failures: stable but too sluggish to reach the wall
+  int wall_not_reached = 0;  ///< passed runs in which the wall never carried the user's push (a light push)
   int worst = -1;            ///< index in runs of the largest severity
   [[nodiscard]] bool pass() const noexcept { return failures == 0 && !runs.empty(); }
 };
 
 /// Severity of a result (see MonteCarloRun::severity).
 [[nodiscard]] double runSeverity(const ClosedLoopResult& result, double oscillation_speed_radps) noexcept;
+
+/// The nominal scenario as the validation runs it: the config's user (its inertia replacing the
+/// scenario's user inertia in the load), wall and detector threshold.
+[[nodiscard]] JointScenario validationScenario(const JointScenario& nominal, const ValidationConfig& config);
 
 /// Runs `config.samples` simulations of every nominal scenario (its user, wall and detector
 /// replaced by the config's) on `threads` worker threads (<= 0: hardware concurrency).

@@ -1,0 +1,196 @@
+#include "fullarm/controllers/nonlinear_stage.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace fullarm::controllers {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Salt of the stage's sample stream: the tuner never sees the draws of `validate` (seed, joint).
+constexpr std::uint64_t kStageSalt = 0x74756e652d6e6c31ULL;  // "tune-nl1"
+
+// FNV-1a of the joint name (a slot of its own, independent of the other joints).
+int nameSlot(const std::string& name) noexcept {
+  std::uint32_t h = 2166136261u;
+  for (const char c : name) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 16777619u;
+  }
+  return static_cast<int>(h & 0x7fffffffu);
+}
+
+struct Point {
+  double log_damping = 0.0;  // log10 B_m
+  double log_gain = 0.0;     // log10 B_o/eps
+};
+
+Point pointOf(const JointGains& g) {
+  return {std::log10(std::max(g.impedance.damping_nms_per_rad, 1e-12)),
+          std::log10(g.sliding_mode.valve_bound_v / g.sliding_mode.boundary_layer_radps)};
+}
+
+JointGains gainsAt(const JointGains& base, const Point& p) {
+  JointGains g = base;
+  g.impedance.damping_nms_per_rad = std::pow(10.0, p.log_damping);
+  g.sliding_mode.boundary_layer_radps = g.sliding_mode.valve_bound_v / std::pow(10.0, p.log_gain);
+  return g;
+}
+
+bool better(const NonlinearScore& a, const NonlinearScore& b) {
+  return a.cost < b.cost;
+}
+
+}  // namespace
+
+std::vector<MonteCarloSample> stageSamples(const UncertaintyRanges& ranges, std::uint64_t seed,
+                                           const std::string& joint_name, int first, int count) {
+  std::vector<MonteCarloSample> out;
+  out.reserve(static_cast<std::size_t>(std::max(count, 0)));
+  for (int i = 0; i < count; ++i) out.push_back(drawSample(ranges, seed ^ kStageSalt, nameSlot(joint_name), first + i));
+  return out;
+}
+
+NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& gains,
+                              const std::vector<MonteCarloSample>& set, const LinearRequirements& req, int max_delay,
+                              int failure_cap) {
+  NonlinearScore s;
+  JointScenario sc = scenario;
+  sc.gains = gains;
+  s.linear_ok = analyzeScenario(sc, req, max_delay, {}).pass;
+  if (!s.linear_ok) {
+    s.cost = kInf;
+    s.worst_failure = "linear check fails (closed loop unstable at some delay)";
+    return s;
+  }
+  double worst_severity = -1.0;
+  double rms_sum = 0.0;
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    const ClosedLoopResult r = simulateJoint(applySample(sc, set[i]));
+    rms_sum += r.free_rms_user_torque_nm;
+    if (!r.acceptable()) ++s.failures;
+    const double severity = runSeverity(r, sc.oscillation_speed_radps);
+    if (severity > worst_severity) {
+      worst_severity = severity;
+      s.worst = static_cast<int>(i);
+      s.worst_failure = r.acceptable() ? std::string() : r.failure;
+    }
+    ++s.runs;
+    if (s.failures > failure_cap) break;  // cannot beat the incumbent any more
+  }
+  s.mean_rms_user_torque_nm = s.runs > 0 ? rms_sum / static_cast<double>(s.runs) : 0.0;
+  s.cost = static_cast<double>(s.failures) + (1.0 - 1.0 / (1.0 + s.mean_rms_user_torque_nm));
+  return s;
+}
+
+NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointGains& linear_optimum,
+                                     const JointGains& start, const UncertaintyRanges& ranges,
+                                     const LinearRequirements& req, const NonlinearStageOptions& o) {
+  if (o.samples < 1 || o.check_samples < 0 || o.rounds < 1 || o.max_evaluations < 0 || !(o.step_decades > 0.0) ||
+      !(o.min_step_decades > 0.0) || o.max_added_per_round < 1 || !(o.min_damping_nms_per_rad > 0.0) ||
+      !(o.max_damping_nms_per_rad >= o.min_damping_nms_per_rad) || !(o.min_gain_v_s_per_rad > 0.0) ||
+      !(o.max_gain_v_s_per_rad >= o.min_gain_v_s_per_rad)) {
+    throw std::invalid_argument("nonlinear stage options: expected samples, rounds >= 1, steps > 0, 0 < min <= max");
+  }
+  const int max_delay = ranges.delay_max_samples;
+  const std::array<double, 2> lo = {std::log10(o.min_damping_nms_per_rad), std::log10(o.min_gain_v_s_per_rad)};
+  const std::array<double, 2> hi = {std::log10(o.max_damping_nms_per_rad), std::log10(o.max_gain_v_s_per_rad)};
+  NonlinearStageResult res;
+  res.set = stageSamples(ranges, o.seed, scenario.joint_name, 0, o.samples);
+  int next_index = o.samples;
+
+  const auto score = [&](const JointGains& g, int cap = std::numeric_limits<int>::max()) {
+    const NonlinearScore s = scoreNonlinear(scenario, g, res.set, req, max_delay, cap);
+    ++res.evaluations;
+    res.simulations += s.linear_ok ? s.runs : 0;
+    return s;
+  };
+  res.linear_optimum = score(linear_optimum);
+  res.start = score(start);
+  // J_m, K_m, lambda (and everything else) of the better of the two; B_m and B_o/eps are searched.
+  const bool from_start = better(res.start, res.linear_optimum);
+  const JointGains base = from_start ? start : linear_optimum;
+  Point best_p = pointOf(base);
+  NonlinearScore best = from_start ? res.start : res.linear_optimum;
+  res.history.push_back(best.cost);
+
+  for (int round = 0; round < o.rounds; ++round) {
+    // Compass search (deterministic poll order: +B_m, -B_m, +gain, -gain).
+    double step = o.step_decades;
+    int evaluations = 0;
+    while (evaluations < o.max_evaluations && step >= o.min_step_decades && (best.failures > 0 || !best.linear_ok)) {
+      bool improved = false;
+      for (int dir = 0; dir < 4 && evaluations < o.max_evaluations; ++dir) {
+        Point p = best_p;
+        const double delta = (dir % 2 == 0 ? 1.0 : -1.0) * step;
+        if (dir < 2) {
+          p.log_damping = std::clamp(p.log_damping + delta, lo[0], hi[0]);
+        } else {
+          p.log_gain = std::clamp(p.log_gain + delta, lo[1], hi[1]);
+        }
+        if (p.log_damping == best_p.log_damping && p.log_gain == best_p.log_gain) continue;
+        const NonlinearScore s = score(gainsAt(base, p), best.failures);
+        ++evaluations;
+        if (better(s, best)) {
+          best = s;
+          best_p = p;
+          improved = true;
+          res.history.push_back(best.cost);
+          break;  // poll again around the new incumbent
+        }
+        res.history.push_back(best.cost);
+      }
+      if (!improved) step *= 0.5;
+    }
+    // Worst-case addition: a fresh check batch on the incumbent; its failures join the set.
+    const std::vector<MonteCarloSample> check =
+        stageSamples(ranges, o.seed, scenario.joint_name, next_index, o.check_samples);
+    next_index += o.check_samples;
+    JointScenario sc = scenario;
+    sc.gains = gainsAt(base, best_p);
+    std::vector<std::pair<double, MonteCarloSample>> failed;
+    for (const MonteCarloSample& sample : check) {
+      const ClosedLoopResult r = simulateJoint(applySample(sc, sample));
+      ++res.simulations;
+      if (!r.acceptable()) failed.emplace_back(runSeverity(r, sc.oscillation_speed_radps), sample);
+      // Enough worst cases for this round: the rest of the batch would not join the set.
+      if (static_cast<int>(failed.size()) >= o.max_added_per_round) break;
+    }
+    res.check_failures.push_back(static_cast<int>(failed.size()));
+    if (failed.empty() && best.failures == 0 && best.linear_ok) {
+      res.verified = true;
+      break;
+    }
+    std::stable_sort(failed.begin(), failed.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    for (std::size_t i = 0; i < failed.size() && static_cast<int>(i) < o.max_added_per_round; ++i) {
+      res.set.push_back(failed[i].second);
+    }
+    if (round + 1 < o.rounds) {
+      best = score(sc.gains);  // re-score the incumbent on the grown set
+      res.history.push_back(best.cost);
+    }
+  }
+  res.gains = gainsAt(base, best_p);
+  res.final_score = scoreNonlinear(scenario, res.gains, res.set, req, max_delay);
+  res.simulations += res.final_score.runs;
+  res.verified = res.verified && res.final_score.failures == 0;
+  std::ostringstream v;
+  v << scenario.joint_name << ": nonlinear stage " << (res.verified ? "verified" : "NOT verified") << " - "
+    << res.final_score.failures << " of " << res.final_score.runs << " runs of its sample set fail";
+  if (!res.check_failures.empty()) {
+    v << ", last check batch "
+      << (res.check_failures.back() == 0 ? "0 of " + std::to_string(o.check_samples)
+                                         : std::to_string(res.check_failures.back()) + " failed (batch stopped early)");
+  }
+  v << "; started from the " << (from_start ? "starting" : "linearly tuned") << " gains (failures: linear optimum "
+    << res.linear_optimum.failures << ", start " << res.start.failures << " of " << o.samples << ")";
+  if (!res.verified && !res.final_score.worst_failure.empty()) v << "; worst: " << res.final_score.worst_failure;
+  res.verdict = v.str();
+  return res;
+}
+
+}  // namespace fullarm::controllers
