@@ -83,14 +83,21 @@ double squaredDistancePointTriangle(const Vector3d& p, const Vector3d& a, const 
   return (ap - ab * (vb * denom) - ac * (vc * denom)).squaredNorm();
 }
 
-SegmentSegmentResult closestPointsSegmentSegment(const Vector3d& p0, const Vector3d& p1, const Vector3d& q0,
-                                                 const Vector3d& q1) noexcept {
-  // Ericson 5.1.9 with clamping; the parallel case picks s = 0 then clamps.
-  const Vector3d d1 = p1 - p0;
-  const Vector3d d2 = q1 - q0;
+namespace {
+
+// Closest points of two segments p0 + s d1 and q0 + t d2 (s, t in [0, 1]) with the directions and their
+// squared lengths a, e given: Ericson 5.1.9 with clamping; the parallel case picks s = 0 then clamps.
+struct SquaredSegmentResult {
+  double s;
+  double t;
+  Vector3d p;
+  Vector3d q;
+  double distance_sq;
+};
+
+inline SquaredSegmentResult closestSegmentSegmentSquared(const Vector3d& p0, const Vector3d& d1, double a,
+                                                         const Vector3d& q0, const Vector3d& d2, double e) noexcept {
   const Vector3d r = p0 - q0;
-  const double a = d1.squaredNorm();
-  const double e = d2.squaredNorm();
   const double f = d2.dot(r);
   double s = 0.0;
   double t = 0.0;
@@ -106,7 +113,6 @@ SegmentSegmentResult closestPointsSegmentSegment(const Vector3d& p0, const Vecto
     } else {
       const double b = d1.dot(d2);
       const double denom = a * e - b * b;
-      // Relative parallelism test: sin^2 of the angle below 1e-20.
       s = denom > 1e-20 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
       t = (b * s + f) / e;
       if (t < 0.0) {
@@ -118,12 +124,24 @@ SegmentSegmentResult closestPointsSegmentSegment(const Vector3d& p0, const Vecto
       }
     }
   }
+  SquaredSegmentResult out{s, t, p0 + s * d1, q0 + t * d2, 0.0};
+  out.distance_sq = (out.p - out.q).squaredNorm();
+  return out;
+}
+
+}  // namespace
+
+SegmentSegmentResult closestPointsSegmentSegment(const Vector3d& p0, const Vector3d& p1, const Vector3d& q0,
+                                                 const Vector3d& q1) noexcept {
+  const Vector3d d1 = p1 - p0;
+  const Vector3d d2 = q1 - q0;
+  const SquaredSegmentResult r = closestSegmentSegmentSquared(p0, d1, d1.squaredNorm(), q0, d2, d2.squaredNorm());
   SegmentSegmentResult out;
-  out.s = s;
-  out.t = t;
-  out.p = p0 + s * d1;
-  out.q = q0 + t * d2;
-  out.distance_m = (out.p - out.q).norm();
+  out.s = r.s;
+  out.t = r.t;
+  out.p = r.p;
+  out.q = r.q;
+  out.distance_m = std::sqrt(r.distance_sq);
   return out;
 }
 
@@ -192,49 +210,6 @@ inline SquaredPointResult closestPointSquared(const Vector3d& p, const PreparedT
   const double denom = 1.0 / (va + vb + vc);
   const Vector3d x = a + ab * (vb * denom) + ac * (vc * denom);
   return {x, (p - x).squaredNorm(), {Kind::kFace, 0}};
-}
-
-// closestPointsSegmentSegment with the segment directions and squared lengths given.
-struct SquaredSegmentResult {
-  double s;
-  double t;
-  Vector3d p;
-  Vector3d q;
-  double distance_sq;
-};
-
-inline SquaredSegmentResult closestSegmentSegmentSquared(const Vector3d& p0, const Vector3d& d1, double a,
-                                                         const Vector3d& q0, const Vector3d& d2, double e) noexcept {
-  const Vector3d r = p0 - q0;
-  const double f = d2.dot(r);
-  double s = 0.0;
-  double t = 0.0;
-  constexpr double kTiny = 1e-300;
-  if (a <= kTiny && e <= kTiny) {
-    s = t = 0.0;
-  } else if (a <= kTiny) {
-    t = std::clamp(f / e, 0.0, 1.0);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= kTiny) {
-      s = std::clamp(-c / a, 0.0, 1.0);
-    } else {
-      const double b = d1.dot(d2);
-      const double denom = a * e - b * b;
-      s = denom > 1e-20 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0.0) {
-        t = 0.0;
-        s = std::clamp(-c / a, 0.0, 1.0);
-      } else if (t > 1.0) {
-        t = 1.0;
-        s = std::clamp((b - c) / a, 0.0, 1.0);
-      }
-    }
-  }
-  SquaredSegmentResult out{s, t, p0 + s * d1, q0 + t * d2, 0.0};
-  out.distance_sq = (out.p - out.q).squaredNorm();
-  return out;
 }
 
 // segmentTriangleCrossing against a prepared triangle (same arithmetic).
