@@ -82,9 +82,8 @@ void BM_GlobalSearch_Snch(benchmark::State& state) {
   setSnchCounters(state, search.lastStats());
 }
 
-void BM_GlobalSearch_Bullet(benchmark::State& state) {
-  Setup& s = setup();
-  static const haptics::CollisionWorld world = haptics::makeCollisionWorld(s.scene, s.model);
+// The Bullet search on `world`, timed after checking that it returns SNCH's minima.
+void runBulletSearch(benchmark::State& state, const Setup& s, const haptics::CollisionWorld& world) {
   haptics::BulletGlobalSearch search(world);
   std::vector<haptics::LocalMinimum> out;
   std::vector<haptics::LocalMinimum> reference;
@@ -98,6 +97,12 @@ void BM_GlobalSearch_Bullet(benchmark::State& state) {
   }
   state.counters["minima"] = static_cast<double>(out.size());
   state.counters["tri_pairs"] = static_cast<double>(search.lastTrianglePairs());
+}
+
+void BM_GlobalSearch_Bullet(benchmark::State& state) {
+  Setup& s = setup();
+  static const haptics::CollisionWorld world = haptics::makeCollisionWorld(s.scene, s.model);
+  runBulletSearch(state, s, world);
 }
 
 void BM_GlobalSearch_Snch_Subdivided(benchmark::State& state) {
@@ -119,20 +124,8 @@ void BM_GlobalSearch_Bullet_Subdivided(benchmark::State& state) {
   Setup& s = setup();
   const haptics::Scene scene = subdivided(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const haptics::CollisionWorld world = haptics::makeCollisionWorld(scene, s.model);
-  haptics::BulletGlobalSearch search(world);
-  std::vector<haptics::LocalMinimum> out;
-  std::vector<haptics::LocalMinimum> reference;
-  haptics::SnchGlobalSearch snch;
-  snch.search(world, s.fk, kCutoff_m, kPruneRadius_m, reference);
-  search.search(world, s.fk, kCutoff_m, kPruneRadius_m, out);
-  checkSameMinima(reference, out);
-  for (auto _ : state) {
-    search.search(world, s.fk, kCutoff_m, kPruneRadius_m, out);
-    benchmark::DoNotOptimize(out.data());
-  }
-  state.counters["minima"] = static_cast<double>(out.size());
+  runBulletSearch(state, s, world);
   state.counters["triangles"] = static_cast<double>(scene.numTriangles());
-  state.counters["tri_pairs"] = static_cast<double>(search.lastTrianglePairs());
 }
 
 BENCHMARK(BM_GlobalSearch_Snch)->Unit(benchmark::kMillisecond);
