@@ -64,7 +64,8 @@ void Rodas3::setBlockStructure(int blocks) {
 namespace {
 
 // In-place LU with partial pivoting of the n x n column-major matrix a (leading dimension ld):
-// P a = L U, row k swapped with piv[k] at elimination step k. Plain loops: at the sizes here
+// P a = L U, row k swapped with piv[k] at elimination step k; the diagonal holds 1 / U_kk, so
+// the back substitution multiplies (a division's latency dominated the 6 x 6 solve). Plain loops: at the sizes here
 // (4 to 20) they beat a general library LU's dispatch overhead several times. False if a pivot
 // is zero or not finite.
 bool luFactor(double* a, int ld, int n, int* piv) noexcept {
@@ -84,6 +85,7 @@ bool luFactor(double* a, int ld, int n, int* piv) noexcept {
       for (int j = 0; j < n; ++j) std::swap(at(k, j), at(p, j));
     }
     const double inv = 1.0 / at(k, k);
+    at(k, k) = inv;  // stored as 1 / U_kk: the solves multiply
     for (int i = k + 1; i < n; ++i) at(i, k) *= inv;
     for (int j = k + 1; j < n; ++j) {
       const double akj = at(k, j);
@@ -110,7 +112,7 @@ void luSolve(const double* __restrict a, int ld, int n, const int* __restrict pi
     for (int i = k + 1; i < n; ++i) x[i] -= at(i, k) * xk;
   }
   for (int k = n - 1; k >= 0; --k) {
-    x[k] /= at(k, k);
+    x[k] *= at(k, k);
     const double xk = x[k];
     for (int i = 0; i < k; ++i) x[i] -= at(i, k) * xk;
   }
@@ -118,25 +120,37 @@ void luSolve(const double* __restrict a, int ld, int n, const int* __restrict pi
 
 // luFactor and luSolve with the size known at compile time (the single joint's 6 states, the
 // 4-state hydraulic blocks): unrolled by the compiler, several times faster than the
-// runtime-size loops at these sizes. Same arithmetic, same results.
+// runtime-size loops at these sizes. The fixed-size factorisation returns the row permutation
+// itself (row i of P a is row perm[i] of a) instead of the swap sequence, so the solve gathers
+// x once into a local array that lives in registers: updating x in place in memory, the
+// partially vectorised substitutions stalled on store-to-load forwarding.
 template <int N>
-void luSolveFixed(const double* __restrict a, const int* __restrict piv, double* __restrict x) noexcept {
+void luSolveFixed(const double* __restrict a, const int* __restrict perm, double* __restrict x) noexcept {
+  // (Complete unrolling, so that v is a set of registers; GCC leaves the nested loops rolled.)
+  double v[N];
+#pragma GCC unroll 16
+  for (int i = 0; i < N; ++i) v[i] = x[perm[i]];
+#pragma GCC unroll 16
   for (int k = 0; k < N; ++k) {
-    if (piv[k] != k) std::swap(x[k], x[piv[k]]);
+#pragma GCC unroll 16
+    for (int i = k + 1; i < N; ++i) v[i] -= a[i + k * N] * v[k];
   }
-  for (int k = 0; k < N; ++k) {
-    for (int i = k + 1; i < N; ++i) x[i] -= a[i + k * N] * x[k];
-  }
+#pragma GCC unroll 16
   for (int k = N - 1; k >= 0; --k) {
-    x[k] /= a[k + k * N];
-    for (int i = 0; i < k; ++i) x[i] -= a[i + k * N] * x[k];
+    v[k] *= a[k + k * N];
+#pragma GCC unroll 16
+    for (int i = 0; i < k; ++i) v[i] -= a[i + k * N] * v[k];
   }
+#pragma GCC unroll 16
+  for (int i = 0; i < N; ++i) x[i] = v[i];
 }
 template <int N>
 bool luFactorFixed(double* a, int* piv) noexcept {
+#pragma GCC unroll 16
   for (int k = 0; k < N; ++k) {
     int p = k;
     double best = std::abs(a[k + k * N]);
+#pragma GCC unroll 16
     for (int i = k + 1; i < N; ++i) {
       if (std::abs(a[i + k * N]) > best) {
         best = std::abs(a[i + k * N]);
@@ -146,19 +160,30 @@ bool luFactorFixed(double* a, int* piv) noexcept {
     piv[k] = p;
     if (!(best > 0.0) || !std::isfinite(best)) return false;
     if (p != k) {
+#pragma GCC unroll 16
       for (int j = 0; j < N; ++j) std::swap(a[k + j * N], a[p + j * N]);
     }
     const double inv = 1.0 / a[k + k * N];
+    a[k + k * N] = inv;  // stored as 1 / U_kk: the solves multiply
+#pragma GCC unroll 16
     for (int i = k + 1; i < N; ++i) a[i + k * N] *= inv;
+#pragma GCC unroll 16
     for (int j = k + 1; j < N; ++j) {
       const double akj = a[k + j * N];
+#pragma GCC unroll 16
       for (int i = k + 1; i < N; ++i) a[i + j * N] -= a[i + k * N] * akj;
     }
   }
+  // Swap sequence -> permutation (the same swaps applied to the identity).
+  int perm[N];
+  for (int i = 0; i < N; ++i) perm[i] = i;
+  for (int k = 0; k < N; ++k) std::swap(perm[k], perm[piv[k]]);
+  for (int i = 0; i < N; ++i) piv[i] = perm[i];
   return true;
 }
 
-// Dispatch on the sizes that occur (4: hydraulic block, 6: one joint).
+// Dispatch on the sizes that occur (4: hydraulic block, 6: one joint); `piv` is the swap
+// sequence of luFactor or the permutation of luFactorFixed, consistently per size.
 bool luFactorAny(double* a, int ld, int n, int* piv) noexcept {
   if (n == ld && n == 4) return luFactorFixed<4>(a, piv);
   if (n == ld && n == 6) return luFactorFixed<6>(a, piv);
