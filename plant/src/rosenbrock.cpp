@@ -119,11 +119,10 @@ void luSolve(const double* __restrict a, int ld, int n, const int* __restrict pi
 }
 
 // luFactor and luSolve with the size known at compile time (the single joint's 6 states, the
-// 4-state hydraulic blocks): unrolled by the compiler, several times faster than the
-// runtime-size loops at these sizes. The fixed-size factorisation returns the row permutation
-// itself (row i of P a is row perm[i] of a) instead of the swap sequence, so the solve gathers
-// x once into a local array that lives in registers: updating x in place in memory, the
-// partially vectorised substitutions stalled on store-to-load forwarding.
+// 4-state hydraulic blocks, the arm's 7 x 7 halved Schur system): unrolled by the compiler, several times faster than
+// the runtime-size loops at these sizes. The fixed-size factorisation returns the row permutation itself (row i of P a
+// is row perm[i] of a) instead of the swap sequence, so the solve gathers x once into a local array that lives in
+// registers: updating x in place in memory, the partially vectorised substitutions stalled on store-to-load forwarding.
 template <int N>
 void luSolveFixed(const double* __restrict a, const int* __restrict perm, double* __restrict x) noexcept {
   // (Complete unrolling, so that v is a set of registers; GCC leaves the nested loops rolled.)
@@ -182,11 +181,13 @@ bool luFactorFixed(double* a, int* piv) noexcept {
   return true;
 }
 
-// Dispatch on the sizes that occur (4: hydraulic block, 6: one joint); `piv` is the swap
+// Dispatch on the sizes that occur (4: hydraulic block, 6: one joint, 7: the arm's halved Schur
+// system); `piv` is the swap
 // sequence of luFactor or the permutation of luFactorFixed, consistently per size.
 bool luFactorAny(double* a, int ld, int n, int* piv) noexcept {
   if (n == ld && n == 4) return luFactorFixed<4>(a, piv);
   if (n == ld && n == 6) return luFactorFixed<6>(a, piv);
+  if (n == ld && n == 7) return luFactorFixed<7>(a, piv);
   return luFactor(a, ld, n, piv);
 }
 void luSolveAny(const double* a, int ld, int n, const int* piv, double* x) noexcept {
@@ -194,6 +195,8 @@ void luSolveAny(const double* a, int ld, int n, const int* piv, double* x) noexc
     luSolveFixed<4>(a, piv, x);
   } else if (n == ld && n == 6) {
     luSolveFixed<6>(a, piv, x);
+  } else if (n == ld && n == 7) {
+    luSolveFixed<7>(a, piv, x);
   } else {
     luSolve(a, ld, n, piv, x);
   }
@@ -224,13 +227,24 @@ bool Rodas3::factor(double h) noexcept {
   // of S are (d I, -I) and C has no x rows, so x = (b_x + v) / d and the v rows reduce to the
   // half-size system (S_vv + S_vx / d) v = b_v - S_vx b_x / d.
   const int p = m / 2;
-  second_order_border_ = m % 2 == 0 && p > 0;
-  for (int i = 0; i < p && second_order_border_; ++i) {
-    for (int c = 0; c < n_ && second_order_border_; ++c) {
-      const double value = jac[static_cast<std::ptrdiff_t>(c) * ld + nb + i];
-      second_order_border_ = value == (c == nb + p + i ? 1.0 : 0.0);
+  second_order_border_ = m % 2 == 0 && p > 0 && [&]() noexcept {
+    // Sum of |J_x - [0 I 0]| over the x rows: zero exactly when the pattern holds (a sum of
+    // non-negative terms; NaN fails the test). Branch-free, so it vectorises: an entry-by-entry
+    // comparison cost a third of the factorisation.
+    double deviation = 0.0;
+    for (int c = 0; c < n_; ++c) {
+      const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
+      const int one = c - nb - p;  // row of the expected 1 in this column, if in [0, p)
+      if (one < 0 || one >= p) {
+        for (int i = 0; i < p; ++i) deviation += std::abs(col[i]);
+      } else {
+        for (int i = 0; i < one; ++i) deviation += std::abs(col[i]);
+        deviation += std::abs(col[one] - 1.0);
+        for (int i = one + 1; i < p; ++i) deviation += std::abs(col[i]);
+      }
     }
-  }
+    return deviation == 0.0;
+  }();
   const int first_row = second_order_border_ ? p : 0;  // border rows C can reach
   for (int k = 0; k < blocks_; ++k) {
     const int r = k * kRosenbrockBlock;
@@ -261,9 +275,9 @@ bool Rodas3::factor(double h) noexcept {
     for (int j = 0; j < p; ++j) {
       for (int i = 0; i < p; ++i) schur_reduced_(i, j) = schur_(p + i, p + j) + schur_(p + i, j) * inv_d_;
     }
-    return luFactor(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data());
+    return luFactorAny(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data());
   }
-  return luFactor(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data());
+  return luFactorAny(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data());
 }
 
 void Rodas3::solve(const Vector& b, Vector& x) noexcept {
@@ -297,10 +311,10 @@ void Rodas3::solve(const Vector& b, Vector& x) noexcept {
       const double bx = xm[j] * inv_d_;
       for (int i = 0; i < p; ++i) xv[i] -= schur_(p + i, j) * bx;
     }
-    luSolve(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data(), xv);
+    luSolveAny(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data(), xv);
     for (int i = 0; i < p; ++i) xm[i] = (xm[i] + xv[i]) * inv_d_;
   } else {
-    luSolve(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data(), xm);
+    luSolveAny(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data(), xm);
   }
   // x_h = z - W x_m over the nonzero columns of each block.
   for (int k = 0; k < blocks_; ++k) {
