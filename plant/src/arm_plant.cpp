@@ -450,6 +450,9 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   rigid_tau_.setZero(n_);
   q_.setZero(n_);
   qd_.setZero(n_);
+  mechanics_q_.setZero(n_);
+  mechanics_qd_.setZero(n_);
+  mechanics_valid_ = false;
   zero_.setZero(n_);
   reset();
 }
@@ -490,6 +493,7 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
   }
   for (int k = 0; k < n_; ++k)
     stop_side_[static_cast<std::size_t>(k)] = stopSide(params_[static_cast<std::size_t>(k)], y[angleIndex(n_, k)]);
+  mechanics_valid_ = false;  // (the cuff anchor below moves, and the kinematics are overwritten)
   if (reduced_ && user_.enabled) {
     // The cuff spring rests where the cuff is at the initial state.
     for (int k = 0; k < n_; ++k) {
@@ -565,6 +569,9 @@ void ArmPlant::mechanics(const double* y) noexcept {
     q_[k] = y[angleIndex(n, k)];
     qd_[k] = y[velocityIndex(n, k)];
   }
+  // Everything below depends on (q, qd) only: at the state of the previous call (the period's
+  // end, sampled by sampleOutputs() and then the next period's first Jacobian) it is reused.
+  if (mechanics_valid_ && q_ == mechanics_q_ && qd_ == mechanics_qd_) return;
   // Newton-Euler on the reduced arm: h = C(q, qd) qd + g(q) (ID at qdd = 0), then M(q) by
   // composite rigid bodies (reduced_dynamics.hpp, R1-R5).
   ReducedArmData& d = *reduced_data_;
@@ -589,6 +596,9 @@ void ArmPlant::mechanics(const double* y) noexcept {
     cuff_jac_.setZero();
     tau_cuff_.setZero();
   }
+  mechanics_q_ = q_;
+  mechanics_qd_ = qd_;
+  mechanics_valid_ = true;
 }
 
 void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {

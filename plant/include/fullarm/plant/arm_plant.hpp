@@ -225,6 +225,9 @@ class ArmPlant {
   std::unique_ptr<ReducedArmData> reduced_data_;
   ReducedPoint cuff_point_{};
   JointVector q_, qd_, zero_;
+  // (q, qd) of the last full mechanics() pass: its outputs are reused at the same state.
+  JointVector mechanics_q_, mechanics_qd_;
+  bool mechanics_valid_ = false;
   bool rigid_body_gradients_ = false;
   ReducedMatrix rigid_dq_, rigid_dqd_;
   JointVector rigid_tau_;
