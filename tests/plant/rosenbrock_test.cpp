@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -108,6 +109,67 @@ TEST(Rodas3, StiffLinearSystemMatchesMatrixExponential) {
   EXPECT_LT(r.stats().steps, 3000);  // not limited by the fast mode
 }
 
+// y' = A (y - g) of size N with eigenvalues from -1e5 to -1 and eigenvectors that make partial
+// pivoting swap rows of G = I / (h gamma) - A: exercises the dense LU at every size the plant
+// dispatches on (4, 6 and 7 at compile time, 5 at run time), against Eigen's matrix exponential.
+template <int N>
+struct StiffN {
+  Eigen::Matrix<double, N, N> a;
+  Eigen::Matrix<double, N, 1> g;
+  static void rhs(void* user, const double* y, double* f) noexcept {
+    const auto* s = static_cast<const StiffN*>(user);
+    Eigen::Map<Eigen::Matrix<double, N, 1>> out(f);
+    out = s->a * (Eigen::Map<const Eigen::Matrix<double, N, 1>>(y) - s->g);
+  }
+  static void jacobian(void* user, const double* y, double* f, double* j) noexcept {
+    rhs(user, y, f);
+    Eigen::Map<Eigen::Matrix<double, N, N>> jac(j);
+    jac = static_cast<const StiffN*>(user)->a;
+  }
+};
+
+template <int N>
+void expectStiffSystemMatchesMatrixExponential() {
+  using Matrix = Eigen::Matrix<double, N, N>;
+  using Vector = Eigen::Matrix<double, N, 1>;
+  StiffN<N> s;
+  Vector lambda;
+  for (int i = 0; i < N; ++i) lambda[i] = -std::pow(10.0, 5.0 * i / (N - 1));
+  s.g = Vector::LinSpaced(N, 1.0, -1.0);
+  // Dense, well-mixed eigenvectors, from the first seed whose G = I / (h gamma) - A (at h = 1 ms)
+  // makes partial pivoting swap rows: the test means something only if the LU pivots.
+  for (int seed = 1;; ++seed) {
+    ASSERT_LT(seed, 100) << "N = " << N;
+    std::srand(static_cast<unsigned>(seed));
+    const Matrix v = Matrix::Random() + 0.5 * Matrix::Identity().rowwise().reverse();
+    s.a = v * lambda.asDiagonal() * v.inverse();
+    const Eigen::PartialPivLU<Matrix> lu(Matrix::Identity() / (1e-3 * 0.5) - s.a);
+    if ((lu.permutationP().indices().array() != Eigen::Array<int, N, 1>::LinSpaced(N, 0, N - 1)).any()) break;
+  }
+  std::array<double, N> atol{};
+  atol.fill(1e-9);
+  Rodas3 r;
+  r.configure(N, atol.data(), 1e-7, 10000, {&StiffN<N>::rhs, &StiffN<N>::jacobian, &s});
+  const Vector y0 = Vector::Zero();
+  Vector y = y0;
+  for (int k = 0; k < 200; ++k) ASSERT_EQ(r.advance(y.data(), 1e-3), RosenbrockStatus::kOk);
+  const Vector exact = s.g + (s.a * 0.2).exp() * (y0 - s.g);
+  EXPECT_LT((y - exact).cwiseAbs().maxCoeff(), 1e-5) << "N = " << N;
+  EXPECT_GT((exact - s.g).cwiseAbs().maxCoeff(), 1e-2);  // the slow modes have not decayed
+  // A wrong solve is rescued by the error control at tiny steps, where G is nearly diagonal, so
+  // the step count is the check (1,000-1,300 steps, <= 17 rejections with a correct LU; with the
+  // permutation dropped from the 6 x 6 solve, 3,521 steps and 1,165 rejections).
+  EXPECT_LT(r.stats().steps, 2000) << "N = " << N;
+  EXPECT_LT(r.stats().rejected, 100) << "N = " << N;
+}
+
+TEST(Rodas3, StiffSystemsOfEveryLuSizeMatchMatrixExponential) {
+  expectStiffSystemMatchesMatrixExponential<4>();
+  expectStiffSystemMatchesMatrixExponential<5>();
+  expectStiffSystemMatchesMatrixExponential<6>();
+  expectStiffSystemMatchesMatrixExponential<7>();
+}
+
 // Two 4-state blocks coupled only through a 2-state border: block elimination = dense LU.
 struct Bordered {
   Eigen::Matrix<double, 10, 10> a;
@@ -203,6 +265,45 @@ TEST(Rodas3, BlockEliminationWithSecondOrderBorderMatchesDenseLu) {
   s.a.block<2, 2>(10, 8) = -4.0 * Eigen::Matrix2d::Identity();     // springs
   s.a.block<2, 2>(10, 10) = -0.5 * Eigen::Matrix2d::Identity();    // dampers
   s.a.block<2, 2>(8, 10) = Eigen::Matrix2d::Identity();            // x' = v
+  expectBlockEliminationMatchesDense(s, /*expect_halved_border=*/true);
+}
+
+// The plant's shape: two 4-state blocks and a second-order border of 7 positions and 7
+// velocities, so the halved Schur system is 7 x 7 (the compile-time-size LU).
+struct SevenJointBordered {
+  Eigen::Matrix<double, 22, 22> a;
+  static void rhs(void* user, const double* y, double* f) noexcept {
+    const auto* s = static_cast<const SevenJointBordered*>(user);
+    const Eigen::Map<const Eigen::Matrix<double, 22, 1>> x(y);
+    Eigen::Map<Eigen::Matrix<double, 22, 1>> out(f);
+    out = s->a * x;
+    for (int i = 0; i < 22; ++i) {
+      if (i < 8 || i >= 15) out[i] += 0.1 * x[i] * x[i];
+    }
+  }
+  static void jacobian(void* user, const double* y, double* f, double* j) noexcept {
+    rhs(user, y, f);
+    Eigen::Map<Eigen::Matrix<double, 22, 22>> J(j);
+    J = static_cast<const SevenJointBordered*>(user)->a;
+    for (int i = 0; i < 22; ++i) {
+      if (i < 8 || i >= 15) J(i, i) += 0.2 * y[i];
+    }
+  }
+};
+
+TEST(Rodas3, BlockEliminationWithSevenJointBorderMatchesDenseLu) {
+  SevenJointBordered s;
+  s.a.setZero();
+  std::srand(13);
+  using Matrix7 = Eigen::Matrix<double, 7, 7>;
+  s.a.block<4, 4>(0, 0) = Eigen::Matrix4d::Random() - 8.0 * Eigen::Matrix4d::Identity();
+  s.a.block<4, 4>(4, 4) = Eigen::Matrix4d::Random() - 500.0 * Eigen::Matrix4d::Identity();
+  s.a.block<4, 7>(0, 8) = Eigen::Matrix<double, 4, 7>::Random();                   // blocks see x
+  s.a.block<4, 7>(4, 15) = Eigen::Matrix<double, 4, 7>::Random();                  // and v
+  s.a.block<7, 8>(15, 0) = Eigen::Matrix<double, 7, 8>::Random();                  // v' sees both blocks
+  s.a.block<7, 7>(15, 8) = -4.0 * Matrix7::Identity() + 0.5 * Matrix7::Random();   // coupled springs
+  s.a.block<7, 7>(15, 15) = -0.5 * Matrix7::Identity() + 0.1 * Matrix7::Random();  // and dampers
+  s.a.block<7, 7>(8, 15) = Matrix7::Identity();                                    // x' = v
   expectBlockEliminationMatchesDense(s, /*expect_halved_border=*/true);
 }
 
