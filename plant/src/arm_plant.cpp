@@ -486,6 +486,7 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
   stats_ = stats_base_ = {};
   cmd_ = last_cmd_ = PlantCommand::zero(n_);
   need_reinit_ = true;
+  cvodes_counters_stale_ = true;  // CVODES still counts the previous run until its next re-init
   error_[0] = '\0';
   if (rodas_) {
     rodas_->resetStepSize(kRodasInitialStep_s);
@@ -867,8 +868,10 @@ void ArmPlant::harvestStats() noexcept {
 }
 
 void ArmPlant::reinitSolver() noexcept {
-  // CVodeReInit resets CVODES' counters: bank them first (research/plant.md 3.2).
-  harvestStats();
+  // CVodeReInit resets CVODES' counters: bank them first (research/plant.md 3.2), unless they
+  // belong to the run before the last reset().
+  if (!cvodes_counters_stale_) harvestStats();
+  cvodes_counters_stale_ = false;
   stats_base_ = stats_;
   stats_base_.root_events = 0;
   stats_base_.reinits = 0;

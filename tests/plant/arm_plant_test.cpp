@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <random>
 
 #include "fullarm/arm/arm_data.hpp"
@@ -175,6 +176,33 @@ TEST(ArmPlant, StatisticsAccumulateAcrossReinit) {
   EXPECT_GE(plant.stats().reinits, 5);
   EXPECT_GT(plant.stats().jac_evals, 0);
   EXPECT_GT(plant.stats().rhs_evals, plant.stats().steps);
+}
+
+// reset() starts the counters from zero: a second identical run reports what the first did
+// (CVODES keeps its own counters until the next CVodeReInit, which used to bank the previous
+// run's last segment into the new run's statistics: twice the steps of a slow sine).
+TEST(ArmPlant, StatisticsRestartAtReset) {
+  const arm::ArmModel& model = test::dtsModel();
+  const PlantConfig& config = test::dtsPlant();
+  ArmPlant plant;
+  plant.configure(model, {config.joints[3]}, model.defaultPosture(), UserArmParams{}, config.solver);
+  auto run = [&plant]() {
+    plant.reset();
+    PlantCommand cmd = PlantCommand::zero(1);
+    for (int k = 0; k < 200; ++k) {
+      cmd.command[0] = 0.5 * std::sin(2.0 * std::numbers::pi * 2.0 * k * 1e-3);  // no re-init
+      EXPECT_EQ(plant.step(1e-3, cmd), PlantStatus::kOk) << plant.lastError();
+    }
+    return plant.stats();
+  };
+  const SolverStats first = run();
+  const SolverStats second = run();
+  EXPECT_GT(first.steps, 0);
+  EXPECT_EQ(first.reinits, 1);
+  EXPECT_EQ(second.steps, first.steps);
+  EXPECT_EQ(second.rhs_evals, first.rhs_evals);
+  EXPECT_EQ(second.jac_evals, first.jac_evals);
+  EXPECT_EQ(second.reinits, first.reinits);
 }
 
 // Rodas3 on pure rigid-body motion (ideal torque sources, free swing from a spinning start):

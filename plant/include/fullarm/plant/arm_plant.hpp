@@ -209,6 +209,7 @@ class ArmPlant {
   PlantCommand cmd_{};
   PlantCommand last_cmd_{};
   bool need_reinit_ = true;
+  bool cvodes_counters_stale_ = true;  // CVODES' counters are the previous run's (after reset())
   SolverStats stats_{};
   SolverStats stats_base_{};
   char error_[256] = {};
