@@ -178,6 +178,7 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
         for (int t : lmesh.featureTriangles(cur_l)) {
           if (t == tl || !screen.mayBeCloser(t)) continue;
           // Warm-started: B and its closest feature are unchanged, t's is unknown (face).
+          ++st.evaluated;
           const TriangleTriangleResult c =
               closestPointsTriangleTriangleWarm(linkTriangle(lmesh, t, X_OL), B, LocalFeature{}, r.feature_b);
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
@@ -191,6 +192,21 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
         const NeighbourScreen screen(omesh, cur_o, -u_O);
         for (int t : omesh.featureTriangles(cur_o)) {
           if (t == to || !screen.mayBeCloser(t)) continue;
+          // Re-screening: once a neighbour t1 of this step has lowered the distance with the
+          // link triangle A unchanged, its pair (p', q') is optimal over A x t1, so p' is A's
+          // closest point to q'. If q' lies on a feature that t shares with t1 and the first-
+          // order test shows that no point of t is closer to p' than q', then (p', q') is also
+          // optimal over A x t: t cannot lower the distance below the best, and its (costly)
+          // evaluation is skipped. Exact: same screening test as above, at the new pair.
+          if (params.rescreen_neighbours && best_t >= 0 && !best_link_side && best.distance_m > 0.0) {
+            const Feature shared = globalFeature(omesh, best_t, best.feature_b);
+            if (shared.kind != FeatureKind::kFace && localIndex(omesh, t, shared) >= 0 &&
+                !NeighbourScreen(omesh, shared, (best.p - best.q) / best.distance_m).mayBeCloser(t)) {
+              ++st.rescreened;
+              continue;
+            }
+          }
+          ++st.evaluated;
           const TriangleTriangleResult c =
               closestPointsTriangleTriangleWarm(A, objectTriangle(omesh, t), r.feature_a, LocalFeature{});
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
