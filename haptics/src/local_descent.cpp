@@ -125,8 +125,10 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
   std::array<std::uint64_t, kMaxRuns> runs;
   int num_runs = 0;
   bool runs_overflowed = false;
-  int run_begin = 0;       // first survivor of the current run
-  bool full_scan = false;  // the current pair had an earlier run: compare every survivor
+  int run_begin = 0;         // first survivor of the current run
+  bool full_scan = false;    // the current pair had an earlier run: compare every survivor
+  int cached_link_tri = -1;  // link triangle held by cached_link (prepared at the current pose)
+  PreparedTriangle cached_link{};
   for (std::size_t i = 0; i < minima.size(); ++i) {
     LocalMinimum m = minima[i];
     const TriMesh& lmesh = world.linkMesh(m.link);
@@ -147,13 +149,20 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       X_LO = X_OL.inverse();
       pose_link = m.link;
       pose_object = m.object;
+      cached_link_tri = -1;
     }
     int tl = m.tri_link;
     int to = m.tri_object;
     // The tracked pair, warm-started from the previous features (same distance as the full
     // computation; one candidate and its optimality test when the features did not change).
     // Each side's prepared triangle is reused for every neighbour evaluated against it.
-    PreparedTriangle A = linkTriangle(lmesh, tl, X_OL);
+    // Minima of one link/object pair often start on the same link triangle (a capsule's long
+    // strips hold several): its prepared copy in the object frame is reused while the pose is.
+    if (tl != cached_link_tri) {
+      cached_link = linkTriangle(lmesh, tl, X_OL);
+      cached_link_tri = tl;
+    }
+    PreparedTriangle A = cached_link;
     PreparedTriangle B = objectTriangle(omesh, to);
     TriangleTriangleResult r = closestPointsTriangleTriangleWarm(A, B, localGuess(lmesh, tl, m.feature_link),
                                                                  localGuess(omesh, to, m.feature_object));
