@@ -98,14 +98,14 @@ std::vector<std::vector<int>> leafPaths(const SnchTree& tree, int num_triangles)
 // of the given axes.
 std::vector<Vector3d> sampleDirections(const std::vector<Vector3d>& axes) {
   std::vector<Vector3d> dirs;
-  const int n_sphere = 4000;
+  const int n_sphere = 2000;
   const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
   for (int i = 0; i < n_sphere; ++i) {
     const double z = 1.0 - 2.0 * (i + 0.5) / n_sphere;
     const double r = std::sqrt(1.0 - z * z);
     dirs.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
   }
-  const int n_circle = 720;
+  const int n_circle = 360;
   for (const Vector3d& a : axes) {
     const Vector3d e1 = a.unitOrthogonal();
     const Vector3d e2 = a.cross(e1);
