@@ -136,7 +136,7 @@ TEST(LocalDescentTest, RescreeningGivesTheSameMinimaAsEvaluatingEveryNeighbour) 
   long skipped = 0;
   long evaluated_reference = 0;
   long evaluated_shortcut = 0;
-  for (int trial = 0; trial < 300; ++trial) {
+  for (int trial = 0; trial < 150; ++trial) {
     WorldFixture s(model);
     s.world.setLinkMesh(kLink, randomSmallMesh(rng));
     const bool rough = trial % 2 == 0;
