@@ -429,7 +429,16 @@ bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, 
       t_feature = edgeFeature(j, c.t);
     }
   }
+  // The endpoints against T, unless T's bounding sphere (centre v0, radius its longer edge
+  // from v0) puts an endpoint farther than the best edge pair (a long edge against a small
+  // triangle: its endpoints are far away).
+  const double radius = std::sqrt(std::max(T.edge_sq[0], T.edge_sq[2]));
   for (const int end : {k, k1}) {
+    const double centre_distance = (E.v[end] - T.v[0]).norm();
+    if (centre_distance > radius) {
+      const double lower = centre_distance - radius;
+      if (lower * lower > best * (1.0 + kBoundSlack)) continue;
+    }
     const SquaredPointResult c = closestPointSquared(E.v[end], T);
     if (c.distance_sq < best) {
       best = c.distance_sq;

@@ -125,8 +125,10 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
   std::array<std::uint64_t, kMaxRuns> runs;
   int num_runs = 0;
   bool runs_overflowed = false;
-  int run_begin = 0;       // first survivor of the current run
-  bool full_scan = false;  // the current pair had an earlier run: compare every survivor
+  int run_begin = 0;         // first survivor of the current run
+  bool full_scan = false;    // the current pair had an earlier run: compare every survivor
+  int cached_link_tri = -1;  // link triangle held by cached_link (prepared at the current pose)
+  PreparedTriangle cached_link{};
   for (std::size_t i = 0; i < minima.size(); ++i) {
     LocalMinimum m = minima[i];
     const TriMesh& lmesh = world.linkMesh(m.link);
@@ -147,13 +149,20 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       X_LO = X_OL.inverse();
       pose_link = m.link;
       pose_object = m.object;
+      cached_link_tri = -1;
     }
     int tl = m.tri_link;
     int to = m.tri_object;
     // The tracked pair, warm-started from the previous features (same distance as the full
     // computation; one candidate and its optimality test when the features did not change).
     // Each side's prepared triangle is reused for every neighbour evaluated against it.
-    PreparedTriangle A = linkTriangle(lmesh, tl, X_OL);
+    // Minima of one link/object pair often start on the same link triangle (a capsule's long
+    // strips hold several): its prepared copy in the object frame is reused while the pose is.
+    if (tl != cached_link_tri) {
+      cached_link = linkTriangle(lmesh, tl, X_OL);
+      cached_link_tri = tl;
+    }
+    PreparedTriangle A = cached_link;
     PreparedTriangle B = objectTriangle(omesh, to);
     TriangleTriangleResult r = closestPointsTriangleTriangleWarm(A, B, localGuess(lmesh, tl, m.feature_link),
                                                                  localGuess(omesh, to, m.feature_object));
@@ -178,6 +187,7 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
         for (int t : lmesh.featureTriangles(cur_l)) {
           if (t == tl || !screen.mayBeCloser(t)) continue;
           // Warm-started: B and its closest feature are unchanged, t's is unknown (face).
+          ++st.evaluated;
           const TriangleTriangleResult c =
               closestPointsTriangleTriangleWarm(linkTriangle(lmesh, t, X_OL), B, LocalFeature{}, r.feature_b);
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
@@ -191,6 +201,21 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
         const NeighbourScreen screen(omesh, cur_o, -u_O);
         for (int t : omesh.featureTriangles(cur_o)) {
           if (t == to || !screen.mayBeCloser(t)) continue;
+          // Re-screening: once a neighbour t1 of this step has lowered the distance with the
+          // link triangle A unchanged, its pair (p', q') is optimal over A x t1, so p' is A's
+          // closest point to q'. If q' lies on a feature that t shares with t1 and the first-
+          // order test shows that no point of t is closer to p' than q', then (p', q') is also
+          // optimal over A x t: t cannot lower the distance below the best, and its (costly)
+          // evaluation is skipped. Exact: same screening test as above, at the new pair.
+          if (params.rescreen_neighbours && best_t >= 0 && !best_link_side && best.distance_m > 0.0) {
+            const Feature shared = globalFeature(omesh, best_t, best.feature_b);
+            if (shared.kind != FeatureKind::kFace && localIndex(omesh, t, shared) >= 0 &&
+                !NeighbourScreen(omesh, shared, (best.p - best.q) / best.distance_m).mayBeCloser(t)) {
+              ++st.rescreened;
+              continue;
+            }
+          }
+          ++st.evaluated;
           const TriangleTriangleResult c =
               closestPointsTriangleTriangleWarm(A, objectTriangle(omesh, t), r.feature_a, LocalFeature{});
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {

@@ -343,9 +343,18 @@ Feature meshFeature(const TriMesh& mesh, int tri, const LocalFeature& f) noexcep
   return {FeatureKind::kFace, tri};
 }
 
-bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh, int tri_object,
-                          const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
-  const TriangleTriangleResult r = closestPointsInObjectFrame(link_mesh, tri_link, object_mesh, tri_object, X_OL);
+namespace {
+
+// evaluateTrianglePair with the link vertices in the object frame given by `link_vertex_O(v)`
+// (X_OL * vertex, computed on the fly or read from a per-query cache: the same values).
+template <class LinkVertex>
+bool evaluatePair(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int tri_link, const TriMesh& object_mesh,
+                  int tri_object, const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
+  const auto& ta = link_mesh.triangle(tri_link);
+  const auto& tb = object_mesh.triangle(tri_object);
+  const TriangleTriangleResult r =
+      closestPointsTriangleTriangle(link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2]),
+                                    object_mesh.vertex(tb[0]), object_mesh.vertex(tb[1]), object_mesh.vertex(tb[2]));
   if (r.distance_m > cutoff_m) return false;
   const Feature fl = meshFeature(link_mesh, tri_link, r.feature_a);
   const Feature fo = meshFeature(object_mesh, tri_object, r.feature_b);
@@ -356,9 +365,8 @@ bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh&
     for (int t : link_mesh.featureTriangles(fl)) {
       if (t == tri_link) continue;
       const auto& a = link_mesh.triangle(t);
-      if (accept > 0.0 &&
-          squaredDistancePointTriangle(r.q, X_OL * link_mesh.vertex(a[0]), X_OL * link_mesh.vertex(a[1]),
-                                       X_OL * link_mesh.vertex(a[2])) < accept * accept) {
+      if (accept > 0.0 && squaredDistancePointTriangle(r.q, link_vertex_O(a[0]), link_vertex_O(a[1]),
+                                                       link_vertex_O(a[2])) < accept * accept) {
         return false;
       }
     }
@@ -391,6 +399,15 @@ bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh&
   out.u_W = u;
   out.previous_distance_m = std::numeric_limits<double>::quiet_NaN();
   return true;
+}
+
+}  // namespace
+
+bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh, int tri_object,
+                          const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
+  return evaluatePair(
+      link_mesh, [&](int v) -> Vector3d { return X_OL * link_mesh.vertex(v); }, tri_link, object_mesh, tri_object, X_OL,
+      cutoff_m, out);
 }
 
 std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t begin) noexcept {
@@ -545,6 +562,11 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
     centre_O[k] = X_OL * link_tree.nodes[k].centre_m;
     axis_O[k] = R_OL * link_tree.nodes[k].cone_axis;
   }
+  // The link's vertices in the object frame, once, at the first leaf pair (every leaf pair
+  // reads them; most link/object pairs are pruned before any leaf).
+  auto& vertex_O = scratch.link_vertex_O;
+  bool vertices_ready = false;
+  const auto link_vertex_O = [&vertex_O](int v) -> const Vector3d& { return vertex_O[static_cast<std::size_t>(v)]; };
   auto& stack = scratch.stack;
   stack.clear();
   stack.emplace_back(0, 0);
@@ -574,11 +596,17 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
       continue;
     }
     if (a.isLeaf() && b.isLeaf()) {
+      if (!vertices_ready) {
+        vertex_O.resize(static_cast<std::size_t>(link_mesh.numVertices()));
+        for (int v = 0; v < link_mesh.numVertices(); ++v) {
+          vertex_O[static_cast<std::size_t>(v)] = X_OL * link_mesh.vertex(v);
+        }
+        vertices_ready = true;
+      }
       // Exact separating-axis bound of the two triangles before the closest-point computation.
       const auto& ta = link_mesh.triangle(a.triangle);
       const auto& tb = obj_mesh.triangle(b.triangle);
-      const Vector3d va[3] = {X_OL * link_mesh.vertex(ta[0]), X_OL * link_mesh.vertex(ta[1]),
-                              X_OL * link_mesh.vertex(ta[2])};
+      const Vector3d va[3] = {link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2])};
       const Vector3d vb[3] = {obj_mesh.vertex(tb[0]), obj_mesh.vertex(tb[1]), obj_mesh.vertex(tb[2])};
       if (trianglesFartherThan(va, R_OL * link_mesh.faceNormal(a.triangle), vb, obj_mesh.faceNormal(b.triangle),
                                cutoff_m)) {
@@ -590,7 +618,7 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
         continue;
       }
       ++st.triangle_pairs_tested;
-      if (evaluateTrianglePair(link_mesh, a.triangle, obj_mesh, b.triangle, X_OL, cutoff_m, m)) {
+      if (evaluatePair(link_mesh, link_vertex_O, a.triangle, obj_mesh, b.triangle, X_OL, cutoff_m, m)) {
         m.u_W = X_WO.linear() * m.u_W;
         out.push_back(m);
       }

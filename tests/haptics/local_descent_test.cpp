@@ -11,6 +11,7 @@
 #include "alloc_guard.hpp"
 #include "arm_test_util.hpp"
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/haptics/primitives.hpp"
 #include "haptics_test_util.hpp"
 
 namespace fullarm::haptics {
@@ -31,6 +32,22 @@ Eigen::Isometry3d smallMotion(std::mt19937& rng) {
   dX.linear() = Eigen::AngleAxisd(u(rng) * 2.0 * M_PI / 180.0, axis).toRotationMatrix();
   dX.translation() = u(rng) * 0.005 * dir;
   return dX;
+}
+
+// A 10 x 10 x 4 cm box of 1 cm triangles whose top face carries +-1.5 mm of random relief:
+// every bump is a separate local minimum and steps cross vertex one-rings.
+TriMesh roughBox(std::mt19937& rng) {
+  const TriMesh box = makeBox({0.1, 0.1, 0.04}, 0.01);
+  std::uniform_real_distribution<double> bump(-0.0015, 0.0015);
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Eigen::Vector3i> t;
+  for (int i = 0; i < box.numVertices(); ++i) {
+    Eigen::Vector3d p = box.vertex(i);
+    if (p.z() > 0.0 && std::abs(p.x()) < 0.05 - 1e-9 && std::abs(p.y()) < 0.05 - 1e-9) p.z() += bump(rng);
+    v.push_back(p);
+  }
+  for (int i = 0; i < box.numTriangles(); ++i) t.push_back(box.triangle(i));
+  return TriMesh::build("rough box", std::move(v), std::move(t));
 }
 
 struct WorldFixture {
@@ -105,6 +122,96 @@ TEST(LocalDescentTest, TrackedMinimaMatchFreshSearchAfterSmallMotion) {
   EXPECT_GE(confirmed, static_cast<int>(0.9 * tracked_total));
   RecordProperty("tracked", tracked_total);
   RecordProperty("confirmed", confirmed);
+}
+
+// The re-screening shortcut (LocalDescentParams::rescreen_neighbours) against the reference
+// path that evaluates every screened neighbour: the same minima (feature pairs, triangles,
+// distances, points) after random small motions, on random meshes and on a dense box with
+// random relief (where steps cross vertex one-rings, the case the shortcut targets).
+TEST(LocalDescentTest, RescreeningGivesTheSameMinimaAsEvaluatingEveryNeighbour) {
+  const arm::ArmModel& model = arm::test::defaultModel();
+  std::mt19937 rng(57);
+  int compared = 0;
+  int ties = 0;
+  long skipped = 0;
+  long evaluated_reference = 0;
+  long evaluated_shortcut = 0;
+  for (int trial = 0; trial < 150; ++trial) {
+    WorldFixture s(model);
+    s.world.setLinkMesh(kLink, randomSmallMesh(rng));
+    const bool rough = trial % 2 == 0;
+    s.world.addObject("obj", rough ? roughBox(rng) : randomSmallMesh(rng), randomPose(rng, 0.3));
+    const CollisionObject& obj = s.world.object(0);
+    Eigen::Isometry3d X_WL = randomPose(rng, 0.0);
+    std::normal_distribution<double> n(0.0, 1.0);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    if (rough) {
+      // Above the rough top face, 2-4 cm from it.
+      X_WL.translation() = obj.X_WO * Eigen::Vector3d(0.04 * u(rng), 0.04 * u(rng), 0.05 + 0.01 * u(rng));
+    } else {
+      X_WL.translation() = obj.X_WO.translation() + std::uniform_real_distribution<double>(0.1, 0.35)(rng) *
+                                                        Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+    }
+    s.fk.X_WL[kLink] = X_WL;
+    std::vector<LocalMinimum> minima;
+    SnchQueryScratch scratch;
+    querySnchPair(s.world.linkTree(kLink), s.world.linkMesh(kLink), X_WL, obj.tree, obj.mesh, obj.X_WO, kCutoff_m,
+                  scratch, minima);
+    if (minima.empty()) continue;
+    for (auto& m : minima) {
+      m.link = kLink;
+      m.object = 0;
+    }
+    s.fk.X_WL[kLink] = X_WL * smallMotion(rng);
+    std::vector<LocalMinimum> reference = minima;
+    LocalDescentParams all;
+    all.rescreen_neighbours = false;
+    LocalDescentStats st_ref;
+    const int kept_ref = updateMinimaLocalDescent(s.world, s.fk, reference, all, &st_ref);
+    LocalDescentStats st;
+    const int kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{}, &st);
+    ASSERT_EQ(kept, kept_ref) << "trial " << trial;
+    // Compared in order of distance: where the paths part at a tie (below), the merge of
+    // duplicates can keep the minima in another order.
+    auto byDistance = [](std::vector<LocalMinimum>& v, int count) {
+      v.resize(static_cast<std::size_t>(count));
+      std::stable_sort(v.begin(), v.end(),
+                       [](const LocalMinimum& x, const LocalMinimum& y) { return x.distance_m < y.distance_m; });
+    };
+    byDistance(minima, kept);
+    byDistance(reference, kept_ref);
+    bool diverged = false;
+    for (int i = 0; i < kept; ++i) {
+      const LocalMinimum& a = minima[static_cast<std::size_t>(i)];
+      const LocalMinimum& b = reference[static_cast<std::size_t>(i)];
+      ++compared;
+      EXPECT_NEAR(a.distance_m, b.distance_m, 1e-15) << "trial " << trial << ", minimum " << i;
+      if (sameFeaturePair(a, b) && a.tri_link == b.tri_link && a.tri_object == b.tri_object) {
+        EXPECT_NEAR((a.p_O - b.p_O).norm(), 0.0, 1e-15);
+        continue;
+      }
+      // A tie: the skipped neighbour reaches the same distance in exact arithmetic, and the
+      // reference path took it because its evaluation came out lower by rounding (strict
+      // decrease); both are minima at the same distance (checked above).
+      ++ties;
+      diverged = true;
+    }
+    // Every skipped evaluation is one the reference path ran; the paths only part at a tie.
+    if (!diverged) {
+      EXPECT_EQ(st.rescreened, st_ref.evaluated - st.evaluated) << "trial " << trial;
+    }
+    skipped += st.rescreened;
+    evaluated_reference += st_ref.evaluated;
+    evaluated_shortcut += st.evaluated;
+  }
+  EXPECT_GT(compared, 300);
+  EXPECT_GT(skipped, 30);  // the shortcut was exercised
+  EXPECT_LE(ties, compared / 100);
+  RecordProperty("compared", compared);
+  RecordProperty("ties", ties);
+  RecordProperty("skipped", static_cast<int>(skipped));
+  RecordProperty("evaluated_reference", static_cast<int>(evaluated_reference));
+  RecordProperty("evaluated_shortcut", static_cast<int>(evaluated_shortcut));
 }
 
 TEST(LocalDescentTest, WalksAcrossAFlatWallAndMergesDuplicates) {

@@ -21,6 +21,11 @@ struct LocalDescentParams {
   double min_decrease_m = 1e-12;
   /// Minima farther than this after the update are dropped [m] (infinity: keep all).
   double drop_beyond_m = std::numeric_limits<double>::infinity();
+  /// Skip the evaluation of an object-side neighbour when the step's best pair so far already
+  /// lies on a feature it shares and the first-order screening at that pair rejects it (exact:
+  /// such a neighbour cannot lower the distance below the best). false runs every screened
+  /// neighbour's triangle-pair query (the reference path of the tests).
+  bool rescreen_neighbours = true;
 };
 
 struct LocalDescentStats {
@@ -28,6 +33,8 @@ struct LocalDescentStats {
   int minima_at_iteration_cap = 0;  ///< minima that stopped at max_iterations
   int merged = 0;                   ///< minima removed because another reached the same feature pair
   int dropped = 0;                  ///< minima removed by drop_beyond_m
+  int evaluated = 0;                ///< neighbour triangle pairs evaluated (closest points computed)
+  int rescreened = 0;               ///< neighbour evaluations skipped by re-screening at the step's best pair
 };
 
 /// Updates every minimum to the current link poses (fk.X_WL) and object poses of `world`:

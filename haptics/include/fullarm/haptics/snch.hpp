@@ -86,6 +86,8 @@ struct SnchQueryScratch {
   /// Per link node, its centre and cone axis in the object frame (filled once per query).
   std::vector<Eigen::Vector3d> link_centre_O;
   std::vector<Eigen::Vector3d> link_axis_O;
+  /// The link mesh's vertices in the object frame (filled once per query).
+  std::vector<Eigen::Vector3d> link_vertex_O;
 };
 
 /// Counters of the last querySnchPair call.
