@@ -42,6 +42,12 @@ TEST(TuneCli, WritesLoadableGainsAndSummary) {
   const auto& eb = gains.joints[static_cast<std::size_t>(fullarm::controllers::findGainsJoint(gains, "EB"))];
   EXPECT_DOUBLE_EQ(eb.impedance.inertia_kgm2, joints[0]["tuned_gains"]["inertia_kgm2"].get<double>());
   EXPECT_TRUE(std::filesystem::exists(dir / "report.html"));
+  // The written gains' linear hard goals are reported, and a violation is said on stdout.
+  const nlohmann::json& stage = summary["results"]["tune"]["nonlinear_stage"];
+  ASSERT_EQ(stage.size(), 1u);
+  const bool met = stage[0]["linear_hard_goals_met"].get<bool>();
+  EXPECT_EQ(met, stage[0]["final"]["linear_hard"].get<double>() <= 1.0);
+  EXPECT_EQ(met, r.output.find("VIOLATE the linear hard goal") == std::string::npos) << r.output;
 }
 
 TEST(TuneCli, UnknownJointIsBadInput) {
