@@ -45,7 +45,37 @@ bool better(const NonlinearScore& a, const NonlinearScore& b) {
   return a.cost < b.cost;
 }
 
+// Cost weights: one failure outweighs the other terms together (0.5 + 0.25 * 1 + 0.25 * (< 1)).
+constexpr double kHardGoalWeight = 0.5;
+constexpr double kMarginWeight = 0.25;
+constexpr double kTransparencyWeight = 0.25;
+constexpr int kCornerIndex = 1000000;
+
 }  // namespace
+
+std::vector<MonteCarloSample> stressCorners(const UncertaintyRanges& r, double user_fraction) {
+  const auto weak = [user_fraction](const UniformRange& u) { return u.min + user_fraction * (u.max - u.min); };
+  MonteCarloSample fast;
+  fast.index = kCornerIndex;
+  fast.bulk_modulus_scale = r.bulk_modulus_scale.min;
+  fast.valve_gain_scale = r.valve_gain_scale.max;
+  fast.friction_scale = r.friction_scale.min;
+  fast.inertia_scale = r.inertia_scale.min;
+  fast.delay_samples = r.delay_max_samples;
+  fast.user_stiffness_nm_per_rad = weak(r.user_stiffness_nm_per_rad);
+  fast.user_damping_nms_per_rad = weak(r.user_damping_nms_per_rad);
+  MonteCarloSample slow = fast;
+  slow.index = kCornerIndex + 1;
+  slow.bulk_modulus_scale = r.bulk_modulus_scale.max;
+  slow.valve_gain_scale = r.valve_gain_scale.min;
+  slow.friction_scale = r.friction_scale.max;
+  slow.inertia_scale = r.inertia_scale.max;
+  slow.delay_samples = r.delay_min_samples;
+  MonteCarloSample stiff = fast;
+  stiff.index = kCornerIndex + 2;
+  stiff.user_stiffness_nm_per_rad = r.user_stiffness_nm_per_rad.max;
+  return {fast, slow, stiff};
+}
 
 std::vector<MonteCarloSample> stageSamples(const UncertaintyRanges& ranges, std::uint64_t seed,
                                            const std::string& joint_name, int first, int count) {
@@ -57,10 +87,17 @@ std::vector<MonteCarloSample> stageSamples(const UncertaintyRanges& ranges, std:
 
 NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& gains,
                               const std::vector<MonteCarloSample>& set, const LinearRequirements& req, int max_delay,
-                              int failure_cap) {
+                              int failure_cap, const LinearHardGoals* hard_goals) {
   NonlinearScore s;
   JointScenario sc = scenario;
   sc.gains = gains;
+  if (hard_goals != nullptr) {
+    const auto [value, name] =
+        worstHardGoal(evaluateGoals(hard_goals->models, gains, hard_goals->goals), hard_goals->goals);
+    s.linear_hard = value;
+    s.linear_hard_goal = name;
+    s.linear_hard_met = value <= 1.0;
+  }
   s.linear_ok = analyzeScenario(sc, req, max_delay, {}).pass;
   if (!s.linear_ok) {
     s.cost = kInf;
@@ -72,7 +109,11 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
   for (std::size_t i = 0; i < set.size(); ++i) {
     const ClosedLoopResult r = simulateJoint(applySample(sc, set[i]));
     rms_sum += r.free_rms_user_torque_nm;
-    if (!r.acceptable()) ++s.failures;
+    if (!r.acceptable()) {
+      ++s.failures;
+    } else {
+      s.worst_passed_severity = std::max(s.worst_passed_severity, runSeverity(r, sc.oscillation_speed_radps));
+    }
     const double severity = runSeverity(r, sc.oscillation_speed_radps);
     if (severity > worst_severity) {
       worst_severity = severity;
@@ -83,28 +124,36 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
     if (s.failures > failure_cap) break;  // cannot beat the incumbent any more
   }
   s.mean_rms_user_torque_nm = s.runs > 0 ? rms_sum / static_cast<double>(s.runs) : 0.0;
-  s.cost = static_cast<double>(s.failures) + (1.0 - 1.0 / (1.0 + s.mean_rms_user_torque_nm));
+  s.cost = static_cast<double>(s.failures) + (s.linear_hard_met ? 0.0 : kHardGoalWeight) +
+           kMarginWeight * s.worst_passed_severity +
+           kTransparencyWeight * (1.0 - 1.0 / (1.0 + s.mean_rms_user_torque_nm));
   return s;
 }
 
 NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointGains& linear_optimum,
                                      const JointGains& start, const UncertaintyRanges& ranges,
-                                     const LinearRequirements& req, const NonlinearStageOptions& o) {
+                                     const LinearRequirements& req, const NonlinearStageOptions& o,
+                                     const LinearHardGoals* hard_goals) {
   if (o.samples < 1 || o.check_samples < 0 || o.rounds < 1 || o.max_evaluations < 0 || !(o.step_decades > 0.0) ||
       !(o.min_step_decades > 0.0) || o.max_added_per_round < 1 || !(o.min_damping_nms_per_rad > 0.0) ||
       !(o.max_damping_nms_per_rad >= o.min_damping_nms_per_rad) || !(o.min_gain_v_s_per_rad > 0.0) ||
-      !(o.max_gain_v_s_per_rad >= o.min_gain_v_s_per_rad)) {
+      !(o.max_gain_v_s_per_rad >= o.min_gain_v_s_per_rad) || !(o.corner_user_fraction >= 0.0) ||
+      !(o.corner_user_fraction <= 1.0)) {
     throw std::invalid_argument("nonlinear stage options: expected samples, rounds >= 1, steps > 0, 0 < min <= max");
   }
   const int max_delay = ranges.delay_max_samples;
   const std::array<double, 2> lo = {std::log10(o.min_damping_nms_per_rad), std::log10(o.min_gain_v_s_per_rad)};
   const std::array<double, 2> hi = {std::log10(o.max_damping_nms_per_rad), std::log10(o.max_gain_v_s_per_rad)};
   NonlinearStageResult res;
-  res.set = stageSamples(ranges, o.seed, scenario.joint_name, 0, o.samples);
+  if (o.stress_corners) res.set = stressCorners(ranges, o.corner_user_fraction);
+  for (const MonteCarloSample& sample : stageSamples(ranges, o.seed, scenario.joint_name, 0, o.samples)) {
+    res.set.push_back(sample);
+  }
   int next_index = o.samples;
+  const std::size_t initial_size = res.set.size();
 
   const auto score = [&](const JointGains& g, int cap = std::numeric_limits<int>::max()) {
-    const NonlinearScore s = scoreNonlinear(scenario, g, res.set, req, max_delay, cap);
+    const NonlinearScore s = scoreNonlinear(scenario, g, res.set, req, max_delay, cap, hard_goals);
     ++res.evaluations;
     res.simulations += s.linear_ok ? s.runs : 0;
     return s;
@@ -122,7 +171,8 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
     // Compass search (deterministic poll order: +B_m, -B_m, +gain, -gain).
     double step = o.step_decades;
     int evaluations = 0;
-    while (evaluations < o.max_evaluations && step >= o.min_step_decades && (best.failures > 0 || !best.linear_ok)) {
+    while (evaluations < o.max_evaluations && step >= o.min_step_decades &&
+           (best.failures > 0 || !best.linear_ok || best.worst_passed_severity >= 1.0)) {
       bool improved = false;
       for (int dir = 0; dir < 4 && evaluations < o.max_evaluations; ++dir) {
         Point p = best_p;
@@ -175,7 +225,9 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
     }
   }
   res.gains = gainsAt(base, best_p);
-  res.final_score = scoreNonlinear(scenario, res.gains, res.set, req, max_delay);
+  res.final_score =
+      scoreNonlinear(scenario, res.gains, res.set, req, max_delay, std::numeric_limits<int>::max(), hard_goals);
+  res.linear_hard_goals_met = res.final_score.linear_hard_met;
   res.simulations += res.final_score.runs;
   res.verified = res.verified && res.final_score.failures == 0;
   std::ostringstream v;
@@ -187,8 +239,18 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
                                          : std::to_string(res.check_failures.back()) + " failed (batch stopped early)");
   }
   v << "; started from the " << (from_start ? "starting" : "linearly tuned") << " gains (failures: linear optimum "
-    << res.linear_optimum.failures << ", start " << res.start.failures << " of " << o.samples << ")";
+    << res.linear_optimum.failures << ", start " << res.start.failures << " of " << initial_size << ")";
   if (!res.verified && !res.final_score.worst_failure.empty()) v << "; worst: " << res.final_score.worst_failure;
+  if (hard_goals != nullptr) {
+    if (res.linear_hard_goals_met) {
+      v << "; the written gains meet the linear hard goals (worst " << res.final_score.linear_hard_goal << " "
+        << res.final_score.linear_hard << " <= 1)";
+    } else {
+      v << "; WARNING: the written gains VIOLATE the linear hard goal " << res.final_score.linear_hard_goal
+        << " (normalised " << res.final_score.linear_hard << " > 1): no candidate of the search met the hard goals "
+        << "with as few nonlinear failures";
+    }
+  }
   res.verdict = v.str();
   return res;
 }

@@ -231,6 +231,11 @@ ModelVariation corner(const UncertaintyRanges& r, bool high) {
 
 }  // namespace
 
+std::pair<double, std::string> worstHardGoal(const GoalValues& values, const TuningGoals& goals) {
+  const auto [value, name] = worstHard(values, goals);
+  return {value, std::string(name)};
+}
+
 PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,
                                const ModelVariation& v) {
   JointPlantModel m = nominal;

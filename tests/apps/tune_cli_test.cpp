@@ -38,10 +38,20 @@ TEST(TuneCli, WritesLoadableGainsAndSummary) {
   ASSERT_EQ(joints.size(), 1u);
   EXPECT_EQ(joints[0]["joint"], "R_EB");
   EXPECT_EQ(summary["verdict"]["pass"].get<bool>(), r.exit_code == 0);
-  // The tuned joint in the file is the one the summary reports.
+  // The tuned joint in the file is the one the summary reports: the nonlinear stage's result (it
+  // may keep the starting gains instead of the linear stage's `tuned_gains`).
   const auto& eb = gains.joints[static_cast<std::size_t>(fullarm::controllers::findGainsJoint(gains, "EB"))];
-  EXPECT_DOUBLE_EQ(eb.impedance.inertia_kgm2, joints[0]["tuned_gains"]["inertia_kgm2"].get<double>());
+  const nlohmann::json& written = summary["results"]["tune"]["nonlinear_stage"][0]["gains"];
+  EXPECT_DOUBLE_EQ(eb.impedance.inertia_kgm2, written["inertia_kgm2"].get<double>());
+  EXPECT_DOUBLE_EQ(eb.impedance.damping_nms_per_rad, written["damping_nms_per_rad"].get<double>());
+  EXPECT_DOUBLE_EQ(eb.sliding_mode.boundary_layer_radps, written["boundary_layer_radps"].get<double>());
   EXPECT_TRUE(std::filesystem::exists(dir / "report.html"));
+  // The written gains' linear hard goals are reported, and a violation is said on stdout.
+  const nlohmann::json& stage = summary["results"]["tune"]["nonlinear_stage"];
+  ASSERT_EQ(stage.size(), 1u);
+  const bool met = stage[0]["linear_hard_goals_met"].get<bool>();
+  EXPECT_EQ(met, stage[0]["final"]["linear_hard"].get<double>() <= 1.0);
+  EXPECT_EQ(met, r.output.find("VIOLATE the linear hard goal") == std::string::npos) << r.output;
 }
 
 TEST(TuneCli, UnknownJointIsBadInput) {

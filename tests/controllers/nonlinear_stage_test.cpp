@@ -6,12 +6,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "controllers_fixture.hpp"
 #include "fullarm/controllers/closed_loop.hpp"
+#include "fullarm/controllers/joint_linearization.hpp"
 #include "fullarm/controllers/nonlinear_stage.hpp"
+#include "fullarm/controllers/tuner.hpp"
 #include "fullarm/controllers/validation.hpp"
 
 namespace fullarm::controllers {
@@ -149,6 +152,109 @@ TEST(NonlinearStage, RejectsAnOscillatingCandidateAndIsDeterministic) {
   const auto mc = runMonteCarlo({chosen, rejected}, check, 2);
   EXPECT_LT(mc[0].failures, mc[1].failures);
   EXPECT_GT(mc[1].failures, 0);
+}
+
+// The stress corners sit on the box's faces (the linear stage's corners) with a lightly damped
+// user (5 % of the B_h range) that is weak (5 % of the K_h range) or stiff (its maximum). Oracle: validate's own
+// runner. The HR gains shipped before this change (hand-sized J_m 0.2, B_m 12, K_m 20, lambda 300, B_o/eps 5/48) failed
+// validate's run 268 (soft oil x0.708, valve gain x1.168, 3 samples of delay, K_h 6, B_h 1.04) with a 14 Hz oscillation
+// that the stage's 150-run check batches never drew; the fast corner reproduces that failure mode deterministically,
+// and halving B_o/eps (the delay margin of the hydraulic mode) removes it there, as it does on run 268.
+TEST(NonlinearStage, TheFastStressCornerExposesTheDelayLimitedHydraulicOscillationOfHr) {
+  const ValidationConfig vc = defaultValidation();
+  const UncertaintyRanges& r = vc.ranges;
+  const auto corners = stressCorners(r, 0.05);
+  ASSERT_EQ(corners.size(), 3u);
+  const MonteCarloSample& fast = corners[0];
+  const MonteCarloSample& slow = corners[1];
+  EXPECT_EQ(fast.bulk_modulus_scale, r.bulk_modulus_scale.min);
+  EXPECT_EQ(fast.valve_gain_scale, r.valve_gain_scale.max);
+  EXPECT_EQ(fast.delay_samples, r.delay_max_samples);
+  EXPECT_EQ(slow.bulk_modulus_scale, r.bulk_modulus_scale.max);
+  EXPECT_EQ(slow.friction_scale, r.friction_scale.max);
+  EXPECT_EQ(slow.delay_samples, r.delay_min_samples);
+  const auto weak = [](const UniformRange& u) { return u.min + 0.05 * (u.max - u.min); };
+  EXPECT_DOUBLE_EQ(fast.user_stiffness_nm_per_rad, weak(r.user_stiffness_nm_per_rad));
+  EXPECT_DOUBLE_EQ(slow.user_stiffness_nm_per_rad, weak(r.user_stiffness_nm_per_rad));
+  EXPECT_EQ(corners[2].user_stiffness_nm_per_rad, r.user_stiffness_nm_per_rad.max);
+  EXPECT_EQ(corners[2].bulk_modulus_scale, r.bulk_modulus_scale.min);
+  for (const MonteCarloSample& c : corners) {
+    EXPECT_DOUBLE_EQ(c.user_damping_nms_per_rad, weak(r.user_damping_nms_per_rad));
+  }
+  GainsConfig g = test::referenceGains();
+  JointGains& hr = g.joints[static_cast<std::size_t>(findGainsJoint(g, "R_HR"))];
+  hr.impedance = {0.2, 12.0, 20.0};
+  hr.sliding_mode = {300.0, 5.0, 48.0};
+  const JointScenario sc = validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), g, "HR"), vc);
+  const ClosedLoopResult old_gains = simulateJoint(applySample(sc, fast));
+  EXPECT_TRUE(old_gains.oscillating) << old_gains.failure;
+  EXPECT_GT(old_gains.oscillation_frequency_hz, 10.0);
+  EXPECT_LT(old_gains.oscillation_frequency_hz, 20.0);
+  JointScenario halved = sc;
+  halved.gains.sliding_mode.boundary_layer_radps *= 2.0;
+  const ClosedLoopResult fixed = simulateJoint(applySample(halved, fast));
+  EXPECT_TRUE(fixed.acceptable()) << fixed.failure;
+}
+
+// The stage's score carries the linear stage's hard goals: the value is the tuner's own
+// evaluateGoals() on the same models (independent path), the cost rises by exactly the hard-goal
+// weight when they are violated, and an impossible goal (Ms <= 0.5) makes the stage say that the
+// written gains violate it.
+TEST(NonlinearStage, ScoresAndReportsTheLinearHardGoals) {
+  const ValidationConfig vc = defaultValidation();
+  const JointScenario sc = validationEb(handSized());
+  const auto& m = test::dtsModel();
+  const auto& cfg = test::dtsPlant();
+  JointPlantModel model;
+  model.joint = cfg.joints[static_cast<std::size_t>(plant::findPlantJoint(cfg, "EB"))];
+  const int idx = m.jointIndex(model.joint.name);
+  model.load = jointLoadFromArm(m, plant::UserArmParams{}, idx, m.defaultPosture());
+  model.load.user_inertia_kgm2 = vc.user.inertia_kgm2;
+  model.load.user_stiffness_nm_per_rad = vc.user.stiffness_nm_per_rad;
+  model.load.user_damping_nms_per_rad = vc.user.damping_nms_per_rad;
+  LoopSetup setup;
+  setup.grid_points = 60;
+  ModelVariation nominal;
+  nominal.user_stiffness_nm_per_rad = vc.user.stiffness_nm_per_rad;
+  nominal.user_damping_nms_per_rad = vc.user.damping_nms_per_rad;
+  LinearHardGoals loose;
+  loose.models = {prepareVariation(model, m.defaultPosture()[idx], setup, nominal)};
+  loose.goals.max_peak_sensitivity = 100.0;
+  loose.goals.passivity_tolerance_nms_per_rad = 1e6;
+  LinearHardGoals impossible = loose;
+  impossible.goals.max_peak_sensitivity = 0.5;
+
+  const std::vector<MonteCarloSample> one = stageSamples(vc.ranges, vc.seed, "R_EB", 0, 1);
+  const int max_delay = vc.ranges.delay_max_samples;
+  const NonlinearScore bare = scoreNonlinear(sc, sc.gains, one, vc.linear, max_delay);
+  const NonlinearScore met = scoreNonlinear(sc, sc.gains, one, vc.linear, max_delay, 1000, &loose);
+  const NonlinearScore violated = scoreNonlinear(sc, sc.gains, one, vc.linear, max_delay, 1000, &impossible);
+  const GoalValues direct = evaluateGoals(impossible.models, sc.gains, impossible.goals);
+  EXPECT_DOUBLE_EQ(violated.linear_hard, worstHardGoal(direct, impossible.goals).first);
+  EXPECT_GT(violated.linear_hard, 1.0);
+  EXPECT_EQ(violated.linear_hard_goal, "peak sensitivity Ms");
+  EXPECT_TRUE(met.linear_hard_met) << met.linear_hard_goal << " " << met.linear_hard;
+  EXPECT_FALSE(violated.linear_hard_met);
+  EXPECT_DOUBLE_EQ(met.cost, bare.cost);
+  // The cost from validate's runner directly: failures, then 0.25 x the passed run's margin term
+  // (speed deviation over the threshold, capped at 1) and 0.25 x the transparency term.
+  const ClosedLoopResult run = simulateJoint(applySample(sc, one[0]));
+  ASSERT_TRUE(run.acceptable()) << run.failure;
+  const double margin = std::min(
+      std::max(run.free_hold_speed_rms_radps, run.contact_hold_speed_rms_radps) / sc.oscillation_speed_radps, 1.0);
+  EXPECT_DOUBLE_EQ(bare.worst_passed_severity, margin);
+  EXPECT_NEAR(bare.cost, 0.25 * margin + 0.25 * (1.0 - 1.0 / (1.0 + run.free_rms_user_torque_nm)), 1e-12);
+  EXPECT_DOUBLE_EQ(violated.cost - bare.cost, 0.5);
+
+  NonlinearStageOptions o;
+  o.samples = 1;
+  o.check_samples = 1;
+  o.rounds = 1;
+  o.max_evaluations = 0;
+  o.stress_corners = false;
+  const NonlinearStageResult st = refineNonlinear(sc, sc.gains, sc.gains, vc.ranges, vc.linear, o, &impossible);
+  EXPECT_FALSE(st.linear_hard_goals_met);
+  EXPECT_NE(st.verdict.find("VIOLATE the linear hard goal peak sensitivity Ms"), std::string::npos) << st.verdict;
 }
 
 }  // namespace

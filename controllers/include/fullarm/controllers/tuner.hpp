@@ -22,6 +22,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fullarm/controllers/gains.hpp"
@@ -107,6 +108,10 @@ struct TuningResult {
 /// Evaluates the goals of `gains` over `models` (worst case over the set).
 [[nodiscard]] GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const JointGains& gains,
                                        const TuningGoals& goals);
+
+/// The worst normalised hard goal of `values` and its name ("peak sensitivity Ms", "spectral
+/// radius", "sector condition Re L > -1", "passivity Re Z >= 0"); met when the value is <= 1.
+[[nodiscard]] std::pair<double, std::string> worstHardGoal(const GoalValues& values, const TuningGoals& goals);
 
 /// Tunes one joint. `nominal` carries the joint and its load (with the user's arm), `q_rad`
 /// the operating posture of the joint, `initial` the starting gains (B_o, filters and the
