@@ -250,7 +250,12 @@ TEST(Cli, ValidateRejectsBadGains) {
   std::stringstream text;
   text << in.rdbuf();
   std::string yaml = text.str();
-  yaml.replace(yaml.find("inertia_kgm2: 0.2"), std::string("inertia_kgm2: 0.2").size(), "inertia_kgm2: -0.2");
+  // Negate the first joint's model inertia, whatever value the tuner wrote.
+  const std::string key = "inertia_kgm2: ";
+  const auto at = yaml.find(key);
+  ASSERT_NE(at, std::string::npos) << "config/dts_gains.yaml has no " << key;
+  const auto value_at = at + key.size();
+  yaml = yaml.substr(0, value_at) + "-" + yaml.substr(value_at);
   const auto gains = dir / "gains.yaml";
   std::ofstream(gains) << yaml;
   Result r = runFullarm("validate --gains " + gains.string() + " --samples 1 --out " + (dir / "out").string());
