@@ -59,6 +59,20 @@ struct WorldFixture {
       fk.X_WL[i] = Eigen::Translation3d(100.0 * static_cast<double>(i + 1), 0.0, 0.0) * Eigen::Isometry3d::Identity();
     }
   }
+  /// Fresh SNCH minima of kLink against object 0 at the link's current pose, tagged with both
+  /// indices (the tracked set local descent starts from).
+  std::vector<LocalMinimum> seedMinima() const {
+    const CollisionObject& obj = world.object(0);
+    std::vector<LocalMinimum> minima;
+    SnchQueryScratch scratch;
+    querySnchPair(world.linkTree(kLink), world.linkMesh(kLink), fk.X_WL[kLink], obj.tree, obj.mesh, obj.X_WO, kCutoff_m,
+                  scratch, minima);
+    for (auto& m : minima) {
+      m.link = kLink;
+      m.object = 0;
+    }
+    return minima;
+  }
 };
 
 TEST(LocalDescentTest, TrackedMinimaMatchFreshSearchAfterSmallMotion) {
@@ -78,15 +92,8 @@ TEST(LocalDescentTest, TrackedMinimaMatchFreshSearchAfterSmallMotion) {
     X_WL.translation() = obj.X_WO.translation() + std::uniform_real_distribution<double>(0.1, 0.35)(rng) *
                                                       Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
     s.fk.X_WL[kLink] = X_WL;
-    std::vector<LocalMinimum> minima;
-    SnchQueryScratch scratch;
-    querySnchPair(s.world.linkTree(kLink), s.world.linkMesh(kLink), X_WL, obj.tree, obj.mesh, obj.X_WO, kCutoff_m,
-                  scratch, minima);
+    std::vector<LocalMinimum> minima = s.seedMinima();
     if (minima.empty()) continue;
-    for (auto& m : minima) {
-      m.link = kLink;
-      m.object = 0;
-    }
     const std::vector<LocalMinimum> before = minima;
     // Small motion, then descent.
     s.fk.X_WL[kLink] = X_WL * smallMotion(rng);
@@ -94,6 +101,7 @@ TEST(LocalDescentTest, TrackedMinimaMatchFreshSearchAfterSmallMotion) {
     minima.resize(static_cast<std::size_t>(kept));
     // Fresh global search at the new pose with a wider cutoff (a minimum may have receded).
     std::vector<LocalMinimum> fresh;
+    SnchQueryScratch scratch;
     querySnchPair(s.world.linkTree(kLink), s.world.linkMesh(kLink), s.fk.X_WL[kLink], obj.tree, obj.mesh, obj.X_WO,
                   kCutoff_m + 0.02, scratch, fresh);
     const Eigen::Isometry3d X_OL = obj.X_WO.inverse() * s.fk.X_WL[kLink];
@@ -153,15 +161,8 @@ TEST(LocalDescentTest, RescreeningGivesTheSameMinimaAsEvaluatingEveryNeighbour) 
                                                         Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
     }
     s.fk.X_WL[kLink] = X_WL;
-    std::vector<LocalMinimum> minima;
-    SnchQueryScratch scratch;
-    querySnchPair(s.world.linkTree(kLink), s.world.linkMesh(kLink), X_WL, obj.tree, obj.mesh, obj.X_WO, kCutoff_m,
-                  scratch, minima);
+    std::vector<LocalMinimum> minima = s.seedMinima();
     if (minima.empty()) continue;
-    for (auto& m : minima) {
-      m.link = kLink;
-      m.object = 0;
-    }
     s.fk.X_WL[kLink] = X_WL * smallMotion(rng);
     std::vector<LocalMinimum> reference = minima;
     LocalDescentParams all;
