@@ -3,7 +3,9 @@
 // meshes and random poses.
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "fullarm/haptics/minima.hpp"
@@ -74,6 +76,43 @@ inline TriMesh randomSmallMesh(std::mt19937& rng) {
     default:
       return makeRectangularFrame(0.2, 0.16, 0.04, 0.03, 0.08);
   }
+}
+
+/// Vertices and triangles of an open sheet: two 0.1 x 0.1 m panels of n x n squares (two
+/// triangles each) meeting along the x axis (j = 0, duplicated: weld when building) at `fold`
+/// radians between the panels. Panel 1 is wound the other way when `face_outside`, so that both
+/// panels face the outside of the fold; otherwise both are wound alike.
+struct FoldGrid {
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<Eigen::Vector3i> triangles;
+};
+inline FoldGrid foldGrid(double fold, int n, bool face_outside) {
+  FoldGrid g;
+  for (int panel = 0; panel < 2; ++panel) {
+    for (int i = 0; i <= n; ++i) {
+      for (int j = 0; j <= n; ++j) {
+        const double x = 0.1 * i / n;
+        const double r = 0.1 * j / n;
+        g.vertices.emplace_back(x, panel == 0 ? r : r * std::cos(fold), panel == 0 ? 0.0 : r * std::sin(fold));
+      }
+    }
+  }
+  auto id = [n](int panel, int i, int j) { return panel * (n + 1) * (n + 1) + i * (n + 1) + j; };
+  for (int panel = 0; panel < 2; ++panel) {
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        Eigen::Vector3i a(id(panel, i, j), id(panel, i + 1, j), id(panel, i + 1, j + 1));
+        Eigen::Vector3i b(id(panel, i, j), id(panel, i + 1, j + 1), id(panel, i, j + 1));
+        if (face_outside && panel == 1) {
+          std::swap(a[1], a[2]);
+          std::swap(b[1], b[2]);
+        }
+        g.triangles.push_back(a);
+        g.triangles.push_back(b);
+      }
+    }
+  }
+  return g;
 }
 
 }  // namespace fullarm::haptics::test

@@ -28,6 +28,7 @@
 
 #include "fullarm/haptics/primitives.hpp"
 #include "fullarm/haptics/snch.hpp"
+#include "haptics_test_util.hpp"
 
 namespace fullarm::haptics {
 namespace {
@@ -38,26 +39,9 @@ using Eigen::Vector3d;
 // radians between the panels, every triangle also present with the opposite winding (as the
 // DRC CAD exports are). Interior fold vertices (0 < x < 0.1) are not on the rim.
 TriMesh doubleSidedFold(double fold, int n) {
-  std::vector<Vector3d> v;
-  for (int panel = 0; panel < 2; ++panel) {
-    for (int i = 0; i <= n; ++i) {
-      for (int j = 0; j <= n; ++j) {
-        const double x = 0.1 * i / n;
-        const double r = 0.1 * j / n;
-        v.emplace_back(x, panel == 0 ? r : r * std::cos(fold), panel == 0 ? 0.0 : r * std::sin(fold));
-      }
-    }
-  }
-  auto id = [n](int panel, int i, int j) { return panel * (n + 1) * (n + 1) + i * (n + 1) + j; };
-  std::vector<Eigen::Vector3i> t;
-  for (int panel = 0; panel < 2; ++panel) {
-    for (int i = 0; i < n; ++i) {
-      for (int j = 0; j < n; ++j) {
-        t.emplace_back(id(panel, i, j), id(panel, i + 1, j), id(panel, i + 1, j + 1));
-        t.emplace_back(id(panel, i, j), id(panel, i + 1, j + 1), id(panel, i, j + 1));
-      }
-    }
-  }
+  test::FoldGrid g = test::foldGrid(fold, n, /*face_outside=*/false);
+  std::vector<Vector3d>& v = g.vertices;
+  std::vector<Eigen::Vector3i>& t = g.triangles;
   const std::size_t one_side = t.size();
   for (std::size_t k = 0; k < one_side; ++k) t.emplace_back(t[k][0], t[k][2], t[k][1]);
   return TriMesh::build("double-sided fold", std::move(v), std::move(t), 1e-9);

@@ -28,36 +28,9 @@ enum class Variant { kClosed, kOpen, kDoubleSided, kOpenDoubleSided };
 // degrees), gridded so it has interior vertices.
 TriMesh foldedSheet(std::mt19937& rng) {
   const double fold = std::uniform_real_distribution<double>(0.26, 2.88)(rng);
-  const int n = 5;
-  std::vector<Eigen::Vector3d> v;
-  for (int panel = 0; panel < 2; ++panel) {
-    for (int i = 0; i <= n; ++i) {
-      for (int j = 0; j <= n; ++j) {
-        const double x = 0.1 * i / n;
-        const double r = 0.1 * j / n;
-        v.emplace_back(x, panel == 0 ? r : r * std::cos(fold), panel == 0 ? 0.0 : r * std::sin(fold));
-      }
-    }
-  }
-  auto id = [n](int panel, int i, int j) { return panel * (n + 1) * (n + 1) + i * (n + 1) + j; };
-  std::vector<Eigen::Vector3i> t;
-  for (int panel = 0; panel < 2; ++panel) {
-    for (int i = 0; i < n; ++i) {
-      for (int j = 0; j < n; ++j) {
-        // Panel 1 wound the other way, so both panels face the outside of the fold.
-        Eigen::Vector3i a(id(panel, i, j), id(panel, i + 1, j), id(panel, i + 1, j + 1));
-        Eigen::Vector3i b(id(panel, i, j), id(panel, i + 1, j + 1), id(panel, i, j + 1));
-        if (panel == 1) {
-          std::swap(a[1], a[2]);
-          std::swap(b[1], b[2]);
-        }
-        t.push_back(a);
-        t.push_back(b);
-      }
-    }
-  }
+  test::FoldGrid g = test::foldGrid(fold, 5, /*face_outside=*/true);
   // The fold line (j = 0) is shared: weld the duplicated vertices.
-  return TriMesh::build("folded sheet", std::move(v), std::move(t), 1e-9);
+  return TriMesh::build("folded sheet", std::move(g.vertices), std::move(g.triangles), 1e-9);
 }
 
 // `mesh` with a random 10-40 % of its triangles removed (kOpen), with every triangle repeated
