@@ -174,10 +174,19 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--scales") == 0 && i + 1 < argc) {
       Variant v;
       v.name = argv[++i];
-      if (std::sscanf(argv[i], "%lf,%lf,%lf,%lf,%lf,%lf", &v.rtol, &v.spool, &v.spool_rate, &v.pressure, &v.angle,
-                      &v.velocity) != 6) {
-        std::fprintf(stderr, "--scales: expected six factors rtol,spool,spool_rate,pressure,angle,velocity, got '%s'\n",
-                     argv[i]);
+      int consumed = 0;
+      const bool parsed = std::sscanf(argv[i], "%lf,%lf,%lf,%lf,%lf,%lf%n", &v.rtol, &v.spool, &v.spool_rate,
+                                      &v.pressure, &v.angle, &v.velocity, &consumed) == 6 &&
+                          argv[i][consumed] == '\0';
+      const bool positive = parsed && v.rtol > 0.0 && v.spool > 0.0 && v.spool_rate > 0.0 && v.pressure > 0.0 &&
+                            v.angle > 0.0 && v.velocity > 0.0 &&
+                            std::isfinite(v.rtol * v.spool * v.spool_rate * v.pressure * v.angle * v.velocity);
+      if (!positive) {
+        std::fprintf(
+            stderr,
+            "--scales: expected six finite positive factors rtol,spool,spool_rate,pressure,angle,velocity, got "
+            "'%s'\n",
+            argv[i]);
         return 2;
       }
       custom.push_back(v);
@@ -192,6 +201,34 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  std::vector<Variant> variants = {
+      {"shipped", 1, 1, 1, 1, 1, 1},
+      {"all x0.125", 0.125, 0.125, 0.125, 0.125, 0.125, 0.125},
+      {"all x0.25", 0.25, 0.25, 0.25, 0.25, 0.25, 0.25},
+      {"all x0.5", 0.5, 0.5, 0.5, 0.5, 0.5, 0.5},
+      {"all x2", 2, 2, 2, 2, 2, 2},
+      {"all x4", 4, 4, 4, 4, 4, 4},
+      {"all x8", 8, 8, 8, 8, 8, 8},
+      {"rtol x4", 4, 1, 1, 1, 1, 1},
+      {"atols x4", 1, 4, 4, 4, 4, 4},
+      {"angle x10 (1/4 count)", 1, 1, 1, 1, 10, 1},
+      {"velocity x10", 1, 1, 1, 1, 1, 10},
+      {"velocity x0.1", 1, 1, 1, 1, 1, 0.1},
+      {"pressure x4 (0.2 % supply)", 1, 1, 1, 4, 1, 1},
+      {"spool x10", 1, 10, 10, 1, 1, 1},
+      {"pressure x0.25", 1, 1, 1, 0.25, 1, 1},
+      {"rtol x0.5", 0.5, 1, 1, 1, 1, 1},
+  };
+  variants.insert(variants.end(), custom.begin(), custom.end());
+  for (const std::string& name : only) {
+    if (std::none_of(variants.begin(), variants.end(), [&](const Variant& v) { return v.name == name; })) {
+      std::fprintf(stderr, "--variant: no row named '%s'; the rows are:", name.c_str());
+      for (const Variant& v : variants) std::fprintf(stderr, " '%s'", v.name.c_str());
+      std::fprintf(stderr, "\n");
+      return 2;
+    }
+  }
+
   const std::vector<JointParams> arm_joints = config().joints;
   const std::vector<JointParams> eb = {config().joints[static_cast<std::size_t>(findPlantJoint(config(), "EB"))]};
 
@@ -209,25 +246,6 @@ int main(int argc, char** argv) {
     s.ref = runChirp(*s.joints, tight(), s.duration_s, s.from_limit_rad);
     std::fprintf(stderr, "reference %s: %.1f s CPU\n", s.name, s.ref.cpu_s);
   }
-
-  std::vector<Variant> variants = {
-      {"shipped", 1, 1, 1, 1, 1, 1},
-      {"all x0.125", 0.125, 0.125, 0.125, 0.125, 0.125, 0.125},
-      {"all x0.25", 0.25, 0.25, 0.25, 0.25, 0.25, 0.25},
-      {"all x0.5", 0.5, 0.5, 0.5, 0.5, 0.5, 0.5},
-      {"all x2", 2, 2, 2, 2, 2, 2},
-      {"all x4", 4, 4, 4, 4, 4, 4},
-      {"all x8", 8, 8, 8, 8, 8, 8},
-      {"rtol x4", 4, 1, 1, 1, 1, 1},
-      {"atols x4", 1, 4, 4, 4, 4, 4},
-      {"angle x10 (1/4 count)", 1, 1, 1, 1, 10, 1},
-      {"velocity x10", 1, 1, 1, 1, 1, 10},
-      {"pressure x4 (0.2 % supply)", 1, 1, 1, 4, 1, 1},
-      {"spool x10", 1, 10, 10, 1, 1, 1},
-      {"pressure x0.25", 1, 1, 1, 0.25, 1, 1},
-      {"rtol x0.5", 0.5, 1, 1, 1, 1, 1},
-  };
-  variants.insert(variants.end(), custom.begin(), custom.end());
 
   std::printf(
       "| tolerances | EB mid q / p_L | EB limit q / p_L | arm mid q / p_L (worst joint) | arm limit q / p_L "
