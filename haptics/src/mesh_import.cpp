@@ -1,5 +1,6 @@
 #include "fullarm/haptics/mesh_import.hpp"
 
+#include "fullarm/haptics/mesh_repair.hpp"
 #include "fullarm/haptics/mesh_subdivision.hpp"
 
 #include <assimp/config.h>
@@ -382,6 +383,7 @@ TriMesh importMesh(const std::filesystem::path& file, const MeshImportOptions& o
     throw MeshError(source, "the file holds no triangle (only points/lines, or no geometry)");
   }
   TriMesh mesh = TriMesh::build(source, std::move(raw.vertices), std::move(raw.triangles), options.weld_tolerance_m);
+  if (options.collapse_double_sided_solids) mesh = collapseDoubleSidedSolids(mesh);
   if (options.max_edge_m > 0.0) mesh = refineLongEdges(mesh, options.max_edge_m);
   return mesh;
 }

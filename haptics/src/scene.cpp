@@ -46,6 +46,7 @@ struct CachedMesh {
   Eigen::Matrix4d X_OF;
   double weld_tolerance_m = 0.0;
   double max_edge_m = 0.0;
+  bool collapse_double_sided = true;
   std::shared_ptr<const TriMesh> mesh;
 };
 
@@ -182,6 +183,11 @@ class SceneReader {
     if (options.weld_tolerance_m < 0.0) m.fail("weld_tolerance_m", "expected a number >= 0 m");
     options.max_edge_m = m.optionalNumber("max_edge_m", "metres").value_or(0.0);
     if (options.max_edge_m < 0.0) m.fail("max_edge_m", "expected a number > 0 m (or leave it out: no refinement)");
+    const std::string collapse = m.optionalString("collapse_double_sided").value_or("true");
+    if (collapse != "true" && collapse != "false") {
+      m.fail("collapse_double_sided", "expected true or false, got '" + collapse + "'");
+    }
+    options.collapse_double_sided_solids = collapse == "true";
     m.finish();
     const std::filesystem::path base = file_.empty() ? std::filesystem::current_path() : file_.parent_path();
     const std::filesystem::path path = (base / relative).lexically_normal();
@@ -189,14 +195,16 @@ class SceneReader {
     object.shape = "mesh " + relative.filename().string();
     for (const CachedMesh& cached : cache_) {
       if (cached.file == object.mesh_file && cached.scale == options.scale && cached.X_OF == options.X_OF.matrix() &&
-          cached.weld_tolerance_m == options.weld_tolerance_m && cached.max_edge_m == options.max_edge_m) {
+          cached.weld_tolerance_m == options.weld_tolerance_m && cached.max_edge_m == options.max_edge_m &&
+          cached.collapse_double_sided == options.collapse_double_sided_solids) {
         object.mesh = *cached.mesh;
         return;
       }
     }
     object.mesh = importMesh(object.mesh_file, options);
     cache_.push_back({object.mesh_file, options.scale, options.X_OF.matrix(), options.weld_tolerance_m,
-                      options.max_edge_m, std::make_shared<const TriMesh>(object.mesh)});
+                      options.max_edge_m, options.collapse_double_sided_solids,
+                      std::make_shared<const TriMesh>(object.mesh)});
   }
 
   std::filesystem::path file_;

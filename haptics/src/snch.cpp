@@ -487,30 +487,32 @@ bool conesAdmit(const SnchNode& a, const Vector3d& a_axis, const SnchNode& b, co
   return true;
 }
 
-// True when triangles A and B (same frame) are proven farther apart than `cutoff_m` by a
-// separating axis: the two face normals, then the six in-plane edge normals (a projection on
-// an axis never lengthens a distance). Axes are left unnormalised: the gap along a is compared
-// with cutoff_m |a|, squared.
-bool trianglesFartherThan(const Vector3d (&a)[3], const Vector3d& n_a, const Vector3d (&b)[3], const Vector3d& n_b,
-                          double cutoff_m) noexcept {
-  auto gapAlong = [&](const Vector3d& axis) {
+// Lower bound on the distance between triangles A and B (same frame) from separating axes: the
+// two face normals, then the six in-plane edge normals (a projection on an axis never lengthens
+// a distance, so the gap along any axis divided by its length bounds the distance). Returns 0
+// when no axis separates them. Axes are left unnormalised; the comparison is done squared.
+double triangleGapLowerBound(const Vector3d (&a)[3], const Vector3d& n_a, const Vector3d (&b)[3],
+                             const Vector3d& n_b) noexcept {
+  double best_sq = 0.0;
+  auto consider = [&](const Vector3d& axis) {
     const double a0 = a[0].dot(axis);
     const double a1 = a[1].dot(axis);
     const double a2 = a[2].dot(axis);
     const double b0 = b[0].dot(axis);
     const double b1 = b[1].dot(axis);
     const double b2 = b[2].dot(axis);
-    return std::max(std::min({b0, b1, b2}) - std::max({a0, a1, a2}), std::min({a0, a1, a2}) - std::max({b0, b1, b2}));
+    const double gap =
+        std::max(std::min({b0, b1, b2}) - std::max({a0, a1, a2}), std::min({a0, a1, a2}) - std::max({b0, b1, b2}));
+    const double len_sq = axis.squaredNorm();
+    if (gap > 0.0 && gap * gap > best_sq * len_sq) best_sq = gap * gap / len_sq;
   };
-  auto separates = [&](const Vector3d& axis) {
-    const double gap = gapAlong(axis);
-    return gap > 0.0 && gap * gap > cutoff_m * cutoff_m * axis.squaredNorm();
-  };
-  if (separates(n_a) || separates(n_b)) return true;
+  consider(n_a);
+  consider(n_b);
   for (int k = 0; k < 3; ++k) {
-    if (separates(n_a.cross(a[(k + 1) % 3] - a[k])) || separates(n_b.cross(b[(k + 1) % 3] - b[k]))) return true;
+    consider(n_a.cross(a[(k + 1) % 3] - a[k]));
+    consider(n_b.cross(b[(k + 1) % 3] - b[k]));
   }
-  return false;
+  return std::sqrt(best_sq);
 }
 
 // The support tests of conesAdmit on the two triangles themselves (vertices in the object
@@ -556,11 +558,14 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
   // The link's nodes in the object frame, once (the link tree is the small one).
   auto& centre_O = scratch.link_centre_O;
   auto& axis_O = scratch.link_axis_O;
+  auto& box_O = scratch.link_box_O;
   centre_O.resize(link_tree.nodes.size());
   axis_O.resize(link_tree.nodes.size());
+  box_O.resize(link_tree.nodes.size());
   for (std::size_t k = 0; k < link_tree.nodes.size(); ++k) {
     centre_O[k] = X_OL * link_tree.nodes[k].centre_m;
     axis_O[k] = R_OL * link_tree.nodes[k].cone_axis;
+    box_O[k] = abs_R_OL * link_tree.nodes[k].box_half_m;
   }
   // The link's vertices in the object frame, once, at the first leaf pair (every leaf pair
   // reads them; most link/object pairs are pruned before any leaf).
@@ -578,12 +583,19 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
     const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(i)];
     const SnchNode& b = obj_tree.nodes[static_cast<std::size_t>(j)];
     const Vector3d diff = b.centre_m - centre_O[static_cast<std::size_t>(i)];
-    const double dist = diff.norm();
-    // Distance lower bounds: the spheres, then the separating gaps of the two boxes along the
-    // three object axes and the three link axes (any unit direction bounds the distance).
+    // Distance lower bounds: the spheres (squared first, no root for the far pairs), then the
+    // separating gaps of the two boxes along the three object axes and the three link axes (any
+    // unit direction bounds the distance).
+    const double dist_sq = diff.squaredNorm();
+    const double reach = a.radius_m + b.radius_m + cutoff_m;
+    if (dist_sq > reach * reach) {
+      ++st.pruned_by_distance;
+      continue;
+    }
+    const double dist = std::sqrt(dist_sq);
     double gap = dist - a.radius_m - b.radius_m;
-    if (gap <= cutoff_m) {
-      const Vector3d gap_o = diff.cwiseAbs() - b.box_half_m - abs_R_OL * a.box_half_m;
+    {
+      const Vector3d gap_o = diff.cwiseAbs() - b.box_half_m - box_O[static_cast<std::size_t>(i)];
       const Vector3d gap_l = (R_OL.transpose() * diff).cwiseAbs() - a.box_half_m - abs_R_OL.transpose() * b.box_half_m;
       gap = std::max(gap, std::max(gap_o.maxCoeff(), gap_l.maxCoeff()));
     }
@@ -608,12 +620,20 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
       const auto& tb = obj_mesh.triangle(b.triangle);
       const Vector3d va[3] = {link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2])};
       const Vector3d vb[3] = {obj_mesh.vertex(tb[0]), obj_mesh.vertex(tb[1]), obj_mesh.vertex(tb[2])};
-      if (trianglesFartherThan(va, R_OL * link_mesh.faceNormal(a.triangle), vb, obj_mesh.faceNormal(b.triangle),
-                               cutoff_m)) {
+      const double tri_gap =
+          triangleGapLowerBound(va, R_OL * link_mesh.faceNormal(a.triangle), vb, obj_mesh.faceNormal(b.triangle));
+      if (tri_gap > cutoff_m) {
         ++st.pruned_by_distance;
         continue;
       }
-      if (gap > kConeTestMinGap_m && !leafConesAdmit(a, axis_O[static_cast<std::size_t>(i)], b, va, vb, gap)) {
+      // The triangles' own gap often proves a separation that the boxes could not (a long link
+      // strip's box overlaps the object leaves beside it): the cone tests then apply to the leaf
+      // pair, with the larger of the two bounds.
+      const double leaf_gap = std::max(gap, tri_gap);
+      if (leaf_gap > kConeTestMinGap_m &&
+          ((gap <= kConeTestMinGap_m &&
+            !conesAdmit(a, axis_O[static_cast<std::size_t>(i)], b, R_OL, diff, dist, leaf_gap)) ||
+           !leafConesAdmit(a, axis_O[static_cast<std::size_t>(i)], b, va, vb, leaf_gap))) {
         ++st.pruned_by_cone;
         continue;
       }

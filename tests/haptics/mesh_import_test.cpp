@@ -402,7 +402,7 @@ TEST(MeshImportDrcTest, ValveWallMatchesItsSdfCollisionBox) {
   EXPECT_NEAR(box.max.y(), 0.00952, kMeshVsSdfTolerance);
   EXPECT_NEAR(box.min.z(), 0.0, kMeshVsSdfTolerance);
   EXPECT_NEAR(box.max.z(), 2.4384, kMeshVsSdfTolerance);
-  EXPECT_GT(wall.numTriangles(), 3000);
+  EXPECT_GT(wall.numTriangles(), 1500);  // 3,280 in the file, both windings; the outward 1,640 kept
 }
 
 TEST(MeshImportDrcTest, WheelAndTrussHaveTheirModelSizes) {
@@ -430,7 +430,13 @@ TEST(MeshImportDrcTest, EveryDaeOfTheSharedDrcFolderLoads) {
     SCOPED_TRACE(entry.path().string());
     ++files;
     const TriMesh mesh = importMesh(entry.path());
-    EXPECT_GT(mesh.numTriangles(), 100);
+    // Some files are double-sided solids: the default import keeps their outward half.
+    MeshImportOptions as_is;
+    as_is.collapse_double_sided_solids = false;
+    const int file_triangles = importMesh(entry.path(), as_is).numTriangles();
+    EXPECT_GT(file_triangles, 100);
+    EXPECT_GE(2 * mesh.numTriangles(), file_triangles);
+    EXPECT_LE(mesh.numTriangles(), file_triangles);
     const BoundingBox box = boundingBox(mesh);
     // Every DRC model is between 1 cm and 3 m across: a unit error (inch vs metre) would miss.
     EXPECT_GT(box.size().maxCoeff(), 0.01);

@@ -86,7 +86,7 @@ TEST(SceneTest, ValveWallHasTheObjectsItDescribes) {
   }
   const TriMesh box = makeBox(Eigen::Vector3d(0.30, 0.00952, 1.12), 0.05);
   EXPECT_EQ(scene.objects[2].mesh.numTriangles(), box.numTriangles());
-  EXPECT_GT(scene.numTriangles(), 25000);
+  EXPECT_GT(scene.numTriangles(), 16000);  // 27,027 as written; the walls' inward copies removed
 
   // Poses as written: translation, and rpy (90 deg roll) of the opening frame.
   EXPECT_TRUE(matricesNear(scene.objects[1].X_SO.translation(), Eigen::Vector3d(0.40, 0.30, 0.0), kTight));
@@ -324,6 +324,51 @@ TEST(SceneTest, RelativeMeshPathsResolveAgainstTheSceneFolderAndShareOneImport) 
   // Same file with refinement: a separate import, every edge <= 0.3 m, same area.
   EXPECT_GT(scene.objects[1].mesh.numTriangles(), 1);
   EXPECT_NEAR(scene.objects[1].mesh.area(), 0.5, kTight);
+  fs::remove_all(dir);
+}
+
+// A tetrahedron written twice, once per winding (the double-sided export): by default the scene
+// keeps its outward copy (4 triangles, positive enclosed volume); collapse_double_sided: false
+// keeps the file's 8 (a separate import of the same file); any other value is an error.
+TEST(SceneTest, DoubleSidedSolidsAreCollapsedUnlessTheSceneSaysOtherwise) {
+  const fs::path dir = fullarm::test::scratchDir("fullarm_scene_test_double_sided");
+  {
+    const Eigen::Vector3d v[4] = {{0, 0, 0}, {100, 0, 0}, {0, 100, 0}, {0, 0, 100}};
+    const int outward[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    std::ofstream stl(dir / "tet.stl");
+    stl << "solid t\n";
+    for (const bool flip : {true, false}) {
+      for (const auto& f : outward) {
+        stl << "facet normal 0 0 0\nouter loop\n";
+        for (int k : {0, flip ? 2 : 1, flip ? 1 : 2}) stl << "vertex " << v[f[k]].transpose() << "\n";
+        stl << "endloop\nendfacet\n";
+      }
+    }
+    stl << "endsolid t\n";
+  }
+  std::string text = edited("shape: {type: box, size_m: [0.2, 0.1, 0.3], max_edge_m: 0.1}",
+                            "shape: {type: mesh, file: tet.stl, scale: 0.001}");
+  const std::string cylinder = "shape: {type: cylinder, radius_m: 0.05, length_m: 1.0, segments: 12, max_edge_m: 0.2}";
+  text.replace(text.find(cylinder), cylinder.size(),
+               "shape: {type: mesh, file: tet.stl, scale: 0.001, collapse_double_sided: false}");
+  const Scene scene = parseScene(text, dir / "scene.yaml");
+  const TriMesh& once = scene.objects[0].mesh;
+  ASSERT_EQ(once.numTriangles(), 4);
+  double volume = 0.0;
+  for (int t = 0; t < 4; ++t) {
+    const auto& tri = once.triangle(t);
+    volume += once.vertex(tri[0]).dot(once.vertex(tri[1]).cross(once.vertex(tri[2]))) / 6.0;
+  }
+  EXPECT_NEAR(volume, 0.1 * 0.1 * 0.1 / 6.0, kTight);  // outward: the tetrahedron's volume, positive
+  EXPECT_EQ(scene.objects[1].mesh.numTriangles(), 8);
+  text.replace(text.find("collapse_double_sided: false"), 28, "collapse_double_sided: maybe");
+  try {
+    (void)parseScene(text, dir / "scene.yaml");
+    ADD_FAILURE() << "no error for collapse_double_sided: maybe";
+  } catch (const arm::ConfigError& e) {
+    EXPECT_EQ(e.keyPath(), "objects[1].shape.collapse_double_sided");
+    EXPECT_NE(std::string(e.what()).find("expected true or false"), std::string::npos) << e.what();
+  }
   fs::remove_all(dir);
 }
 

@@ -29,6 +29,10 @@ struct MeshImportOptions {
   Eigen::Isometry3d X_OF = Eigen::Isometry3d::Identity();
   /// Vertices closer than this are merged (TriMesh::build); 0 disables welding [m].
   double weld_tolerance_m = kDefaultImportWeldToleranceM;
+  /// Keep only the outward copy of every double-sided closed solid (collapseDoubleSidedSolids,
+  /// after welding, before refinement): the surface is unchanged, and normal cones can prune
+  /// near it again. False keeps the file's triangles as they are.
+  bool collapse_double_sided_solids = true;
   /// When > 0, edges longer than this are split at their midpoints after welding
   /// (refineLongEdges): CAD exports often span flat faces with long sliver triangles, whose
   /// bounding spheres are as large as the face and defeat hierarchy culling [m].
@@ -48,7 +52,8 @@ struct MeshImportOptions {
 /// are taken as they are (no unit, no up axis). Every node of the file's scene graph is
 /// flattened with its transform (instanced meshes appear once per instance); polygons are
 /// triangulated; point and line primitives are ignored. Vertex welding, degenerate-triangle
-/// repair and validation are those of TriMesh::build (source = the file path).
+/// repair and validation are those of TriMesh::build (source = the file path); then, unless
+/// disabled, double-sided closed solids keep only their outward copy (mesh_repair.hpp).
 ///
 /// Isolation: assimp 5.2 hangs or crashes on some truncated or mutated files (found by
 /// tests/haptics/mesh_import_test.cpp: PLY headers, COLLADA arrays without a count). The file

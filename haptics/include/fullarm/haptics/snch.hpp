@@ -86,6 +86,8 @@ struct SnchQueryScratch {
   /// Per link node, its centre and cone axis in the object frame (filled once per query).
   std::vector<Eigen::Vector3d> link_centre_O;
   std::vector<Eigen::Vector3d> link_axis_O;
+  /// Per link node, the half extents of the object-frame box around its (link-frame) box.
+  std::vector<Eigen::Vector3d> link_box_O;
   /// The link mesh's vertices in the object frame (filled once per query).
   std::vector<Eigen::Vector3d> link_vertex_O;
 };
