@@ -149,6 +149,8 @@ void BM_Haptics_LocalTick64(benchmark::State& state) {
   state.counters["active_springs"] = data.active_springs;
   state.counters["pairs_evaluated"] = stats.evaluated;
   state.counters["rescreened"] = stats.rescreened;
+  state.counters["cone_rejected"] = stats.cone_rejected;
+  state.counters["screened"] = stats.screened;
   reportPercentiles(state, us);
 }
 BENCHMARK(BM_Haptics_LocalTick64)->Arg(57)->Arg(200);

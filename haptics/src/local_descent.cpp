@@ -132,6 +132,7 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
   for (std::size_t i = 0; i < minima.size(); ++i) {
     LocalMinimum m = minima[i];
     const TriMesh& lmesh = world.linkMesh(m.link);
+    const NeighbourCones& lcones = world.linkCones(m.link);
     const CollisionObject& obj = world.object(m.object);
     const TriMesh& omesh = obj.mesh;
     // Minima come grouped by link/object pair: the relative pose is computed once per pair.
@@ -181,11 +182,17 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       TriangleTriangleResult best = r;
       int best_t = -1;
       bool best_link_side = false;
-      // A face feature has no neighbours to screen.
-      if (cur_l.kind != FeatureKind::kFace) {
+      // A face feature has no neighbours to screen; a direction inside the feature's
+      // rejection cone rejects them all at once (exact, see neighbour_cones.hpp).
+      const bool link_cone = params.cone_screening && conesRejectAllNeighbours(lcones, cur_l, u_L);
+      const bool object_cone = params.cone_screening && conesRejectAllNeighbours(obj.cones, cur_o, -u_O);
+      st.cone_rejected += static_cast<int>(link_cone) + static_cast<int>(object_cone);
+      if (cur_l.kind != FeatureKind::kFace && !link_cone) {
         const NeighbourScreen screen(lmesh, cur_l, u_L);
         for (int t : lmesh.featureTriangles(cur_l)) {
-          if (t == tl || !screen.mayBeCloser(t)) continue;
+          if (t == tl) continue;
+          ++st.screened;
+          if (!screen.mayBeCloser(t)) continue;
           // Warm-started: B and its closest feature are unchanged, t's is unknown (face).
           ++st.evaluated;
           const TriangleTriangleResult c =
@@ -197,10 +204,12 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
           }
         }
       }
-      if (cur_o.kind != FeatureKind::kFace) {
+      if (cur_o.kind != FeatureKind::kFace && !object_cone) {
         const NeighbourScreen screen(omesh, cur_o, -u_O);
         for (int t : omesh.featureTriangles(cur_o)) {
-          if (t == to || !screen.mayBeCloser(t)) continue;
+          if (t == to) continue;
+          ++st.screened;
+          if (!screen.mayBeCloser(t)) continue;
           // Re-screening: once a neighbour t1 of this step has lowered the distance with the
           // link triangle A unchanged, its pair (p', q') is optimal over A x t1, so p' is A's
           // closest point to q'. If q' lies on a feature that t shares with t1 and the first-
