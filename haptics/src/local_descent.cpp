@@ -129,8 +129,13 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
   bool full_scan = false;    // the current pair had an earlier run: compare every survivor
   int cached_link_tri = -1;  // link triangle held by cached_link (prepared at the current pose)
   PreparedTriangle cached_link{};
+  // Prepared triangles of the neighbours evaluated in a step: the best one's slot is kept, so
+  // the step moves onto an already prepared triangle.
+  std::array<PreparedTriangle, 2> candidates;
+  PreparedTriangle moved_link;  // the link triangle after a link-side step
   for (std::size_t i = 0; i < minima.size(); ++i) {
-    LocalMinimum m = minima[i];
+    // Updated in place; a survivor is moved down to minima[kept] at the end (kept <= i).
+    LocalMinimum& m = minima[i];
     const TriMesh& lmesh = world.linkMesh(m.link);
     const NeighbourCones& lcones = world.linkCones(m.link);
     const CollisionObject& obj = world.object(m.object);
@@ -163,9 +168,9 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       cached_link = linkTriangle(lmesh, tl, X_OL);
       cached_link_tri = tl;
     }
-    PreparedTriangle A = cached_link;
+    const PreparedTriangle* A = &cached_link;
     PreparedTriangle B = objectTriangle(omesh, to);
-    TriangleTriangleResult r = closestPointsTriangleTriangleWarm(A, B, localGuess(lmesh, tl, m.feature_link),
+    TriangleTriangleResult r = closestPointsTriangleTriangleWarm(*A, B, localGuess(lmesh, tl, m.feature_link),
                                                                  localGuess(omesh, to, m.feature_object));
     Feature cur_l = globalFeature(lmesh, tl, r.feature_a);
     Feature cur_o = globalFeature(omesh, to, r.feature_b);
@@ -182,6 +187,8 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       TriangleTriangleResult best = r;
       int best_t = -1;
       bool best_link_side = false;
+      int best_slot = 0;
+      int free_slot = 0;
       // A face feature has no neighbours to screen; a direction inside the feature's
       // rejection cone rejects them all at once (exact, see neighbour_cones.hpp).
       const bool link_cone = params.cone_screening && conesRejectAllNeighbours(lcones, cur_l, u_L);
@@ -195,12 +202,15 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
           if (!screen.mayBeCloser(t)) continue;
           // Warm-started: B and its closest feature are unchanged, t's is unknown (face).
           ++st.evaluated;
-          const TriangleTriangleResult c =
-              closestPointsTriangleTriangleWarm(linkTriangle(lmesh, t, X_OL), B, LocalFeature{}, r.feature_b);
+          PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
+          cand = linkTriangle(lmesh, t, X_OL);
+          const TriangleTriangleResult c = closestPointsTriangleTriangleWarm(cand, B, LocalFeature{}, r.feature_b);
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
             best = c;
             best_t = t;
             best_link_side = true;
+            best_slot = free_slot;
+            free_slot ^= 1;
           }
         }
       }
@@ -225,22 +235,26 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
             }
           }
           ++st.evaluated;
-          const TriangleTriangleResult c =
-              closestPointsTriangleTriangleWarm(A, objectTriangle(omesh, t), r.feature_a, LocalFeature{});
+          PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
+          cand = objectTriangle(omesh, t);
+          const TriangleTriangleResult c = closestPointsTriangleTriangleWarm(*A, cand, r.feature_a, LocalFeature{});
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
             best = c;
             best_t = t;
             best_link_side = false;
+            best_slot = free_slot;
+            free_slot ^= 1;
           }
         }
       }
       if (best_t < 0) break;
       if (best_link_side) {
         tl = best_t;
-        A = linkTriangle(lmesh, tl, X_OL);
+        moved_link = candidates[static_cast<std::size_t>(best_slot)];
+        A = &moved_link;
       } else {
         to = best_t;
-        B = objectTriangle(omesh, to);
+        B = candidates[static_cast<std::size_t>(best_slot)];
       }
       r = best;
       cur_l = globalFeature(lmesh, tl, r.feature_a);
@@ -278,7 +292,8 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       ++st.merged;
       continue;
     }
-    minima[static_cast<std::size_t>(kept++)] = m;
+    if (static_cast<std::size_t>(kept) != i) minima[static_cast<std::size_t>(kept)] = m;
+    ++kept;
   }
   if (stats != nullptr) *stats = st;
   return kept;
