@@ -284,9 +284,12 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     // Merge with an earlier survivor that reached the same feature pair. Only survivors of
     // the same link/object pair can match: those of the current run of that pair, unless the
     // pair already had an earlier run (input not grouped) or the run table overflowed.
+    // The object feature's index differs for almost every other survivor: compared first.
     bool duplicate = false;
+    const int object_feature = m.feature_object.index;
     for (int k = full_scan ? 0 : run_begin; k < kept && !duplicate; ++k) {
-      duplicate = sameFeaturePair(minima[static_cast<std::size_t>(k)], m);
+      const LocalMinimum& other = minima[static_cast<std::size_t>(k)];
+      duplicate = other.feature_object.index == object_feature && sameFeaturePair(other, m);
     }
     if (duplicate) {
       ++st.merged;
