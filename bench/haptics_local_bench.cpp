@@ -123,7 +123,7 @@ void reportPercentiles(benchmark::State& state, std::vector<double>& us) {
   state.counters["p99_us"] = us[std::min(us.size() - 1, us.size() * 99 / 100)];
 }
 
-void BM_Haptics_LocalTick64(benchmark::State& state) {
+void localTick64(benchmark::State& state, const LocalDescentParams& descent) {
   Scene& s = scene();
   arm::ArmData fk(s.model);
   ContactData data(s.model, static_cast<int>(kMinima));
@@ -137,7 +137,7 @@ void BM_Haptics_LocalTick64(benchmark::State& state) {
     std::copy(s.baseline.begin(), s.baseline.end(), minima.begin());
     const auto t0 = std::chrono::steady_clock::now();
     arm::computeForwardKinematics(s.model, fk, q1);
-    kept = updateMinimaLocalDescent(s.world, fk, minima, s.params.descent, &stats);
+    kept = updateMinimaLocalDescent(s.world, fk, minima, descent, &stats);
     const std::span<const LocalMinimum> live(minima.data(), static_cast<std::size_t>(kept));
     computeContactForces(s.params, s.model, fk, live, 1e-3, data);
     computeContactTorques(s.model, fk, live, data);
@@ -149,9 +149,24 @@ void BM_Haptics_LocalTick64(benchmark::State& state) {
   state.counters["active_springs"] = data.active_springs;
   state.counters["pairs_evaluated"] = stats.evaluated;
   state.counters["rescreened"] = stats.rescreened;
+  state.counters["cone_rejected"] = stats.cone_rejected;
+  state.counters["screened"] = stats.screened;
   reportPercentiles(state, us);
 }
+
+void BM_Haptics_LocalTick64(benchmark::State& state) {
+  localTick64(state, scene().params.descent);
+}
 BENCHMARK(BM_Haptics_LocalTick64)->Arg(57)->Arg(200);
+
+// Peer: the same tick with the neighbour-rejection cones off (every neighbour of a closest
+// vertex or edge screened one by one): the path before the cones, same minima.
+void BM_Peer_LocalTick64NoCones(benchmark::State& state) {
+  LocalDescentParams descent = scene().params.descent;
+  descent.cone_screening = false;
+  localTick64(state, descent);
+}
+BENCHMARK(BM_Peer_LocalTick64NoCones)->Arg(57)->Arg(200);
 
 // Machine-noise reference for the tick's tail: every tick iteration above does identical work
 // (same baseline, same q1, same memory), so its spread is the machine's, not the algorithm's.

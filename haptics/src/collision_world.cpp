@@ -13,6 +13,7 @@ CollisionWorld::CollisionWorld(const arm::ArmModel& model, const Options& option
     auto lm = std::make_shared<LinkMesh>();
     lm->mesh = makeLinkCapsuleMesh(model_, l, options.capsule_segments, options.capsule_rings);
     lm->tree = buildSnchTree(lm->mesh);
+    lm->cones = computeNeighbourCones(lm->mesh);
     links_[static_cast<std::size_t>(l)] = std::move(lm);
   }
 }
@@ -31,6 +32,7 @@ void CollisionWorld::setLinkMesh(int link, const TriMesh& mesh, const Eigen::Iso
   auto lm = std::make_shared<LinkMesh>();
   lm->mesh = TriMesh::build(mesh.source(), std::move(v), std::move(t));
   lm->tree = buildSnchTree(lm->mesh);
+  lm->cones = computeNeighbourCones(lm->mesh);
   links_[static_cast<std::size_t>(link)] = std::move(lm);
 }
 
@@ -38,6 +40,7 @@ int CollisionWorld::addObject(std::string name, TriMesh mesh, const Eigen::Isome
   CollisionObject o;
   o.name = std::move(name);
   o.tree = buildSnchTree(mesh);
+  o.cones = computeNeighbourCones(mesh);
   o.mesh = std::move(mesh);
   o.X_WO = X_WO;
   objects_.push_back(std::move(o));

@@ -129,9 +129,15 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
   bool full_scan = false;    // the current pair had an earlier run: compare every survivor
   int cached_link_tri = -1;  // link triangle held by cached_link (prepared at the current pose)
   PreparedTriangle cached_link{};
+  // Prepared triangles of the neighbours evaluated in a step: the best one's slot is kept, so
+  // the step moves onto an already prepared triangle.
+  std::array<PreparedTriangle, 2> candidates;
+  PreparedTriangle moved_link;  // the link triangle after a link-side step
   for (std::size_t i = 0; i < minima.size(); ++i) {
-    LocalMinimum m = minima[i];
+    // Updated in place; a survivor is moved down to minima[kept] at the end (kept <= i).
+    LocalMinimum& m = minima[i];
     const TriMesh& lmesh = world.linkMesh(m.link);
+    const NeighbourCones& lcones = world.linkCones(m.link);
     const CollisionObject& obj = world.object(m.object);
     const TriMesh& omesh = obj.mesh;
     // Minima come grouped by link/object pair: the relative pose is computed once per pair.
@@ -162,9 +168,9 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       cached_link = linkTriangle(lmesh, tl, X_OL);
       cached_link_tri = tl;
     }
-    PreparedTriangle A = cached_link;
+    const PreparedTriangle* A = &cached_link;
     PreparedTriangle B = objectTriangle(omesh, to);
-    TriangleTriangleResult r = closestPointsTriangleTriangleWarm(A, B, localGuess(lmesh, tl, m.feature_link),
+    TriangleTriangleResult r = closestPointsTriangleTriangleWarm(*A, B, localGuess(lmesh, tl, m.feature_link),
                                                                  localGuess(omesh, to, m.feature_object));
     Feature cur_l = globalFeature(lmesh, tl, r.feature_a);
     Feature cur_o = globalFeature(omesh, to, r.feature_b);
@@ -181,26 +187,39 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       TriangleTriangleResult best = r;
       int best_t = -1;
       bool best_link_side = false;
-      // A face feature has no neighbours to screen.
-      if (cur_l.kind != FeatureKind::kFace) {
+      int best_slot = 0;
+      int free_slot = 0;
+      // A face feature has no neighbours to screen; a direction inside the feature's
+      // rejection cone rejects them all at once (exact, see neighbour_cones.hpp).
+      const bool link_cone = params.cone_screening && conesRejectAllNeighbours(lcones, cur_l, u_L);
+      const bool object_cone = params.cone_screening && conesRejectAllNeighbours(obj.cones, cur_o, -u_O);
+      st.cone_rejected += static_cast<int>(link_cone) + static_cast<int>(object_cone);
+      if (cur_l.kind != FeatureKind::kFace && !link_cone) {
         const NeighbourScreen screen(lmesh, cur_l, u_L);
         for (int t : lmesh.featureTriangles(cur_l)) {
-          if (t == tl || !screen.mayBeCloser(t)) continue;
+          if (t == tl) continue;
+          ++st.screened;
+          if (!screen.mayBeCloser(t)) continue;
           // Warm-started: B and its closest feature are unchanged, t's is unknown (face).
           ++st.evaluated;
-          const TriangleTriangleResult c =
-              closestPointsTriangleTriangleWarm(linkTriangle(lmesh, t, X_OL), B, LocalFeature{}, r.feature_b);
+          PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
+          cand = linkTriangle(lmesh, t, X_OL);
+          const TriangleTriangleResult c = closestPointsTriangleTriangleWarm(cand, B, LocalFeature{}, r.feature_b);
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
             best = c;
             best_t = t;
             best_link_side = true;
+            best_slot = free_slot;
+            free_slot ^= 1;
           }
         }
       }
-      if (cur_o.kind != FeatureKind::kFace) {
+      if (cur_o.kind != FeatureKind::kFace && !object_cone) {
         const NeighbourScreen screen(omesh, cur_o, -u_O);
         for (int t : omesh.featureTriangles(cur_o)) {
-          if (t == to || !screen.mayBeCloser(t)) continue;
+          if (t == to) continue;
+          ++st.screened;
+          if (!screen.mayBeCloser(t)) continue;
           // Re-screening: once a neighbour t1 of this step has lowered the distance with the
           // link triangle A unchanged, its pair (p', q') is optimal over A x t1, so p' is A's
           // closest point to q'. If q' lies on a feature that t shares with t1 and the first-
@@ -216,22 +235,26 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
             }
           }
           ++st.evaluated;
-          const TriangleTriangleResult c =
-              closestPointsTriangleTriangleWarm(A, objectTriangle(omesh, t), r.feature_a, LocalFeature{});
+          PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
+          cand = objectTriangle(omesh, t);
+          const TriangleTriangleResult c = closestPointsTriangleTriangleWarm(*A, cand, r.feature_a, LocalFeature{});
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
             best = c;
             best_t = t;
             best_link_side = false;
+            best_slot = free_slot;
+            free_slot ^= 1;
           }
         }
       }
       if (best_t < 0) break;
       if (best_link_side) {
         tl = best_t;
-        A = linkTriangle(lmesh, tl, X_OL);
+        moved_link = candidates[static_cast<std::size_t>(best_slot)];
+        A = &moved_link;
       } else {
         to = best_t;
-        B = objectTriangle(omesh, to);
+        B = candidates[static_cast<std::size_t>(best_slot)];
       }
       r = best;
       cur_l = globalFeature(lmesh, tl, r.feature_a);
@@ -261,15 +284,19 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     // Merge with an earlier survivor that reached the same feature pair. Only survivors of
     // the same link/object pair can match: those of the current run of that pair, unless the
     // pair already had an earlier run (input not grouped) or the run table overflowed.
+    // The object feature's index differs for almost every other survivor: compared first.
     bool duplicate = false;
+    const int object_feature = m.feature_object.index;
     for (int k = full_scan ? 0 : run_begin; k < kept && !duplicate; ++k) {
-      duplicate = sameFeaturePair(minima[static_cast<std::size_t>(k)], m);
+      const LocalMinimum& other = minima[static_cast<std::size_t>(k)];
+      duplicate = other.feature_object.index == object_feature && sameFeaturePair(other, m);
     }
     if (duplicate) {
       ++st.merged;
       continue;
     }
-    minima[static_cast<std::size_t>(kept++)] = m;
+    if (static_cast<std::size_t>(kept) != i) minima[static_cast<std::size_t>(kept)] = m;
+    ++kept;
   }
   if (stats != nullptr) *stats = st;
   return kept;

@@ -215,6 +215,74 @@ TEST(LocalDescentTest, RescreeningGivesTheSameMinimaAsEvaluatingEveryNeighbour) 
   RecordProperty("evaluated_shortcut", static_cast<int>(evaluated_shortcut));
 }
 
+// The cone shortcut (LocalDescentParams::cone_screening) against the reference path that
+// screens every neighbour triangle: a neighbourhood rejected by a cone is one whose every
+// triangle the per-triangle screening rejects, so both paths evaluate the same neighbour pairs
+// in the same order and must end on identical minima (bit for bit), on random meshes, on the
+// dense box with random relief, and on link capsules.
+TEST(LocalDescentTest, ConeScreeningGivesTheSameMinimaAsScreeningEveryNeighbour) {
+  const arm::ArmModel& model = arm::test::defaultModel();
+  std::mt19937 rng(91);
+  int compared = 0;
+  long cone_rejected = 0;
+  long screened_reference = 0;
+  long screened_cones = 0;
+  for (int trial = 0; trial < 150; ++trial) {
+    WorldFixture s(model);
+    s.world.setLinkMesh(kLink,
+                        trial % 3 == 0 ? makeCapsule({0, 0, 0}, {0, 0, 0.2}, 0.04, 16, 4) : randomSmallMesh(rng));
+    const bool rough = trial % 2 == 0;
+    s.world.addObject("obj", rough ? roughBox(rng) : randomSmallMesh(rng), randomPose(rng, 0.3));
+    const CollisionObject& obj = s.world.object(0);
+    Eigen::Isometry3d X_WL = randomPose(rng, 0.0);
+    std::normal_distribution<double> n(0.0, 1.0);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    if (rough) {
+      X_WL.translation() = obj.X_WO * Eigen::Vector3d(0.04 * u(rng), 0.04 * u(rng), 0.05 + 0.01 * u(rng));
+    } else {
+      X_WL.translation() = obj.X_WO.translation() + std::uniform_real_distribution<double>(0.1, 0.35)(rng) *
+                                                        Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+    }
+    s.fk.X_WL[kLink] = X_WL;
+    std::vector<LocalMinimum> minima = s.seedMinima();
+    if (minima.empty()) continue;
+    s.fk.X_WL[kLink] = X_WL * smallMotion(rng);
+    std::vector<LocalMinimum> reference = minima;
+    LocalDescentParams every;
+    every.cone_screening = false;
+    LocalDescentStats st_ref;
+    const int kept_ref = updateMinimaLocalDescent(s.world, s.fk, reference, every, &st_ref);
+    LocalDescentStats st;
+    const int kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{}, &st);
+    ASSERT_EQ(kept, kept_ref) << "trial " << trial;
+    EXPECT_EQ(st.evaluated, st_ref.evaluated) << "trial " << trial;
+    EXPECT_EQ(st.rescreened, st_ref.rescreened) << "trial " << trial;
+    EXPECT_EQ(st.steps, st_ref.steps) << "trial " << trial;
+    EXPECT_EQ(st_ref.cone_rejected, 0);
+    for (int i = 0; i < kept; ++i) {
+      const LocalMinimum& a = minima[static_cast<std::size_t>(i)];
+      const LocalMinimum& b = reference[static_cast<std::size_t>(i)];
+      ++compared;
+      EXPECT_TRUE(sameFeaturePair(a, b) && a.tri_link == b.tri_link && a.tri_object == b.tri_object)
+          << "trial " << trial << ", minimum " << i;
+      EXPECT_EQ(a.distance_m, b.distance_m) << "trial " << trial << ", minimum " << i;
+      EXPECT_EQ(a.p_O, b.p_O);
+      EXPECT_EQ(a.p_L, b.p_L);
+    }
+    cone_rejected += st.cone_rejected;
+    screened_reference += st_ref.screened;
+    screened_cones += st.screened;
+  }
+  EXPECT_GT(compared, 300);
+  // The shortcut was exercised: it skipped a large share of the per-triangle screenings.
+  EXPECT_GT(cone_rejected, 200);
+  EXPECT_LT(screened_cones, screened_reference);
+  RecordProperty("compared", compared);
+  RecordProperty("cone_rejected", static_cast<int>(cone_rejected));
+  RecordProperty("screened_reference", static_cast<int>(screened_reference));
+  RecordProperty("screened_cones", static_cast<int>(screened_cones));
+}
+
 TEST(LocalDescentTest, WalksAcrossAFlatWallAndMergesDuplicates) {
   const arm::ArmModel& model = arm::test::defaultModel();
   WorldFixture s(model);

@@ -13,6 +13,7 @@
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/arm_model.hpp"
 #include "fullarm/haptics/minima.hpp"
+#include "fullarm/haptics/neighbour_cones.hpp"
 #include "fullarm/haptics/snch.hpp"
 #include "fullarm/haptics/tri_mesh.hpp"
 
@@ -24,6 +25,7 @@ struct CollisionObject {
   TriMesh mesh;
   SnchTree tree;
   Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+  NeighbourCones cones;  ///< local descent's neighbour-rejection cones of `mesh`
 };
 
 /// Link meshes and object meshes with their hierarchies. Link meshes are expressed in their
@@ -60,6 +62,10 @@ class CollisionWorld {
   [[nodiscard]] const SnchTree& linkTree(int link) const noexcept {
     return links_[static_cast<std::size_t>(link)]->tree;
   }
+  /// Neighbour-rejection cones of the link's mesh (local descent). Precondition: hasLinkMesh(link).
+  [[nodiscard]] const NeighbourCones& linkCones(int link) const noexcept {
+    return links_[static_cast<std::size_t>(link)]->cones;
+  }
   [[nodiscard]] int numObjects() const noexcept { return static_cast<int>(objects_.size()); }
   [[nodiscard]] const CollisionObject& object(int i) const noexcept { return objects_[static_cast<std::size_t>(i)]; }
   /// Index of the object called `name`, or -1.
@@ -74,6 +80,7 @@ class CollisionWorld {
   struct LinkMesh {
     TriMesh mesh;
     SnchTree tree;
+    NeighbourCones cones;
   };
   arm::ArmModel model_;
   std::vector<std::shared_ptr<const LinkMesh>> links_;

@@ -26,6 +26,12 @@ struct LocalDescentParams {
   /// such a neighbour cannot lower the distance below the best). false runs every screened
   /// neighbour's triangle-pair query (the reference path of the tests).
   bool rescreen_neighbours = true;
+  /// Before screening the neighbour triangles of a closest vertex or edge one by one, test the
+  /// direction to the other mesh against the feature's precomputed rejection cone
+  /// (neighbour_cones.hpp): inside it, every neighbour would fail the per-triangle screening,
+  /// so none is looked at (exact). false screens every neighbour (the reference path of the
+  /// tests).
+  bool cone_screening = true;
 };
 
 struct LocalDescentStats {
@@ -35,6 +41,8 @@ struct LocalDescentStats {
   int dropped = 0;                  ///< minima removed by drop_beyond_m
   int evaluated = 0;                ///< neighbour triangle pairs evaluated (closest points computed)
   int rescreened = 0;               ///< neighbour evaluations skipped by re-screening at the step's best pair
+  int cone_rejected = 0;            ///< feature neighbourhoods (one side of one step) rejected whole by a cone
+  int screened = 0;                 ///< neighbour triangles screened one by one (first-order test)
 };
 
 /// Updates every minimum to the current link poses (fk.X_WL) and object poses of `world`:
