@@ -295,9 +295,9 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
   }
 
   reports::XyChart convergence;
-  convergence.title = "Convergence: best feasible objective (worst soft goal) per evaluation";
+  convergence.title = "Convergence per evaluation: best feasible objective and least hard-goal value";
   convergence.x_axis = {"Evaluation", "", false};
-  convergence.y_axis = {"Worst soft goal", "", true};
+  convergence.y_axis = {"Normalised goal (worst soft / worst hard)", "", true};
   for (const TuningResult& r : run.results) {
     reports::Series s;
     s.name = r.joint;
@@ -306,8 +306,20 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
       s.y.push_back(r.history[i] > 0.0 ? r.history[i] : std::numeric_limits<double>::quiet_NaN());
     }
     convergence.series.push_back(std::move(s));
+    reports::Series h;
+    h.name = r.joint + " least hard-goal value";
+    for (std::size_t i = 0; i < r.hard_history.size(); ++i) {
+      h.x.push_back(static_cast<double>(i + 1));
+      h.y.push_back(r.hard_history[i] > 0.0 && std::isfinite(r.hard_history[i])
+                        ? r.hard_history[i]
+                        : std::numeric_limits<double>::quiet_NaN());
+    }
+    convergence.series.push_back(std::move(h));
   }
-  convergence.caption = "Gaps: no feasible point yet. Steps up where a worst-case model joins the set.";
+  convergence.caption =
+      "Per joint: the best feasible objective (gaps: no feasible point yet) and the smallest worst normalised hard "
+      "goal found so far (<= 1: feasible; it stays above 1 on a joint the hard goals leave infeasible). Steps up where "
+      "a worst-case model joins the set.";
   section.addLineChart(std::move(convergence));
 
   reports::XyChart impedance;

@@ -122,6 +122,7 @@ struct Search {
   Vector best_any_x;  // least infeasible (smallest hard) when nothing is feasible
   double best_any_hard = std::numeric_limits<double>::infinity();
   std::vector<double>* history = nullptr;
+  std::vector<double>* hard_history = nullptr;
   int evaluations = 0;
   std::string error;
   nlopt::opt* running = nullptr;
@@ -160,6 +161,7 @@ struct Search {
       best_any_x = x;
     }
     history->push_back(std::isfinite(best_feasible) ? best_feasible : kNan);
+    hard_history->push_back(best_any_hard);
     return last;
   }
 
@@ -369,6 +371,7 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const Joint
   const auto free_count = static_cast<unsigned>(search.active.size());
   search.base = initial;
   search.history = &result.history;
+  search.hard_history = &result.hard_history;
   Vector start = pointOf(initial, lo, hi);
   for (int round = 0; round < options.rounds; ++round) {
     search.models = &models;

@@ -126,6 +126,12 @@ TEST(Tuner, InfeasibleSpecificationGetsAClearVerdict) {
       tuneJoint(f.model, f.q_rad, f.gains, LoopSetup{}, goals, TuningBounds{}, UncertaintyRanges{}, smallBudget());
   EXPECT_FALSE(r.feasible);
   EXPECT_NE(r.verdict.find("infeasible"), std::string::npos) << r.verdict;
+  // The hard-goal trace shows the search's progress: one entry per evaluation, never rising
+  // within a round (rounds re-score on a larger set), above 1 throughout.
+  ASSERT_EQ(r.hard_history.size(), r.history.size());
+  ASSERT_FALSE(r.hard_history.empty());
+  for (std::size_t i = 1; i < r.hard_history.size(); ++i) EXPECT_LE(r.hard_history[i], r.hard_history[i - 1]);
+  EXPECT_GT(r.hard_history.back(), 1.0);
   EXPECT_NE(r.verdict.find("peak sensitivity"), std::string::npos) << r.verdict;
   // The starting gains are returned unchanged.
   EXPECT_EQ(r.tuned.impedance.inertia_kgm2, f.gains.impedance.inertia_kgm2);

@@ -114,6 +114,9 @@ struct TuningResult {
   std::vector<PreparedJoint> coupled_models;
   /// Best feasible objective after each evaluation (NaN until the first feasible point).
   std::vector<double> history;
+  /// Smallest worst normalised hard goal after each evaluation (<= 1 once a point is feasible);
+  /// shows the search's progress also when nothing is feasible.
+  std::vector<double> hard_history;
   int evaluations = 0;
   std::vector<std::string> nlopt_results;  ///< result code of every NLopt run, in order
 };
