@@ -19,9 +19,7 @@ constexpr double kLimitMarginRad = 0.05;
 constexpr double kRoomFraction = 0.8;
 // Onset window after the start of the free move [s].
 constexpr double kOnsetWindowS = 0.1;
-// A hold oscillates when its late window's speed deviation is above the threshold and at least
-// this fraction of the window before it (a decaying transient is not an oscillation).
-constexpr double kSustainRatio = 0.5;
+constexpr double kSustainRatio = kOscillationSustainRatio;
 // The wall chatters when, over the last contact window, the standard deviation of the rendered
 // wall torque exceeds this fraction of its mean magnitude (the wall switches on and off) and
 // kChatterFloorNm (so that a barely touched wall does not count).

@@ -92,8 +92,8 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
   JointScenario sc = scenario;
   sc.gains = gains;
   if (hard_goals != nullptr) {
-    const auto [value, name] =
-        worstHardGoal(evaluateGoals(hard_goals->models, gains, hard_goals->goals), hard_goals->goals);
+    const auto [value, name] = worstHardGoal(
+        evaluateGoals(hard_goals->models, gains, hard_goals->goals, hard_goals->coupled_models), hard_goals->goals);
     s.linear_hard = value;
     s.linear_hard_goal = name;
     s.linear_hard_met = value <= 1.0;

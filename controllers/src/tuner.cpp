@@ -17,6 +17,9 @@ constexpr int kVariables = 5;
 /// Objective of an infeasible point in the global stage: above every feasible objective.
 constexpr double kInfeasiblePenalty = 1e3;
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+/// Goal value of a point whose goals cannot be computed (finite, so that COBYLA's linear models
+/// stay finite).
+constexpr double kUnscorable = 1e6;
 
 using Vector = std::vector<double>;
 
@@ -91,19 +94,27 @@ std::pair<double, const char*> worstHard(const GoalValues& v, const TuningGoals&
   };
   consider(v.spectral_radius - kMarginalPoleTolerance, "spectral radius");
   consider(-v.min_real_loop, "sector condition Re L > -1");
-  consider(1.0 - v.min_real_impedance / goals.passivity_tolerance_nms_per_rad, "passivity Re Z >= 0");
+  if (goals.coupled_hard) {
+    consider(std::max(v.coupled_spectral_radius - kMarginalPoleTolerance, v.coupled_detector_score),
+             "coupled stability and damping over the validated users");
+  }
+  if (goals.passivity_hard) {
+    consider(1.0 - v.min_real_impedance / goals.passivity_tolerance_nms_per_rad, "passivity Re Z >= 0");
+  }
   return worst;
 }
 
 // The search state shared by the NLopt callbacks of one joint.
 struct Search {
   const std::vector<PreparedJoint>* models = nullptr;
+  const std::vector<PreparedJoint>* coupled = nullptr;
   std::vector<int> active;  // indices of the free variables (NLopt sees only these)
   Vector fixed;             // full point: values of the fixed variables
   const TuningGoals* goals = nullptr;
   JointGains base;
   Vector last_x;
   GoalValues last;
+  GoalValues nonfinite;
   bool have_last = false;
   // Own tracking of the best points (NLopt's returned point is not trusted).
   Vector best_feasible_x;
@@ -111,6 +122,7 @@ struct Search {
   Vector best_any_x;  // least infeasible (smallest hard) when nothing is feasible
   double best_any_hard = std::numeric_limits<double>::infinity();
   std::vector<double>* history = nullptr;
+  std::vector<double>* hard_history = nullptr;
   int evaluations = 0;
   std::string error;
   nlopt::opt* running = nullptr;
@@ -129,7 +141,14 @@ struct Search {
 
   const GoalValues& at(const Vector& x) {
     if (have_last && x == last_x) return last;
-    last = evaluateGoals(*models, gainsAt(base, x), *goals);
+    if (!std::all_of(x.begin(), x.end(), [](double e) { return std::isfinite(e); })) {
+      // COBYLA can step to a non-finite point after a non-finite goal value: score it as the
+      // worst finite value instead of building gains from it.
+      nonfinite.hard = kUnscorable;
+      nonfinite.soft = kUnscorable;
+      return nonfinite;
+    }
+    last = evaluateGoals(*models, gainsAt(base, x), *goals, *coupled);
     last_x = x;
     have_last = true;
     ++evaluations;
@@ -142,6 +161,7 @@ struct Search {
       best_any_x = x;
     }
     history->push_back(std::isfinite(best_feasible) ? best_feasible : kNan);
+    hard_history->push_back(best_any_hard);
     return last;
   }
 
@@ -253,7 +273,8 @@ PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, con
   return prepareJoint(m, solveOperatingPoint(m, q_rad), s);
 }
 
-GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const JointGains& gains, const TuningGoals& goals) {
+GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const JointGains& gains, const TuningGoals& goals,
+                         const std::vector<PreparedJoint>& coupled) {
   GoalValues worst;
   worst.min_real_loop = std::numeric_limits<double>::infinity();
   worst.min_real_impedance = std::numeric_limits<double>::infinity();
@@ -281,11 +302,24 @@ GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const JointGa
     worst.rms_user_torque_nm = std::max(worst.rms_user_torque_nm, std::sqrt(power));
     worst.wall_error = std::max(worst.wall_error, wall_error);
   }
+  if (goals.coupled_hard) {
+    // Coupled stability and the detector score (coupled_stability.hpp) over the model set and
+    // the coupled grid of the validated users.
+    for (const std::vector<PreparedJoint>* set : {&models, &coupled}) {
+      const CoupledGoal c = evaluateCoupled(*set, gains, goals.detector);
+      worst.coupled_spectral_radius = std::max(worst.coupled_spectral_radius, c.spectral_radius);
+      if (c.detector_score >= worst.coupled_detector_score) {
+        worst.coupled_detector_score = c.detector_score;
+        worst.coupled_mode_hz = c.detector_hz;
+        worst.coupled_mode_decay_per_s = c.detector_decay_per_s;
+      }
+    }
+  }
   worst.hard = worstHard(worst, goals).first;
   worst.soft = std::max(worst.rms_user_torque_nm / goals.target_rms_torque_nm, worst.wall_error / goals.wall_accuracy);
   if (!std::isfinite(worst.hard) || !std::isfinite(worst.soft)) {
-    worst.hard = std::numeric_limits<double>::infinity();
-    worst.soft = std::numeric_limits<double>::infinity();
+    worst.hard = kUnscorable;
+    worst.soft = kUnscorable;
   }
   return worst;
 }
@@ -314,9 +348,13 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const Joint
   nominal_variation.user_damping_nms_per_rad = nominal.load.user_damping_nms_per_rad;
   result.model_set = {nominal_variation};
   std::vector<PreparedJoint> models = {prepareVariation(nominal, q_rad, s, nominal_variation)};
+  // The coupled grid of the validation box around the nominal plant (coupled_stability.hpp).
+  if (goals.coupled_hard) result.coupled_models = prepareCoupledGrid(nominal, q_rad, s, {nominal_variation}, ranges);
+  const std::vector<PreparedJoint>& coupled = result.coupled_models;
 
   Search search;
   search.goals = &goals;
+  search.coupled = &coupled;
   search.fixed = pointOf(initial, lo, hi);
   Vector lo_free;
   Vector hi_free;
@@ -333,6 +371,7 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const Joint
   const auto free_count = static_cast<unsigned>(search.active.size());
   search.base = initial;
   search.history = &result.history;
+  search.hard_history = &result.hard_history;
   Vector start = pointOf(initial, lo, hi);
   for (int round = 0; round < options.rounds; ++round) {
     search.models = &models;
@@ -372,7 +411,8 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const Joint
     start = search.best_feasible_x.size() == kVariables ? search.best_feasible_x : search.best_any_x;
     if (round + 1 == options.rounds) break;
     // Worst case: the model (corners and seeded random samples) on which the incumbent does
-    // worst; added to the set if it is worse than the set already is.
+    // worst; added to the set if it is worse than the set already is (both without the coupled
+    // grid, which is in every evaluation anyway: like is compared with like).
     const JointGains incumbent = gainsAt(initial, start);
     const double set_hard = evaluateGoals(models, incumbent, goals).hard;
     ModelVariation worst_v;
@@ -396,16 +436,16 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const Joint
   result.feasible = search.best_feasible_x.size() == kVariables && std::isfinite(search.best_feasible);
   const Vector best = result.feasible ? search.best_feasible_x : search.best_any_x;
   result.tuned = result.feasible ? gainsAt(initial, best) : initial;
-  result.initial_goals = evaluateGoals(models, initial, goals);
+  result.initial_goals = evaluateGoals(models, initial, goals, coupled);
   // The goals of the returned gains (the starting gains when nothing was feasible).
-  result.tuned_goals = evaluateGoals(models, result.tuned, goals);
+  result.tuned_goals = evaluateGoals(models, result.tuned, goals, coupled);
   std::ostringstream v;
   if (result.feasible) {
     v << initial.name << ": every hard goal met on " << models.size() << " model(s); worst soft goal "
       << result.tuned_goals.soft << " (initial gains: " << result.initial_goals.soft
       << (result.initial_goals.feasible() ? ", feasible" : ", infeasible") << ")";
   } else {
-    const auto [value, name] = worstHard(evaluateGoals(models, gainsAt(initial, best), goals), goals);
+    const auto [value, name] = worstHard(evaluateGoals(models, gainsAt(initial, best), goals, coupled), goals);
     v << initial.name << ": infeasible - no gains in the search box meet the hard goals; the least violating point "
       << "still fails the " << name << " goal (normalised " << value << " > 1)";
   }

@@ -221,6 +221,7 @@ TEST(NonlinearStage, ScoresAndReportsTheLinearHardGoals) {
   loose.models = {prepareVariation(model, m.defaultPosture()[idx], setup, nominal)};
   loose.goals.max_peak_sensitivity = 100.0;
   loose.goals.passivity_tolerance_nms_per_rad = 1e6;
+  loose.goals.coupled_hard = false;  // the hard goal that replaced passivity (coupled_stability.hpp)
   LinearHardGoals impossible = loose;
   impossible.goals.max_peak_sensitivity = 0.5;
 

@@ -59,7 +59,11 @@ TEST(Tuner, FindsTheBruteForceOptimumOfOneFreeVariable) {
   pin(b.damping_nms_per_rad, f.gains.impedance.damping_nms_per_rad);
   pin(b.stiffness_nm_per_rad, f.gains.impedance.stiffness_nm_per_rad);
   pin(b.lambda_per_s, f.gains.sliding_mode.lambda_per_s);
-  const TuningGoals goals;
+  // The search against a brute force, on the goals without the coupled grid (with it, no B_o/eps
+  // of these pinned EB gains is feasible: the detector score of the slowest coupled mode stays
+  // above 1; the coupled goal has its own oracles in coupled_stability_test.cpp).
+  TuningGoals goals;
+  goals.coupled_hard = false;
   const TunerOptions o = smallBudget();
   const LoopSetup setup;
   const TuningResult r = tuneJoint(f.model, f.q_rad, f.gains, setup, goals, b, UncertaintyRanges{}, o);
@@ -122,6 +126,12 @@ TEST(Tuner, InfeasibleSpecificationGetsAClearVerdict) {
       tuneJoint(f.model, f.q_rad, f.gains, LoopSetup{}, goals, TuningBounds{}, UncertaintyRanges{}, smallBudget());
   EXPECT_FALSE(r.feasible);
   EXPECT_NE(r.verdict.find("infeasible"), std::string::npos) << r.verdict;
+  // The hard-goal trace shows the search's progress: one entry per evaluation, never rising
+  // within a round (rounds re-score on a larger set), above 1 throughout.
+  ASSERT_EQ(r.hard_history.size(), r.history.size());
+  ASSERT_FALSE(r.hard_history.empty());
+  for (std::size_t i = 1; i < r.hard_history.size(); ++i) EXPECT_LE(r.hard_history[i], r.hard_history[i - 1]);
+  EXPECT_GT(r.hard_history.back(), 1.0);
   EXPECT_NE(r.verdict.find("peak sensitivity"), std::string::npos) << r.verdict;
   // The starting gains are returned unchanged.
   EXPECT_EQ(r.tuned.impedance.inertia_kgm2, f.gains.impedance.inertia_kgm2);
@@ -130,8 +140,10 @@ TEST(Tuner, InfeasibleSpecificationGetsAClearVerdict) {
 
 TEST(Tuner, TunedGainsRoundTripThroughTheGainsLoader) {
   const Fixture f = elbow();
-  const TuningResult r = tuneJoint(f.model, f.q_rad, f.gains, LoopSetup{}, TuningGoals{}, TuningBounds{},
-                                   UncertaintyRanges{}, smallBudget());
+  TuningGoals goals;
+  goals.coupled_hard = false;  // a feasible EB point at this budget (see the brute-force test)
+  const TuningResult r =
+      tuneJoint(f.model, f.q_rad, f.gains, LoopSetup{}, goals, TuningBounds{}, UncertaintyRanges{}, smallBudget());
   ASSERT_TRUE(r.feasible) << r.verdict;
   GainsConfig config = test::dtsGains();
   config.joints[static_cast<std::size_t>(findGainsJoint(config, "EB"))] = r.tuned;

@@ -43,6 +43,10 @@
 
 namespace fullarm::controllers {
 
+/// A hold oscillates when its late window's speed deviation is above the threshold and at least
+/// this fraction of the window before it (a decaying transient is not an oscillation).
+inline constexpr double kOscillationSustainRatio = 0.5;
+
 /// The user's arm at one joint: an impedance following a reference motion.
 struct UserImpedance {
   double stiffness_nm_per_rad = 25.0;  ///< K_h (Viviani et al. 1976 elbow: ~25 N m/rad)

@@ -126,6 +126,11 @@ struct PreparedJoint {
 [[nodiscard]] double closedLoopSpectralRadius(const PreparedJoint& joint, const JointGains& gains,
                                               const VirtualWall& wall);
 
+/// Eigenvalues (z) of the coupled closed loop (device + the model's user, `wall` in the controller,
+/// the setup's delay): the poles whose slowest oscillatory member coupled_stability.hpp judges.
+[[nodiscard]] Eigen::VectorXcd closedLoopPoles(const PreparedJoint& joint, const JointGains& gains,
+                                               const VirtualWall& wall);
+
 /// Rendered impedance of the device at w [rad/s] (first-harmonic model of the sampled loop:
 /// aliases neglected; exact for the continuous paths).
 [[nodiscard]] std::complex<double> renderedImpedance(const PreparedJoint& joint, const JointGains& gains,

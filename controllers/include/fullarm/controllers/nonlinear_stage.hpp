@@ -67,7 +67,8 @@ struct NonlinearStageOptions {
 
 /// The linear stage's hard goals, checked on a candidate of the nonlinear stage.
 struct LinearHardGoals {
-  std::vector<PreparedJoint> models;  ///< the linear stage's final model set (prepareVariation())
+  std::vector<PreparedJoint> models;          ///< the linear stage's final model set (prepareVariation())
+  std::vector<PreparedJoint> coupled_models;  ///< the linear stage's coupled grid (TuningResult::coupled_models)
   TuningGoals goals;
 };
 

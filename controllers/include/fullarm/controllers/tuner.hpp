@@ -14,8 +14,11 @@
 /// Hard goals, each normalised so that <= 1 is met, for every model of the set:
 ///   Ms / max_peak_sensitivity;  spectral radius of the closed loop (free motion and in
 ///   contact with the target wall) / 1;  sector: -min Re L / 1, and a loop that is unstable at
-///   a gain scale of kSectorScales fails it outright (LinearChecks::sector_ok);  passivity:
-///   1 - min Re Z / passivity_tolerance (rendered impedance of the device, Re Z >= -tolerance).
+///   a gain scale of kSectorScales fails it outright (LinearChecks::sector_ok);  coupled
+///   stability and damping with the validated users (coupled_stability.hpp: spectral radius and
+///   the detector score of every mode, over the model set and the coupled grid of the
+///   validation box). Passivity, 1 - min Re Z / passivity_tolerance, is computed and reported,
+///   and is a hard goal only with TuningGoals::passivity_hard (docs/analysis.md).
 /// Soft goals (the objective is their maximum, worst model):
 ///   free-motion transparency: RMS user torque to follow the reference motion / target;
 ///   wall accuracy: |K_rendered(wall_check_hz) / K_wall - 1| / wall_accuracy.
@@ -25,6 +28,7 @@
 #include <utility>
 #include <vector>
 
+#include "fullarm/controllers/coupled_stability.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/controllers/linear_analysis.hpp"
 #include "fullarm/controllers/validation.hpp"
@@ -45,6 +49,13 @@ struct TuningGoals {
   // Hard.
   double max_peak_sensitivity = 1.7;
   double passivity_tolerance_nms_per_rad = 0.05;  ///< Re Z >= -this counts as passive
+  /// Unconditional passivity as a hard goal (false: computed and reported only; the coupled goal
+  /// below is the hard one, docs/analysis.md "Coupled stability instead of unconditional passivity").
+  bool passivity_hard = false;
+  /// Coupled goal (coupled_stability.hpp): the closed loop with every user of the coupled grid and
+  /// of the model set is stable and each of its modes is judged decaying by this detector.
+  bool coupled_hard = true;
+  DetectorModel detector{};
   // Soft.
   std::vector<double> reference_hz = {0.25, 0.5, 1.0, 2.0};  ///< reference motion: sum of sines
   double reference_amplitude_rad = 0.1;                      ///< per sine
@@ -74,14 +85,18 @@ struct TunerOptions {
 
 /// Goal values of one gain set over a model set (worst model), each normalised.
 struct GoalValues {
-  double peak_sensitivity = 0.0;    ///< Ms (raw)
-  double spectral_radius = 0.0;     ///< worst of free motion and wall (raw)
-  double min_real_loop = 0.0;       ///< min Re L (raw)
-  double min_real_impedance = 0.0;  ///< min Re Z [N m s/rad] (raw)
-  double rms_user_torque_nm = 0.0;  ///< free-motion reference (raw)
-  double wall_error = 0.0;          ///< relative rendered-stiffness error (raw)
-  double hard = 0.0;                ///< max normalised hard goal (<= 1: met)
-  double soft = 0.0;                ///< max normalised soft goal (objective)
+  double peak_sensitivity = 0.0;          ///< Ms (raw)
+  double spectral_radius = 0.0;           ///< worst of free motion and wall (raw)
+  double min_real_loop = 0.0;             ///< min Re L (raw)
+  double min_real_impedance = 0.0;        ///< min Re Z [N m s/rad] (raw)
+  double rms_user_torque_nm = 0.0;        ///< free-motion reference (raw)
+  double wall_error = 0.0;                ///< relative rendered-stiffness error (raw)
+  double coupled_spectral_radius = 0.0;   ///< worst over the coupled grid and the model set (raw)
+  double coupled_detector_score = 0.0;    ///< worst detectorModeScore() (<= 1: judged decaying)
+  double coupled_mode_hz = 0.0;           ///< frequency of the mode with that score
+  double coupled_mode_decay_per_s = 0.0;  ///< and its decay rate
+  double hard = 0.0;                      ///< max normalised hard goal (<= 1: met)
+  double soft = 0.0;                      ///< max normalised soft goal (objective)
   bool feasible() const noexcept { return hard <= 1.0; }
 };
 
@@ -95,8 +110,13 @@ struct TuningResult {
   GoalValues initial_goals;  ///< over the final model set
   GoalValues tuned_goals;    ///< of `tuned` (so of the starting gains when infeasible)
   std::vector<ModelVariation> model_set;
+  /// The coupled grid of the nominal plant (coupledVariations() of the validation box).
+  std::vector<PreparedJoint> coupled_models;
   /// Best feasible objective after each evaluation (NaN until the first feasible point).
   std::vector<double> history;
+  /// Smallest worst normalised hard goal after each evaluation (<= 1 once a point is feasible);
+  /// shows the search's progress also when nothing is feasible.
+  std::vector<double> hard_history;
   int evaluations = 0;
   std::vector<std::string> nlopt_results;  ///< result code of every NLopt run, in order
 };
@@ -105,12 +125,14 @@ struct TuningResult {
 [[nodiscard]] PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,
                                              const ModelVariation& v);
 
-/// Evaluates the goals of `gains` over `models` (worst case over the set).
+/// Evaluates the goals of `gains` over `models` (worst case over the set); the coupled goal runs
+/// over `models` and `coupled` (the coupled grid; may be empty).
 [[nodiscard]] GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const JointGains& gains,
-                                       const TuningGoals& goals);
+                                       const TuningGoals& goals, const std::vector<PreparedJoint>& coupled = {});
 
 /// The worst normalised hard goal of `values` and its name ("peak sensitivity Ms", "spectral
-/// radius", "sector condition Re L > -1", "passivity Re Z >= 0"); met when the value is <= 1.
+/// radius", "sector condition Re L > -1", "coupled stability and damping over the validated users",
+/// and "passivity Re Z >= 0" when TuningGoals::passivity_hard); met when the value is <= 1.
 [[nodiscard]] std::pair<double, std::string> worstHardGoal(const GoalValues& values, const TuningGoals& goals);
 
 /// Tunes one joint. `nominal` carries the joint and its load (with the user's arm), `q_rad`

@@ -1,0 +1,199 @@
+#include "fullarm/controllers/coupled_stability.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <stdexcept>
+
+#include "fullarm/controllers/tuner.hpp"
+
+namespace fullarm::controllers {
+
+ModeDecay slowestOscillatoryMode(const Eigen::VectorXcd& poles_z, double period_s) {
+  if (!(period_s > 0.0) || !std::isfinite(period_s)) {
+    throw std::invalid_argument("slowestOscillatoryMode: period_s must be finite and > 0");
+  }
+  ModeDecay m;
+  for (Eigen::Index i = 0; i < poles_z.size(); ++i) {
+    const std::complex<double> z = poles_z[i];
+    const double radius = std::abs(z);
+    m.spectral_radius = std::max(m.spectral_radius, radius);
+    const double angle = std::abs(std::arg(z));
+    if (!(angle > kOscillatoryArgTolerance) || radius == 0.0) continue;  // real pole or deadbeat
+    // s = ln(z) / T: Re s = ln|z| / T, Im s = arg(z) / T.
+    const double sigma = -std::log(radius) / period_s;
+    if (sigma < m.decay_rate_per_s) {
+      const double w = angle / period_s;
+      m.decay_rate_per_s = sigma;
+      m.frequency_hz = w / (2.0 * std::numbers::pi);
+      m.damping_ratio = sigma / std::hypot(sigma, w);
+    }
+  }
+  return m;
+}
+
+double detectorDecayRate(double window_s, double sustain_ratio) {
+  if (!(window_s > 0.0) || !std::isfinite(window_s) || !(sustain_ratio > 0.0) || !(sustain_ratio < 1.0)) {
+    throw std::invalid_argument("detectorDecayRate: expected window_s > 0 and 0 < sustain_ratio < 1");
+  }
+  // Eq. C2: e^{-sigma W} < r  <=>  sigma > ln(1/r) / W.
+  return std::log(1.0 / sustain_ratio) / window_s;
+}
+
+std::vector<ModelVariation> coupledVariations(const ModelVariation& plant, const UncertaintyRanges& ranges) {
+  std::vector<ModelVariation> out;
+  const auto at = [](const UniformRange& r, double f) { return r.min + f * (r.max - r.min); };
+  for (int d = ranges.delay_min_samples; d <= ranges.delay_max_samples; ++d) {
+    for (double inertia : {ranges.inertia_scale.min, ranges.inertia_scale.max}) {
+      for (double fb : kCoupledDampingFractions) {
+        for (double fk : kCoupledStiffnessFractions) {
+          ModelVariation v = plant;
+          v.delay_samples = d;
+          v.inertia_scale = inertia;
+          v.user_damping_nms_per_rad = at(ranges.user_damping_nms_per_rad, fb);
+          v.user_stiffness_nm_per_rad = at(ranges.user_stiffness_nm_per_rad, fk);
+          out.push_back(v);
+        }
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<PreparedJoint> prepareCoupledGrid(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,
+                                              const std::vector<ModelVariation>& plants,
+                                              const UncertaintyRanges& ranges) {
+  std::vector<PreparedJoint> out;
+  for (const ModelVariation& p : plants) {
+    for (const ModelVariation& v : coupledVariations(p, ranges))
+      out.push_back(prepareVariation(nominal, q_rad, setup, v));
+  }
+  return out;
+}
+
+DetectorModel detectorModelOf(const JointScenario& sc) noexcept {
+  DetectorModel d;
+  d.hold_s = sc.timing.free_hold_s;
+  d.window_s = sc.timing.detect_window_s;
+  d.threshold_radps = sc.oscillation_speed_radps;
+  d.initial_speed_radps = sc.timing.free_move_s > 0.0 ? 1.875 * sc.timing.free_move_rad / sc.timing.free_move_s : 0.0;
+  d.period_s = sc.dt_s;
+  return d;
+}
+
+namespace {
+
+// Covariance (about the window mean) of a = e^{-sigma t} cos(w t), b = -e^{-sigma t} sin(w t)
+// over samples [begin, end): v = V0 (a cos(phi) + b sin(phi)).
+struct Cov2 {
+  double aa = 0.0, ab = 0.0, bb = 0.0;
+  double varAt(double c, double s) const { return c * c * aa + 2.0 * c * s * ab + s * s * bb; }
+};
+
+Cov2 windowCovariance(double sigma, double w, double T, long begin, long end) {
+  double sa = 0.0, sb = 0.0, saa = 0.0, sab = 0.0, sbb = 0.0;
+  for (long k = begin; k < end; ++k) {
+    const double t = static_cast<double>(k) * T;
+    const double e = std::exp(-sigma * t);
+    const double a = e * std::cos(w * t);
+    const double b = -e * std::sin(w * t);
+    sa += a;
+    sb += b;
+    saa += a * a;
+    sab += a * b;
+    sbb += b * b;
+  }
+  const double n = static_cast<double>(end - begin);
+  Cov2 c;
+  c.aa = std::max(saa / n - (sa / n) * (sa / n), 0.0);
+  c.ab = sab / n - (sa / n) * (sb / n);
+  c.bb = std::max(sbb / n - (sb / n) * (sb / n), 0.0);
+  return c;
+}
+
+constexpr int kPhases = 360;
+// Detector score of a growing mode (plus its growth rate [1/s], capped at 1e3).
+constexpr double kUnstableModeScore = 10.0;
+
+}  // namespace
+
+double detectorModeScore(double sigma, double w, const DetectorModel& d) {
+  if (!(d.window_s > 0.0) || !(d.hold_s >= 2.0 * d.window_s) || !(d.threshold_radps > 0.0) ||
+      !(d.sustain_ratio > 0.0) || !(d.initial_speed_radps >= 0.0) || !(d.period_s > 0.0)) {
+    throw std::invalid_argument("detectorModeScore: expected hold_s >= 2 window_s > 0, threshold, ratio, period > 0");
+  }
+  // The hold runs on the control samples 0 .. N-1 (t from the start of the hold), as examineHold().
+  const long n = std::lround(d.hold_s / d.period_s);
+  const long win = std::lround(d.window_s / d.period_s);
+  const Cov2 late = windowCovariance(sigma, w, d.period_s, n - win, n);
+  const Cov2 early = windowCovariance(sigma, w, d.period_s, n - 2 * win, n - win);
+  double worst = 0.0;
+  const int phases = w == 0.0 ? 1 : kPhases;
+  for (int i = 0; i < phases; ++i) {
+    const double phi = std::numbers::pi * static_cast<double>(i) / static_cast<double>(phases);
+    const double c = std::cos(phi), s = std::sin(phi);
+    const double l = d.initial_speed_radps * std::sqrt(late.varAt(c, s));
+    const double e = d.initial_speed_radps * std::sqrt(early.varAt(c, s));
+    if (!(l > 0.0)) continue;
+    const double amplitude = l / d.threshold_radps;
+    const double sustained = e > 0.0 ? l / (d.sustain_ratio * e) : std::numeric_limits<double>::infinity();
+    worst = std::max(worst, std::min(amplitude, sustained));
+  }
+  return worst;
+}
+
+CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const JointGains& gains,
+                            const DetectorModel& detector) {
+  CoupledGoal g;
+  // Poles faster than this leave less than 1e-3 of the threshold in the late window.
+  const double skip_above =
+      std::log(1e3 * std::max(detector.initial_speed_radps, detector.threshold_radps) / detector.threshold_radps) /
+      (detector.hold_s - detector.window_s);
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    const PreparedJoint& m = models[i];
+    const double T = m.setup.control_period_s;
+    const Eigen::VectorXcd z = closedLoopPoles(m, gains, VirtualWall{});
+    const ModeDecay d = slowestOscillatoryMode(z, T);
+    // Spectral radius without the free-position drift (a real pole within kDriftPoleTolerance of
+    // z = 1: with K_h = 0 the position has no restoring torque, and the residual slope of the
+    // gravity compensation leaves it at |z| = 1 + 1e-7 or so, an e-folding time of hours).
+    for (Eigen::Index k = 0; k < z.size(); ++k) {
+      const bool drift =
+          std::abs(std::arg(z[k])) <= kOscillatoryArgTolerance && std::abs(std::abs(z[k]) - 1.0) <= kDriftPoleTolerance;
+      if (!drift) g.spectral_radius = std::max(g.spectral_radius, std::abs(z[k]));
+    }
+    if (g.worst_model < 0 || d.decay_rate_per_s < g.slowest.decay_rate_per_s) {
+      g.slowest = d;
+      g.worst_model = static_cast<int>(i);
+    }
+    for (Eigen::Index k = 0; k < z.size(); ++k) {
+      const double radius = std::abs(z[k]);
+      if (radius == 0.0 || z[k].imag() < 0.0) continue;  // deadbeat, or the conjugate of a pole seen
+      const double sigma = -std::log(radius) / T;
+      if (sigma > skip_above) continue;
+      const double angle = std::abs(std::arg(z[k]));
+      const double w = angle > kOscillatoryArgTolerance ? angle / T : 0.0;
+      if (w == 0.0 && std::abs(radius - 1.0) <= kMarginalPoleTolerance) continue;  // free-position pole
+      // A growing mode fails outright; the score stays finite (and rises with the growth rate) so
+      // that the optimisers see a slope instead of an infinity.
+      const bool drift = w == 0.0 && radius <= 1.0 + kDriftPoleTolerance;  // scored like any real mode
+      const double score =
+          sigma < 0.0 && !drift ? kUnstableModeScore + std::min(-sigma, 1e3) : detectorModeScore(sigma, w, detector);
+      if (score > g.detector_score) {
+        g.detector_score = score;
+        g.detector_hz = w / (2.0 * std::numbers::pi);
+        g.detector_decay_per_s = sigma;
+        g.detector_model = static_cast<int>(i);
+      }
+    }
+  }
+  g.slowest.spectral_radius = g.spectral_radius;
+  return g;
+}
+
+double coupledGoalValue(const CoupledGoal& goal) noexcept {
+  return std::max(goal.spectral_radius - kMarginalPoleTolerance, goal.detector_score);
+}
+
+}  // namespace fullarm::controllers
