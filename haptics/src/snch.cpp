@@ -491,26 +491,50 @@ bool conesAdmit(const SnchNode& a, const Vector3d& a_axis, const SnchNode& b, co
 // two face normals, then the six in-plane edge normals (a projection on an axis never lengthens
 // a distance, so the gap along any axis divided by its length bounds the distance). Returns 0
 // when no axis separates them. Axes are left unnormalised; the comparison is done squared.
-double triangleGapLowerBound(const Vector3d (&a)[3], const Vector3d& n_a, const Vector3d (&b)[3],
-                             const Vector3d& n_b) noexcept {
+// Stops at the first axis whose bound exceeds `stop_m` and returns that bound (the caller only
+// needs to know that the pair is farther than `stop_m`; on the valve scene about a third of the
+// leaf pairs are).
+double triangleGapLowerBound(const Vector3d (&a)[3], const Vector3d& n_a, const Vector3d (&b)[3], const Vector3d& n_b,
+                             double stop_m) noexcept {
+  // Scalar code on purpose: this runs on every leaf pair, and the Eigen expressions with
+  // initializer-list min/max compiled to about twice the instructions.
+  const double ax[3] = {a[0].x(), a[1].x(), a[2].x()};
+  const double ay[3] = {a[0].y(), a[1].y(), a[2].y()};
+  const double az[3] = {a[0].z(), a[1].z(), a[2].z()};
+  const double bx[3] = {b[0].x(), b[1].x(), b[2].x()};
+  const double by[3] = {b[0].y(), b[1].y(), b[2].y()};
+  const double bz[3] = {b[0].z(), b[1].z(), b[2].z()};
   double best_sq = 0.0;
-  auto consider = [&](const Vector3d& axis) {
-    const double a0 = a[0].dot(axis);
-    const double a1 = a[1].dot(axis);
-    const double a2 = a[2].dot(axis);
-    const double b0 = b[0].dot(axis);
-    const double b1 = b[1].dot(axis);
-    const double b2 = b[2].dot(axis);
-    const double gap =
-        std::max(std::min({b0, b1, b2}) - std::max({a0, a1, a2}), std::min({a0, a1, a2}) - std::max({b0, b1, b2}));
-    const double len_sq = axis.squaredNorm();
-    if (gap > 0.0 && gap * gap > best_sq * len_sq) best_sq = gap * gap / len_sq;
+  const double stop_sq = stop_m * stop_m;
+  // Returns true once the bound exceeds stop_m.
+  const auto consider = [&](double x, double y, double z) noexcept {
+    const double a0 = ax[0] * x + ay[0] * y + az[0] * z;
+    const double a1 = ax[1] * x + ay[1] * y + az[1] * z;
+    const double a2 = ax[2] * x + ay[2] * y + az[2] * z;
+    const double b0 = bx[0] * x + by[0] * y + bz[0] * z;
+    const double b1 = bx[1] * x + by[1] * y + bz[1] * z;
+    const double b2 = bx[2] * x + by[2] * y + bz[2] * z;
+    const double a_lo = std::min(a0, std::min(a1, a2));
+    const double a_hi = std::max(a0, std::max(a1, a2));
+    const double b_lo = std::min(b0, std::min(b1, b2));
+    const double b_hi = std::max(b0, std::max(b1, b2));
+    const double gap = std::max(b_lo - a_hi, a_lo - b_hi);
+    if (gap > 0.0) {
+      const double len_sq = x * x + y * y + z * z;
+      if (gap * gap > best_sq * len_sq) best_sq = gap * gap / len_sq;
+    }
+    return best_sq > stop_sq;
   };
-  consider(n_a);
-  consider(n_b);
+  // In-plane normal n x (v1 - v0) of one edge.
+  const auto edgeAxis = [&](const Vector3d& n, const Vector3d& v0, const Vector3d& v1) noexcept {
+    const double ex = v1.x() - v0.x();
+    const double ey = v1.y() - v0.y();
+    const double ez = v1.z() - v0.z();
+    return consider(n.y() * ez - n.z() * ey, n.z() * ex - n.x() * ez, n.x() * ey - n.y() * ex);
+  };
+  if (consider(n_a.x(), n_a.y(), n_a.z()) || consider(n_b.x(), n_b.y(), n_b.z())) return std::sqrt(best_sq);
   for (int k = 0; k < 3; ++k) {
-    consider(n_a.cross(a[(k + 1) % 3] - a[k]));
-    consider(n_b.cross(b[(k + 1) % 3] - b[k]));
+    if (edgeAxis(n_a, a[k], a[(k + 1) % 3]) || edgeAxis(n_b, b[k], b[(k + 1) % 3])) break;
   }
   return std::sqrt(best_sq);
 }
@@ -555,18 +579,30 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
   const Isometry3d X_OL = X_WO.inverse() * X_WL;
   const Eigen::Matrix3d R_OL = X_OL.linear();
   const Eigen::Matrix3d abs_R_OL = R_OL.cwiseAbs();
-  // The link's nodes in the object frame, once (the link tree is the small one).
-  auto& centre_O = scratch.link_centre_O;
-  auto& axis_O = scratch.link_axis_O;
-  auto& box_O = scratch.link_box_O;
-  centre_O.resize(link_tree.nodes.size());
-  axis_O.resize(link_tree.nodes.size());
-  box_O.resize(link_tree.nodes.size());
-  for (std::size_t k = 0; k < link_tree.nodes.size(); ++k) {
-    centre_O[k] = X_OL * link_tree.nodes[k].centre_m;
-    axis_O[k] = R_OL * link_tree.nodes[k].cone_axis;
-    box_O[k] = abs_R_OL * link_tree.nodes[k].box_half_m;
+  // The link's nodes in the object frame, each when the traversal first reaches it (the link
+  // tree is the small one, but most link/object pairs end within a few nodes of the roots).
+  const std::size_t n_link_nodes = link_tree.nodes.size();
+  if (scratch.link_node_O.size() < n_link_nodes) {
+    scratch.link_node_O.resize(n_link_nodes);
+    scratch.link_node_query.resize(n_link_nodes, 0);
   }
+  if (++scratch.query == 0) {  // wrapped: every entry stale
+    std::fill(scratch.link_node_query.begin(), scratch.link_node_query.end(), 0U);
+    scratch.query = 1;
+  }
+  const std::uint32_t query = scratch.query;
+  const auto link_node_O = [&](int i) -> const SnchQueryScratch::LinkNodeO& {
+    const auto k = static_cast<std::size_t>(i);
+    SnchQueryScratch::LinkNodeO& n = scratch.link_node_O[k];
+    if (scratch.link_node_query[k] != query) {
+      const SnchNode& a = link_tree.nodes[k];
+      n.centre_m = X_OL * a.centre_m;
+      n.axis = R_OL * a.cone_axis;
+      n.box_half_m = abs_R_OL * a.box_half_m;
+      scratch.link_node_query[k] = query;
+    }
+    return n;
+  };
   // The link's vertices in the object frame, once, at the first leaf pair (every leaf pair
   // reads them; most link/object pairs are pruned before any leaf).
   auto& vertex_O = scratch.link_vertex_O;
@@ -582,7 +618,8 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
     ++st.node_pairs_visited;
     const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(i)];
     const SnchNode& b = obj_tree.nodes[static_cast<std::size_t>(j)];
-    const Vector3d diff = b.centre_m - centre_O[static_cast<std::size_t>(i)];
+    const SnchQueryScratch::LinkNodeO& a_O = link_node_O(i);
+    const Vector3d diff = b.centre_m - a_O.centre_m;
     // Distance lower bounds: the spheres (squared first, no root for the far pairs), then the
     // separating gaps of the two boxes along the three object axes and the three link axes (any
     // unit direction bounds the distance).
@@ -594,16 +631,25 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
     }
     const double dist = std::sqrt(dist_sq);
     double gap = dist - a.radius_m - b.radius_m;
+    // The object-axis gaps first (cheap); the link-axis gaps only for the pairs they leave.
+    gap = std::max(gap, (diff.cwiseAbs() - b.box_half_m - a_O.box_half_m).maxCoeff());
+    if (gap > cutoff_m) {
+      ++st.pruned_by_distance;
+      continue;
+    }
     {
-      const Vector3d gap_o = diff.cwiseAbs() - b.box_half_m - box_O[static_cast<std::size_t>(i)];
-      const Vector3d gap_l = (R_OL.transpose() * diff).cwiseAbs() - a.box_half_m - abs_R_OL.transpose() * b.box_half_m;
-      gap = std::max(gap, std::max(gap_o.maxCoeff(), gap_l.maxCoeff()));
+      const Vector3d& h = b.box_half_m;
+      for (int k = 0; k < 3; ++k) {  // link axis k: the column k of R_OL
+        const double centre_gap = std::abs(R_OL(0, k) * diff.x() + R_OL(1, k) * diff.y() + R_OL(2, k) * diff.z());
+        const double b_extent = abs_R_OL(0, k) * h.x() + abs_R_OL(1, k) * h.y() + abs_R_OL(2, k) * h.z();
+        gap = std::max(gap, centre_gap - a.box_half_m[k] - b_extent);
+      }
     }
     if (gap > cutoff_m) {
       ++st.pruned_by_distance;
       continue;
     }
-    if (gap > kConeTestMinGap_m && !conesAdmit(a, axis_O[static_cast<std::size_t>(i)], b, R_OL, diff, dist, gap)) {
+    if (gap > kConeTestMinGap_m && !conesAdmit(a, a_O.axis, b, R_OL, diff, dist, gap)) {
       ++st.pruned_by_cone;
       continue;
     }
@@ -620,8 +666,8 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
       const auto& tb = obj_mesh.triangle(b.triangle);
       const Vector3d va[3] = {link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2])};
       const Vector3d vb[3] = {obj_mesh.vertex(tb[0]), obj_mesh.vertex(tb[1]), obj_mesh.vertex(tb[2])};
-      const double tri_gap =
-          triangleGapLowerBound(va, R_OL * link_mesh.faceNormal(a.triangle), vb, obj_mesh.faceNormal(b.triangle));
+      const double tri_gap = triangleGapLowerBound(va, R_OL * link_mesh.faceNormal(a.triangle), vb,
+                                                   obj_mesh.faceNormal(b.triangle), cutoff_m);
       if (tri_gap > cutoff_m) {
         ++st.pruned_by_distance;
         continue;
@@ -631,9 +677,8 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
       // pair, with the larger of the two bounds.
       const double leaf_gap = std::max(gap, tri_gap);
       if (leaf_gap > kConeTestMinGap_m &&
-          ((gap <= kConeTestMinGap_m &&
-            !conesAdmit(a, axis_O[static_cast<std::size_t>(i)], b, R_OL, diff, dist, leaf_gap)) ||
-           !leafConesAdmit(a, axis_O[static_cast<std::size_t>(i)], b, va, vb, leaf_gap))) {
+          ((gap <= kConeTestMinGap_m && !conesAdmit(a, a_O.axis, b, R_OL, diff, dist, leaf_gap)) ||
+           !leafConesAdmit(a, a_O.axis, b, va, vb, leaf_gap))) {
         ++st.pruned_by_cone;
         continue;
       }

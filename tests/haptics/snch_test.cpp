@@ -9,6 +9,8 @@
 #include <fcl/narrowphase/distance.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <limits>
 #include <memory>
 
 #include "fcl_mesh.hpp"
@@ -70,6 +72,37 @@ TEST(SnchTest, FindsExactlyTheBruteForceLocalMinima) {
   EXPECT_GT(pruned_by_cone, 0);
   RecordProperty("cases_with_minima", cases_with_minima);
   RecordProperty("total_minima", total_minima);
+}
+
+// The query caches the link nodes in the object frame per query, stamped with a query counter:
+// a scratch reused across different link trees (stale entries of another tree at the same
+// index) and across the wrap of the counter must still give exactly the brute-force minima.
+TEST(SnchTest, ScratchReusedAcrossTreesAndCounterWrap) {
+  std::mt19937 rng(77);
+  SnchQueryScratch scratch;
+  int compared = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const TriMesh link = randomSmallMesh(rng);
+    const TriMesh obj = randomSmallMesh(rng);
+    const SnchTree link_tree = buildSnchTree(link);
+    const SnchTree obj_tree = buildSnchTree(obj);
+    const auto [X_WL, X_WO] = randomPair(rng);
+    // Every third trial starts right below the wrap of the counter (the stamps of the previous
+    // trial's tree are then max - 1 or max, and the wrap resets them).
+    if (trial % 3 == 0) scratch.query = std::numeric_limits<std::uint32_t>::max() - 1;
+    for (int repeat = 0; repeat < 3; ++repeat) {
+      std::vector<LocalMinimum> snch;
+      querySnchPair(link_tree, link, X_WL, obj_tree, obj, X_WO, kCutoff_m, scratch, snch);
+      const std::vector<LocalMinimum> brute = bruteForceMinima(link, X_WL, obj, X_WO, kCutoff_m);
+      ASSERT_EQ(snch.size(), brute.size()) << "trial " << trial << " repeat " << repeat;
+      for (std::size_t i = 0; i < snch.size(); ++i) {
+        EXPECT_TRUE(sameFeaturePair(snch[i], brute[i])) << "trial " << trial;
+        EXPECT_NEAR(snch[i].distance_m, brute[i].distance_m, 1e-12);
+      }
+      compared += static_cast<int>(snch.size());
+    }
+  }
+  EXPECT_GT(compared, 20);  // the sample holds minima, not only empty queries
 }
 
 double fclDistance(const std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>>& a, const Eigen::Isometry3d& X_WA,

@@ -16,6 +16,7 @@
 /// feature pair are merged.
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -83,11 +84,19 @@ struct SnchTree {
 /// Reusable traversal storage for querySnchPair (grows, then stays allocated).
 struct SnchQueryScratch {
   std::vector<std::pair<int, int>> stack;
-  /// Per link node, its centre and cone axis in the object frame (filled once per query).
-  std::vector<Eigen::Vector3d> link_centre_O;
-  std::vector<Eigen::Vector3d> link_axis_O;
-  /// Per link node, the half extents of the object-frame box around its (link-frame) box.
-  std::vector<Eigen::Vector3d> link_box_O;
+  /// One link node in the object frame: its centre, its cone axis, and the half extents of the
+  /// object-frame box around its (link-frame) box [m].
+  struct LinkNodeO {
+    Eigen::Vector3d centre_m;
+    Eigen::Vector3d axis;
+    Eigen::Vector3d box_half_m;
+  };
+  /// Per link node, filled when the traversal first reaches the node in a query (most link
+  /// nodes never are: the pair is pruned near the root).
+  std::vector<LinkNodeO> link_node_O;
+  /// Per link node, the query that filled link_node_O (entries below `query` are stale).
+  std::vector<std::uint32_t> link_node_query;
+  std::uint32_t query = 0;
   /// The link mesh's vertices in the object frame (filled once per query).
   std::vector<Eigen::Vector3d> link_vertex_O;
 };
