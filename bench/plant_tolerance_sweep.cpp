@@ -94,18 +94,6 @@ Trace runChirp(const std::vector<JointParams>& joints, const SolverOptions& opti
   return t;
 }
 
-double rmsRatio(const std::vector<double>& ref, const std::vector<double>& b) {
-  double mean = 0.0;
-  for (double v : ref) mean += v / static_cast<double>(ref.size());
-  double diff = 0.0;
-  double spread = 0.0;
-  for (std::size_t i = 0; i < ref.size(); ++i) {
-    diff += (ref[i] - b[i]) * (ref[i] - b[i]);
-    spread += (ref[i] - mean) * (ref[i] - mean);
-  }
-  return std::sqrt(diff / spread);
-}
-
 struct Worst {
   double q = 0.0, p = 0.0;
 };
@@ -115,8 +103,8 @@ constexpr double kBudget = 0.25 * 0.005;
 Worst worstError(const Trace& ref, const Trace& t) {
   Worst w;
   for (std::size_t j = 0; j < ref.q.size(); ++j) {
-    w.q = std::max(w.q, rmsRatio(ref.q[j], t.q[j]));
-    w.p = std::max(w.p, rmsRatio(ref.p_load[j], t.p_load[j]));
+    w.q = std::max(w.q, normalisedRmsDifference(ref.q[j], t.q[j]));
+    w.p = std::max(w.p, normalisedRmsDifference(ref.p_load[j], t.p_load[j]));
   }
   return w;
 }
@@ -268,8 +256,8 @@ int main(int argc, char** argv) {
         std::snprintf(line, sizeof line, "| %s | %s |", v.name.c_str(), s.name);
         joint_table += line;
         for (std::size_t j = 0; j < t.q.size(); ++j) {
-          std::snprintf(line, sizeof line, " %.1e / %.1e |", rmsRatio(s.ref.q[j], t.q[j]),
-                        rmsRatio(s.ref.p_load[j], t.p_load[j]));
+          std::snprintf(line, sizeof line, " %.1e / %.1e |", normalisedRmsDifference(s.ref.q[j], t.q[j]),
+                        normalisedRmsDifference(s.ref.p_load[j], t.p_load[j]));
           joint_table += line;
         }
         joint_table += "\n";

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 namespace fullarm::plant {
 
@@ -102,6 +103,28 @@ CommandTable loadCommandCsv(const std::filesystem::path& file) {
   }
   if (table.time_s.empty()) fail(line, "no data rows");
   return table;
+}
+
+double normalisedRmsDifference(const std::vector<double>& reference, const std::vector<double>& other) {
+  if (reference.empty() || reference.size() != other.size()) {
+    throw std::invalid_argument("normalisedRmsDifference: expected two non-empty responses of equal length, got " +
+                                std::to_string(reference.size()) + " and " + std::to_string(other.size()) + " samples");
+  }
+  double mean = 0.0;
+  for (double v : reference) mean += v / static_cast<double>(reference.size());
+  double diff = 0.0;
+  double spread = 0.0;
+  for (std::size_t i = 0; i < reference.size(); ++i) {
+    diff += (reference[i] - other[i]) * (reference[i] - other[i]);
+    spread += (reference[i] - mean) * (reference[i] - mean);
+  }
+  const bool constant =
+      std::all_of(reference.begin(), reference.end(), [&reference](double v) { return v == reference.front(); });
+  if (constant || !(spread > 0.0)) {
+    throw std::invalid_argument(
+        "normalisedRmsDifference: the reference response is constant (no spread to normalise by)");
+  }
+  return std::sqrt(diff / spread);
 }
 
 }  // namespace fullarm::plant

@@ -54,18 +54,6 @@ ChirpRun runChirp(const JointParams& joint, const SolverOptions& options, double
   return r;
 }
 
-double rmsDifferenceRatio(const std::vector<double>& a, const std::vector<double>& b) {
-  double mean = 0.0;
-  for (double v : a) mean += v / static_cast<double>(a.size());
-  double diff = 0.0;
-  double ref = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    diff += (a[i] - b[i]) * (a[i] - b[i]);
-    ref += (a[i] - mean) * (a[i] - mean);
-  }
-  return std::sqrt(diff / ref);
-}
-
 // The issue's chirp checks run with each integrator: CVODES (the reference) and Rodas3.
 class PlantChirp : public ::testing::TestWithParam<IntegratorKind> {
  protected:
@@ -99,15 +87,15 @@ TEST_P(PlantChirp, ResponseIsIndependentOfSolverTolerance) {
   half.rtol *= 0.5;
   const ChirpRun a = runChirp(joint, options(), 4.0);
   const ChirpRun b = runChirp(joint, half, 4.0);
-  EXPECT_LT(rmsDifferenceRatio(a.q, b.q), PlantTolerance::kIssueRtolRms);
-  EXPECT_LT(rmsDifferenceRatio(a.p_load, b.p_load), PlantTolerance::kIssueRtolRms);
+  EXPECT_LT(normalisedRmsDifference(a.q, b.q), PlantTolerance::kIssueRtolRms);
+  EXPECT_LT(normalisedRmsDifference(a.p_load, b.p_load), PlantTolerance::kIssueRtolRms);
   // ... and the comparison is not vacuous: a tenfold looser rtol is visibly different.
   SolverOptions loose = options();
   loose.rtol *= 100.0;
   loose.atol_pressure_pa *= 100.0;
   loose.atol_angle_rad *= 100.0;
   const ChirpRun c = runChirp(joint, loose, 4.0);
-  EXPECT_GT(rmsDifferenceRatio(a.p_load, c.p_load), 1e-5);
+  EXPECT_GT(normalisedRmsDifference(a.p_load, c.p_load), 1e-5);
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, PlantChirp, ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3),
@@ -141,8 +129,9 @@ TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnJointChirp) {
   for (const double from_limit : {0.0, 0.1}) {
     const ChirpRun ref = runChirp(joint, tightReference(), 4.0, from_limit);
     const ChirpRun r = runChirp(joint, rodas, 4.0, from_limit);
-    EXPECT_LT(rmsDifferenceRatio(ref.q, r.q), PlantTolerance::kIssueRtolRms) << "from limit " << from_limit;
-    EXPECT_LT(rmsDifferenceRatio(ref.p_load, r.p_load), PlantTolerance::kIssueRtolRms) << "from limit " << from_limit;
+    EXPECT_LT(normalisedRmsDifference(ref.q, r.q), PlantTolerance::kIssueRtolRms) << "from limit " << from_limit;
+    EXPECT_LT(normalisedRmsDifference(ref.p_load, r.p_load), PlantTolerance::kIssueRtolRms)
+        << "from limit " << from_limit;
   }
 }
 
@@ -184,9 +173,9 @@ TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnArmChirp) {
     const std::vector<ChirpRun> ref = run(tightReference(), from_limit);
     const std::vector<ChirpRun> r = run(rodas, from_limit);
     for (std::size_t j = 0; j < ref.size(); ++j) {
-      EXPECT_LT(rmsDifferenceRatio(ref[j].q, r[j].q), 2.0 * PlantTolerance::kIssueRtolRms)
+      EXPECT_LT(normalisedRmsDifference(ref[j].q, r[j].q), 2.0 * PlantTolerance::kIssueRtolRms)
           << config.joints[j].name << " from limit " << from_limit;
-      EXPECT_LT(rmsDifferenceRatio(ref[j].p_load, r[j].p_load), 2.0 * PlantTolerance::kIssueRtolRms)
+      EXPECT_LT(normalisedRmsDifference(ref[j].p_load, r[j].p_load), 2.0 * PlantTolerance::kIssueRtolRms)
           << config.joints[j].name << " from limit " << from_limit;
     }
   }

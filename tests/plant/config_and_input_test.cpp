@@ -2,10 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "config_text.hpp"
 #include "fullarm/arm/config_error.hpp"
@@ -140,6 +143,23 @@ TEST_F(CommandCsv, MalformedFilesGiveLineNumbers) {
   expectError("time_s,command\n0,nan\n", ":2: 'nan' is not a finite number");
   expectError("time_s,command\n", "no data rows");
   EXPECT_THROW((void)loadCommandCsv("/nonexistent/commands.csv"), std::runtime_error);
+}
+
+// Against the analytic value: a constant offset c on a sampled sine of amplitude A (whole
+// periods: mean 0, RMS A / sqrt(2)) is an RMS difference of |c|, ratio |c| sqrt(2) / A.
+TEST(Signals, NormalisedRmsDifferenceOfAnOffsetSine) {
+  std::vector<double> ref;
+  std::vector<double> shifted;
+  for (int k = 0; k < 1000; ++k) {
+    ref.push_back(3.0 + 2.0 * std::sin(2.0 * std::numbers::pi * 5.0 * k / 1000.0));
+    shifted.push_back(ref.back() + 0.01);
+  }
+  EXPECT_NEAR(normalisedRmsDifference(ref, shifted), 0.01 * std::sqrt(2.0) / 2.0, 1e-12);
+  EXPECT_EQ(normalisedRmsDifference(ref, ref), 0.0);
+  EXPECT_THROW((void)normalisedRmsDifference(ref, std::vector<double>(999, 0.0)), std::invalid_argument);
+  EXPECT_THROW((void)normalisedRmsDifference({}, {}), std::invalid_argument);
+  EXPECT_THROW((void)normalisedRmsDifference(std::vector<double>(10, 1.0), std::vector<double>(10, 2.0)),
+               std::invalid_argument);
 }
 
 TEST(Signals, ChirpStartsAtStartFrequencyAndParsesNames) {
