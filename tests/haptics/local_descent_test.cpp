@@ -132,6 +132,21 @@ TEST(LocalDescentTest, TrackedMinimaMatchFreshSearchAfterSmallMotion) {
   RecordProperty("confirmed", confirmed);
 }
 
+// A random link orientation, placed above the rough box's top face (2-4 cm from it) or 0.1-0.35 m
+// from the centre of a random small mesh in a random direction.
+Eigen::Isometry3d linkPoseNear(const CollisionObject& obj, bool rough, std::mt19937& rng) {
+  Eigen::Isometry3d X_WL = randomPose(rng, 0.0);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  if (rough) {
+    X_WL.translation() = obj.X_WO * Eigen::Vector3d(0.04 * u(rng), 0.04 * u(rng), 0.05 + 0.01 * u(rng));
+  } else {
+    X_WL.translation() = obj.X_WO.translation() + std::uniform_real_distribution<double>(0.1, 0.35)(rng) *
+                                                      Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+  }
+  return X_WL;
+}
+
 // The re-screening shortcut (LocalDescentParams::rescreen_neighbours) against the reference
 // path that evaluates every screened neighbour: the same minima (feature pairs, triangles,
 // distances, points) after random small motions, on random meshes and on a dense box with
@@ -150,16 +165,7 @@ TEST(LocalDescentTest, RescreeningGivesTheSameMinimaAsEvaluatingEveryNeighbour) 
     const bool rough = trial % 2 == 0;
     s.world.addObject("obj", rough ? roughBox(rng) : randomSmallMesh(rng), randomPose(rng, 0.3));
     const CollisionObject& obj = s.world.object(0);
-    Eigen::Isometry3d X_WL = randomPose(rng, 0.0);
-    std::normal_distribution<double> n(0.0, 1.0);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    if (rough) {
-      // Above the rough top face, 2-4 cm from it.
-      X_WL.translation() = obj.X_WO * Eigen::Vector3d(0.04 * u(rng), 0.04 * u(rng), 0.05 + 0.01 * u(rng));
-    } else {
-      X_WL.translation() = obj.X_WO.translation() + std::uniform_real_distribution<double>(0.1, 0.35)(rng) *
-                                                        Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
-    }
+    const Eigen::Isometry3d X_WL = linkPoseNear(obj, rough, rng);
     s.fk.X_WL[kLink] = X_WL;
     std::vector<LocalMinimum> minima = s.seedMinima();
     if (minima.empty()) continue;
@@ -234,15 +240,7 @@ TEST(LocalDescentTest, ConeScreeningGivesTheSameMinimaAsScreeningEveryNeighbour)
     const bool rough = trial % 2 == 0;
     s.world.addObject("obj", rough ? roughBox(rng) : randomSmallMesh(rng), randomPose(rng, 0.3));
     const CollisionObject& obj = s.world.object(0);
-    Eigen::Isometry3d X_WL = randomPose(rng, 0.0);
-    std::normal_distribution<double> n(0.0, 1.0);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    if (rough) {
-      X_WL.translation() = obj.X_WO * Eigen::Vector3d(0.04 * u(rng), 0.04 * u(rng), 0.05 + 0.01 * u(rng));
-    } else {
-      X_WL.translation() = obj.X_WO.translation() + std::uniform_real_distribution<double>(0.1, 0.35)(rng) *
-                                                        Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
-    }
+    const Eigen::Isometry3d X_WL = linkPoseNear(obj, rough, rng);
     s.fk.X_WL[kLink] = X_WL;
     std::vector<LocalMinimum> minima = s.seedMinima();
     if (minima.empty()) continue;
