@@ -109,19 +109,6 @@ Worst worstError(const Trace& ref, const Trace& t) {
   return w;
 }
 
-SolverOptions tight() {
-  SolverOptions o = config().solver;
-  o.integrator = IntegratorKind::kCvodes;
-  o.rtol = 1e-8;
-  o.atol_spool *= 1e-3;
-  o.atol_spool_rate_per_s *= 1e-3;
-  o.atol_pressure_pa *= 1e-3;
-  o.atol_angle_rad *= 1e-3;
-  o.atol_velocity_radps *= 1e-3;
-  o.max_steps_per_period = 200000;
-  return o;
-}
-
 struct Variant {
   std::string name;
   double rtol = 1.0, spool = 1.0, spool_rate = 1.0, pressure = 1.0, angle = 1.0, velocity = 1.0;
@@ -231,7 +218,7 @@ int main(int argc, char** argv) {
                                      {"arm mid", &arm_joints, 1.0, 0.0, {}},
                                      {"arm limit", &arm_joints, 1.0, 0.1, {}}};
   for (Scenario& s : scenarios) {
-    s.ref = runChirp(*s.joints, tight(), s.duration_s, s.from_limit_rad);
+    s.ref = runChirp(*s.joints, tightReferenceOptions(config().solver), s.duration_s, s.from_limit_rad);
     std::fprintf(stderr, "reference %s: %.1f s CPU\n", s.name, s.ref.cpu_s);
   }
 

@@ -103,21 +103,6 @@ INSTANTIATE_TEST_SUITE_P(Integrators, PlantChirp, ::testing::Values(IntegratorKi
                            return param_info.param == IntegratorKind::kCvodes ? "Cvodes" : "Rodas3";
                          });
 
-// CVODES at rtol 1e-8 and 1000x tighter absolute tolerances: the reference for the integrators
-// at their configured tolerances.
-SolverOptions tightReference() {
-  SolverOptions o = test::dtsPlant().solver;
-  o.integrator = IntegratorKind::kCvodes;
-  o.rtol = 1e-8;
-  o.atol_spool *= 1e-3;
-  o.atol_spool_rate_per_s *= 1e-3;
-  o.atol_pressure_pa *= 1e-3;
-  o.atol_angle_rad *= 1e-3;
-  o.atol_velocity_radps *= 1e-3;
-  o.max_steps_per_period = 200000;
-  return o;
-}
-
 // Rodas3 at the configured tolerances against the tight CVODES reference on the EB chirp, from
 // the default posture and from 0.1 rad inside the upper limit (stop contacts): within the same
 // 0.5 % RMS the issue allows between rtol and rtol/2, for the angle and the load pressure.
@@ -127,7 +112,7 @@ TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnJointChirp) {
   SolverOptions rodas = config.solver;
   rodas.integrator = IntegratorKind::kRodas3;
   for (const double from_limit : {0.0, 0.1}) {
-    const ChirpRun ref = runChirp(joint, tightReference(), 4.0, from_limit);
+    const ChirpRun ref = runChirp(joint, tightReferenceOptions(test::dtsPlant().solver), 4.0, from_limit);
     const ChirpRun r = runChirp(joint, rodas, 4.0, from_limit);
     EXPECT_LT(normalisedRmsDifference(ref.q, r.q), PlantTolerance::kIssueRtolRms) << "from limit " << from_limit;
     EXPECT_LT(normalisedRmsDifference(ref.p_load, r.p_load), PlantTolerance::kIssueRtolRms)
@@ -170,7 +155,7 @@ TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnArmChirp) {
   SolverOptions rodas = config.solver;
   rodas.integrator = IntegratorKind::kRodas3;
   for (const double from_limit : {0.0, 0.1}) {
-    const std::vector<ChirpRun> ref = run(tightReference(), from_limit);
+    const std::vector<ChirpRun> ref = run(tightReferenceOptions(test::dtsPlant().solver), from_limit);
     const std::vector<ChirpRun> r = run(rodas, from_limit);
     for (std::size_t j = 0; j < ref.size(); ++j) {
       EXPECT_LT(normalisedRmsDifference(ref[j].q, r[j].q), 2.0 * PlantTolerance::kIssueRtolRms)

@@ -70,6 +70,21 @@ struct SolverOptions {
   IntegratorKind integrator = IntegratorKind::kCvodes;
 };
 
+/// The accuracy reference the plant tests and `bench/plant_tolerance_sweep` compare an
+/// integrator against: CVODES at rtol 1e-8 with every absolute tolerance of `base` 1000x tighter
+/// (and room for the extra steps per period).
+[[nodiscard]] inline SolverOptions tightReferenceOptions(SolverOptions base) noexcept {
+  base.integrator = IntegratorKind::kCvodes;
+  base.rtol = 1e-8;
+  base.atol_spool *= 1e-3;
+  base.atol_spool_rate_per_s *= 1e-3;
+  base.atol_pressure_pa *= 1e-3;
+  base.atol_angle_rad *= 1e-3;
+  base.atol_velocity_radps *= 1e-3;
+  base.max_steps_per_period = 200000;
+  return base;
+}
+
 /// User arm strapped to the cuff: a point mass, a spring to the cuff's rest position and a
 /// damper (Cartesian, world frame), on link `link` at `point_L` (link frame).
 struct UserArmParams {
