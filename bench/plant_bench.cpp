@@ -129,6 +129,24 @@ BENCHMARK(BM_Plant_Joint_SlowSine_Rodas3)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Arm_Chirp_Rodas3)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Arm_SlowSine_Rodas3)->Unit(benchmark::kMillisecond);
 
+// Rodas4 (order 4(3) Rosenbrock, `solver.integrator: rodas4`), same scenarios.
+void BM_Plant_Joint_Chirp_Rodas4(benchmark::State& state) {
+  runPlant(state, false, true, IntegratorKind::kRodas4);
+}
+void BM_Plant_Joint_SlowSine_Rodas4(benchmark::State& state) {
+  runPlant(state, false, false, IntegratorKind::kRodas4);
+}
+void BM_Plant_Arm_Chirp_Rodas4(benchmark::State& state) {
+  runPlant(state, true, true, IntegratorKind::kRodas4);
+}
+void BM_Plant_Arm_SlowSine_Rodas4(benchmark::State& state) {
+  runPlant(state, true, false, IntegratorKind::kRodas4);
+}
+BENCHMARK(BM_Plant_Joint_Chirp_Rodas4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Joint_SlowSine_Rodas4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Arm_Chirp_Rodas4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Arm_SlowSine_Rodas4)->Unit(benchmark::kMillisecond);
+
 // Peer: fixed-step RK4 of the same right-hand side (one joint, 10 us step).
 void BM_Peer_Rk4_Joint_Chirp(benchmark::State& state) {
   ArmPlant plant;

@@ -430,8 +430,10 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   check(CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
   solver_ = std::move(s);
   rodas_.reset();
-  if (options.integrator == IntegratorKind::kRodas3) {
+  if (options.integrator == IntegratorKind::kRodas3 || options.integrator == IntegratorKind::kRodas4) {
     rodas_ = std::make_unique<Rodas3>();
+    rodas_->setMethod(options.integrator == IntegratorKind::kRodas4 ? RosenbrockMethod::kRodas4
+                                                                    : RosenbrockMethod::kRodas3);
     rodas_->configure(static_cast<int>(N), atol, options.rtol, options.max_steps_per_period,
                       {&SolverCallbacks::rodasRhs, &SolverCallbacks::rodasJacobian, this});
     // Joint k's hydraulic states couple to other joints only through q and qd, except in
@@ -933,7 +935,8 @@ PlantStatus ArmPlant::stepRodas3(double dt_s) noexcept {
   PlantStatus status = PlantStatus::kOk;
   if (result != RosenbrockStatus::kOk) {
     status = PlantStatus::kSolverFailure;
-    std::snprintf(error_, sizeof(error_), "Rodas3 at t = %.6f s: %s", t_,
+    std::snprintf(error_, sizeof(error_), "%s at t = %.6f s: %s",
+                  rodas_->method() == RosenbrockMethod::kRodas4 ? "Rodas4" : "Rodas3", t_,
                   result == RosenbrockStatus::kTooManySteps   ? "too many steps in one period"
                   : result == RosenbrockStatus::kStepTooSmall ? "step size underflow"
                                                               : "non-finite right-hand side");

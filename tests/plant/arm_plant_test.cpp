@@ -229,10 +229,15 @@ TEST(ArmPlant, Rodas3FollowsTightCvodesOnIdealTorqueFreeMotion) {
   SolverOptions rodas = test::dtsPlant().solver;
   rodas.integrator = IntegratorKind::kRodas3;
   const Eigen::VectorXd q_rodas = run(rodas);
+  rodas.integrator = IntegratorKind::kRodas4;
+  const Eigen::VectorXd q_rodas4 = run(rodas);
   const Eigen::VectorXd q_cvodes = run(test::dtsPlant().solver);
-  std::printf("ideal-torque free motion, max |q - q_ref| after 1 s: Rodas3 %.2e rad, CVODES %.2e rad\n",
-              (q_rodas - ref).cwiseAbs().maxCoeff(), (q_cvodes - ref).cwiseAbs().maxCoeff());
+  std::printf(
+      "ideal-torque free motion, max |q - q_ref| after 1 s: Rodas3 %.2e rad, Rodas4 %.2e rad, CVODES %.2e rad\n",
+      (q_rodas - ref).cwiseAbs().maxCoeff(), (q_rodas4 - ref).cwiseAbs().maxCoeff(),
+      (q_cvodes - ref).cwiseAbs().maxCoeff());
   EXPECT_LT((q_rodas - ref).cwiseAbs().maxCoeff(), 1e-4);
+  EXPECT_LT((q_rodas4 - ref).cwiseAbs().maxCoeff(), 1e-4);
   EXPECT_GT((ref - model.defaultPosture().head(7)).cwiseAbs().maxCoeff(), 0.05);  // it moved
 }
 

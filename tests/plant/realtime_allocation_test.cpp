@@ -89,9 +89,11 @@ TEST(PlantRealtime, WholeArmTorqueLoopRodas3StepDoesNotAllocate) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, PlantRealtimeIntegrators,
-                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3),
+                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3, IntegratorKind::kRodas4),
                          [](const ::testing::TestParamInfo<IntegratorKind>& param_info) {
-                           return param_info.param == IntegratorKind::kCvodes ? "Cvodes" : "Rodas3";
+                           return param_info.param == IntegratorKind::kCvodes   ? "Cvodes"
+                                  : param_info.param == IntegratorKind::kRodas3 ? "Rodas3"
+                                                                                : "Rodas4";
                          });
 
 }  // namespace

@@ -50,6 +50,7 @@ enum class JacobianKind {
 enum class IntegratorKind {
   kCvodes,  ///< CVODES BDF with root-found hard-stop events: the reference (default)
   kRodas3,  ///< adaptive one-step Rosenbrock (Rodas3) for real-time use; validated against CVODES
+  kRodas4,  ///< the same with the order-4(3) scheme (Hairer & Wanner's RODAS)
 };
 
 /// Integrator settings.
