@@ -375,7 +375,8 @@ double Rodas3::attempt(double h) noexcept {
 }
 
 double Rodas3::attemptRodas4(double h) noexcept {
-  // Stages 1..6 (k_1..k_6 in ks_[0..5]); stage 1 sits at y0 (f0 from the Jacobian pass).
+  // R11 (reports/equations.md). Stages 1..6 (k_1..k_6 in ks_[0..5]); stage 1 sits at y0 (f0
+  // from the Jacobian pass).
   const double inv_h = 1.0 / h;
   solve(f0_, ks_[0]);
   for (int i = 1; i < 6; ++i) {

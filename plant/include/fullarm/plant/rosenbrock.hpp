@@ -18,6 +18,11 @@
 ///   G k3 = f(y0 + 2 k1) + (k1 - k2) / h
 ///   G k4 = f(y0 + 2 k1 + k3) + (k1 - k2 - 8/3 k3) / h
 ///   y1 = y0 + 2 k1 + k3 + k4,   local error estimate k4.
+///
+/// setMethod(RosenbrockMethod::kRodas4) switches the same integrator (storage, Newton matrix,
+/// block elimination, error norm) to RODAS of Hairer & Wanner (Solving ODEs II, sec. IV.7), order
+/// 4 with an embedded order-3 estimate, gamma = 1/4: six stages, five new f evaluations and six
+/// solves per attempt (equation R11 of reports/equations.md).
 
 #include <Eigen/Core>
 #include <array>
