@@ -48,7 +48,8 @@ SignalParams signal(bool chirp, double full_scale) {
   return s;
 }
 
-void runPlant(benchmark::State& state, bool whole_arm, bool chirp, IntegratorKind integrator) {
+void runPlant(benchmark::State& state, bool whole_arm, bool chirp, IntegratorKind integrator,
+              bool rigid_derivatives_once_per_period = false) {
   ArmPlant plant;
   std::vector<JointParams> joints;
   if (whole_arm) {
@@ -58,6 +59,7 @@ void runPlant(benchmark::State& state, bool whole_arm, bool chirp, IntegratorKin
   }
   SolverOptions options = config().solver;
   options.integrator = integrator;
+  options.rigid_derivatives_once_per_period = rigid_derivatives_once_per_period;
   plant.configure(model(), joints, model().defaultPosture(), UserArmParams{}, options, config().seed);
   const int n = plant.numJoints();
   PlantCommand cmd = PlantCommand::zero(n);
@@ -128,6 +130,29 @@ BENCHMARK(BM_Plant_Joint_Chirp_Rodas3)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Joint_SlowSine_Rodas3)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Arm_Chirp_Rodas3)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Arm_SlowSine_Rodas3)->Unit(benchmark::kMillisecond);
+// Rodas3 with the opt-in rigid-body derivatives once per period (SolverOptions).
+void BM_Plant_Arm_Chirp_Rodas3_RigidOncePerPeriod(benchmark::State& state) {
+  runPlant(state, true, true, IntegratorKind::kRodas3, true);
+}
+BENCHMARK(BM_Plant_Arm_Chirp_Rodas3_RigidOncePerPeriod)->Unit(benchmark::kMillisecond);
+
+// Rodas4 (order 4(3) Rosenbrock, `solver.integrator: rodas4`), same scenarios.
+void BM_Plant_Joint_Chirp_Rodas4(benchmark::State& state) {
+  runPlant(state, false, true, IntegratorKind::kRodas4);
+}
+void BM_Plant_Joint_SlowSine_Rodas4(benchmark::State& state) {
+  runPlant(state, false, false, IntegratorKind::kRodas4);
+}
+void BM_Plant_Arm_Chirp_Rodas4(benchmark::State& state) {
+  runPlant(state, true, true, IntegratorKind::kRodas4);
+}
+void BM_Plant_Arm_SlowSine_Rodas4(benchmark::State& state) {
+  runPlant(state, true, false, IntegratorKind::kRodas4);
+}
+BENCHMARK(BM_Plant_Joint_Chirp_Rodas4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Joint_SlowSine_Rodas4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Arm_Chirp_Rodas4)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Arm_SlowSine_Rodas4)->Unit(benchmark::kMillisecond);
 
 // Peer: fixed-step RK4 of the same right-hand side (one joint, 10 us step).
 void BM_Peer_Rk4_Joint_Chirp(benchmark::State& state) {

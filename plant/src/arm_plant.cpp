@@ -430,8 +430,10 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   check(CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
   solver_ = std::move(s);
   rodas_.reset();
-  if (options.integrator == IntegratorKind::kRodas3) {
+  if (options.integrator == IntegratorKind::kRodas3 || options.integrator == IntegratorKind::kRodas4) {
     rodas_ = std::make_unique<Rodas3>();
+    rodas_->setMethod(options.integrator == IntegratorKind::kRodas4 ? RosenbrockMethod::kRodas4
+                                                                    : RosenbrockMethod::kRodas3);
     rodas_->configure(static_cast<int>(N), atol, options.rtol, options.max_steps_per_period,
                       {&SolverCallbacks::rodasRhs, &SolverCallbacks::rodasJacobian, this});
     // Joint k's hydraulic states couple to other joints only through q and qd, except in
@@ -495,6 +497,7 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
   for (int k = 0; k < n_; ++k)
     stop_side_[static_cast<std::size_t>(k)] = stopSide(params_[static_cast<std::size_t>(k)], y[angleIndex(n_, k)]);
   mechanics_valid_ = false;  // (the cuff anchor below moves, and the kinematics are overwritten)
+  rigid_derivatives_stale_ = true;
   if (reduced_ && user_.enabled) {
     // The cuff spring rests where the cuff is at the initial state.
     for (int k = 0; k < n_; ++k) {
@@ -687,6 +690,7 @@ void ArmPlant::evaluateRates(const double* y, double* ydot) noexcept {
 void ArmPlant::evaluateJacobian(const double* y, double* Jdata) noexcept {
   const int N = stateSize(n_);
   std::fill_n(Jdata, static_cast<std::size_t>(N) * static_cast<std::size_t>(N), 0.0);
+  rigid_derivatives_stale_ = true;  // the public Jacobian is always exact at y
   jacobianEntries(y, Jdata);
 }
 
@@ -836,7 +840,10 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
 // mass_inv_ of the evaluateRhs() pass at y that jacobianEntries() has just run.
 void ArmPlant::rigidBodyGradients(const double* /*y*/, double* Jdata, int ld) noexcept {
   const int n = n_;
-  computeReducedInverseDynamicsDerivatives(*reduced_, *reduced_data_, qdd_, rigid_tau_, rigid_dq_, rigid_dqd_);
+  if (rigid_derivatives_stale_ || !options_.rigid_derivatives_once_per_period) {
+    computeReducedInverseDynamicsDerivatives(*reduced_, *reduced_data_, qdd_, rigid_tau_, rigid_dq_, rigid_dqd_);
+    rigid_derivatives_stale_ = false;
+  }
   // J(qd rows, q and qd columns) -= M^-1 [d ID/dq, d ID/dqd] (plain loops: at n = 7 a general
   // matrix product's dispatch costs more than the arithmetic).
   for (int c = 0; c < 2 * n; ++c) {
@@ -928,12 +935,14 @@ PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
 }
 
 PlantStatus ArmPlant::stepRodas3(double dt_s) noexcept {
+  rigid_derivatives_stale_ = true;  // one exact set of rigid-body derivatives per period
   double* y = N_VGetArrayPointer(solver_->y.get());
   const RosenbrockStatus result = rodas_->advance(y, dt_s);
   PlantStatus status = PlantStatus::kOk;
   if (result != RosenbrockStatus::kOk) {
     status = PlantStatus::kSolverFailure;
-    std::snprintf(error_, sizeof(error_), "Rodas3 at t = %.6f s: %s", t_,
+    std::snprintf(error_, sizeof(error_), "%s at t = %.6f s: %s",
+                  rodas_->method() == RosenbrockMethod::kRodas4 ? "Rodas4" : "Rodas3", t_,
                   result == RosenbrockStatus::kTooManySteps   ? "too many steps in one period"
                   : result == RosenbrockStatus::kStepTooSmall ? "step size underflow"
                                                               : "non-finite right-hand side");

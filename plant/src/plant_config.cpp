@@ -157,8 +157,10 @@ PlantConfig build(const YamlMap& root, const std::filesystem::path& source, cons
     o.integrator = IntegratorKind::kCvodes;
   } else if (integrator == "rodas3") {
     o.integrator = IntegratorKind::kRodas3;
+  } else if (integrator == "rodas4") {
+    o.integrator = IntegratorKind::kRodas4;
   } else {
-    solver.fail("integrator", "'" + integrator + "': expected cvodes or rodas3");
+    solver.fail("integrator", "'" + integrator + "': expected cvodes, rodas3 or rodas4");
   }
   for (const auto& [key, value] :
        {std::pair{"rtol", o.rtol}, std::pair{"atol_spool", o.atol_spool},

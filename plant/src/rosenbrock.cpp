@@ -20,6 +20,22 @@ constexpr double kC32 = -1.0;
 constexpr double kC41 = 1.0;
 constexpr double kC42 = -1.0;
 constexpr double kC43 = -8.0 / 3.0;
+// Rodas4 coefficients (RODAS of Hairer & Wanner, Solving ODEs II, 2nd ed., 1996, sec. IV.7,
+// order 4(3); the values of the authors' Fortran code rodas.f, METH = 1), same transformed form: gamma = 1/4; stage i
+// is evaluated at y0 + sum_j a_ij k_j; G k_i = f(stage i) + sum_j (c_ij / h) k_j. Stiffly accurate: stage 6 sits at
+// stage 5 + k5 (the embedded order-3 solution), y1 = stage 6 + k6, error estimate k6; local order 4 (controller
+// exponent 1/4).
+constexpr double kGamma4 = 0.25;
+constexpr double kA4[4][4] = {{1.544, 0.0, 0.0, 0.0},
+                              {0.9466785280815826, 0.2557011698983284, 0.0, 0.0},
+                              {3.314825187068521, 2.896124015972201, 0.9986419139977817, 0.0},
+                              {1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950}};
+constexpr double kC4[5][5] = {
+    {-5.6688, 0.0, 0.0, 0.0, 0.0},
+    {-2.430093356833875, -0.2063599157091915, 0.0, 0.0, 0.0},
+    {-0.1073529058151375, -9.594562251023355, -20.47028614809616, 0.0, 0.0},
+    {7.496443313967647, -10.24680431464352, -33.99990352819905, 11.70890893206160, 0.0},
+    {8.083246795921522, -7.981132988064893, -31.52159432874371, 16.31930543123136, -6.058818238834054}};
 constexpr double kSafety = 0.9;
 constexpr double kMinFactor = 0.2;
 constexpr double kMaxFactor = 5.0;
@@ -42,6 +58,7 @@ void Rodas3::configure(int n, const double* atol, double rtol, long max_steps_pe
     atol_[i] = atol[i];
   }
   for (Vector* v : {&y0_, &f0_, &y1_, &k1_, &k2_, &k3_, &k4_, &stage_, &fstage_, &stage_scratch_}) v->setZero(n);
+  for (Vector& v : ks_) v.setZero(n);
   blocks_ = 0;
   border_ = n;
   jac_.setZero(n, n);
@@ -205,7 +222,7 @@ void luSolveAny(const double* a, int ld, int n, const int* piv, double* x) noexc
 }  // namespace
 
 bool Rodas3::factor(double h) noexcept {
-  const double d = 1.0 / (h * kGamma);
+  const double d = 1.0 / (h * (method_ == RosenbrockMethod::kRodas4 ? kGamma4 : kGamma));
   ++stats_.factorizations;
   if (blocks_ == 0) {
     g_ = -jac_;
@@ -330,6 +347,7 @@ void Rodas3::solve(const Vector& b, Vector& x) noexcept {
 
 double Rodas3::attempt(double h) noexcept {
   if (!factor(h)) return std::numeric_limits<double>::infinity();
+  if (method_ == RosenbrockMethod::kRodas4) return attemptRodas4(h);
   auto solve = [this](const Vector& b, Vector& x) { this->solve(b, x); };
   const double inv_h = 1.0 / h;
   solve(f0_, k1_);
@@ -350,6 +368,35 @@ double Rodas3::attempt(double h) noexcept {
   for (int i = 0; i < n_; ++i) {
     const double w = atol_[i] + rtol_ * std::max(std::abs(y0_[i]), std::abs(y1_[i]));
     const double e = k4_[i] / w;
+    sum += e * e;
+  }
+  const double err = std::sqrt(sum / n_);
+  return std::isfinite(err) ? err : std::numeric_limits<double>::infinity();
+}
+
+double Rodas3::attemptRodas4(double h) noexcept {
+  // R11 (reports/equations.md). Stages 1..6 (k_1..k_6 in ks_[0..5]); stage 1 sits at y0 (f0
+  // from the Jacobian pass).
+  const double inv_h = 1.0 / h;
+  solve(f0_, ks_[0]);
+  for (int i = 1; i < 6; ++i) {
+    if (i < 5) {
+      stage_ = y0_;
+      for (int j = 0; j < i; ++j) stage_ += kA4[i - 1][j] * ks_[static_cast<std::size_t>(j)];
+    } else {
+      stage_ += ks_[4];  // stage 6 = stage 5 + k5 (the embedded solution)
+    }
+    sys_.rhs(sys_.user, stage_.data(), fstage_.data());
+    ++stats_.rhs_evals;
+    for (int j = 0; j < i; ++j) fstage_ += (kC4[i - 1][j] * inv_h) * ks_[static_cast<std::size_t>(j)];
+    solve(fstage_, ks_[static_cast<std::size_t>(i)]);
+  }
+  const Vector& k6 = ks_[5];
+  y1_ = stage_ + k6;  // stiffly accurate: y1 = stage 6 + k6
+  double sum = 0.0;
+  for (int i = 0; i < n_; ++i) {
+    const double w = atol_[i] + rtol_ * std::max(std::abs(y0_[i]), std::abs(y1_[i]));
+    const double e = k6[i] / w;
     sum += e * e;
   }
   const double err = std::sqrt(sum / n_);
@@ -380,7 +427,9 @@ RosenbrockStatus Rodas3::advance(double* y, double duration_s) noexcept {
     const double err = attempt(h);
     // Elementary controller h_new = h (0.9 / err)^(1/3), within [0.2, 5] (no growth right
     // after a rejection).
-    const double factor = err > 0.0 ? kSafety * std::cbrt(1.0 / err) : kMaxFactor;
+    const double factor = err > 0.0 ? kSafety * (method_ == RosenbrockMethod::kRodas4 ? std::sqrt(std::sqrt(1.0 / err))
+                                                                                      : std::cbrt(1.0 / err))
+                                    : kMaxFactor;
     if (err <= 1.0) {
       y0_ = y1_;
       t = last ? duration_s : t + h;

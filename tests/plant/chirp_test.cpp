@@ -54,7 +54,7 @@ ChirpRun runChirp(const JointParams& joint, const SolverOptions& options, double
   return r;
 }
 
-// The issue's chirp checks run with each integrator: CVODES (the reference) and Rodas3.
+// The issue's chirp checks run with each integrator: CVODES (the reference), Rodas3 and Rodas4.
 class PlantChirp : public ::testing::TestWithParam<IntegratorKind> {
  protected:
   [[nodiscard]] SolverOptions options() const {
@@ -98,25 +98,32 @@ TEST_P(PlantChirp, ResponseIsIndependentOfSolverTolerance) {
   EXPECT_GT(normalisedRmsDifference(a.p_load, c.p_load), 1e-5);
 }
 
-INSTANTIATE_TEST_SUITE_P(Integrators, PlantChirp, ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3),
+INSTANTIATE_TEST_SUITE_P(Integrators, PlantChirp,
+                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3, IntegratorKind::kRodas4),
                          [](const ::testing::TestParamInfo<IntegratorKind>& param_info) {
-                           return param_info.param == IntegratorKind::kCvodes ? "Cvodes" : "Rodas3";
+                           return param_info.param == IntegratorKind::kCvodes   ? "Cvodes"
+                                  : param_info.param == IntegratorKind::kRodas3 ? "Rodas3"
+                                                                                : "Rodas4";
                          });
 
-// Rodas3 at the configured tolerances against the tight CVODES reference on the EB chirp, from
+// Rodas3 and Rodas4 at the configured tolerances against the tight CVODES reference on the EB chirp, from
 // the default posture and from 0.1 rad inside the upper limit (stop contacts): within the same
 // 0.5 % RMS the issue allows between rtol and rtol/2, for the angle and the load pressure.
 TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnJointChirp) {
   const PlantConfig& config = test::dtsPlant();
   const JointParams& joint = config.joints[static_cast<std::size_t>(findPlantJoint(config, "EB"))];
-  SolverOptions rodas = config.solver;
-  rodas.integrator = IntegratorKind::kRodas3;
   for (const double from_limit : {0.0, 0.1}) {
     const ChirpRun ref = runChirp(joint, tightReferenceOptions(test::dtsPlant().solver), 4.0, from_limit);
-    const ChirpRun r = runChirp(joint, rodas, 4.0, from_limit);
-    EXPECT_LT(normalisedRmsDifference(ref.q, r.q), PlantTolerance::kIssueRtolRms) << "from limit " << from_limit;
-    EXPECT_LT(normalisedRmsDifference(ref.p_load, r.p_load), PlantTolerance::kIssueRtolRms)
-        << "from limit " << from_limit;
+    for (const IntegratorKind integrator : {IntegratorKind::kRodas3, IntegratorKind::kRodas4}) {
+      SolverOptions rodas = config.solver;
+      rodas.integrator = integrator;
+      const ChirpRun r = runChirp(joint, rodas, 4.0, from_limit);
+      const char* name = integrator == IntegratorKind::kRodas3 ? "Rodas3" : "Rodas4";
+      EXPECT_LT(normalisedRmsDifference(ref.q, r.q), PlantTolerance::kIssueRtolRms)
+          << name << " from limit " << from_limit;
+      EXPECT_LT(normalisedRmsDifference(ref.p_load, r.p_load), PlantTolerance::kIssueRtolRms)
+          << name << " from limit " << from_limit;
+    }
   }
 }
 
@@ -152,16 +159,21 @@ TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnArmChirp) {
     }
     return runs;
   };
-  SolverOptions rodas = config.solver;
-  rodas.integrator = IntegratorKind::kRodas3;
   for (const double from_limit : {0.0, 0.1}) {
     const std::vector<ChirpRun> ref = run(tightReferenceOptions(test::dtsPlant().solver), from_limit);
-    const std::vector<ChirpRun> r = run(rodas, from_limit);
-    for (std::size_t j = 0; j < ref.size(); ++j) {
-      EXPECT_LT(normalisedRmsDifference(ref[j].q, r[j].q), 2.0 * PlantTolerance::kIssueRtolRms)
-          << config.joints[j].name << " from limit " << from_limit;
-      EXPECT_LT(normalisedRmsDifference(ref[j].p_load, r[j].p_load), 2.0 * PlantTolerance::kIssueRtolRms)
-          << config.joints[j].name << " from limit " << from_limit;
+    for (const int variant : {0, 1, 2}) {
+      // Rodas3, Rodas4, Rodas3 with the rigid-body derivatives once per period
+      SolverOptions rodas = config.solver;
+      rodas.integrator = variant == 1 ? IntegratorKind::kRodas4 : IntegratorKind::kRodas3;
+      rodas.rigid_derivatives_once_per_period = variant == 2;
+      const std::vector<ChirpRun> r = run(rodas, from_limit);
+      const char* name = variant == 0 ? "Rodas3" : variant == 1 ? "Rodas4" : "Rodas3 rigid once per period";
+      for (std::size_t j = 0; j < ref.size(); ++j) {
+        EXPECT_LT(normalisedRmsDifference(ref[j].q, r[j].q), 2.0 * PlantTolerance::kIssueRtolRms)
+            << name << " " << config.joints[j].name << " from limit " << from_limit;
+        EXPECT_LT(normalisedRmsDifference(ref[j].p_load, r[j].p_load), 2.0 * PlantTolerance::kIssueRtolRms)
+            << name << " " << config.joints[j].name << " from limit " << from_limit;
+      }
     }
   }
 }

@@ -53,8 +53,11 @@ TEST(PlantConfig, IntegratorIsSelectable) {
   const std::string rodas =
       replaced(defaultText(), "  jacobian: analytic\n", "  jacobian: analytic\n  integrator: rodas3\n");
   EXPECT_EQ(parsePlantConfig(rodas, "test_plant.yaml", test::dtsModel()).solver.integrator, IntegratorKind::kRodas3);
+  const std::string rodas4 =
+      replaced(defaultText(), "  jacobian: analytic\n", "  jacobian: analytic\n  integrator: rodas4\n");
+  EXPECT_EQ(parsePlantConfig(rodas4, "test_plant.yaml", test::dtsModel()).solver.integrator, IntegratorKind::kRodas4);
   expectConfigError(replaced(defaultText(), "  jacobian: analytic\n", "  jacobian: analytic\n  integrator: euler\n"),
-                    "solver.integrator", "expected cvodes or rodas3");
+                    "solver.integrator", "expected cvodes, rodas3 or rodas4");
 }
 
 TEST(PlantConfig, UnknownJointNameIsAClearError) {

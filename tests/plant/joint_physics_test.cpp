@@ -162,9 +162,12 @@ TEST_P(JointPhysics, ClosedValveIsPassive) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Integrators, JointPhysics, ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3),
+INSTANTIATE_TEST_SUITE_P(Integrators, JointPhysics,
+                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3, IntegratorKind::kRodas4),
                          [](const ::testing::TestParamInfo<IntegratorKind>& param_info) {
-                           return param_info.param == IntegratorKind::kCvodes ? "Cvodes" : "Rodas3";
+                           return param_info.param == IntegratorKind::kCvodes   ? "Cvodes"
+                                  : param_info.param == IntegratorKind::kRodas3 ? "Rodas3"
+                                                                                : "Rodas4";
                          });
 
 }  // namespace

@@ -11,7 +11,7 @@
 namespace fullarm::plant {
 /// Test names and messages print the integrator by name.
 inline void PrintTo(IntegratorKind kind, std::ostream* os) {
-  *os << (kind == IntegratorKind::kCvodes ? "cvodes" : "rodas3");
+  *os << (kind == IntegratorKind::kCvodes ? "cvodes" : kind == IntegratorKind::kRodas3 ? "rodas3" : "rodas4");
 }
 }  // namespace fullarm::plant
 

@@ -88,10 +88,31 @@ TEST(PlantRealtime, WholeArmTorqueLoopRodas3StepDoesNotAllocate) {
   EXPECT_GT(plant.stats().steps, 60);
 }
 
+// The opt-in reuse of the rigid-body derivatives within a period (SolverOptions).
+TEST(PlantRealtime, WholeArmRodas3RigidDerivativesOncePerPeriodStepDoesNotAllocate) {
+  const arm::ArmModel& model = test::dtsModel();
+  const PlantConfig& config = test::dtsPlant();
+  SolverOptions options = config.solver;
+  options.integrator = IntegratorKind::kRodas3;
+  options.rigid_derivatives_once_per_period = true;
+  ArmPlant plant;
+  plant.configure(model, config.joints, model.defaultPosture(), config.user_arm, options, config.seed);
+  PlantCommand cmd = PlantCommand::zero(plant.numJoints());
+  for (int k = 0; k < 60; ++k) {
+    for (int j = 0; j < plant.numJoints(); ++j) cmd.command[j] = (k / 20) % 2 == 0 ? 4.0 : -4.0;
+    PlantStatus status = PlantStatus::kOk;
+    EXPECT_NO_HEAP_ALLOCATION(status = plant.step(1e-3, cmd));
+    ASSERT_EQ(status, PlantStatus::kOk) << plant.lastError();
+  }
+  EXPECT_GT(plant.stats().steps, 60);
+}
+
 INSTANTIATE_TEST_SUITE_P(Integrators, PlantRealtimeIntegrators,
-                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3),
+                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3, IntegratorKind::kRodas4),
                          [](const ::testing::TestParamInfo<IntegratorKind>& param_info) {
-                           return param_info.param == IntegratorKind::kCvodes ? "Cvodes" : "Rodas3";
+                           return param_info.param == IntegratorKind::kCvodes   ? "Cvodes"
+                                  : param_info.param == IntegratorKind::kRodas3 ? "Rodas3"
+                                                                                : "Rodas4";
                          });
 
 }  // namespace

@@ -38,8 +38,9 @@ Eigen::Vector3d nonStiffExact(double t) {
   return {1.0 / (1.0 + 9.0 * std::exp(-t)), std::sin(t), std::cos(t)};
 }
 
-double fixedStepError(double h) {
+double fixedStepError(double h, RosenbrockMethod method = RosenbrockMethod::kRodas3) {
   Rodas3 r;
+  r.setMethod(method);
   const double atol[3] = {1e3, 1e3, 1e3};  // every step accepted: a fixed-step run
   r.configure(3, atol, 1e-2, 10, {&NonStiff::rhs, &NonStiff::jacobian, nullptr});
   Eigen::Vector3d y(0.1, 0.0, 1.0);
@@ -60,6 +61,34 @@ TEST(Rodas3, ConvergesWithOrderThree) {
   const double order2 = std::log2(e2 / e3);
   EXPECT_NEAR(order1, 3.0, 0.3);
   EXPECT_NEAR(order2, 3.0, 0.3);
+}
+
+// Rodas4 (Hairer & Wanner's RODAS, order 4): halving the fixed step divides the error by 2^4.
+// (A wrong coefficient in the sixth digit already breaks this: the order conditions are exact.)
+TEST(Rodas4, ConvergesWithOrderFour) {
+  const double e1 = fixedStepError(0.2, RosenbrockMethod::kRodas4);
+  const double e2 = fixedStepError(0.1, RosenbrockMethod::kRodas4);
+  const double e3 = fixedStepError(0.05, RosenbrockMethod::kRodas4);
+  const double order1 = std::log2(e1 / e2);
+  const double order2 = std::log2(e2 / e3);
+  EXPECT_NEAR(order1, 4.0, 0.3);
+  EXPECT_NEAR(order2, 4.0, 0.3);
+  EXPECT_LT(e3, 0.1 * fixedStepError(0.05));  // and it beats Rodas3 at the same step
+}
+
+TEST(Rodas4, AdaptiveErrorFollowsTheTolerance) {
+  for (const double rtol : {1e-4, 1e-6, 1e-8}) {
+    Rodas3 r;
+    r.setMethod(RosenbrockMethod::kRodas4);
+    const double atol[3] = {rtol, rtol, rtol};
+    r.configure(3, atol, rtol, 100000, {&NonStiff::rhs, &NonStiff::jacobian, nullptr});
+    Eigen::Vector3d y(0.1, 0.0, 1.0);
+    for (int k = 0; k < 20; ++k) ASSERT_EQ(r.advance(y.data(), 0.1), RosenbrockStatus::kOk);
+    const double err = (y - nonStiffExact(2.0)).cwiseAbs().maxCoeff();
+    EXPECT_LT(err, 100.0 * rtol) << "rtol " << rtol;
+    EXPECT_GT(r.stats().steps, 20);
+    EXPECT_EQ(r.stats().rhs_evals, r.stats().jac_evals + 5 * (r.stats().steps + r.stats().rejected));
+  }
 }
 
 TEST(Rodas3, AdaptiveErrorFollowsTheTolerance) {
@@ -93,20 +122,24 @@ struct Stiff {
 };
 
 TEST(Rodas3, StiffLinearSystemMatchesMatrixExponential) {
-  Stiff s;
-  Eigen::Matrix2d v;
-  v << 1.0, 1.0, 0.5, -1.0;
-  s.a = v * Eigen::Vector2d(-1e6, -1.0).asDiagonal() * v.inverse();
-  s.g = Eigen::Vector2d(2.0, -1.0);
-  Rodas3 r;
-  const double atol[2] = {1e-9, 1e-9};
-  r.configure(2, atol, 1e-7, 1000, {&Stiff::rhs, &Stiff::jacobian, &s});
-  const Eigen::Vector2d y0(0.0, 0.0);
-  Eigen::Vector2d y = y0;
-  for (int k = 0; k < 1000; ++k) ASSERT_EQ(r.advance(y.data(), 1e-3), RosenbrockStatus::kOk);
-  const Eigen::Vector2d exact = s.g + (s.a * 1.0).exp() * (y0 - s.g);
-  EXPECT_LT((y - exact).cwiseAbs().maxCoeff(), 1e-5);
-  EXPECT_LT(r.stats().steps, 3000);  // not limited by the fast mode
+  for (const RosenbrockMethod method : {RosenbrockMethod::kRodas3, RosenbrockMethod::kRodas4}) {
+    SCOPED_TRACE(method == RosenbrockMethod::kRodas3 ? "Rodas3" : "Rodas4");
+    Stiff s;
+    Eigen::Matrix2d v;
+    v << 1.0, 1.0, 0.5, -1.0;
+    s.a = v * Eigen::Vector2d(-1e6, -1.0).asDiagonal() * v.inverse();
+    s.g = Eigen::Vector2d(2.0, -1.0);
+    Rodas3 r;
+    r.setMethod(method);
+    const double atol[2] = {1e-9, 1e-9};
+    r.configure(2, atol, 1e-7, 1000, {&Stiff::rhs, &Stiff::jacobian, &s});
+    const Eigen::Vector2d y0(0.0, 0.0);
+    Eigen::Vector2d y = y0;
+    for (int k = 0; k < 1000; ++k) ASSERT_EQ(r.advance(y.data(), 1e-3), RosenbrockStatus::kOk);
+    const Eigen::Vector2d exact = s.g + (s.a * 1.0).exp() * (y0 - s.g);
+    EXPECT_LT((y - exact).cwiseAbs().maxCoeff(), 1e-5);
+    EXPECT_LT(r.stats().steps, 3000);  // not limited by the fast mode
+  }
 }
 
 // y' = A (y - g) of size N with eigenvalues from -1e5 to -1 and eigenvectors that make partial
@@ -193,25 +226,30 @@ struct Bordered {
 // the same state to 1e-12 relative.
 template <class System>
 void expectBlockEliminationMatchesDense(System& s, bool expect_halved_border) {
-  constexpr int kN = decltype(System::a)::RowsAtCompileTime;
-  using Vector = Eigen::Matrix<double, kN, 1>;
-  std::array<double, kN> atol{};
-  atol.fill(1e-8);
-  Rodas3 dense;
-  Rodas3 blocks;
-  dense.configure(kN, atol.data(), 1e-6, 10000, {&System::rhs, &System::jacobian, &s});
-  blocks.configure(kN, atol.data(), 1e-6, 10000, {&System::rhs, &System::jacobian, &s});
-  blocks.setBlockStructure(2);
-  Vector yd = Vector::LinSpaced(kN, -0.5, 0.5);
-  Vector yb = yd;
-  for (int k = 0; k < 50; ++k) {
-    ASSERT_EQ(dense.advance(yd.data(), 1e-2), RosenbrockStatus::kOk);
-    ASSERT_EQ(blocks.advance(yb.data(), 1e-2), RosenbrockStatus::kOk);
+  for (const RosenbrockMethod method : {RosenbrockMethod::kRodas3, RosenbrockMethod::kRodas4}) {
+    SCOPED_TRACE(method == RosenbrockMethod::kRodas3 ? "Rodas3" : "Rodas4");
+    constexpr int kN = decltype(System::a)::RowsAtCompileTime;
+    using Vector = Eigen::Matrix<double, kN, 1>;
+    std::array<double, kN> atol{};
+    atol.fill(1e-8);
+    Rodas3 dense;
+    Rodas3 blocks;
+    dense.setMethod(method);
+    blocks.setMethod(method);
+    dense.configure(kN, atol.data(), 1e-6, 10000, {&System::rhs, &System::jacobian, &s});
+    blocks.configure(kN, atol.data(), 1e-6, 10000, {&System::rhs, &System::jacobian, &s});
+    blocks.setBlockStructure(2);
+    Vector yd = Vector::LinSpaced(kN, -0.5, 0.5);
+    Vector yb = yd;
+    for (int k = 0; k < 50; ++k) {
+      ASSERT_EQ(dense.advance(yd.data(), 1e-2), RosenbrockStatus::kOk);
+      ASSERT_EQ(blocks.advance(yb.data(), 1e-2), RosenbrockStatus::kOk);
+    }
+    EXPECT_EQ(dense.stats().steps, blocks.stats().steps);
+    EXPECT_LT((yd - yb).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, yd.cwiseAbs().maxCoeff()));
+    EXPECT_GT(yd.cwiseAbs().maxCoeff(), 1e-3);  // not decayed to nothing
+    EXPECT_EQ(blocks.halvedBorder(), expect_halved_border);
   }
-  EXPECT_EQ(dense.stats().steps, blocks.stats().steps);
-  EXPECT_LT((yd - yb).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, yd.cwiseAbs().maxCoeff()));
-  EXPECT_GT(yd.cwiseAbs().maxCoeff(), 1e-3);  // not decayed to nothing
-  EXPECT_EQ(blocks.halvedBorder(), expect_halved_border);
 }
 
 TEST(Rodas3, BlockEliminationMatchesDenseLu) {

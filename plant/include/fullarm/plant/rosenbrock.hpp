@@ -18,6 +18,11 @@
 ///   G k3 = f(y0 + 2 k1) + (k1 - k2) / h
 ///   G k4 = f(y0 + 2 k1 + k3) + (k1 - k2 - 8/3 k3) / h
 ///   y1 = y0 + 2 k1 + k3 + k4,   local error estimate k4.
+///
+/// setMethod(RosenbrockMethod::kRodas4) switches the same integrator (storage, Newton matrix,
+/// block elimination, error norm) to RODAS of Hairer & Wanner (Solving ODEs II, sec. IV.7), order
+/// 4 with an embedded order-3 estimate, gamma = 1/4: six stages, five new f evaluations and six
+/// solves per attempt (equation R11 of reports/equations.md).
 
 #include <Eigen/Core>
 #include <array>
@@ -37,6 +42,12 @@ struct RosenbrockStats {
   long rhs_evals = 0;       ///< f evaluations (including the one inside each Jacobian call)
   long jac_evals = 0;       ///< Jacobian evaluations (one per attempted step)
   long factorizations = 0;  ///< LU factorisations of G
+};
+
+/// Which Rosenbrock scheme advance() uses.
+enum class RosenbrockMethod {
+  kRodas3,  ///< order 3(2), 4 stages: 3 f evaluations (one inside the Jacobian pass), 4 solves per attempt
+  kRodas4,  ///< order 4(3), 6 stages (Hairer & Wanner's RODAS): 6 f evaluations, 6 solves per attempt
 };
 
 /// Outcome of Rodas3::advance().
@@ -78,6 +89,10 @@ class Rodas3 {
   /// blocks = 0 restores the dense LU. @throws std::invalid_argument if it does not fit.
   void setBlockStructure(int blocks);
 
+  /// Selects the scheme (default kRodas3); takes effect at the next step.
+  void setMethod(RosenbrockMethod method) noexcept { method_ = method; }
+  [[nodiscard]] RosenbrockMethod method() const noexcept { return method_; }
+
   /// Forgets the step-size history (the next advance() starts from `initial_step_s`). @rt
   void resetStepSize(double initial_step_s) noexcept { h_ = initial_step_s; }
   /// Step size the controller proposes for the next step [s].
@@ -90,6 +105,8 @@ class Rodas3 {
  private:
   /// One attempted step of length h from y0_; returns the error norm (inf if not finite).
   double attempt(double h) noexcept;
+  /// The Rodas4 stages of attempt() after the factorisation.
+  double attemptRodas4(double h) noexcept;
   /// Factorises G = I / (h gamma) - J; false if singular.
   bool factor(double h) noexcept;
   /// x = G^-1 b with the last factorisation.
@@ -100,8 +117,10 @@ class Rodas3 {
   long max_steps_ = 1000;
   double h_ = 1e-4;
   RosenbrockSystem sys_{};
+  RosenbrockMethod method_ = RosenbrockMethod::kRodas3;
   RosenbrockStats stats_{};
   Vector atol_, y0_, f0_, y1_, k1_, k2_, k3_, k4_, stage_, fstage_;
+  std::array<Vector, 6> ks_;  // Rodas4 stage increments
   Matrix jac_, g_;
   std::array<int, kMaxRosenbrockStates> pivots_{};
   // Block elimination: per-block inverse of D_k, W = D^-1 B (blocks x border), Schur S = E - C W.
