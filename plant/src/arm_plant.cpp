@@ -431,7 +431,7 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   solver_ = std::move(s);
   rodas_.reset();
   if (options.integrator == IntegratorKind::kRodas3 || options.integrator == IntegratorKind::kRodas4) {
-    rodas_ = std::make_unique<Rodas3>();
+    rodas_ = std::make_unique<RosenbrockIntegrator>();
     rodas_->setMethod(options.integrator == IntegratorKind::kRodas4 ? RosenbrockMethod::kRodas4
                                                                     : RosenbrockMethod::kRodas3);
     rodas_->configure(static_cast<int>(N), atol, options.rtol, options.max_steps_per_period,

@@ -43,18 +43,20 @@ constexpr double kSmallestStep_s = 1e-14;
 
 }  // namespace
 
-void Rodas3::configure(int n, const double* atol, double rtol, long max_steps_per_call,
-                       const RosenbrockSystem& system) {
-  if (n < 1 || n > kMaxRosenbrockStates) throw std::invalid_argument("Rodas3: state size out of range");
-  if (!(rtol > 0.0) || max_steps_per_call < 1) throw std::invalid_argument("Rodas3: bad tolerance or step budget");
-  if (system.rhs == nullptr || system.jacobian == nullptr) throw std::invalid_argument("Rodas3: missing f or J");
+void RosenbrockIntegrator::configure(int n, const double* atol, double rtol, long max_steps_per_call,
+                                     const RosenbrockSystem& system) {
+  if (n < 1 || n > kMaxRosenbrockStates) throw std::invalid_argument("Rosenbrock integrator: state size out of range");
+  if (!(rtol > 0.0) || max_steps_per_call < 1)
+    throw std::invalid_argument("Rosenbrock integrator: bad tolerance or step budget");
+  if (system.rhs == nullptr || system.jacobian == nullptr)
+    throw std::invalid_argument("Rosenbrock integrator: missing f or J");
   n_ = n;
   rtol_ = rtol;
   max_steps_ = max_steps_per_call;
   sys_ = system;
   atol_.resize(n);
   for (int i = 0; i < n; ++i) {
-    if (!(atol[i] > 0.0)) throw std::invalid_argument("Rodas3: absolute tolerances must be positive");
+    if (!(atol[i] > 0.0)) throw std::invalid_argument("Rosenbrock integrator: absolute tolerances must be positive");
     atol_[i] = atol[i];
   }
   for (Vector* v : {&y0_, &f0_, &y1_, &k1_, &k2_, &k3_, &k4_, &stage_, &fstage_, &stage_scratch_}) v->setZero(n);
@@ -66,8 +68,9 @@ void Rodas3::configure(int n, const double* atol, double rtol, long max_steps_pe
   stats_ = {};
 }
 
-void Rodas3::setBlockStructure(int blocks) {
-  if (blocks < 0 || blocks * kRosenbrockBlock > n_) throw std::invalid_argument("Rodas3: block structure too large");
+void RosenbrockIntegrator::setBlockStructure(int blocks) {
+  if (blocks < 0 || blocks * kRosenbrockBlock > n_)
+    throw std::invalid_argument("Rosenbrock integrator: block structure too large");
   blocks_ = blocks;
   border_ = n_ - blocks * kRosenbrockBlock;
   if (blocks_ > 0) {
@@ -221,7 +224,7 @@ void luSolveAny(const double* a, int ld, int n, const int* piv, double* x) noexc
 
 }  // namespace
 
-bool Rodas3::factor(double h) noexcept {
+bool RosenbrockIntegrator::factor(double h) noexcept {
   const double d = 1.0 / (h * (method_ == RosenbrockMethod::kRodas4 ? kGamma4 : kGamma));
   ++stats_.factorizations;
   if (blocks_ == 0) {
@@ -297,7 +300,7 @@ bool Rodas3::factor(double h) noexcept {
   return luFactorAny(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data());
 }
 
-void Rodas3::solve(const Vector& b, Vector& x) noexcept {
+void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {
   if (blocks_ == 0) {
     x = b;
     luSolveAny(g_.data(), static_cast<int>(g_.rows()), n_, pivots_.data(), x.data());
@@ -345,7 +348,7 @@ void Rodas3::solve(const Vector& b, Vector& x) noexcept {
   }
 }
 
-double Rodas3::attempt(double h) noexcept {
+double RosenbrockIntegrator::attempt(double h) noexcept {
   if (!factor(h)) return std::numeric_limits<double>::infinity();
   if (method_ == RosenbrockMethod::kRodas4) return attemptRodas4(h);
   auto solve = [this](const Vector& b, Vector& x) { this->solve(b, x); };
@@ -374,7 +377,7 @@ double Rodas3::attempt(double h) noexcept {
   return std::isfinite(err) ? err : std::numeric_limits<double>::infinity();
 }
 
-double Rodas3::attemptRodas4(double h) noexcept {
+double RosenbrockIntegrator::attemptRodas4(double h) noexcept {
   // R11 (reports/equations.md). Stages 1..6 (k_1..k_6 in ks_[0..5]); stage 1 sits at y0 (f0
   // from the Jacobian pass).
   const double inv_h = 1.0 / h;
@@ -403,7 +406,7 @@ double Rodas3::attemptRodas4(double h) noexcept {
   return std::isfinite(err) ? err : std::numeric_limits<double>::infinity();
 }
 
-RosenbrockStatus Rodas3::advance(double* y, double duration_s) noexcept {
+RosenbrockStatus RosenbrockIntegrator::advance(double* y, double duration_s) noexcept {
   Eigen::Map<Vector> state(y, n_);
   y0_ = state;
   double t = 0.0;

@@ -39,7 +39,7 @@ Eigen::Vector3d nonStiffExact(double t) {
 }
 
 double fixedStepError(double h, RosenbrockMethod method = RosenbrockMethod::kRodas3) {
-  Rodas3 r;
+  RosenbrockIntegrator r;
   r.setMethod(method);
   const double atol[3] = {1e3, 1e3, 1e3};  // every step accepted: a fixed-step run
   r.configure(3, atol, 1e-2, 10, {&NonStiff::rhs, &NonStiff::jacobian, nullptr});
@@ -78,7 +78,7 @@ TEST(Rodas4, ConvergesWithOrderFour) {
 
 TEST(Rodas4, AdaptiveErrorFollowsTheTolerance) {
   for (const double rtol : {1e-4, 1e-6, 1e-8}) {
-    Rodas3 r;
+    RosenbrockIntegrator r;
     r.setMethod(RosenbrockMethod::kRodas4);
     const double atol[3] = {rtol, rtol, rtol};
     r.configure(3, atol, rtol, 100000, {&NonStiff::rhs, &NonStiff::jacobian, nullptr});
@@ -93,7 +93,7 @@ TEST(Rodas4, AdaptiveErrorFollowsTheTolerance) {
 
 TEST(Rodas3, AdaptiveErrorFollowsTheTolerance) {
   for (const double rtol : {1e-4, 1e-6, 1e-8}) {
-    Rodas3 r;
+    RosenbrockIntegrator r;
     const double atol[3] = {rtol, rtol, rtol};
     r.configure(3, atol, rtol, 100000, {&NonStiff::rhs, &NonStiff::jacobian, nullptr});
     Eigen::Vector3d y(0.1, 0.0, 1.0);
@@ -129,7 +129,7 @@ TEST(Rodas3, StiffLinearSystemMatchesMatrixExponential) {
     v << 1.0, 1.0, 0.5, -1.0;
     s.a = v * Eigen::Vector2d(-1e6, -1.0).asDiagonal() * v.inverse();
     s.g = Eigen::Vector2d(2.0, -1.0);
-    Rodas3 r;
+    RosenbrockIntegrator r;
     r.setMethod(method);
     const double atol[2] = {1e-9, 1e-9};
     r.configure(2, atol, 1e-7, 1000, {&Stiff::rhs, &Stiff::jacobian, &s});
@@ -181,7 +181,7 @@ void expectStiffSystemMatchesMatrixExponential() {
   }
   std::array<double, N> atol{};
   atol.fill(1e-9);
-  Rodas3 r;
+  RosenbrockIntegrator r;
   r.configure(N, atol.data(), 1e-7, 10000, {&StiffN<N>::rhs, &StiffN<N>::jacobian, &s});
   const Vector y0 = Vector::Zero();
   Vector y = y0;
@@ -232,8 +232,8 @@ void expectBlockEliminationMatchesDense(System& s, bool expect_halved_border) {
     using Vector = Eigen::Matrix<double, kN, 1>;
     std::array<double, kN> atol{};
     atol.fill(1e-8);
-    Rodas3 dense;
-    Rodas3 blocks;
+    RosenbrockIntegrator dense;
+    RosenbrockIntegrator blocks;
     dense.setMethod(method);
     blocks.setMethod(method);
     dense.configure(kN, atol.data(), 1e-6, 10000, {&System::rhs, &System::jacobian, &s});
@@ -346,7 +346,7 @@ TEST(Rodas3, BlockEliminationWithSevenJointBorderMatchesDenseLu) {
 }
 
 TEST(Rodas3, RejectsBadConfiguration) {
-  Rodas3 r;
+  RosenbrockIntegrator r;
   const double atol[2] = {1e-6, 0.0};
   const RosenbrockSystem sys{&NonStiff::rhs, &NonStiff::jacobian, nullptr};
   EXPECT_THROW(r.configure(0, atol, 1e-6, 10, sys), std::invalid_argument);

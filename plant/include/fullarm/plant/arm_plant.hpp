@@ -285,8 +285,8 @@ class ArmPlant {
   std::vector<JointMeasurement> measured_;
 
   std::unique_ptr<Solver> solver_;
-  std::unique_ptr<Rodas3> rodas_;       // set when options_.integrator == kRodas3
-  std::vector<signed char> stop_side_;  // -1 below min, 0 inside, 1 above max (Rodas3 event count)
+  std::unique_ptr<RosenbrockIntegrator> rodas_;  // set when options_.integrator == kRodas3
+  std::vector<signed char> stop_side_;           // -1 below min, 0 inside, 1 above max (Rodas3 event count)
   PlantStatus stepRodas3(double dt_s) noexcept;
   void sampleOutputs(double dt_s) noexcept;
 };

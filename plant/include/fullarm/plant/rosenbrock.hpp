@@ -1,10 +1,9 @@
 #pragma once
 /// @file
-/// Rodas3: an adaptive, L-stable, stiffly accurate Rosenbrock method of order 3 with an
-/// embedded order-2 error estimate (Sandu et al., "Benchmarking stiff ODE solvers for
-/// atmospheric chemistry problems II: Rosenbrock solvers", Atmos. Environ. 31, 1997; Hairer &
-/// Wanner, Solving ODEs II, sec. IV.7), for autonomous systems y' = f(y) of up to
-/// kMaxRosenbrockStates states, in fixed-capacity storage (no heap after configure()).
+/// RosenbrockIntegrator: Rodas3 by default, an adaptive, L-stable, stiffly accurate Rosenbrock method of order 3 with
+/// an embedded order-2 error estimate (Sandu et al., "Benchmarking stiff ODE solvers for atmospheric chemistry problems
+/// II: Rosenbrock solvers", Atmos. Environ. 31, 1997; Hairer & Wanner, Solving ODEs II, sec. IV.7), for autonomous
+/// systems y' = f(y) of up to kMaxRosenbrockStates states, in fixed-capacity storage (no heap after configure()).
 ///
 /// Why a one-step method next to CVODES: the plant's input is a zero-order hold that jumps at
 /// every control period. A multistep method (BDF) must restart at order 1 with tiny steps
@@ -29,13 +28,13 @@
 
 namespace fullarm::plant {
 
-/// Largest state size Rodas3 handles.
+/// Largest state size RosenbrockIntegrator handles.
 inline constexpr int kMaxRosenbrockStates = 60;
 
 /// Size of the independent diagonal blocks of setBlockStructure().
 inline constexpr int kRosenbrockBlock = 4;
 
-/// Counters of a Rodas3 integrator (since configure() or resetCounters()).
+/// Counters of a RosenbrockIntegrator (since configure() or resetCounters()).
 struct RosenbrockStats {
   long steps = 0;           ///< accepted steps
   long rejected = 0;        ///< steps rejected by the error test
@@ -50,7 +49,7 @@ enum class RosenbrockMethod {
   kRodas4,  ///< order 4(3), 6 stages (Hairer & Wanner's RODAS): 6 f evaluations, 6 solves per attempt
 };
 
-/// Outcome of Rodas3::advance().
+/// Outcome of RosenbrockIntegrator::advance().
 enum class RosenbrockStatus { kOk, kTooManySteps, kStepTooSmall, kNonFinite };
 
 /// The right-hand side and its Jacobian, supplied by the caller.
@@ -62,9 +61,9 @@ struct RosenbrockSystem {
   void* user = nullptr;
 };
 
-/// Adaptive Rodas3 with weighted-RMS error control (the norm CVODES uses):
+/// Adaptive Rodas3 or Rodas4 (setMethod) with weighted-RMS error control (the norm CVODES uses):
 /// ||e|| = sqrt(mean_i (e_i / (rtol max(|y0_i|, |y1_i|) + atol_i))^2) <= 1.
-class Rodas3 {
+class RosenbrockIntegrator {
  public:
   using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxRosenbrockStates, 1>;
   using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRosenbrockStates, kMaxRosenbrockStates>;
