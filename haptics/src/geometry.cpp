@@ -408,16 +408,87 @@ bool vertexCandidate(const PreparedTriangle& v_tri, int k, const PreparedTriangl
   return true;
 }
 
-// Closest pair of edge k of E and triangle T (the segment against T: its two endpoints against
-// T and the segment against T's three edges, unless it crosses T), kept when the point on E is
-// also E's closest point to the point on T (E's Voronoi-region test; the point on T is T's
-// closest point by construction, since the pair minimises over the edge and T).
-bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, Vector3d& e_point, Vector3d& t_point,
-                   double& distance_sq, LocalFeature& e_feature, LocalFeature& t_feature) noexcept {
+}  // namespace
+
+bool closestPointsSpanningSegmentTriangle(const Vector3d& p0, const Vector3d& d, double d_sq, const PreparedTriangle& t,
+                                          SegmentTriangleResult& out) noexcept {
+  if (!(d_sq > 0.0)) return false;
+  const double inv_d_sq = 1.0 / d_sq;
+  // Line parameter s_k of each vertex and its offset x_k from the line: the triangle projected
+  // along d onto the plane through p0 perpendicular to d, where the line is the origin.
+  double s[3];
+  Vector3d x[3];
+  for (int k = 0; k < 3; ++k) {
+    const Vector3d r = t.v[k] - p0;
+    s[k] = r.dot(d) * inv_d_sq;
+    if (!(s[k] >= 0.0 && s[k] <= 1.0)) return false;  // the segment does not span the triangle
+    x[k] = r - s[k] * d;
+  }
+  // Closest point of the projected triangle to the origin (Ericson 5.1.5, the regions of
+  // closestPointTriangle with p = 0). Its preimage on t is t's closest point to the line; the
+  // segment's point has the same barycentric combination of the s_k. An edge region needs a
+  // projected edge of positive length (an edge parallel to d projects to a point: its region
+  // test is meaningless, the general query decides).
+  const Vector3d ab = x[1] - x[0];
+  const Vector3d ac = x[2] - x[0];
+  const double d1 = -ab.dot(x[0]);
+  const double d2 = -ac.dot(x[0]);
+  auto vertex = [&](int k) noexcept {
+    out.s = s[k];
+    out.q = t.v[k];
+    out.feature_t = {LocalFeature::Kind::kVertex, static_cast<std::uint8_t>(k)};
+  };
+  auto edge = [&](int k, double lambda) noexcept {
+    const int k1 = (k + 1) % 3;
+    if (lambda <= 0.0) return vertex(k);  // an end of the edge (the general query's edgeFeature)
+    if (lambda >= 1.0) return vertex(k1);
+    out.s = std::clamp(s[k] + lambda * (s[k1] - s[k]), 0.0, 1.0);
+    out.q = t.v[k] + lambda * t.edge[k];
+    out.feature_t = {LocalFeature::Kind::kEdge, static_cast<std::uint8_t>(k)};
+  };
+  if (d1 <= 0.0 && d2 <= 0.0) {
+    vertex(0);
+  } else {
+    const double d3 = -ab.dot(x[1]);
+    const double d4 = -ac.dot(x[1]);
+    const double vc = d1 * d4 - d3 * d2;
+    if (d3 >= 0.0 && d4 <= d3) {
+      vertex(1);
+    } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+      if (!(d1 - d3 > 0.0)) return false;
+      edge(0, d1 / (d1 - d3));
+    } else {
+      const double d5 = -ab.dot(x[2]);
+      const double d6 = -ac.dot(x[2]);
+      const double vb = d5 * d2 - d1 * d6;
+      const double va = d3 * d6 - d5 * d4;
+      if (d6 >= 0.0 && d5 <= d6) {
+        vertex(2);
+      } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        // Edge 2 runs from vertex 2 to vertex 0: the point a + w ac is at 1 - w along it.
+        if (!(d2 - d6 > 0.0)) return false;
+        edge(2, 1.0 - d2 / (d2 - d6));
+      } else if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+        const double den = (d4 - d3) + (d5 - d6);
+        if (!(den > 0.0)) return false;
+        edge(1, (d4 - d3) / den);
+      } else {
+        return false;  // face region: the line meets the triangle inside the segment
+      }
+    }
+  }
+  out.p = p0 + out.s * d;
+  out.distance_sq = (out.q - out.p).squaredNorm();
+  return true;
+}
+
+namespace {
+
+// Closest pair of edge k of E and a triangle T that it does not cross: the segment against
+// T's three edges, then its endpoints against T (the general segment-triangle query).
+void generalEdgeTriangle(const PreparedTriangle& E, int k, const PreparedTriangle& T, Vector3d& e_point,
+                         Vector3d& t_point, double& best, LocalFeature& e_feature, LocalFeature& t_feature) noexcept {
   const int k1 = (k + 1) % 3;
-  double s_cross = 0.0;
-  if (segmentCrossesPrepared(E.v[k], E.v[k1], T, s_cross)) return false;
-  double best = std::numeric_limits<double>::infinity();
   for (int j = 0; j < 3; ++j) {
     const SquaredSegmentResult c =
         closestSegmentSegmentSquared(E.v[k], E.edge[k], E.edge_sq[k], T.v[j], T.edge[j], T.edge_sq[j]);
@@ -447,6 +518,30 @@ bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, 
       e_feature = {Kind::kVertex, static_cast<std::uint8_t>(end)};
       t_feature = c.feature;
     }
+  }
+}
+
+// Closest pair of edge k of E and triangle T (the segment against T: the spanning kernel when
+// it applies, else its two endpoints against T and the segment against T's three edges, unless
+// it crosses T), kept when the point on E is also E's closest point to the point on T (E's
+// Voronoi-region test; the point on T is T's closest point by construction, since the pair
+// minimises over the edge and T).
+bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, Vector3d& e_point, Vector3d& t_point,
+                   double& distance_sq, LocalFeature& e_feature, LocalFeature& t_feature) noexcept {
+  double best = std::numeric_limits<double>::infinity();
+  SegmentTriangleResult spanning;
+  if (closestPointsSpanningSegmentTriangle(E.v[k], E.edge[k], E.edge_sq[k], T, spanning)) {
+    // The dominant case (a long link edge over a small object triangle): one point-triangle
+    // query in the plane perpendicular to the edge.
+    best = spanning.distance_sq;
+    e_point = spanning.p;
+    t_point = spanning.q;
+    e_feature = edgeFeature(k, spanning.s);
+    t_feature = spanning.feature_t;
+  } else {
+    double s_cross = 0.0;
+    if (segmentCrossesPrepared(E.v[k], E.v[(k + 1) % 3], T, s_cross)) return false;
+    generalEdgeTriangle(E, k, T, e_point, t_point, best, e_feature, t_feature);
   }
   if (!(best > 0.0)) return false;
   const Vector3d w = t_point - e_point;

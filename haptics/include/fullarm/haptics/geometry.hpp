@@ -101,6 +101,32 @@ struct PreparedTriangle {
   return t;
 }
 
+/// Closest points of a segment and a triangle (see closestPointsSpanningSegmentTriangle).
+struct SegmentTriangleResult {
+  double s = 0.0;            ///< parameter of p on the segment, in [0, 1]
+  Eigen::Vector3d p;         ///< closest point on the segment [m]
+  Eigen::Vector3d q;         ///< closest point on the triangle [m]
+  double distance_sq = 0.0;  ///< |p - q|^2 [m^2]
+  LocalFeature feature_t;    ///< closest feature of the triangle: a vertex or an edge
+};
+
+/// Exact closest points of the segment [p0, p0 + d] and triangle t when the segment spans the
+/// triangle along its direction (every vertex of t projects onto the segment: 0 <= (v - p0) . d
+/// <= |d|^2), the dominant case of local descent, where a link capsule's long strip edge lies
+/// over a small triangle of the environment. Then the closest point of the segment to any point
+/// of t is that of the infinite line, and the distance is that of the line to t: the distance
+/// from the line's point to t projected along d onto the plane perpendicular to d, one
+/// point-triangle query (Ericson 5.1.5) instead of the three edge-edge and two endpoint-triangle
+/// candidates of the general segment-triangle query. Returns false, and leaves `out`
+/// unspecified, when the kernel does not apply: a vertex projects outside the segment, the
+/// projected triangle holds the line (the segment meets t: the face region) or is degenerate
+/// beyond the region tests. The caller then runs the general query.
+/// @param d segment direction (p1 - p0) [m], d_sq = |d|^2 > 0 [m^2]
+/// @rt
+[[nodiscard]] bool closestPointsSpanningSegmentTriangle(const Eigen::Vector3d& p0, const Eigen::Vector3d& d,
+                                                        double d_sq, const PreparedTriangle& t,
+                                                        SegmentTriangleResult& out) noexcept;
+
 /// Same as squaredDistancePointTriangle on a prepared triangle.
 /// @rt
 [[nodiscard]] double squaredDistancePointTriangle(const Eigen::Vector3d& p, const PreparedTriangle& t) noexcept;
