@@ -410,6 +410,47 @@ bool vertexCandidate(const PreparedTriangle& v_tri, int k, const PreparedTriangl
 
 }  // namespace
 
+bool certifyVertexTriangle(const Vector3d& v, const Vector3d& to_next, const Vector3d& to_prev,
+                           const PreparedTriangle& t, Vector3d& q, double& distance_sq,
+                           LocalFeature& feature_t) noexcept {
+  const SquaredPointResult c = closestPointSquared(v, t);
+  const Vector3d w = c.point - v;
+  if (!(c.distance_sq > 0.0) || !notTowards(w, to_next) || !notTowards(w, to_prev)) return false;
+  q = c.point;
+  distance_sq = c.distance_sq;
+  feature_t = c.feature;
+  return true;
+}
+
+bool certifyEdgeEdgePair(const Vector3d& a0, const Vector3d& a1, const Vector3d& inward_a, const Vector3d& b0,
+                         const Vector3d& b1, const Vector3d& inward_b, Vector3d& p, Vector3d& q,
+                         double& distance_sq) noexcept {
+  // Closest points of the two lines a0 + s da, b0 + t db (Ericson 5.1.8): the 2x2 normal
+  // equations, solved only when the solution is interior to both segments (0 < s, t < 1, tested
+  // on the numerators against the positive denominator, no division before).
+  const Vector3d da = a1 - a0;
+  const Vector3d db = b1 - b0;
+  const Vector3d r = a0 - b0;
+  const double a = da.squaredNorm();
+  const double e = db.squaredNorm();
+  const double b = da.dot(db);
+  const double c = da.dot(r);
+  const double f = db.dot(r);
+  const double denom = a * e - b * b;
+  if (!(denom > 1e-20 * a * e)) return false;  // parallel (the threshold of the general routine)
+  const double s_num = b * f - c * e;
+  const double t_num = a * f - b * c;
+  if (!(s_num > 0.0 && s_num < denom && t_num > 0.0 && t_num < denom)) return false;
+  const double inv = 1.0 / denom;
+  p = a0 + (s_num * inv) * da;
+  q = b0 + (t_num * inv) * db;
+  const Vector3d w = q - p;
+  distance_sq = w.squaredNorm();
+  // Interior points of both edges, the offset perpendicular to both: each point is its
+  // triangle's closest point iff the offset does not point into that triangle.
+  return distance_sq > 0.0 && notTowards(w, inward_a) && notTowards(-w, inward_b);
+}
+
 bool closestPointsSpanningSegmentTriangle(const Vector3d& p0, const Vector3d& d, double d_sq, const PreparedTriangle& t,
                                           SegmentTriangleResult& out) noexcept {
   if (!(d_sq > 0.0)) return false;
@@ -576,15 +617,8 @@ TriangleTriangleResult closestPointsTriangleTriangleWarm(const PreparedTriangle&
   } else if (guess_a.kind == Kind::kEdge && guess_b.kind == Kind::kEdge) {
     const int i = guess_a.index;
     const int j = guess_b.index;
-    const SquaredSegmentResult c =
-        closestSegmentSegmentSquared(A.v[i], A.edge[i], A.edge_sq[i], B.v[j], B.edge[j], B.edge_sq[j]);
-    // Interior points of both edges: the offset is perpendicular to both edges, so each point
-    // is its triangle's closest point iff the offset does not point into that triangle.
-    if (c.s > 0.0 && c.s < 1.0 && c.t > 0.0 && c.t < 1.0 && c.distance_sq > 0.0 && edgeRegionHolds(A, i, c.q - c.p) &&
-        edgeRegionHolds(B, j, c.p - c.q)) {
-      r.p = c.p;
-      r.q = c.q;
-      d_sq = c.distance_sq;
+    if (certifyEdgeEdgePair(A.v[i], A.v[(i + 1) % 3], A.normal.cross(A.edge[i]), B.v[j], B.v[(j + 1) % 3],
+                            B.normal.cross(B.edge[j]), r.p, r.q, d_sq)) {
       r.feature_a = guess_a;
       r.feature_b = guess_b;
       found = true;

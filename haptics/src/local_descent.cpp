@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <utility>
 
@@ -159,19 +160,54 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     }
     int tl = m.tri_link;
     int to = m.tri_object;
-    // The tracked pair, warm-started from the previous features (same distance as the full
-    // computation; one candidate and its optimality test when the features did not change).
-    // Each side's prepared triangle is reused for every neighbour evaluated against it.
+    // The tracked pair at the new pose. Most pairs keep their features between ticks: their
+    // optimality certificate (the KKT conditions, certifyEdgeEdgePair / certifyVertexTriangle)
+    // is checked on the raw vertices first, and the triangles are prepared only when it fails
+    // or when a neighbour is evaluated against them. Otherwise the warm-started query runs.
     // Minima of one link/object pair often start on the same link triangle (a capsule's long
     // strips hold several): its prepared copy in the object frame is reused while the pose is.
-    if (tl != cached_link_tri) {
-      cached_link = linkTriangle(lmesh, tl, X_OL);
-      cached_link_tri = tl;
+    const PreparedTriangle* A = nullptr;  // the link triangle, prepared on first use
+    auto prepareLink = [&]() noexcept {
+      if (tl != cached_link_tri) {
+        cached_link = linkTriangle(lmesh, tl, X_OL);
+        cached_link_tri = tl;
+      }
+      return &cached_link;
+    };
+    PreparedTriangle B;  // the object triangle, prepared on first use (b_ready)
+    bool b_ready = false;
+    const LocalFeature guess_l = localGuess(lmesh, tl, m.feature_link);
+    const LocalFeature guess_o = localGuess(omesh, to, m.feature_object);
+    TriangleTriangleResult r;
+    bool certified = false;
+    double d_sq = 0.0;
+    if (guess_l.kind == LocalFeature::Kind::kEdge && guess_o.kind == LocalFeature::Kind::kEdge) {
+      const Eigen::Vector3i& lt = lmesh.triangle(tl);
+      const Eigen::Vector3i& ot = omesh.triangle(to);
+      const Vector3d& l0 = lmesh.vertex(lt[guess_l.index]);
+      const Vector3d& l1 = lmesh.vertex(lt[(guess_l.index + 1) % 3]);
+      const Vector3d& o0 = omesh.vertex(ot[guess_o.index]);
+      const Vector3d& o1 = omesh.vertex(ot[(guess_o.index + 1) % 3]);
+      certified = certifyEdgeEdgePair(X_OL * l0, X_OL * l1, X_OL.linear() * lmesh.faceNormal(tl).cross(l1 - l0), o0, o1,
+                                      omesh.faceNormal(to).cross(o1 - o0), r.p, r.q, d_sq);
+    } else if (guess_o.kind == LocalFeature::Kind::kVertex && guess_l.kind != LocalFeature::Kind::kVertex) {
+      const Eigen::Vector3i& ot = omesh.triangle(to);
+      const Vector3d& v = omesh.vertex(ot[guess_o.index]);
+      A = prepareLink();
+      certified = certifyVertexTriangle(v, omesh.vertex(ot[(guess_o.index + 1) % 3]) - v,
+                                        omesh.vertex(ot[(guess_o.index + 2) % 3]) - v, *A, r.p, d_sq, r.feature_a);
+      r.q = v;
     }
-    const PreparedTriangle* A = &cached_link;
-    PreparedTriangle B = objectTriangle(omesh, to);
-    TriangleTriangleResult r = closestPointsTriangleTriangleWarm(*A, B, localGuess(lmesh, tl, m.feature_link),
-                                                                 localGuess(omesh, to, m.feature_object));
+    if (certified) {
+      r.distance_m = std::sqrt(d_sq);
+      if (guess_o.kind == LocalFeature::Kind::kEdge) r.feature_a = guess_l;
+      r.feature_b = guess_o;
+    } else {
+      if (A == nullptr) A = prepareLink();
+      B = objectTriangle(omesh, to);
+      b_ready = true;
+      r = closestPointsTriangleTriangleWarm(*A, B, guess_l, guess_o);
+    }
     Feature cur_l = globalFeature(lmesh, tl, r.feature_a);
     Feature cur_o = globalFeature(omesh, to, r.feature_b);
     int it = 0;
@@ -202,6 +238,10 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
           if (!screen.mayBeCloser(t)) continue;
           // Warm-started: B and its closest feature are unchanged, t's is unknown (face).
           ++st.evaluated;
+          if (!b_ready) {
+            B = objectTriangle(omesh, to);
+            b_ready = true;
+          }
           PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
           cand = linkTriangle(lmesh, t, X_OL);
           const TriangleTriangleResult c = closestPointsTriangleTriangleWarm(cand, B, LocalFeature{}, r.feature_b);
@@ -235,6 +275,7 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
             }
           }
           ++st.evaluated;
+          if (A == nullptr) A = prepareLink();
           PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
           cand = objectTriangle(omesh, t);
           const TriangleTriangleResult c = closestPointsTriangleTriangleWarm(*A, cand, r.feature_a, LocalFeature{});
@@ -255,6 +296,7 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       } else {
         to = best_t;
         B = candidates[static_cast<std::size_t>(best_slot)];
+        b_ready = true;
       }
       r = best;
       cur_l = globalFeature(lmesh, tl, r.feature_a);

@@ -127,6 +127,33 @@ struct SegmentTriangleResult {
                                                         double d_sq, const PreparedTriangle& t,
                                                         SegmentTriangleResult& out) noexcept;
 
+/// Optimality certificate of an edge-edge pair (the KKT conditions of the triangle-triangle
+/// distance at the pair), on raw vertices: no triangle is prepared. Edge a0 -> a1 of triangle
+/// A and edge b0 -> b1 of triangle B, with `inward_a` / `inward_b` any positive multiple of the
+/// direction into the triangle perpendicular to the edge in its plane (n x e for a triangle
+/// wound counter-clockwise about n). Returns true, with the closest points p (on A), q (on B)
+/// and |p - q|^2, when the closest points of the two lines lie strictly inside both edges, the
+/// distance is positive and the offset q - p points into neither triangle (with the slack of
+/// closestPointsTriangleTriangleWarm): then (p, q) is the closest pair of the two triangles.
+/// Otherwise false (parallel edges, an end reached, an offset into a triangle): the caller
+/// computes the pair. The test of closestPointsTriangleTriangleWarm's edge-edge guess.
+/// @rt
+[[nodiscard]] bool certifyEdgeEdgePair(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1,
+                                       const Eigen::Vector3d& inward_a, const Eigen::Vector3d& b0,
+                                       const Eigen::Vector3d& b1, const Eigen::Vector3d& inward_b, Eigen::Vector3d& p,
+                                       Eigen::Vector3d& q, double& distance_sq) noexcept;
+
+/// Optimality certificate of a vertex against a prepared triangle: vertex v of a triangle whose
+/// two edges leaving v are `to_next` and `to_prev`, against triangle t. Returns true, with t's
+/// closest point q, its feature and |v - q|^2 > 0, when v is also its own triangle's closest
+/// point to q (the offset q - v has no positive component along either edge leaving v): the
+/// pair is then the closest pair of the two triangles. The test of
+/// closestPointsTriangleTriangleWarm's vertex guess, without preparing v's triangle.
+/// @rt
+[[nodiscard]] bool certifyVertexTriangle(const Eigen::Vector3d& v, const Eigen::Vector3d& to_next,
+                                         const Eigen::Vector3d& to_prev, const PreparedTriangle& t, Eigen::Vector3d& q,
+                                         double& distance_sq, LocalFeature& feature_t) noexcept;
+
 /// Same as squaredDistancePointTriangle on a prepared triangle.
 /// @rt
 [[nodiscard]] double squaredDistancePointTriangle(const Eigen::Vector3d& p, const PreparedTriangle& t) noexcept;
