@@ -453,6 +453,12 @@ bool certifyEdgeEdgePair(const Vector3d& a0, const Vector3d& a1, const Vector3d&
 
 bool closestPointsSpanningSegmentTriangle(const Vector3d& p0, const Vector3d& d, double d_sq, const PreparedTriangle& t,
                                           SegmentTriangleResult& out) noexcept {
+  return closestPointsSpanningSegmentTriangle(p0, d, d_sq, t.v[0], t.v[1], t.v[2], out);
+}
+
+bool closestPointsSpanningSegmentTriangle(const Vector3d& p0, const Vector3d& d, double d_sq, const Vector3d& t0,
+                                          const Vector3d& t1, const Vector3d& t2, SegmentTriangleResult& out) noexcept {
+  const Vector3d* const v[3] = {&t0, &t1, &t2};
   if (!(d_sq > 0.0)) return false;
   const double inv_d_sq = 1.0 / d_sq;
   // Line parameter s_k of each vertex and its offset x_k from the line: the triangle projected
@@ -460,7 +466,7 @@ bool closestPointsSpanningSegmentTriangle(const Vector3d& p0, const Vector3d& d,
   double s[3];
   Vector3d x[3];
   for (int k = 0; k < 3; ++k) {
-    const Vector3d r = t.v[k] - p0;
+    const Vector3d r = *v[k] - p0;
     s[k] = r.dot(d) * inv_d_sq;
     if (!(s[k] >= 0.0 && s[k] <= 1.0)) return false;  // the segment does not span the triangle
     x[k] = r - s[k] * d;
@@ -476,7 +482,7 @@ bool closestPointsSpanningSegmentTriangle(const Vector3d& p0, const Vector3d& d,
   const double d2 = -ac.dot(x[0]);
   auto vertex = [&](int k) noexcept {
     out.s = s[k];
-    out.q = t.v[k];
+    out.q = *v[k];
     out.feature_t = {LocalFeature::Kind::kVertex, static_cast<std::uint8_t>(k)};
   };
   auto edge = [&](int k, double lambda) noexcept {
@@ -484,7 +490,7 @@ bool closestPointsSpanningSegmentTriangle(const Vector3d& p0, const Vector3d& d,
     if (lambda <= 0.0) return vertex(k);  // an end of the edge (the general query's edgeFeature)
     if (lambda >= 1.0) return vertex(k1);
     out.s = std::clamp(s[k] + lambda * (s[k1] - s[k]), 0.0, 1.0);
-    out.q = t.v[k] + lambda * t.edge[k];
+    out.q = *v[k] + lambda * (*v[k1] - *v[k]);
     out.feature_t = {LocalFeature::Kind::kEdge, static_cast<std::uint8_t>(k)};
   };
   if (d1 <= 0.0 && d2 <= 0.0) {
@@ -593,6 +599,28 @@ bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, 
 }
 
 }  // namespace
+
+bool closestPointsEdgeTriangleSpanning(const PreparedTriangle& E, int k, const Vector3d& t0, const Vector3d& t1,
+                                       const Vector3d& t2, TriangleTriangleResult& out) noexcept {
+  // edgeCandidate's spanning branch and optimality test, step for step.
+  SegmentTriangleResult spanning;
+  if (!closestPointsSpanningSegmentTriangle(E.v[k], E.edge[k], E.edge_sq[k], t0, t1, t2, spanning) ||
+      !(spanning.distance_sq > 0.0)) {
+    return false;
+  }
+  const LocalFeature e_feature = edgeFeature(k, spanning.s);
+  const Vector3d w = spanning.q - spanning.p;
+  if (!(e_feature.kind == Kind::kVertex ? vertexRegionHolds(E, e_feature.index, w) : edgeRegionHolds(E, k, w))) {
+    return false;
+  }
+  out.p = spanning.p;
+  out.q = spanning.q;
+  out.distance_m = std::sqrt(spanning.distance_sq);
+  out.feature_a = e_feature;
+  out.feature_b = spanning.feature_t;
+  out.intersecting = false;
+  return true;
+}
 
 TriangleTriangleResult closestPointsTriangleTriangleWarm(const PreparedTriangle& A, const PreparedTriangle& B,
                                                          const LocalFeature& guess_a,

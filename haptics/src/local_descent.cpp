@@ -15,9 +15,14 @@ namespace {
 
 // Local index (0..2) of a global feature within triangle `tri`, or -1 (face or not on it).
 int localIndex(const TriMesh& mesh, int tri, const Feature& f) noexcept {
-  for (int k = 0; k < 3; ++k) {
-    if (f.kind == FeatureKind::kVertex && mesh.triangle(tri)[k] == f.index) return k;
-    if (f.kind == FeatureKind::kEdge && mesh.triangleEdge(tri, k) == f.index) return k;
+  if (f.kind == FeatureKind::kVertex) {
+    const Eigen::Vector3i& v = mesh.triangle(tri);
+    return v[0] == f.index ? 0 : v[1] == f.index ? 1 : v[2] == f.index ? 2 : -1;
+  }
+  if (f.kind == FeatureKind::kEdge) {
+    for (int k = 0; k < 3; ++k) {
+      if (mesh.triangleEdge(tri, k) == f.index) return k;
+    }
   }
   return -1;
 }
@@ -208,8 +213,10 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       b_ready = true;
       r = closestPointsTriangleTriangleWarm(*A, B, guess_l, guess_o);
     }
-    Feature cur_l = globalFeature(lmesh, tl, r.feature_a);
-    Feature cur_o = globalFeature(omesh, to, r.feature_b);
+    // A certified pair keeps the tracked features.
+    Feature cur_l =
+        certified && guess_o.kind == LocalFeature::Kind::kEdge ? m.feature_link : globalFeature(lmesh, tl, r.feature_a);
+    Feature cur_o = certified ? m.feature_object : globalFeature(omesh, to, r.feature_b);
     int it = 0;
     for (; it < params.max_iterations; ++it) {
       // Steepest move among the triangles around the closest feature on either side.
@@ -223,6 +230,7 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       TriangleTriangleResult best = r;
       int best_t = -1;
       bool best_link_side = false;
+      bool best_prepared = false;  // the best neighbour's prepared triangle is in candidates[best_slot]
       int best_slot = 0;
       int free_slot = 0;
       // A face feature has no neighbours to screen; a direction inside the feature's
@@ -249,6 +257,7 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
             best = c;
             best_t = t;
             best_link_side = true;
+            best_prepared = true;
             best_slot = free_slot;
             free_slot ^= 1;
           }
@@ -276,15 +285,27 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
           }
           ++st.evaluated;
           if (A == nullptr) A = prepareLink();
-          PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
-          cand = objectTriangle(omesh, t);
-          const TriangleTriangleResult c = closestPointsTriangleTriangleWarm(*A, cand, r.feature_a, LocalFeature{});
+          // The link edge against t through the spanning kernel on t's raw vertices (the
+          // dominant case; bit for bit the warm start below); t is prepared only when the
+          // kernel does not decide, or later if the step moves onto it and it is needed.
+          TriangleTriangleResult c;
+          bool prepared = false;
+          const Eigen::Vector3i& tv = omesh.triangle(t);
+          if (r.feature_a.kind != LocalFeature::Kind::kEdge ||
+              !closestPointsEdgeTriangleSpanning(*A, r.feature_a.index, omesh.vertex(tv[0]), omesh.vertex(tv[1]),
+                                                 omesh.vertex(tv[2]), c)) {
+            PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
+            cand = objectTriangle(omesh, t);
+            c = closestPointsTriangleTriangleWarm(*A, cand, r.feature_a, LocalFeature{});
+            prepared = true;
+          }
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
             best = c;
             best_t = t;
             best_link_side = false;
+            best_prepared = prepared;
             best_slot = free_slot;
-            free_slot ^= 1;
+            if (prepared) free_slot ^= 1;
           }
         }
       }
@@ -295,8 +316,8 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
         A = &moved_link;
       } else {
         to = best_t;
-        B = candidates[static_cast<std::size_t>(best_slot)];
-        b_ready = true;
+        b_ready = best_prepared;
+        if (best_prepared) B = candidates[static_cast<std::size_t>(best_slot)];
       }
       r = best;
       cur_l = globalFeature(lmesh, tl, r.feature_a);

@@ -324,6 +324,7 @@ TEST(GeometryTest, SpanningSegmentKernelMatchesGeneralSegmentTriangle) {
 TEST(GeometryTest, WarmStartOfLongEdgesOverSmallTrianglesMatchesFcl) {
   std::mt19937 rng(37);
   int spanning = 0;
+  int raw_decided = 0;
   for (int trial = 0; trial < 3000; ++trial) {
     const Vector3d e = randomPoint(rng, 1.0).normalized();
     const Vector3d m = e.cross(randomPoint(rng, 1.0)).normalized();
@@ -340,6 +341,22 @@ TEST(GeometryTest, WarmStartOfLongEdgesOverSmallTrianglesMatchesFcl) {
     if (!(pb.normal_sq > 1e-16)) continue;
     SegmentTriangleResult probe;
     spanning += closestPointsSpanningSegmentTriangle(pa.v[0], pa.edge[0], pa.edge_sq[0], pb, probe) ? 1 : 0;
+    // The raw-vertex evaluation of local descent: bit for bit the warm start on the prepared
+    // triangle whenever it decides.
+    for (int k = 0; k < 3; ++k) {
+      TriangleTriangleResult raw;
+      if (!closestPointsEdgeTriangleSpanning(pa, k, B[0], B[1], B[2], raw)) continue;
+      ++raw_decided;
+      const TriangleTriangleResult w =
+          closestPointsTriangleTriangleWarm(pa, pb, LocalFeature{Kind::kEdge, static_cast<std::uint8_t>(k)}, {});
+      EXPECT_EQ(raw.distance_m, w.distance_m);
+      EXPECT_EQ(raw.p, w.p);
+      EXPECT_EQ(raw.q, w.q);
+      EXPECT_EQ(raw.feature_a.kind, w.feature_a.kind);
+      EXPECT_EQ(raw.feature_a.index, w.feature_a.index);
+      EXPECT_EQ(raw.feature_b.kind, w.feature_b.kind);
+      EXPECT_EQ(raw.feature_b.index, w.feature_b.index);
+    }
     Vector3d P;
     Vector3d Q;
     const double d_fcl = fcl::detail::TriangleDistance<double>::triDistance(A[0], A[1], A[2], B[0], B[1], B[2], P, Q);
@@ -354,6 +371,7 @@ TEST(GeometryTest, WarmStartOfLongEdgesOverSmallTrianglesMatchesFcl) {
     }
   }
   EXPECT_GT(spanning, 2000);
+  EXPECT_GT(raw_decided, 1000);
 }
 
 // The raw-vertex optimality certificates that local descent checks before preparing the tracked

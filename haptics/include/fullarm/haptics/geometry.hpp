@@ -127,6 +127,13 @@ struct SegmentTriangleResult {
                                                         double d_sq, const PreparedTriangle& t,
                                                         SegmentTriangleResult& out) noexcept;
 
+/// Same on the raw vertices t0, t1, t2 of the triangle (nothing prepared).
+/// @rt
+[[nodiscard]] bool closestPointsSpanningSegmentTriangle(const Eigen::Vector3d& p0, const Eigen::Vector3d& d,
+                                                        double d_sq, const Eigen::Vector3d& t0,
+                                                        const Eigen::Vector3d& t1, const Eigen::Vector3d& t2,
+                                                        SegmentTriangleResult& out) noexcept;
+
 /// Optimality certificate of an edge-edge pair (the KKT conditions of the triangle-triangle
 /// distance at the pair), on raw vertices: no triangle is prepared. Edge a0 -> a1 of triangle
 /// A and edge b0 -> b1 of triangle B, with `inward_a` / `inward_b` any positive multiple of the
@@ -184,5 +191,16 @@ struct SegmentTriangleResult {
                                                                        const PreparedTriangle& B,
                                                                        const LocalFeature& guess_a,
                                                                        const LocalFeature& guess_b) noexcept;
+
+/// The warm start of edge k of E against a triangle given by its raw vertices (nothing
+/// prepared), whose closest feature is unknown, through the spanning-segment kernel: the
+/// result of closestPointsTriangleTriangleWarm(E, prepareTriangle(t0, t1, t2), edge k, face),
+/// bit for bit, when the kernel applies and its pair passes the optimality test; false
+/// otherwise (then that warm start, on the prepared triangle, decides). Local descent's
+/// evaluation of an object triangle against the link edge that holds the closest point.
+/// @rt
+[[nodiscard]] bool closestPointsEdgeTriangleSpanning(const PreparedTriangle& E, int k, const Eigen::Vector3d& t0,
+                                                     const Eigen::Vector3d& t1, const Eigen::Vector3d& t2,
+                                                     TriangleTriangleResult& out) noexcept;
 
 }  // namespace fullarm::haptics
