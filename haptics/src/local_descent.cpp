@@ -89,10 +89,10 @@ class NeighbourScreen {
     const Eigen::Vector3i& tri = mesh_.triangle(t);
     if (feature_.kind == FeatureKind::kVertex) {
       // dir . (w - v) > 0 for one of the two other vertices w.
-      for (int k = 0; k < 3; ++k) {
-        if (tri[k] != feature_.index && dir_.dot(mesh_.vertex(tri[k])) > dir_a_) return true;
-      }
-      return false;
+      const int v = feature_.index;
+      const int w0 = tri[0] == v ? tri[1] : tri[0];
+      const int w1 = tri[2] == v ? tri[1] : tri[2];
+      return dir_.dot(mesh_.vertex(w0)) > dir_a_ || dir_.dot(mesh_.vertex(w1)) > dir_a_;
     }
     int w = tri[0];
     for (int k = 0; k < 3; ++k) {
