@@ -408,16 +408,134 @@ bool vertexCandidate(const PreparedTriangle& v_tri, int k, const PreparedTriangl
   return true;
 }
 
-// Closest pair of edge k of E and triangle T (the segment against T: its two endpoints against
-// T and the segment against T's three edges, unless it crosses T), kept when the point on E is
-// also E's closest point to the point on T (E's Voronoi-region test; the point on T is T's
-// closest point by construction, since the pair minimises over the edge and T).
-bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, Vector3d& e_point, Vector3d& t_point,
-                   double& distance_sq, LocalFeature& e_feature, LocalFeature& t_feature) noexcept {
+}  // namespace
+
+bool certifyVertexTriangle(const Vector3d& v, const Vector3d& to_next, const Vector3d& to_prev,
+                           const PreparedTriangle& t, Vector3d& q, double& distance_sq,
+                           LocalFeature& feature_t) noexcept {
+  const SquaredPointResult c = closestPointSquared(v, t);
+  const Vector3d w = c.point - v;
+  if (!(c.distance_sq > 0.0) || !notTowards(w, to_next) || !notTowards(w, to_prev)) return false;
+  q = c.point;
+  distance_sq = c.distance_sq;
+  feature_t = c.feature;
+  return true;
+}
+
+bool certifyEdgeEdgePair(const Vector3d& a0, const Vector3d& a1, const Vector3d& inward_a, const Vector3d& b0,
+                         const Vector3d& b1, const Vector3d& inward_b, Vector3d& p, Vector3d& q,
+                         double& distance_sq) noexcept {
+  // Closest points of the two lines a0 + s da, b0 + t db (Ericson 5.1.8): the 2x2 normal
+  // equations, solved only when the solution is interior to both segments (0 < s, t < 1, tested
+  // on the numerators against the positive denominator, no division before).
+  const Vector3d da = a1 - a0;
+  const Vector3d db = b1 - b0;
+  const Vector3d r = a0 - b0;
+  const double a = da.squaredNorm();
+  const double e = db.squaredNorm();
+  const double b = da.dot(db);
+  const double c = da.dot(r);
+  const double f = db.dot(r);
+  const double denom = a * e - b * b;
+  if (!(denom > 1e-20 * a * e)) return false;  // parallel (the threshold of the general routine)
+  const double s_num = b * f - c * e;
+  const double t_num = a * f - b * c;
+  if (!(s_num > 0.0 && s_num < denom && t_num > 0.0 && t_num < denom)) return false;
+  const double inv = 1.0 / denom;
+  p = a0 + (s_num * inv) * da;
+  q = b0 + (t_num * inv) * db;
+  const Vector3d w = q - p;
+  distance_sq = w.squaredNorm();
+  // Interior points of both edges, the offset perpendicular to both: each point is its
+  // triangle's closest point iff the offset does not point into that triangle.
+  return distance_sq > 0.0 && notTowards(w, inward_a) && notTowards(-w, inward_b);
+}
+
+bool closestPointsSpanningSegmentTriangle(const Vector3d& p0, const Vector3d& d, double d_sq, const PreparedTriangle& t,
+                                          SegmentTriangleResult& out) noexcept {
+  return closestPointsSpanningSegmentTriangle(p0, d, d_sq, t.v[0], t.v[1], t.v[2], out);
+}
+
+bool closestPointsSpanningSegmentTriangle(const Vector3d& p0, const Vector3d& d, double d_sq, const Vector3d& t0,
+                                          const Vector3d& t1, const Vector3d& t2, SegmentTriangleResult& out) noexcept {
+  const Vector3d* const v[3] = {&t0, &t1, &t2};
+  if (!(d_sq > 0.0)) return false;
+  const double inv_d_sq = 1.0 / d_sq;
+  // Line parameter s_k of each vertex and its offset x_k from the line: the triangle projected
+  // along d onto the plane through p0 perpendicular to d, where the line is the origin.
+  double s[3];
+  Vector3d x[3];
+  for (int k = 0; k < 3; ++k) {
+    const Vector3d r = *v[k] - p0;
+    s[k] = r.dot(d) * inv_d_sq;
+    if (!(s[k] >= 0.0 && s[k] <= 1.0)) return false;  // the segment does not span the triangle
+    x[k] = r - s[k] * d;
+  }
+  // Closest point of the projected triangle to the origin (Ericson 5.1.5, the regions of
+  // closestPointTriangle with p = 0). Its preimage on t is t's closest point to the line; the
+  // segment's point has the same barycentric combination of the s_k. An edge region needs a
+  // projected edge of positive length (an edge parallel to d projects to a point: its region
+  // test is meaningless, the general query decides).
+  const Vector3d ab = x[1] - x[0];
+  const Vector3d ac = x[2] - x[0];
+  const double d1 = -ab.dot(x[0]);
+  const double d2 = -ac.dot(x[0]);
+  auto vertex = [&](int k) noexcept {
+    out.s = s[k];
+    out.q = *v[k];
+    out.feature_t = {LocalFeature::Kind::kVertex, static_cast<std::uint8_t>(k)};
+  };
+  auto edge = [&](int k, double lambda) noexcept {
+    const int k1 = (k + 1) % 3;
+    if (lambda <= 0.0) return vertex(k);  // an end of the edge (the general query's edgeFeature)
+    if (lambda >= 1.0) return vertex(k1);
+    out.s = std::clamp(s[k] + lambda * (s[k1] - s[k]), 0.0, 1.0);
+    out.q = *v[k] + lambda * (*v[k1] - *v[k]);
+    out.feature_t = {LocalFeature::Kind::kEdge, static_cast<std::uint8_t>(k)};
+  };
+  if (d1 <= 0.0 && d2 <= 0.0) {
+    vertex(0);
+  } else {
+    const double d3 = -ab.dot(x[1]);
+    const double d4 = -ac.dot(x[1]);
+    const double vc = d1 * d4 - d3 * d2;
+    if (d3 >= 0.0 && d4 <= d3) {
+      vertex(1);
+    } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+      if (!(d1 - d3 > 0.0)) return false;
+      edge(0, d1 / (d1 - d3));
+    } else {
+      const double d5 = -ab.dot(x[2]);
+      const double d6 = -ac.dot(x[2]);
+      const double vb = d5 * d2 - d1 * d6;
+      const double va = d3 * d6 - d5 * d4;
+      if (d6 >= 0.0 && d5 <= d6) {
+        vertex(2);
+      } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        // Edge 2 runs from vertex 2 to vertex 0: the point a + w ac is at 1 - w along it.
+        if (!(d2 - d6 > 0.0)) return false;
+        edge(2, 1.0 - d2 / (d2 - d6));
+      } else if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+        const double den = (d4 - d3) + (d5 - d6);
+        if (!(den > 0.0)) return false;
+        edge(1, (d4 - d3) / den);
+      } else {
+        return false;  // face region: the line meets the triangle inside the segment
+      }
+    }
+  }
+  out.p = p0 + out.s * d;
+  out.distance_sq = (out.q - out.p).squaredNorm();
+  return true;
+}
+
+namespace {
+
+// Closest pair of edge k of E and a triangle T that it does not cross: the segment against
+// T's three edges, then its endpoints against T (the general segment-triangle query).
+void generalEdgeTriangle(const PreparedTriangle& E, int k, const PreparedTriangle& T, Vector3d& e_point,
+                         Vector3d& t_point, double& best, LocalFeature& e_feature, LocalFeature& t_feature) noexcept {
   const int k1 = (k + 1) % 3;
-  double s_cross = 0.0;
-  if (segmentCrossesPrepared(E.v[k], E.v[k1], T, s_cross)) return false;
-  double best = std::numeric_limits<double>::infinity();
   for (int j = 0; j < 3; ++j) {
     const SquaredSegmentResult c =
         closestSegmentSegmentSquared(E.v[k], E.edge[k], E.edge_sq[k], T.v[j], T.edge[j], T.edge_sq[j]);
@@ -448,6 +566,30 @@ bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, 
       t_feature = c.feature;
     }
   }
+}
+
+// Closest pair of edge k of E and triangle T (the segment against T: the spanning kernel when
+// it applies, else its two endpoints against T and the segment against T's three edges, unless
+// it crosses T), kept when the point on E is also E's closest point to the point on T (E's
+// Voronoi-region test; the point on T is T's closest point by construction, since the pair
+// minimises over the edge and T).
+bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, Vector3d& e_point, Vector3d& t_point,
+                   double& distance_sq, LocalFeature& e_feature, LocalFeature& t_feature) noexcept {
+  double best = std::numeric_limits<double>::infinity();
+  SegmentTriangleResult spanning;
+  if (closestPointsSpanningSegmentTriangle(E.v[k], E.edge[k], E.edge_sq[k], T, spanning)) {
+    // The dominant case (a long link edge over a small object triangle): one point-triangle
+    // query in the plane perpendicular to the edge.
+    best = spanning.distance_sq;
+    e_point = spanning.p;
+    t_point = spanning.q;
+    e_feature = edgeFeature(k, spanning.s);
+    t_feature = spanning.feature_t;
+  } else {
+    double s_cross = 0.0;
+    if (segmentCrossesPrepared(E.v[k], E.v[(k + 1) % 3], T, s_cross)) return false;
+    generalEdgeTriangle(E, k, T, e_point, t_point, best, e_feature, t_feature);
+  }
   if (!(best > 0.0)) return false;
   const Vector3d w = t_point - e_point;
   const bool optimal =
@@ -457,6 +599,28 @@ bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, 
 }
 
 }  // namespace
+
+bool closestPointsEdgeTriangleSpanning(const PreparedTriangle& E, int k, const Vector3d& t0, const Vector3d& t1,
+                                       const Vector3d& t2, TriangleTriangleResult& out) noexcept {
+  // edgeCandidate's spanning branch and optimality test, step for step.
+  SegmentTriangleResult spanning;
+  if (!closestPointsSpanningSegmentTriangle(E.v[k], E.edge[k], E.edge_sq[k], t0, t1, t2, spanning) ||
+      !(spanning.distance_sq > 0.0)) {
+    return false;
+  }
+  const LocalFeature e_feature = edgeFeature(k, spanning.s);
+  const Vector3d w = spanning.q - spanning.p;
+  if (!(e_feature.kind == Kind::kVertex ? vertexRegionHolds(E, e_feature.index, w) : edgeRegionHolds(E, k, w))) {
+    return false;
+  }
+  out.p = spanning.p;
+  out.q = spanning.q;
+  out.distance_m = std::sqrt(spanning.distance_sq);
+  out.feature_a = e_feature;
+  out.feature_b = spanning.feature_t;
+  out.intersecting = false;
+  return true;
+}
 
 TriangleTriangleResult closestPointsTriangleTriangleWarm(const PreparedTriangle& A, const PreparedTriangle& B,
                                                          const LocalFeature& guess_a,
@@ -481,15 +645,8 @@ TriangleTriangleResult closestPointsTriangleTriangleWarm(const PreparedTriangle&
   } else if (guess_a.kind == Kind::kEdge && guess_b.kind == Kind::kEdge) {
     const int i = guess_a.index;
     const int j = guess_b.index;
-    const SquaredSegmentResult c =
-        closestSegmentSegmentSquared(A.v[i], A.edge[i], A.edge_sq[i], B.v[j], B.edge[j], B.edge_sq[j]);
-    // Interior points of both edges: the offset is perpendicular to both edges, so each point
-    // is its triangle's closest point iff the offset does not point into that triangle.
-    if (c.s > 0.0 && c.s < 1.0 && c.t > 0.0 && c.t < 1.0 && c.distance_sq > 0.0 && edgeRegionHolds(A, i, c.q - c.p) &&
-        edgeRegionHolds(B, j, c.p - c.q)) {
-      r.p = c.p;
-      r.q = c.q;
-      d_sq = c.distance_sq;
+    if (certifyEdgeEdgePair(A.v[i], A.v[(i + 1) % 3], A.normal.cross(A.edge[i]), B.v[j], B.v[(j + 1) % 3],
+                            B.normal.cross(B.edge[j]), r.p, r.q, d_sq)) {
       r.feature_a = guess_a;
       r.feature_b = guess_b;
       found = true;

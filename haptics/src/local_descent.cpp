@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <utility>
 
@@ -14,9 +15,14 @@ namespace {
 
 // Local index (0..2) of a global feature within triangle `tri`, or -1 (face or not on it).
 int localIndex(const TriMesh& mesh, int tri, const Feature& f) noexcept {
-  for (int k = 0; k < 3; ++k) {
-    if (f.kind == FeatureKind::kVertex && mesh.triangle(tri)[k] == f.index) return k;
-    if (f.kind == FeatureKind::kEdge && mesh.triangleEdge(tri, k) == f.index) return k;
+  if (f.kind == FeatureKind::kVertex) {
+    const Eigen::Vector3i& v = mesh.triangle(tri);
+    return v[0] == f.index ? 0 : v[1] == f.index ? 1 : v[2] == f.index ? 2 : -1;
+  }
+  if (f.kind == FeatureKind::kEdge) {
+    for (int k = 0; k < 3; ++k) {
+      if (mesh.triangleEdge(tri, k) == f.index) return k;
+    }
   }
   return -1;
 }
@@ -83,10 +89,10 @@ class NeighbourScreen {
     const Eigen::Vector3i& tri = mesh_.triangle(t);
     if (feature_.kind == FeatureKind::kVertex) {
       // dir . (w - v) > 0 for one of the two other vertices w.
-      for (int k = 0; k < 3; ++k) {
-        if (tri[k] != feature_.index && dir_.dot(mesh_.vertex(tri[k])) > dir_a_) return true;
-      }
-      return false;
+      const int v = feature_.index;
+      const int w0 = tri[0] == v ? tri[1] : tri[0];
+      const int w1 = tri[2] == v ? tri[1] : tri[2];
+      return dir_.dot(mesh_.vertex(w0)) > dir_a_ || dir_.dot(mesh_.vertex(w1)) > dir_a_;
     }
     int w = tri[0];
     for (int k = 0; k < 3; ++k) {
@@ -159,21 +165,58 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
     }
     int tl = m.tri_link;
     int to = m.tri_object;
-    // The tracked pair, warm-started from the previous features (same distance as the full
-    // computation; one candidate and its optimality test when the features did not change).
-    // Each side's prepared triangle is reused for every neighbour evaluated against it.
+    // The tracked pair at the new pose. Most pairs keep their features between ticks: their
+    // optimality certificate (the KKT conditions, certifyEdgeEdgePair / certifyVertexTriangle)
+    // is checked on the raw vertices first, and the triangles are prepared only when it fails
+    // or when a neighbour is evaluated against them. Otherwise the warm-started query runs.
     // Minima of one link/object pair often start on the same link triangle (a capsule's long
     // strips hold several): its prepared copy in the object frame is reused while the pose is.
-    if (tl != cached_link_tri) {
-      cached_link = linkTriangle(lmesh, tl, X_OL);
-      cached_link_tri = tl;
+    const PreparedTriangle* A = nullptr;  // the link triangle, prepared on first use
+    auto prepareLink = [&]() noexcept {
+      if (tl != cached_link_tri) {
+        cached_link = linkTriangle(lmesh, tl, X_OL);
+        cached_link_tri = tl;
+      }
+      return &cached_link;
+    };
+    PreparedTriangle B;  // the object triangle, prepared on first use (b_ready)
+    bool b_ready = false;
+    const LocalFeature guess_l = localGuess(lmesh, tl, m.feature_link);
+    const LocalFeature guess_o = localGuess(omesh, to, m.feature_object);
+    TriangleTriangleResult r;
+    bool certified = false;
+    double d_sq = 0.0;
+    if (guess_l.kind == LocalFeature::Kind::kEdge && guess_o.kind == LocalFeature::Kind::kEdge) {
+      const Eigen::Vector3i& lt = lmesh.triangle(tl);
+      const Eigen::Vector3i& ot = omesh.triangle(to);
+      const Vector3d& l0 = lmesh.vertex(lt[guess_l.index]);
+      const Vector3d& l1 = lmesh.vertex(lt[(guess_l.index + 1) % 3]);
+      const Vector3d& o0 = omesh.vertex(ot[guess_o.index]);
+      const Vector3d& o1 = omesh.vertex(ot[(guess_o.index + 1) % 3]);
+      certified = certifyEdgeEdgePair(X_OL * l0, X_OL * l1, X_OL.linear() * lmesh.faceNormal(tl).cross(l1 - l0), o0, o1,
+                                      omesh.faceNormal(to).cross(o1 - o0), r.p, r.q, d_sq);
+    } else if (guess_o.kind == LocalFeature::Kind::kVertex && guess_l.kind != LocalFeature::Kind::kVertex) {
+      const Eigen::Vector3i& ot = omesh.triangle(to);
+      const Vector3d& v = omesh.vertex(ot[guess_o.index]);
+      A = prepareLink();
+      certified = certifyVertexTriangle(v, omesh.vertex(ot[(guess_o.index + 1) % 3]) - v,
+                                        omesh.vertex(ot[(guess_o.index + 2) % 3]) - v, *A, r.p, d_sq, r.feature_a);
+      r.q = v;
     }
-    const PreparedTriangle* A = &cached_link;
-    PreparedTriangle B = objectTriangle(omesh, to);
-    TriangleTriangleResult r = closestPointsTriangleTriangleWarm(*A, B, localGuess(lmesh, tl, m.feature_link),
-                                                                 localGuess(omesh, to, m.feature_object));
-    Feature cur_l = globalFeature(lmesh, tl, r.feature_a);
-    Feature cur_o = globalFeature(omesh, to, r.feature_b);
+    if (certified) {
+      r.distance_m = std::sqrt(d_sq);
+      if (guess_o.kind == LocalFeature::Kind::kEdge) r.feature_a = guess_l;
+      r.feature_b = guess_o;
+    } else {
+      if (A == nullptr) A = prepareLink();
+      B = objectTriangle(omesh, to);
+      b_ready = true;
+      r = closestPointsTriangleTriangleWarm(*A, B, guess_l, guess_o);
+    }
+    // A certified pair keeps the tracked features.
+    Feature cur_l =
+        certified && guess_o.kind == LocalFeature::Kind::kEdge ? m.feature_link : globalFeature(lmesh, tl, r.feature_a);
+    Feature cur_o = certified ? m.feature_object : globalFeature(omesh, to, r.feature_b);
     int it = 0;
     for (; it < params.max_iterations; ++it) {
       // Steepest move among the triangles around the closest feature on either side.
@@ -187,6 +230,7 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
       TriangleTriangleResult best = r;
       int best_t = -1;
       bool best_link_side = false;
+      bool best_prepared = false;  // the best neighbour's prepared triangle is in candidates[best_slot]
       int best_slot = 0;
       int free_slot = 0;
       // A face feature has no neighbours to screen; a direction inside the feature's
@@ -202,6 +246,10 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
           if (!screen.mayBeCloser(t)) continue;
           // Warm-started: B and its closest feature are unchanged, t's is unknown (face).
           ++st.evaluated;
+          if (!b_ready) {
+            B = objectTriangle(omesh, to);
+            b_ready = true;
+          }
           PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
           cand = linkTriangle(lmesh, t, X_OL);
           const TriangleTriangleResult c = closestPointsTriangleTriangleWarm(cand, B, LocalFeature{}, r.feature_b);
@@ -209,6 +257,7 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
             best = c;
             best_t = t;
             best_link_side = true;
+            best_prepared = true;
             best_slot = free_slot;
             free_slot ^= 1;
           }
@@ -235,15 +284,28 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
             }
           }
           ++st.evaluated;
-          PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
-          cand = objectTriangle(omesh, t);
-          const TriangleTriangleResult c = closestPointsTriangleTriangleWarm(*A, cand, r.feature_a, LocalFeature{});
+          if (A == nullptr) A = prepareLink();
+          // The link edge against t through the spanning kernel on t's raw vertices (the
+          // dominant case; bit for bit the warm start below); t is prepared only when the
+          // kernel does not decide, or later if the step moves onto it and it is needed.
+          TriangleTriangleResult c;
+          bool prepared = false;
+          const Eigen::Vector3i& tv = omesh.triangle(t);
+          if (r.feature_a.kind != LocalFeature::Kind::kEdge ||
+              !closestPointsEdgeTriangleSpanning(*A, r.feature_a.index, omesh.vertex(tv[0]), omesh.vertex(tv[1]),
+                                                 omesh.vertex(tv[2]), c)) {
+            PreparedTriangle& cand = candidates[static_cast<std::size_t>(free_slot)];
+            cand = objectTriangle(omesh, t);
+            c = closestPointsTriangleTriangleWarm(*A, cand, r.feature_a, LocalFeature{});
+            prepared = true;
+          }
           if (c.distance_m < threshold && c.distance_m < best.distance_m) {
             best = c;
             best_t = t;
             best_link_side = false;
+            best_prepared = prepared;
             best_slot = free_slot;
-            free_slot ^= 1;
+            if (prepared) free_slot ^= 1;
           }
         }
       }
@@ -254,7 +316,8 @@ int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk
         A = &moved_link;
       } else {
         to = best_t;
-        B = candidates[static_cast<std::size_t>(best_slot)];
+        b_ready = best_prepared;
+        if (best_prepared) B = candidates[static_cast<std::size_t>(best_slot)];
       }
       r = best;
       cur_l = globalFeature(lmesh, tl, r.feature_a);

@@ -101,6 +101,66 @@ struct PreparedTriangle {
   return t;
 }
 
+/// Closest points of a segment and a triangle (see closestPointsSpanningSegmentTriangle).
+struct SegmentTriangleResult {
+  double s = 0.0;            ///< parameter of p on the segment, in [0, 1]
+  Eigen::Vector3d p;         ///< closest point on the segment [m]
+  Eigen::Vector3d q;         ///< closest point on the triangle [m]
+  double distance_sq = 0.0;  ///< |p - q|^2 [m^2]
+  LocalFeature feature_t;    ///< closest feature of the triangle: a vertex or an edge
+};
+
+/// Exact closest points of the segment [p0, p0 + d] and triangle t when the segment spans the
+/// triangle along its direction (every vertex of t projects onto the segment: 0 <= (v - p0) . d
+/// <= |d|^2), the dominant case of local descent, where a link capsule's long strip edge lies
+/// over a small triangle of the environment. Then the closest point of the segment to any point
+/// of t is that of the infinite line, and the distance is that of the line to t: the distance
+/// from the line's point to t projected along d onto the plane perpendicular to d, one
+/// point-triangle query (Ericson 5.1.5) instead of the three edge-edge and two endpoint-triangle
+/// candidates of the general segment-triangle query. Returns false, and leaves `out`
+/// unspecified, when the kernel does not apply: a vertex projects outside the segment, the
+/// projected triangle holds the line (the segment meets t: the face region) or is degenerate
+/// beyond the region tests. The caller then runs the general query.
+/// @param d segment direction (p1 - p0) [m], d_sq = |d|^2 > 0 [m^2]
+/// @rt
+[[nodiscard]] bool closestPointsSpanningSegmentTriangle(const Eigen::Vector3d& p0, const Eigen::Vector3d& d,
+                                                        double d_sq, const PreparedTriangle& t,
+                                                        SegmentTriangleResult& out) noexcept;
+
+/// Same on the raw vertices t0, t1, t2 of the triangle (nothing prepared).
+/// @rt
+[[nodiscard]] bool closestPointsSpanningSegmentTriangle(const Eigen::Vector3d& p0, const Eigen::Vector3d& d,
+                                                        double d_sq, const Eigen::Vector3d& t0,
+                                                        const Eigen::Vector3d& t1, const Eigen::Vector3d& t2,
+                                                        SegmentTriangleResult& out) noexcept;
+
+/// Optimality certificate of an edge-edge pair (the KKT conditions of the triangle-triangle
+/// distance at the pair), on raw vertices: no triangle is prepared. Edge a0 -> a1 of triangle
+/// A and edge b0 -> b1 of triangle B, with `inward_a` / `inward_b` any positive multiple of the
+/// direction into the triangle perpendicular to the edge in its plane (n x e for a triangle
+/// wound counter-clockwise about n). Returns true, with the closest points p (on A), q (on B)
+/// and |p - q|^2, when the closest points of the two lines lie strictly inside both edges, the
+/// distance is positive and the offset q - p points into neither triangle (with the slack of
+/// closestPointsTriangleTriangleWarm): then (p, q) is the closest pair of the two triangles.
+/// Otherwise false (parallel edges, an end reached, an offset into a triangle): the caller
+/// computes the pair. The test of closestPointsTriangleTriangleWarm's edge-edge guess.
+/// @rt
+[[nodiscard]] bool certifyEdgeEdgePair(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1,
+                                       const Eigen::Vector3d& inward_a, const Eigen::Vector3d& b0,
+                                       const Eigen::Vector3d& b1, const Eigen::Vector3d& inward_b, Eigen::Vector3d& p,
+                                       Eigen::Vector3d& q, double& distance_sq) noexcept;
+
+/// Optimality certificate of a vertex against a prepared triangle: vertex v of a triangle whose
+/// two edges leaving v are `to_next` and `to_prev`, against triangle t. Returns true, with t's
+/// closest point q, its feature and |v - q|^2 > 0, when v is also its own triangle's closest
+/// point to q (the offset q - v has no positive component along either edge leaving v): the
+/// pair is then the closest pair of the two triangles. The test of
+/// closestPointsTriangleTriangleWarm's vertex guess, without preparing v's triangle.
+/// @rt
+[[nodiscard]] bool certifyVertexTriangle(const Eigen::Vector3d& v, const Eigen::Vector3d& to_next,
+                                         const Eigen::Vector3d& to_prev, const PreparedTriangle& t, Eigen::Vector3d& q,
+                                         double& distance_sq, LocalFeature& feature_t) noexcept;
+
 /// Same as squaredDistancePointTriangle on a prepared triangle.
 /// @rt
 [[nodiscard]] double squaredDistancePointTriangle(const Eigen::Vector3d& p, const PreparedTriangle& t) noexcept;
@@ -131,5 +191,16 @@ struct PreparedTriangle {
                                                                        const PreparedTriangle& B,
                                                                        const LocalFeature& guess_a,
                                                                        const LocalFeature& guess_b) noexcept;
+
+/// The warm start of edge k of E against a triangle given by its raw vertices (nothing
+/// prepared), whose closest feature is unknown, through the spanning-segment kernel: the
+/// result of closestPointsTriangleTriangleWarm(E, prepareTriangle(t0, t1, t2), edge k, face),
+/// bit for bit, when the kernel applies and its pair passes the optimality test; false
+/// otherwise (then that warm start, on the prepared triangle, decides). Local descent's
+/// evaluation of an object triangle against the link edge that holds the closest point.
+/// @rt
+[[nodiscard]] bool closestPointsEdgeTriangleSpanning(const PreparedTriangle& E, int k, const Eigen::Vector3d& t0,
+                                                     const Eigen::Vector3d& t1, const Eigen::Vector3d& t2,
+                                                     TriangleTriangleResult& out) noexcept;
 
 }  // namespace fullarm::haptics
