@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <optional>
 
 #include "alloc_guard.hpp"
 #include "arm_test_util.hpp"
@@ -147,6 +148,38 @@ Eigen::Isometry3d linkPoseNear(const CollisionObject& obj, bool rough, std::mt19
   return X_WL;
 }
 
+// One trial of a shortcut-against-reference comparison: `link_mesh` on the link and an object (the
+// dense box with relief when `rough`, else a random small mesh) at a random pose, the link placed
+// near it (linkPoseNear), minima seeded by a fresh search, a random small motion, then the update
+// once with `reference_params` and once with the defaults (the shortcuts on). Empty when the
+// seed search found no minimum.
+struct ShortcutTrial {
+  std::vector<LocalMinimum> minima;     // updated with LocalDescentParams{}
+  std::vector<LocalMinimum> reference;  // updated with the reference parameters
+  int kept = 0;
+  int kept_ref = 0;
+  LocalDescentStats st;
+  LocalDescentStats st_ref;
+};
+
+std::optional<ShortcutTrial> runShortcutTrial(const arm::ArmModel& model, TriMesh link_mesh, bool rough,
+                                              const LocalDescentParams& reference_params, std::mt19937& rng) {
+  WorldFixture s(model);
+  s.world.setLinkMesh(kLink, std::move(link_mesh));
+  s.world.addObject("obj", rough ? roughBox(rng) : randomSmallMesh(rng), randomPose(rng, 0.3));
+  const CollisionObject& obj = s.world.object(0);
+  const Eigen::Isometry3d X_WL = linkPoseNear(obj, rough, rng);
+  s.fk.X_WL[kLink] = X_WL;
+  ShortcutTrial t;
+  t.minima = s.seedMinima();
+  if (t.minima.empty()) return std::nullopt;
+  s.fk.X_WL[kLink] = X_WL * smallMotion(rng);
+  t.reference = t.minima;
+  t.kept_ref = updateMinimaLocalDescent(s.world, s.fk, t.reference, reference_params, &t.st_ref);
+  t.kept = updateMinimaLocalDescent(s.world, s.fk, t.minima, LocalDescentParams{}, &t.st);
+  return t;
+}
+
 // The re-screening shortcut (LocalDescentParams::rescreen_neighbours) against the reference
 // path that evaluates every screened neighbour: the same minima (feature pairs, triangles,
 // distances, points) after random small motions, on random meshes and on a dense box with
@@ -159,24 +192,13 @@ TEST(LocalDescentTest, RescreeningGivesTheSameMinimaAsEvaluatingEveryNeighbour) 
   long skipped = 0;
   long evaluated_reference = 0;
   long evaluated_shortcut = 0;
+  LocalDescentParams all;
+  all.rescreen_neighbours = false;
   for (int trial = 0; trial < 150; ++trial) {
-    WorldFixture s(model);
-    s.world.setLinkMesh(kLink, randomSmallMesh(rng));
-    const bool rough = trial % 2 == 0;
-    s.world.addObject("obj", rough ? roughBox(rng) : randomSmallMesh(rng), randomPose(rng, 0.3));
-    const CollisionObject& obj = s.world.object(0);
-    const Eigen::Isometry3d X_WL = linkPoseNear(obj, rough, rng);
-    s.fk.X_WL[kLink] = X_WL;
-    std::vector<LocalMinimum> minima = s.seedMinima();
-    if (minima.empty()) continue;
-    s.fk.X_WL[kLink] = X_WL * smallMotion(rng);
-    std::vector<LocalMinimum> reference = minima;
-    LocalDescentParams all;
-    all.rescreen_neighbours = false;
-    LocalDescentStats st_ref;
-    const int kept_ref = updateMinimaLocalDescent(s.world, s.fk, reference, all, &st_ref);
-    LocalDescentStats st;
-    const int kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{}, &st);
+    TriMesh link_mesh = randomSmallMesh(rng);
+    std::optional<ShortcutTrial> t = runShortcutTrial(model, std::move(link_mesh), trial % 2 == 0, all, rng);
+    if (!t) continue;
+    auto& [minima, reference, kept, kept_ref, st, st_ref] = *t;
     ASSERT_EQ(kept, kept_ref) << "trial " << trial;
     // Compared in order of distance: where the paths part at a tie (below), the merge of
     // duplicates can keep the minima in another order.
@@ -233,25 +255,13 @@ TEST(LocalDescentTest, ConeScreeningGivesTheSameMinimaAsScreeningEveryNeighbour)
   long cone_rejected = 0;
   long screened_reference = 0;
   long screened_cones = 0;
+  LocalDescentParams every;
+  every.cone_screening = false;
   for (int trial = 0; trial < 150; ++trial) {
-    WorldFixture s(model);
-    s.world.setLinkMesh(kLink,
-                        trial % 3 == 0 ? makeCapsule({0, 0, 0}, {0, 0, 0.2}, 0.04, 16, 4) : randomSmallMesh(rng));
-    const bool rough = trial % 2 == 0;
-    s.world.addObject("obj", rough ? roughBox(rng) : randomSmallMesh(rng), randomPose(rng, 0.3));
-    const CollisionObject& obj = s.world.object(0);
-    const Eigen::Isometry3d X_WL = linkPoseNear(obj, rough, rng);
-    s.fk.X_WL[kLink] = X_WL;
-    std::vector<LocalMinimum> minima = s.seedMinima();
-    if (minima.empty()) continue;
-    s.fk.X_WL[kLink] = X_WL * smallMotion(rng);
-    std::vector<LocalMinimum> reference = minima;
-    LocalDescentParams every;
-    every.cone_screening = false;
-    LocalDescentStats st_ref;
-    const int kept_ref = updateMinimaLocalDescent(s.world, s.fk, reference, every, &st_ref);
-    LocalDescentStats st;
-    const int kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{}, &st);
+    TriMesh link_mesh = trial % 3 == 0 ? makeCapsule({0, 0, 0}, {0, 0, 0.2}, 0.04, 16, 4) : randomSmallMesh(rng);
+    std::optional<ShortcutTrial> t = runShortcutTrial(model, std::move(link_mesh), trial % 2 == 0, every, rng);
+    if (!t) continue;
+    const auto& [minima, reference, kept, kept_ref, st, st_ref] = *t;
     ASSERT_EQ(kept, kept_ref) << "trial " << trial;
     EXPECT_EQ(st.evaluated, st_ref.evaluated) << "trial " << trial;
     EXPECT_EQ(st.rescreened, st_ref.rescreened) << "trial " << trial;
