@@ -344,12 +344,15 @@ TriangleTriangleResult closestPointsTriangleTriangle(const PreparedTriangle& A, 
       best.feature_b = {Kind::kVertex, static_cast<std::uint8_t>(k)};
     }
   }
-  // Early exit (convexity): the best vertex candidate is the minimum when its other point is
-  // also the closest point of the other triangle.
+  // Early exit (convexity): the best vertex candidate is the minimum when its vertex is also
+  // the closest point of its own triangle to the other point. Decided by the vertex's region
+  // (signs of dot products), not by comparing squared distances: with nearly parallel edges the
+  // closest point can sit 1e-9 m along an edge from the vertex while the squared distances agree
+  // to the last bit, and the true minimum lies far along the edges, nanometres closer.
   if (best_sq > 0.0) {
-    const double other =
-        best_is_vertex_of_a ? closestPointSquared(best.q, A).distance_sq : closestPointSquared(best.p, B).distance_sq;
-    if (other >= best_sq) {
+    const bool mutual = best_is_vertex_of_a ? vertexRegionHolds(A, best.feature_a.index, best.q - best.p)
+                                            : vertexRegionHolds(B, best.feature_b.index, best.p - best.q);
+    if (mutual) {
       best.distance_m = std::sqrt(best_sq);
       return best;
     }
