@@ -7,13 +7,16 @@
 /// scores a candidate on a small seeded Monte-Carlo of the same closed-loop harness and
 /// uncertainty ranges that `validate` uses (but its own sample stream, so the tuner does not
 /// see validate's draws), and refines the candidate with a deterministic compass search on
-/// log10 B_m and log10 B_o/eps (the two gains that, measured, trade contact oscillation against
-/// sluggishness; J_m, K_m, lambda keep the linear stage's values). In the spirit of systune's
+/// log10 B_m, log10 B_o/eps and log10 lambda, with B_m and lambda also moved together (B_m and
+/// B_o/eps trade contact oscillation against sluggishness; the damping of a stiff, undamped
+/// user's ring grows with B_m only as far as lambda lets the loop render it; J_m and K_m keep the
+/// linear stage's values). In the spirit of systune's
 /// worst-case model addition, each round ends with a fresh check batch on the incumbent; its
 /// failed samples join the sample set and the search goes on. Offline (allocates), not @rt.
 ///
 /// The sample set starts with three stress corners of the uncertainty box (stressCorners(): the
-/// linear stage's corners with a weak and with a stiff, lightly damped user), then seeded draws.
+/// linear stage's corners with a weak and with a stiff, lightly damped user), then the four ring
+/// corners (ringCorners(): undamped users on the slow plant), then seeded draws.
 ///
 /// Score of a candidate over a sample set (lower is better):
 ///   cost = failures + 0.5 [linear hard goals violated] + 0.25 s_max
@@ -52,7 +55,7 @@ struct NonlinearStageOptions {
   int check_samples = 300;
   int rounds = 3;             ///< search rounds (each followed by a check batch)
   int max_evaluations = 14;   ///< candidate evaluations per round's compass search
-  double step_decades = 0.3;  ///< initial compass step on log10 B_m and log10 B_o/eps
+  double step_decades = 0.3;  ///< initial compass step on log10 B_m, log10 B_o/eps and log10 lambda
   double min_step_decades = 0.04;
   int max_added_per_round = 4;  ///< failed check samples added to the set per round (worst first)
   std::uint64_t seed = 1;
