@@ -308,6 +308,8 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
   const HoldVerdict contact_v = examineHold(qd_true, contact_hold_end, window, sc.oscillation_speed_radps);
   r.free_hold_speed_rms_radps = free_v.late;
   r.contact_hold_speed_rms_radps = contact_v.late;
+  r.free_hold_early_speed_rms_radps = free_v.early;
+  r.contact_hold_early_speed_rms_radps = contact_v.early;
   r.contact_penetration_rad = contact_pen.mean();
   r.contact_wall_torque_nm = contact_env.mean();
   r.contact_user_torque_nm = contact_user.mean();
@@ -356,8 +358,8 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
   if (r.controller_faults != kFaultNone && r.failure.empty()) r.failure = "controller fault";
   r.stable = r.solver_ok && !r.hit_stop && !r.oscillating && r.controller_faults == kFaultNone;
   const double breakaway_nm = std::max(sc.joint.friction.static_nm, sc.joint.friction.coulomb_nm);
-  r.sluggish = r.stable && sc.wall.enabled && !r.wall_reached &&
-               r.contact_user_torque_nm > sc.sluggish_push_friction_ratio * breakaway_nm;
+  r.sluggish_push_limit_nm = sc.sluggish_push_friction_ratio * breakaway_nm;
+  r.sluggish = r.stable && sc.wall.enabled && !r.wall_reached && r.contact_user_torque_nm > r.sluggish_push_limit_nm;
   if (r.sluggish) {
     r.failure = "too sluggish: wall not reached under a mean push of " + std::to_string(r.contact_user_torque_nm) +
                 " N m (breakaway " + std::to_string(breakaway_nm) + " N m)";

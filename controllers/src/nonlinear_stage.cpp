@@ -27,19 +27,36 @@ int nameSlot(const std::string& name) noexcept {
 struct Point {
   double log_damping = 0.0;  // log10 B_m
   double log_gain = 0.0;     // log10 B_o/eps
+  double log_lambda = 0.0;   // log10 lambda
+  bool operator==(const Point&) const = default;
 };
 
 Point pointOf(const JointGains& g) {
   return {std::log10(std::max(g.impedance.damping_nms_per_rad, 1e-12)),
-          std::log10(g.sliding_mode.valve_bound_v / g.sliding_mode.boundary_layer_radps)};
+          std::log10(g.sliding_mode.valve_bound_v / g.sliding_mode.boundary_layer_radps),
+          std::log10(std::max(g.sliding_mode.lambda_per_s, 1e-12))};
 }
 
 JointGains gainsAt(const JointGains& base, const Point& p) {
   JointGains g = base;
   g.impedance.damping_nms_per_rad = std::pow(10.0, p.log_damping);
   g.sliding_mode.boundary_layer_radps = g.sliding_mode.valve_bound_v / std::pow(10.0, p.log_gain);
+  g.sliding_mode.lambda_per_s = std::pow(10.0, p.log_lambda);
   return g;
 }
+
+// Poll directions of the compass search, in this order: (d log B_m, d log B_o/eps, d log lambda).
+// The last two move B_m and lambda together: the damping of the user-device mode of a stiff,
+// undamped user grows with B_m only as far as the sliding-mode loop (lambda) renders it
+// (docs/analysis.md, "HR's run 264"), a diagonal valley the axis directions cannot enter.
+constexpr std::array<std::array<double, 3>, 8> kPollDirections = {{{1.0, 0.0, 0.0},
+                                                                   {-1.0, 0.0, 0.0},
+                                                                   {0.0, 1.0, 0.0},
+                                                                   {0.0, -1.0, 0.0},
+                                                                   {0.0, 0.0, 1.0},
+                                                                   {0.0, 0.0, -1.0},
+                                                                   {1.0, 0.0, 1.0},
+                                                                   {-1.0, 0.0, -1.0}}};
 
 bool better(const NonlinearScore& a, const NonlinearScore& b) {
   return a.cost < b.cost;
@@ -75,6 +92,39 @@ std::vector<MonteCarloSample> stressCorners(const UncertaintyRanges& r, double u
   stiff.index = kCornerIndex + 2;
   stiff.user_stiffness_nm_per_rad = r.user_stiffness_nm_per_rad.max;
   return {fast, slow, stiff};
+}
+
+double detectorMargin(const ClosedLoopResult& run, double threshold_radps) noexcept {
+  const auto hold = [threshold_radps](double late, double early) {
+    if (!(late > 0.0)) return 0.0;
+    const double sustained = early > 0.0 ? late / (kOscillationSustainRatio * early) : 1.0;
+    return std::min(late / threshold_radps, sustained);
+  };
+  return std::max(hold(run.free_hold_speed_rms_radps, run.free_hold_early_speed_rms_radps),
+                  hold(run.contact_hold_speed_rms_radps, run.contact_hold_early_speed_rms_radps));
+}
+
+double passedRunMargin(const ClosedLoopResult& run, double threshold_radps) noexcept {
+  double m = detectorMargin(run, threshold_radps);
+  if (!run.wall_reached && run.sluggish_push_limit_nm > 0.0) {
+    m = std::max(m, run.contact_user_torque_nm / run.sluggish_push_limit_nm);
+  }
+  return m;
+}
+
+std::vector<MonteCarloSample> ringCorners(const UncertaintyRanges& r) {
+  const MonteCarloSample slow = stressCorners(r, 0.0)[1];
+  std::vector<MonteCarloSample> out;
+  int index = kCornerIndex + 3;
+  for (const double f : kRingStiffnessFractions) {
+    MonteCarloSample c = slow;
+    c.index = index++;
+    c.user_damping_nms_per_rad = r.user_damping_nms_per_rad.min;
+    c.user_stiffness_nm_per_rad =
+        r.user_stiffness_nm_per_rad.min + f * (r.user_stiffness_nm_per_rad.max - r.user_stiffness_nm_per_rad.min);
+    out.push_back(c);
+  }
+  return out;
 }
 
 std::vector<MonteCarloSample> stageSamples(const UncertaintyRanges& ranges, std::uint64_t seed,
@@ -113,6 +163,8 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
       ++s.failures;
     } else {
       s.worst_passed_severity = std::max(s.worst_passed_severity, runSeverity(r, sc.oscillation_speed_radps));
+      s.worst_passed_detector_margin =
+          std::max(s.worst_passed_detector_margin, std::min(passedRunMargin(r, sc.oscillation_speed_radps), 1.0));
     }
     const double severity = runSeverity(r, sc.oscillation_speed_radps);
     if (severity > worst_severity) {
@@ -125,7 +177,7 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
   }
   s.mean_rms_user_torque_nm = s.runs > 0 ? rms_sum / static_cast<double>(s.runs) : 0.0;
   s.cost = static_cast<double>(s.failures) + (s.linear_hard_met ? 0.0 : kHardGoalWeight) +
-           kMarginWeight * s.worst_passed_severity +
+           kMarginWeight * s.worst_passed_detector_margin +
            kTransparencyWeight * (1.0 - 1.0 / (1.0 + s.mean_rms_user_torque_nm));
   return s;
 }
@@ -137,15 +189,21 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
   if (o.samples < 1 || o.check_samples < 0 || o.rounds < 1 || o.max_evaluations < 0 || !(o.step_decades > 0.0) ||
       !(o.min_step_decades > 0.0) || o.max_added_per_round < 1 || !(o.min_damping_nms_per_rad > 0.0) ||
       !(o.max_damping_nms_per_rad >= o.min_damping_nms_per_rad) || !(o.min_gain_v_s_per_rad > 0.0) ||
-      !(o.max_gain_v_s_per_rad >= o.min_gain_v_s_per_rad) || !(o.corner_user_fraction >= 0.0) ||
+      !(o.max_gain_v_s_per_rad >= o.min_gain_v_s_per_rad) || !(o.min_lambda_per_s > 0.0) ||
+      !(o.max_lambda_per_s >= o.min_lambda_per_s) || !(o.corner_user_fraction >= 0.0) ||
       !(o.corner_user_fraction <= 1.0)) {
     throw std::invalid_argument("nonlinear stage options: expected samples, rounds >= 1, steps > 0, 0 < min <= max");
   }
   const int max_delay = ranges.delay_max_samples;
-  const std::array<double, 2> lo = {std::log10(o.min_damping_nms_per_rad), std::log10(o.min_gain_v_s_per_rad)};
-  const std::array<double, 2> hi = {std::log10(o.max_damping_nms_per_rad), std::log10(o.max_gain_v_s_per_rad)};
+  const std::array<double, 3> lo = {std::log10(o.min_damping_nms_per_rad), std::log10(o.min_gain_v_s_per_rad),
+                                    std::log10(o.min_lambda_per_s)};
+  const std::array<double, 3> hi = {std::log10(o.max_damping_nms_per_rad), std::log10(o.max_gain_v_s_per_rad),
+                                    std::log10(o.max_lambda_per_s)};
   NonlinearStageResult res;
   if (o.stress_corners) res.set = stressCorners(ranges, o.corner_user_fraction);
+  if (o.ring_corners) {
+    for (const MonteCarloSample& c : ringCorners(ranges)) res.set.push_back(c);
+  }
   for (const MonteCarloSample& sample : stageSamples(ranges, o.seed, scenario.joint_name, 0, o.samples)) {
     res.set.push_back(sample);
   }
@@ -168,21 +226,23 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
   res.history.push_back(best.cost);
 
   for (int round = 0; round < o.rounds; ++round) {
-    // Compass search (deterministic poll order: +B_m, -B_m, +gain, -gain).
+    // Compass search (deterministic poll order: kPollDirections).
     double step = o.step_decades;
     int evaluations = 0;
+    // Points scored in this round (the set is fixed within it): none of them beats the incumbent,
+    // so a poll that lands on one again (a clamped direction) is skipped without an evaluation.
+    std::vector<Point> visited = {best_p};
     while (evaluations < o.max_evaluations && step >= o.min_step_decades &&
            (best.failures > 0 || !best.linear_ok || best.worst_passed_severity >= 1.0)) {
       bool improved = false;
-      for (int dir = 0; dir < 4 && evaluations < o.max_evaluations; ++dir) {
+      for (std::size_t dir = 0; dir < kPollDirections.size() && evaluations < o.max_evaluations; ++dir) {
+        const std::array<double, 3>& d = kPollDirections[dir];
         Point p = best_p;
-        const double delta = (dir % 2 == 0 ? 1.0 : -1.0) * step;
-        if (dir < 2) {
-          p.log_damping = std::clamp(p.log_damping + delta, lo[0], hi[0]);
-        } else {
-          p.log_gain = std::clamp(p.log_gain + delta, lo[1], hi[1]);
-        }
-        if (p.log_damping == best_p.log_damping && p.log_gain == best_p.log_gain) continue;
+        p.log_damping = std::clamp(p.log_damping + d[0] * step, lo[0], hi[0]);
+        p.log_gain = std::clamp(p.log_gain + d[1] * step, lo[1], hi[1]);
+        p.log_lambda = std::clamp(p.log_lambda + d[2] * step, lo[2], hi[2]);
+        if (std::find(visited.begin(), visited.end(), p) != visited.end()) continue;
+        visited.push_back(p);
         const NonlinearScore s = score(gainsAt(base, p), best.failures);
         ++evaluations;
         if (better(s, best)) {

@@ -131,7 +131,11 @@ struct ClosedLoopResult {
   std::uint32_t controller_faults = 0;
   double free_hold_speed_rms_radps = 0.0;     ///< std of the speed about its mean, last free-hold window
   double contact_hold_speed_rms_radps = 0.0;  ///< same, last contact-hold window
-  double oscillation_frequency_hz = 0.0;      ///< from zero crossings of the speed in the worst window
+  /// Std of the speed over the window before the last free-hold window (the detector's ratio
+  /// test compares the two).
+  double free_hold_early_speed_rms_radps = 0.0;
+  double contact_hold_early_speed_rms_radps = 0.0;  ///< same, contact hold
+  double oscillation_frequency_hz = 0.0;            ///< from zero crossings of the speed in the worst window
   // Transparency in free space (free move phase).
   double free_rms_user_torque_nm = 0.0;
   double free_peak_user_torque_nm = 0.0;  ///< peak |tau_user| over the free move (onset spike)
@@ -155,6 +159,9 @@ struct ClosedLoopResult {
   /// JointScenario::sluggish_push_friction_ratio x the static friction: a failure of `validate`
   /// (the gains are too sluggish for the user's push), not an instability.
   bool sluggish = false;
+  /// The push above which a run that does not reach the wall is too sluggish:
+  /// JointScenario::sluggish_push_friction_ratio x the breakaway torque [N m].
+  double sluggish_push_limit_nm = 0.0;
   double contact_rendered_stiffness_nm_per_rad = 0.0;  ///< mean |tau_user| / mean penetration
   double min_po_energy_j = 0.0;                        ///< lowest passivity-observer energy
   double po_dissipated_j = 0.0;
