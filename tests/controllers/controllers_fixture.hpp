@@ -1,12 +1,27 @@
 #pragma once
 // The default DTS arm model, plant and gains, loaded once per test binary.
 
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
 #include "fullarm/arm/arm_model.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::controllers::test {
+
+/// Standard deviation of x[begin, end) (population form): the oscillation detector's window
+/// statistic, recomputed independently of validation.cpp for the tests that check it.
+inline double windowStd(const std::vector<double>& x, std::size_t begin, std::size_t end) {
+  double mean = 0.0;
+  for (std::size_t i = begin; i < end; ++i) mean += x[i];
+  mean /= static_cast<double>(end - begin);
+  double var = 0.0;
+  for (std::size_t i = begin; i < end; ++i) var += (x[i] - mean) * (x[i] - mean);
+  return std::sqrt(var / static_cast<double>(end - begin));
+}
 
 inline const arm::ArmModel& dtsModel() {
   static const arm::ArmModel model = arm::loadArmModel(arm::defaultArmModelPath());

@@ -26,14 +26,7 @@
 namespace fullarm::controllers {
 namespace {
 
-double windowStd(const std::vector<double>& x, std::size_t begin, std::size_t end) {
-  double mean = 0.0;
-  for (std::size_t i = begin; i < end; ++i) mean += x[i];
-  mean /= static_cast<double>(end - begin);
-  double var = 0.0;
-  for (std::size_t i = begin; i < end; ++i) var += (x[i] - mean) * (x[i] - mean);
-  return std::sqrt(var / static_cast<double>(end - begin));
-}
+using test::windowStd;
 
 // m x'' + b x' + k x = 0 sampled exactly at T: poles exp(s T), s = -b/(2m) +- j w_d.
 TEST(CoupledStability, SlowestModeOfASampledMassSpringDamperIsItsAnalyticDecayRate) {

@@ -23,14 +23,7 @@
 namespace fullarm::controllers {
 namespace {
 
-double windowStd(const std::vector<double>& x, std::size_t begin, std::size_t end) {
-  double mean = 0.0;
-  for (std::size_t i = begin; i < end; ++i) mean += x[i];
-  mean /= static_cast<double>(end - begin);
-  double var = 0.0;
-  for (std::size_t i = begin; i < end; ++i) var += (x[i] - mean) * (x[i] - mean);
-  return std::sqrt(var / static_cast<double>(end - begin));
-}
+using test::windowStd;
 
 ValidationConfig defaultValidation() {
   return loadValidationConfig(defaultValidationConfigPath());

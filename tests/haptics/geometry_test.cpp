@@ -182,6 +182,21 @@ std::array<LocalFeature, 7> allLocalFeatures() {
           LocalFeature{Kind::kFace, 0}};
 }
 
+// The warm-started query from every guess pair of features (the true pair included): the
+// reference distance d_ref (kTol), points that far apart and on the reported features.
+void expectWarmStartsMatch(const PreparedTriangle& pa, const PreparedTriangle& pb, const std::array<Vector3d, 3>& A,
+                           const std::array<Vector3d, 3>& B, double d_ref, int trial) {
+  for (const LocalFeature& ga : allLocalFeatures()) {
+    for (const LocalFeature& gb : allLocalFeatures()) {
+      const TriangleTriangleResult w = closestPointsTriangleTriangleWarm(pa, pb, ga, gb);
+      ASSERT_NEAR(w.distance_m, d_ref, kTol) << "trial " << trial;
+      EXPECT_NEAR((w.p - w.q).norm(), w.distance_m, kTol);
+      expectOnFeature(w.p, A, w.feature_a);
+      expectOnFeature(w.q, B, w.feature_b);
+    }
+  }
+}
+
 TEST(GeometryTest, PreparedAndWarmStartedQueriesMatchFcl) {
   std::mt19937 rng(23);
   int intersecting = 0;
@@ -201,17 +216,8 @@ TEST(GeometryTest, PreparedAndWarmStartedQueriesMatchFcl) {
     expectOnFeature(prepared.p, A, prepared.feature_a);
     expectOnFeature(prepared.q, B, prepared.feature_b);
     intersecting += prepared.intersecting ? 1 : 0;
-    // Warm start from every guess pair, including the true one: same distance, points on the
-    // reported features, features a closest pair.
-    for (const LocalFeature& ga : allLocalFeatures()) {
-      for (const LocalFeature& gb : allLocalFeatures()) {
-        const TriangleTriangleResult w = closestPointsTriangleTriangleWarm(pa, pb, ga, gb);
-        ASSERT_NEAR(w.distance_m, d_fcl, kTol) << "trial " << trial;
-        EXPECT_NEAR((w.p - w.q).norm(), w.distance_m, kTol);
-        expectOnFeature(w.p, A, w.feature_a);
-        expectOnFeature(w.q, B, w.feature_b);
-      }
-    }
+    // Warm start from every guess pair, including the true one.
+    ASSERT_NO_FATAL_FAILURE(expectWarmStartsMatch(pa, pb, A, B, d_fcl, trial));
     // Point queries on the prepared triangle against the unprepared ones (checked above
     // against dense sampling).
     const Vector3d p = randomPoint(rng, 2.0);
@@ -397,15 +403,7 @@ TEST(GeometryTest, WarmStartOfLongEdgesOverSmallTrianglesMatchesFcl) {
     Vector3d P;
     Vector3d Q;
     const double d_fcl = fcl::detail::TriangleDistance<double>::triDistance(A[0], A[1], A[2], B[0], B[1], B[2], P, Q);
-    for (const LocalFeature& ga : allLocalFeatures()) {
-      for (const LocalFeature& gb : allLocalFeatures()) {
-        const TriangleTriangleResult w = closestPointsTriangleTriangleWarm(pa, pb, ga, gb);
-        ASSERT_NEAR(w.distance_m, d_fcl, kTol) << "trial " << trial;
-        EXPECT_NEAR((w.p - w.q).norm(), w.distance_m, kTol);
-        expectOnFeature(w.p, A, w.feature_a);
-        expectOnFeature(w.q, B, w.feature_b);
-      }
-    }
+    ASSERT_NO_FATAL_FAILURE(expectWarmStartsMatch(pa, pb, A, B, d_fcl, trial));
   }
   EXPECT_GT(spanning, 2000);
   EXPECT_GT(raw_decided, 1000);
