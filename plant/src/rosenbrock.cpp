@@ -367,14 +367,7 @@ double RosenbrockIntegrator::attempt(double h) noexcept {
   fstage_ += inv_h * (kC41 * k1_ + kC42 * k2_ + kC43 * k3_);
   solve(fstage_, k4_);
   y1_ = stage_ + k4_;  // stiffly accurate: y1 = stage 4 + k4
-  double sum = 0.0;
-  for (int i = 0; i < n_; ++i) {
-    const double w = atol_[i] + rtol_ * std::max(std::abs(y0_[i]), std::abs(y1_[i]));
-    const double e = k4_[i] / w;
-    sum += e * e;
-  }
-  const double err = std::sqrt(sum / n_);
-  return std::isfinite(err) ? err : std::numeric_limits<double>::infinity();
+  return errorNorm(k4_);
 }
 
 double RosenbrockIntegrator::attemptRodas4(double h) noexcept {
@@ -396,10 +389,15 @@ double RosenbrockIntegrator::attemptRodas4(double h) noexcept {
   }
   const Vector& k6 = ks_[5];
   y1_ = stage_ + k6;  // stiffly accurate: y1 = stage 6 + k6
+  return errorNorm(k6);
+}
+
+double RosenbrockIntegrator::errorNorm(const Vector& estimate) const noexcept {
+  // Weighted RMS of the embedded error estimate, weights atol + rtol max(|y0|, |y1|).
   double sum = 0.0;
   for (int i = 0; i < n_; ++i) {
     const double w = atol_[i] + rtol_ * std::max(std::abs(y0_[i]), std::abs(y1_[i]));
-    const double e = k6[i] / w;
+    const double e = estimate[i] / w;
     sum += e * e;
   }
   const double err = std::sqrt(sum / n_);

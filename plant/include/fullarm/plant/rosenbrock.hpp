@@ -106,6 +106,8 @@ class RosenbrockIntegrator {
   double attempt(double h) noexcept;
   /// The Rodas4 stages of attempt() after the factorisation.
   double attemptRodas4(double h) noexcept;
+  /// Weighted RMS norm of an embedded error estimate against y0_ and y1_ (inf if not finite).
+  double errorNorm(const Vector& estimate) const noexcept;
   /// Factorises G = I / (h gamma) - J; false if singular.
   bool factor(double h) noexcept;
   /// x = G^-1 b with the last factorisation.
