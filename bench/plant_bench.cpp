@@ -154,6 +154,24 @@ BENCHMARK(BM_Plant_Joint_SlowSine_Rodas4)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Arm_Chirp_Rodas4)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Arm_SlowSine_Rodas4)->Unit(benchmark::kMillisecond);
 
+// ROS34PW2 (Rosenbrock-W, `solver.integrator: ros34pw2`: Jacobian once per period), same scenarios.
+void BM_Plant_Joint_Chirp_Ros34pw2(benchmark::State& state) {
+  runPlant(state, false, true, IntegratorKind::kRos34pw2);
+}
+void BM_Plant_Joint_SlowSine_Ros34pw2(benchmark::State& state) {
+  runPlant(state, false, false, IntegratorKind::kRos34pw2);
+}
+void BM_Plant_Arm_Chirp_Ros34pw2(benchmark::State& state) {
+  runPlant(state, true, true, IntegratorKind::kRos34pw2);
+}
+void BM_Plant_Arm_SlowSine_Ros34pw2(benchmark::State& state) {
+  runPlant(state, true, false, IntegratorKind::kRos34pw2);
+}
+BENCHMARK(BM_Plant_Joint_Chirp_Ros34pw2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Joint_SlowSine_Ros34pw2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Arm_Chirp_Ros34pw2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Arm_SlowSine_Ros34pw2)->Unit(benchmark::kMillisecond);
+
 // Peer: fixed-step RK4 of the same right-hand side (one joint, 10 us step).
 void BM_Peer_Rk4_Joint_Chirp(benchmark::State& state) {
   ArmPlant plant;
