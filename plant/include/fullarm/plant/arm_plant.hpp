@@ -76,8 +76,8 @@ struct SolverOptions {
   /// the rigid-body derivatives d ID/d(q, qd) of the Jacobian (R6-R9) at the first Jacobian of
   /// each control period only and reuses them, with the current M^-1, in the period's later
   /// steps. Not exact after the first step, and the error estimate does not see the difference:
-  /// on the arm chirp about 15 % faster, the big joints' angle error against the tight reference
-  /// about 2x larger (docs/plant.md). false (default): exact at every Jacobian.
+  /// on the arm chirp about 10 % faster (15 % before the composite derivatives, R13), the big joints' angle error
+  /// against the tight reference about 2x larger (docs/plant.md). false (default): exact at every Jacobian.
   bool rigid_derivatives_once_per_period = false;
 };
 
