@@ -118,7 +118,7 @@ TEST(RosenbrockW, JacobianOncePerCallAndFactorisationReused) {
 }
 
 // y' = -1000 (1 + y^2) (y - s) + c, s' = c, c' = -s: a stiff nonlinear component (its Jacobian
-// entry -1000 (1 + 3 y^2 - 2 y s) changes by a factor of up to 4 within a call) tracking sin t.
+// entry -1000 (1 + 3 y^2 - 2 y s) changes by a factor of up to about 3 within a call) tracking 1.5 sin t.
 // Calls of 0.25 s, so the W-method's Jacobian is up to 0.25 s old; reference: Rodas3 (exact
 // Jacobian at every step) at rtol 1e-11.
 struct StiffNonlinear {
