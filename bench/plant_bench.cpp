@@ -13,6 +13,7 @@
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/plant_config.hpp"
+#include "fullarm/plant/reduced_dynamics.hpp"
 #include "fullarm/plant/signals.hpp"
 
 namespace {
@@ -154,6 +155,24 @@ BENCHMARK(BM_Plant_Joint_SlowSine_Rodas4)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Arm_Chirp_Rodas4)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Plant_Arm_SlowSine_Rodas4)->Unit(benchmark::kMillisecond);
 
+// ROS34PW2 (Rosenbrock-W, `solver.integrator: ros34pw2`: Jacobian once per period), same scenarios.
+void BM_Plant_Joint_Chirp_Ros34pw2(benchmark::State& state) {
+  runPlant(state, false, true, IntegratorKind::kRos34pw2);
+}
+void BM_Plant_Joint_SlowSine_Ros34pw2(benchmark::State& state) {
+  runPlant(state, false, false, IntegratorKind::kRos34pw2);
+}
+void BM_Plant_Arm_Chirp_Ros34pw2(benchmark::State& state) {
+  runPlant(state, true, true, IntegratorKind::kRos34pw2);
+}
+void BM_Plant_Arm_SlowSine_Ros34pw2(benchmark::State& state) {
+  runPlant(state, true, false, IntegratorKind::kRos34pw2);
+}
+BENCHMARK(BM_Plant_Joint_Chirp_Ros34pw2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Joint_SlowSine_Ros34pw2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Arm_Chirp_Ros34pw2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plant_Arm_SlowSine_Ros34pw2)->Unit(benchmark::kMillisecond);
+
 // Peer: fixed-step RK4 of the same right-hand side (one joint, 10 us step).
 void BM_Peer_Rk4_Joint_Chirp(benchmark::State& state) {
   ArmPlant plant;
@@ -188,6 +207,41 @@ void BM_Peer_Rk4_Joint_Chirp(benchmark::State& state) {
   state.counters["rtf"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_Peer_Rk4_Joint_Chirp)->Unit(benchmark::kMillisecond);
+
+// The rigid-body derivatives d ID/d(q, qd) of the 7-joint reduced arm (one call per Rodas3 Jacobian): the composite
+// form (R13, what the plant uses) and, in the same run, the body-by-body form (R6-R8) it replaced.
+void runRigidDerivatives(benchmark::State& state, bool composite) {
+  std::vector<int> active;
+  for (const JointParams& j : config().joints) active.push_back(model().jointIndex(j.name));
+  const ReducedArmModel reduced = reduceArmModel(model(), active, model().defaultPosture());
+  const int n = reduced.n;
+  ReducedArmData data;
+  ReducedVector q = ReducedVector::LinSpaced(n, -0.4, 0.5);
+  const ReducedVector qd = ReducedVector::LinSpaced(n, 1.0, -0.8);
+  const ReducedVector qdd = ReducedVector::LinSpaced(n, -3.0, 2.0);
+  ReducedVector tau(n);
+  ReducedMatrix dq(n, n);
+  ReducedMatrix dqd(n, n);
+  computeReducedKinematics(reduced, data, q, qd);
+  for (auto _ : state) {
+    if (composite) {
+      computeReducedInverseDynamicsDerivatives(reduced, data, qdd, tau, dq, dqd);
+    } else {
+      computeReducedInverseDynamicsDerivativesPerBody(reduced, data, qdd, tau, dq, dqd);
+    }
+    benchmark::DoNotOptimize(dq.data());
+    benchmark::DoNotOptimize(dqd.data());
+    benchmark::ClobberMemory();
+  }
+}
+void BM_RigidDerivatives_Composite(benchmark::State& state) {
+  runRigidDerivatives(state, true);
+}
+void BM_RigidDerivatives_PerBody(benchmark::State& state) {
+  runRigidDerivatives(state, false);
+}
+BENCHMARK(BM_RigidDerivatives_Composite);
+BENCHMARK(BM_RigidDerivatives_PerBody);
 
 }  // namespace
 

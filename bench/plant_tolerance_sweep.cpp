@@ -5,7 +5,7 @@
 // 0.1 rad inside the upper limits), the rtol-halving difference on the EB chirp, and
 // the CPU-time real-time factor of 5 s of EB and arm chirp. Prints a Markdown table.
 //
-//   build/release/bench/plant_tolerance_sweep [--integrator rodas3|rodas4|cvodes] [--variant NAME]...
+//   build/release/bench/plant_tolerance_sweep [--integrator rodas3|rodas4|ros34pw2|cvodes] [--variant NAME]...
 //
 // --variant (repeatable) runs only the named rows of the table (default: all); --scales
 // R,S,SR,P,A,V (repeatable) adds and runs a row with the shipped rtol, atol_spool,
@@ -140,10 +140,12 @@ int main(int argc, char** argv) {
         integrator = IntegratorKind::kRodas3;
       } else if (v == "rodas4") {
         integrator = IntegratorKind::kRodas4;
+      } else if (v == "ros34pw2") {
+        integrator = IntegratorKind::kRos34pw2;
       } else if (v == "cvodes") {
         integrator = IntegratorKind::kCvodes;
       } else {
-        std::fprintf(stderr, "--integrator: expected rodas3, rodas4 or cvodes, got '%s'\n", v.c_str());
+        std::fprintf(stderr, "--integrator: expected rodas3, rodas4, ros34pw2 or cvodes, got '%s'\n", v.c_str());
         return 2;
       }
     } else if (std::strcmp(argv[i], "--per-joint") == 0) {
@@ -171,10 +173,11 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--variant") == 0 && i + 1 < argc) {
       only.emplace_back(argv[++i]);
     } else {
-      std::fprintf(stderr,
-                   "usage: %s [--integrator rodas3|rodas4|cvodes] [--variant NAME]... [--scales R,S,SR,P,A,V]... "
-                   "[--per-joint]\n",
-                   argv[0]);
+      std::fprintf(
+          stderr,
+          "usage: %s [--integrator rodas3|rodas4|ros34pw2|cvodes] [--variant NAME]... [--scales R,S,SR,P,A,V]... "
+          "[--per-joint]\n",
+          argv[0]);
       return 2;
     }
   }

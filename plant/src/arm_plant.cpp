@@ -430,10 +430,12 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   check(CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
   solver_ = std::move(s);
   rodas_.reset();
-  if (options.integrator == IntegratorKind::kRodas3 || options.integrator == IntegratorKind::kRodas4) {
+  if (options.integrator == IntegratorKind::kRodas3 || options.integrator == IntegratorKind::kRodas4 ||
+      options.integrator == IntegratorKind::kRos34pw2) {
     rodas_ = std::make_unique<RosenbrockIntegrator>();
-    rodas_->setMethod(options.integrator == IntegratorKind::kRodas4 ? RosenbrockMethod::kRodas4
-                                                                    : RosenbrockMethod::kRodas3);
+    rodas_->setMethod(options.integrator == IntegratorKind::kRodas4     ? RosenbrockMethod::kRodas4
+                      : options.integrator == IntegratorKind::kRos34pw2 ? RosenbrockMethod::kRos34pw2
+                                                                        : RosenbrockMethod::kRodas3);
     rodas_->configure(static_cast<int>(N), atol, options.rtol, options.max_steps_per_period,
                       {&SolverCallbacks::rodasRhs, &SolverCallbacks::rodasJacobian, this});
     // Joint k's hydraulic states couple to other joints only through q and qd, except in
@@ -942,7 +944,10 @@ PlantStatus ArmPlant::stepRodas3(double dt_s) noexcept {
   if (result != RosenbrockStatus::kOk) {
     status = PlantStatus::kSolverFailure;
     std::snprintf(error_, sizeof(error_), "%s at t = %.6f s: %s",
-                  rodas_->method() == RosenbrockMethod::kRodas4 ? "Rodas4" : "Rodas3", t_,
+                  rodas_->method() == RosenbrockMethod::kRodas4     ? "Rodas4"
+                  : rodas_->method() == RosenbrockMethod::kRos34pw2 ? "ROS34PW2"
+                                                                    : "Rodas3",
+                  t_,
                   result == RosenbrockStatus::kTooManySteps   ? "too many steps in one period"
                   : result == RosenbrockStatus::kStepTooSmall ? "step size underflow"
                                                               : "non-finite right-hand side");

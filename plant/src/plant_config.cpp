@@ -159,8 +159,10 @@ PlantConfig build(const YamlMap& root, const std::filesystem::path& source, cons
     o.integrator = IntegratorKind::kRodas3;
   } else if (integrator == "rodas4") {
     o.integrator = IntegratorKind::kRodas4;
+  } else if (integrator == "ros34pw2") {
+    o.integrator = IntegratorKind::kRos34pw2;
   } else {
-    solver.fail("integrator", "'" + integrator + "': expected cvodes, rodas3 or rodas4");
+    solver.fail("integrator", "'" + integrator + "': expected cvodes, rodas3, rodas4 or ros34pw2");
   }
   for (const auto& [key, value] :
        {std::pair{"rtol", o.rtol}, std::pair{"atol_spool", o.atol_spool},

@@ -283,9 +283,9 @@ void computeReducedMassMatrix(const ReducedArmModel& model, const ReducedArmData
   }
 }
 
-void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, ReducedArmData& data,
-                                              const ReducedVector& qdd, ReducedVector& tau, ReducedMatrix& dtau_dq,
-                                              ReducedMatrix& dtau_dqd) noexcept {
+void computeReducedInverseDynamicsDerivativesPerBody(const ReducedArmModel& model, ReducedArmData& data,
+                                                     const ReducedVector& qdd, ReducedVector& tau,
+                                                     ReducedMatrix& dtau_dq, ReducedMatrix& dtau_dqd) noexcept {
   const int n = model.n;
   computeReducedInverseDynamics(model, data, qdd, tau);
   dtau_dq.setZero(n, n);
@@ -339,6 +339,122 @@ void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, Redu
       if (model.supports[kj][ki] && i != j) dq += dot(crossMotion(s, data.s[ki]), data.F_tot[ki]);
       dtau_dq(i, j) = dq;
       dtau_dqd(i, j) = dot(data.s[ki], dqd_sum[ki]);
+    }
+  }
+}
+
+namespace {
+
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+using Vector6 = Eigen::Matrix<double, 6, 1>;
+
+[[gnu::always_inline]] inline Eigen::Matrix3d skew(const Eigen::Vector3d& a) noexcept {
+  Eigen::Matrix3d m;
+  m << 0.0, -a.z(), a.y(), a.z(), 0.0, -a.x(), -a.y(), a.x(), 0.0;
+  return m;
+}
+[[gnu::always_inline]] inline Vector6 stacked(const SpatialVector& a) noexcept {
+  Vector6 v;
+  v << a.top, a.bottom;
+  return v;
+}
+[[gnu::always_inline]] inline SpatialVector split(const Vector6& v) noexcept {
+  return {v.head<3>(), v.tail<3>()};
+}
+
+}  // namespace
+
+void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, ReducedArmData& data,
+                                              const ReducedVector& qdd, ReducedVector& tau, ReducedMatrix& dtau_dq,
+                                              ReducedMatrix& dtau_dqd) noexcept {
+  // R13 (reports/equations.md): the per-body sums of computeReducedInverseDynamicsDerivativesPerBody (R7, R8) collected
+  // into composite quantities of each subtree c, so that every (i, j) entry is a dot product. With the Jacobi identity
+  // (s x V) x* f + V x* (s x* f) = s x* (V x* f):
+  //   sum_{k in c} dF_k/dq_j  = s x* F_tot_c + I^C_c u - B_c w + w x* (IV)^C_c
+  //   sum_{k in c} dF_k/dqd_j = 2 I^C_c w - B_c s + s x* (IV)^C_c
+  // with s, w = V_p x s, u = -(s x A_p + w x V_p) of joint j, I^C the composite inertia, (IV)^C the composite momentum
+  // and B_c = sum_k (I_k crm(V_k) + crm(V_k)^T I_k) (symmetric). For i an ancestor of (or equal to) j the subtree is
+  // j's: dtau_i/dq_j = s_i . D_j. For i a descendant of j it is i's, the turning of s_i cancels s x* F_tot_i, and
+  // dtau_i/dq_j = u . (I^C_i s_i) + w . b_i, dtau_i/dqd_j = 2 w . (I^C_i s_i) + s . b_i, b_i = -B_i s_i - s_i x*
+  // (IV)^C_i.
+  const int n = model.n;
+  computeReducedInverseDynamics(model, data, qdd, tau);
+  dtau_dq.setZero(n, n);
+  dtau_dqd.setZero(n, n);
+  std::array<double, kMaxReducedBodies> mass_c{};
+  std::array<Eigen::Vector3d, kMaxReducedBodies> moment_c{};
+  std::array<Eigen::Matrix3d, kMaxReducedBodies> inertia_c{};
+  std::array<SpatialVector, kMaxReducedBodies> momentum_c{};
+  std::array<Matrix6, kMaxReducedBodies> b_c{};
+  for (int b = 0; b < n; ++b) {
+    const auto k = static_cast<std::size_t>(b);
+    mass_c[k] = data.mass_kg[k];
+    moment_c[k] = data.first_moment_kgm[k];
+    inertia_c[k] = data.inertia_O_kgm2[k];
+    momentum_c[k] = data.IV[k];
+    // I crm(V) with I = [I_O, [h]x; [h]x^T, m 1] and crm(V) = [[w]x, 0; [v]x, [w]x].
+    const Eigen::Matrix3d hx = skew(data.first_moment_kgm[k]);
+    const Eigen::Matrix3d wx = skew(data.V[k].top);
+    const Eigen::Matrix3d vx = skew(data.V[k].bottom);
+    Matrix6 p;
+    p.topLeftCorner<3, 3>().noalias() = data.inertia_O_kgm2[k] * wx + hx * vx;
+    p.topRightCorner<3, 3>().noalias() = hx * wx;
+    p.bottomLeftCorner<3, 3>().noalias() = -hx * wx;
+    p.bottomLeftCorner<3, 3>() += data.mass_kg[k] * vx;
+    p.bottomRightCorner<3, 3>() = data.mass_kg[k] * wx;
+    b_c[k] = p + p.transpose();
+  }
+  for (int o = n - 1; o >= 0; --o) {
+    const auto k = static_cast<std::size_t>(model.order[static_cast<std::size_t>(o)]);
+    const int parent = model.parent[k];
+    if (parent < 0) continue;
+    const auto pk = static_cast<std::size_t>(parent);
+    mass_c[pk] += mass_c[k];
+    moment_c[pk] += moment_c[k];
+    inertia_c[pk] += inertia_c[k];
+    momentum_c[pk] += momentum_c[k];
+    b_c[pk] += b_c[k];
+  }
+  const SpatialVector ground_accel{Eigen::Vector3d::Zero(), -model.gravity_W_mps2};
+  const SpatialVector zero{};
+  std::array<SpatialVector, kMaxReducedBodies> a_i{};   // I^C_i s_i
+  std::array<SpatialVector, kMaxReducedBodies> b_i{};   // -B_i s_i - s_i x* (IV)^C_i
+  std::array<SpatialVector, kMaxReducedBodies> d_q{};   // sum over j's subtree of dF/dq_j
+  std::array<SpatialVector, kMaxReducedBodies> d_qd{};  // sum over j's subtree of dF/dqd_j
+  std::array<SpatialVector, kMaxReducedBodies> w_j{};
+  std::array<SpatialVector, kMaxReducedBodies> u_j{};
+  for (int j = 0; j < n; ++j) {
+    const auto kj = static_cast<std::size_t>(j);
+    const int pj = model.parent[kj];
+    const SpatialVector& s = data.s[kj];
+    const SpatialVector& V_p = pj < 0 ? zero : data.V[static_cast<std::size_t>(pj)];
+    const SpatialVector& A_p = pj < 0 ? ground_accel : data.A[static_cast<std::size_t>(pj)];
+    const SpatialVector w = crossMotion(V_p, s);
+    const SpatialVector u = scaled(crossMotion(s, A_p) + crossMotion(w, V_p), -1.0);
+    w_j[kj] = w;
+    u_j[kj] = u;
+    const SpatialVector ic_s = applyInertia(mass_c[kj], moment_c[kj], inertia_c[kj], s);
+    const SpatialVector ic_u = applyInertia(mass_c[kj], moment_c[kj], inertia_c[kj], u);
+    const SpatialVector ic_w = applyInertia(mass_c[kj], moment_c[kj], inertia_c[kj], w);
+    const Vector6 bs = b_c[kj] * stacked(s);
+    const Vector6 bw = b_c[kj] * stacked(w);
+    const SpatialVector s_x_momentum = crossForce(s, momentum_c[kj]);
+    a_i[kj] = ic_s;
+    b_i[kj] = scaled(split(bs) + s_x_momentum, -1.0);
+    d_q[kj] = crossForce(s, data.F_tot[kj]) + ic_u - split(bw) + crossForce(w, momentum_c[kj]);
+    d_qd[kj] = scaled(ic_w, 2.0) - split(bs) + s_x_momentum;
+  }
+  for (int j = 0; j < n; ++j) {
+    const auto kj = static_cast<std::size_t>(j);
+    for (int i = 0; i < n; ++i) {
+      const auto ki = static_cast<std::size_t>(i);
+      if (i != j && model.supports[kj][ki]) {  // i a descendant of j
+        dtau_dq(i, j) = dot(u_j[kj], a_i[ki]) + dot(w_j[kj], b_i[ki]);
+        dtau_dqd(i, j) = 2.0 * dot(w_j[kj], a_i[ki]) + dot(data.s[kj], b_i[ki]);
+      } else if (model.supports[ki][kj]) {  // i an ancestor of, or equal to, j
+        dtau_dq(i, j) = dot(data.s[ki], d_q[kj]);
+        dtau_dqd(i, j) = dot(data.s[ki], d_qd[kj]);
+      }
     }
   }
 }

@@ -36,12 +36,76 @@ constexpr double kC4[5][5] = {
     {-0.1073529058151375, -9.594562251023355, -20.47028614809616, 0.0, 0.0},
     {7.496443313967647, -10.24680431464352, -33.99990352819905, 11.70890893206160, 0.0},
     {8.083246795921522, -7.981132988064893, -31.52159432874371, 16.31930543123136, -6.058818238834054}};
+// Rosenbrock-W methods of Rang & Angermann, "New Rosenbrock W-methods of order 3 for partial
+// differential algebraic equations of index 1", BIT Numer. Math. 45 (2005) 761-787, in their original form
+// (I - h gamma J) k_i = h f(y0 + sum_j alpha_ij k_j) + h J sum_j gamma_ij k_j, y1 = y0 + sum b_i k_i,
+// embedded bhat; converted to the transformed form of attempt() by setMethod() (Hairer & Wanner, Solving ODEs II,
+// sec. IV.7, eq. (7.25)). The W order conditions hold for any J: b alpha 1 = 1/2 and b (Gamma - gamma I) 1 = -gamma
+// at order 2, as checked by the order tests with a perturbed Jacobian (tests/plant/rosenbrock_test.cpp).
+struct WMethodTable {
+  int stages;
+  double gamma;
+  double alpha[4][4];
+  double gamma_ij[4][4];  // strictly lower part of Gamma (its diagonal is gamma)
+  double b[4];
+  double bhat[4];
+};
+// ROS34PW2: 4 stages, stiffly accurate, L-stable; embedded order 2 with R(inf) = 0.48.
+constexpr WMethodTable kRos34pw2 = {
+    4,
+    4.3586652150845900e-01,
+    {{0.0, 0.0, 0.0, 0.0},
+     {8.7173304301691801e-01, 0.0, 0.0, 0.0},
+     {8.4457060015369423e-01, -1.1299064236484185e-01, 0.0, 0.0},
+     {0.0, 0.0, 1.0, 0.0}},
+    {{0.0, 0.0, 0.0, 0.0},
+     {-8.7173304301691801e-01, 0.0, 0.0, 0.0},
+     {-9.0338057013044082e-01, 5.4180672388095326e-02, 0.0, 0.0},
+     {2.4212380706095346e-01, -1.2232505839045147e+00, 5.4526025533510214e-01, 0.0}},
+    {2.4212380706095346e-01, -1.2232505839045147e+00, 1.5452602553351020e+00, 4.3586652150845900e-01},
+    {3.7810903145819369e-01, -9.6042292212423178e-02, 5.0000000000000000e-01, 2.1793326075422950e-01}};
 constexpr double kSafety = 0.9;
 constexpr double kMinFactor = 0.2;
 constexpr double kMaxFactor = 5.0;
 constexpr double kSmallestStep_s = 1e-14;
 
 }  // namespace
+
+void RosenbrockIntegrator::setMethod(RosenbrockMethod method) noexcept {
+  method_ = method;
+  factor_valid_ = false;
+  if (!isWMethod(method)) return;
+  // Equation R12 (reports/equations.md): with Gamma = (gamma_ij) lower triangular (diagonal gamma) and
+  // u_i = sum_j Gamma_ij k_j, the stages become G u_i = f(y0 + sum_j a_ij u_j) + sum_j (c_ij / h) u_j with
+  // G = I / (h gamma) - J, a = alpha Gamma^-1, c = diag(1 / gamma) - Gamma^-1, m = b Gamma^-1, e = (b - bhat) Gamma^-1.
+  const WMethodTable& t = kRos34pw2;
+  const int s = t.stages;
+  double inv[4][4] = {};  // Gamma^-1 by forward substitution
+  for (int j = 0; j < s; ++j) {
+    inv[j][j] = 1.0 / t.gamma;
+    for (int i = j + 1; i < s; ++i) {
+      double sum = 0.0;
+      for (int k = j; k < i; ++k) sum += t.gamma_ij[i][k] * inv[k][j];
+      inv[i][j] = -sum / t.gamma;
+    }
+  }
+  WTableau w{};
+  w.stages = s;
+  w.gamma = t.gamma;
+  for (int i = 0; i < s; ++i) {
+    for (int j = 0; j < i; ++j) {
+      for (int k = j; k < i; ++k) w.a[i][j] += t.alpha[i][k] * inv[k][j];
+      w.c[i][j] = -inv[i][j];
+    }
+  }
+  for (int j = 0; j < s; ++j) {
+    for (int i = j; i < s; ++i) {
+      w.m[j] += t.b[i] * inv[i][j];
+      w.e[j] += (t.b[i] - t.bhat[i]) * inv[i][j];
+    }
+  }
+  w_tab_ = w;
+}
 
 void RosenbrockIntegrator::configure(int n, const double* atol, double rtol, long max_steps_per_call,
                                      const RosenbrockSystem& system) {
@@ -66,6 +130,7 @@ void RosenbrockIntegrator::configure(int n, const double* atol, double rtol, lon
   jac_.setZero(n, n);
   g_.setZero(n, n);
   stats_ = {};
+  factor_valid_ = false;
 }
 
 void RosenbrockIntegrator::setBlockStructure(int blocks) {
@@ -73,6 +138,7 @@ void RosenbrockIntegrator::setBlockStructure(int blocks) {
     throw std::invalid_argument("Rosenbrock integrator: block structure too large");
   blocks_ = blocks;
   border_ = n_ - blocks * kRosenbrockBlock;
+  factor_valid_ = false;
   if (blocks_ > 0) {
     w_.setZero(blocks_ * kRosenbrockBlock, border_);
     schur_.setZero(border_, border_);
@@ -225,8 +291,18 @@ void luSolveAny(const double* a, int ld, int n, const int* piv, double* x) noexc
 }  // namespace
 
 bool RosenbrockIntegrator::factor(double h) noexcept {
-  const double d = 1.0 / (h * (method_ == RosenbrockMethod::kRodas4 ? kGamma4 : kGamma));
+  // A W-method reuses the factorisation while J and h stay (every step of a period with an unchanged step).
+  if (factor_valid_ && h == factored_h_) return true;
+  factor_valid_ = false;
+  const double gamma = isWMethod(method_) ? w_tab_.gamma : (method_ == RosenbrockMethod::kRodas4 ? kGamma4 : kGamma);
+  const double d = 1.0 / (h * gamma);
   ++stats_.factorizations;
+  factored_h_ = h;
+  factor_valid_ = factorG(d);
+  return factor_valid_;
+}
+
+bool RosenbrockIntegrator::factorG(double d) noexcept {
   if (blocks_ == 0) {
     g_ = -jac_;
     g_.diagonal().array() += d;
@@ -351,6 +427,7 @@ void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {
 double RosenbrockIntegrator::attempt(double h) noexcept {
   if (!factor(h)) return std::numeric_limits<double>::infinity();
   if (method_ == RosenbrockMethod::kRodas4) return attemptRodas4(h);
+  if (isWMethod(method_)) return attemptW(h);
   auto solve = [this](const Vector& b, Vector& x) { this->solve(b, x); };
   const double inv_h = 1.0 / h;
   solve(f0_, k1_);
@@ -392,6 +469,28 @@ double RosenbrockIntegrator::attemptRodas4(double h) noexcept {
   return errorNorm(k6);
 }
 
+double RosenbrockIntegrator::attemptW(double h) noexcept {
+  // R12 (reports/equations.md): stage 1 sits at y0 (f0 from the Jacobian pass or advance()).
+  const WTableau& w = w_tab_;
+  const double inv_h = 1.0 / h;
+  solve(f0_, ks_[0]);
+  for (int i = 1; i < w.stages; ++i) {
+    stage_ = y0_;
+    for (int j = 0; j < i; ++j) stage_ += w.a[i][j] * ks_[static_cast<std::size_t>(j)];
+    sys_.rhs(sys_.user, stage_.data(), fstage_.data());
+    ++stats_.rhs_evals;
+    for (int j = 0; j < i; ++j) fstage_ += (w.c[i][j] * inv_h) * ks_[static_cast<std::size_t>(j)];
+    solve(fstage_, ks_[static_cast<std::size_t>(i)]);
+  }
+  y1_ = y0_;
+  stage_scratch_.setZero();
+  for (int j = 0; j < w.stages; ++j) {
+    y1_ += w.m[j] * ks_[static_cast<std::size_t>(j)];
+    stage_scratch_ += w.e[j] * ks_[static_cast<std::size_t>(j)];
+  }
+  return errorNorm(stage_scratch_);
+}
+
 double RosenbrockIntegrator::errorNorm(const Vector& estimate) const noexcept {
   // Weighted RMS of the embedded error estimate, weights atol + rtol max(|y0|, |y1|).
   double sum = 0.0;
@@ -408,8 +507,11 @@ RosenbrockStatus RosenbrockIntegrator::advance(double* y, double duration_s) noe
   Eigen::Map<Vector> state(y, n_);
   y0_ = state;
   double t = 0.0;
-  bool need_jacobian = true;
+  const bool w_method = isWMethod(method_);
+  bool need_jacobian = true;  // W-methods: once per call (a control period), see below
+  bool need_f0 = false;       // W-methods: f(y0) without a Jacobian after an accepted step
   bool rejected_here = false;
+  int rejections_in_a_row = 0;
   long attempts = 0;
   while (t < duration_s) {
     const double remaining = duration_s - t;
@@ -422,6 +524,13 @@ RosenbrockStatus RosenbrockIntegrator::advance(double* y, double duration_s) noe
       ++stats_.jac_evals;
       ++stats_.rhs_evals;
       need_jacobian = false;
+      need_f0 = false;
+      factor_valid_ = false;
+      if (!f0_.allFinite()) return RosenbrockStatus::kNonFinite;
+    } else if (need_f0) {
+      sys_.rhs(sys_.user, y0_.data(), f0_.data());
+      ++stats_.rhs_evals;
+      need_f0 = false;
       if (!f0_.allFinite()) return RosenbrockStatus::kNonFinite;
     }
     if (++attempts > max_steps_) return RosenbrockStatus::kTooManySteps;
@@ -435,12 +544,19 @@ RosenbrockStatus RosenbrockIntegrator::advance(double* y, double duration_s) noe
       y0_ = y1_;
       t = last ? duration_s : t + h;
       ++stats_.steps;
-      need_jacobian = true;
+      // Rosenbrock: a new Jacobian at every step. W-method: keep J (and its factorisation while h stays).
+      (w_method ? need_f0 : need_jacobian) = true;
       h_ = h * std::clamp(factor, kMinFactor, rejected_here ? 1.0 : kMaxFactor);
       rejected_here = false;
+      rejections_in_a_row = 0;
     } else {
       ++stats_.rejected;
       rejected_here = true;
+      // W-method: a second rejection in a row may be the stale Jacobian's doing; refresh it.
+      if (w_method && ++rejections_in_a_row >= 2) {
+        need_jacobian = true;
+        rejections_in_a_row = 0;
+      }
       h_ = h * (std::isfinite(err) ? std::clamp(factor, kMinFactor, 1.0) : 0.25);
       if (h_ < kSmallestStep_s) return RosenbrockStatus::kStepTooSmall;
     }

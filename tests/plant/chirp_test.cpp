@@ -99,11 +99,13 @@ TEST_P(PlantChirp, ResponseIsIndependentOfSolverTolerance) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, PlantChirp,
-                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3, IntegratorKind::kRodas4),
+                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3, IntegratorKind::kRodas4,
+                                           IntegratorKind::kRos34pw2),
                          [](const ::testing::TestParamInfo<IntegratorKind>& param_info) {
                            return param_info.param == IntegratorKind::kCvodes   ? "Cvodes"
                                   : param_info.param == IntegratorKind::kRodas3 ? "Rodas3"
-                                                                                : "Rodas4";
+                                  : param_info.param == IntegratorKind::kRodas4 ? "Rodas4"
+                                                                                : "Ros34pw2";
                          });
 
 // Rodas3 and Rodas4 at the configured tolerances against the tight CVODES reference on the EB chirp, from
@@ -114,11 +116,14 @@ TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnJointChirp) {
   const JointParams& joint = config.joints[static_cast<std::size_t>(findPlantJoint(config, "EB"))];
   for (const double from_limit : {0.0, 0.1}) {
     const ChirpRun ref = runChirp(joint, tightReferenceOptions(test::dtsPlant().solver), 4.0, from_limit);
-    for (const IntegratorKind integrator : {IntegratorKind::kRodas3, IntegratorKind::kRodas4}) {
+    for (const IntegratorKind integrator :
+         {IntegratorKind::kRodas3, IntegratorKind::kRodas4, IntegratorKind::kRos34pw2}) {
       SolverOptions rodas = config.solver;
       rodas.integrator = integrator;
       const ChirpRun r = runChirp(joint, rodas, 4.0, from_limit);
-      const char* name = integrator == IntegratorKind::kRodas3 ? "Rodas3" : "Rodas4";
+      const char* name = integrator == IntegratorKind::kRodas3   ? "Rodas3"
+                         : integrator == IntegratorKind::kRodas4 ? "Rodas4"
+                                                                 : "ROS34PW2";
       EXPECT_LT(normalisedRmsDifference(ref.q, r.q), PlantTolerance::kIssueRtolRms)
           << name << " from limit " << from_limit;
       EXPECT_LT(normalisedRmsDifference(ref.p_load, r.p_load), PlantTolerance::kIssueRtolRms)
@@ -161,13 +166,18 @@ TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnArmChirp) {
   };
   for (const double from_limit : {0.0, 0.1}) {
     const std::vector<ChirpRun> ref = run(tightReferenceOptions(test::dtsPlant().solver), from_limit);
-    for (const int variant : {0, 1, 2}) {
-      // Rodas3, Rodas4, Rodas3 with the rigid-body derivatives once per period
+    for (const int variant : {0, 1, 2, 3}) {
+      // Rodas3, Rodas4, Rodas3 with the rigid-body derivatives once per period, ROS34PW2 (Jacobian once per period)
       SolverOptions rodas = config.solver;
-      rodas.integrator = variant == 1 ? IntegratorKind::kRodas4 : IntegratorKind::kRodas3;
+      rodas.integrator = variant == 1   ? IntegratorKind::kRodas4
+                         : variant == 3 ? IntegratorKind::kRos34pw2
+                                        : IntegratorKind::kRodas3;
       rodas.rigid_derivatives_once_per_period = variant == 2;
       const std::vector<ChirpRun> r = run(rodas, from_limit);
-      const char* name = variant == 0 ? "Rodas3" : variant == 1 ? "Rodas4" : "Rodas3 rigid once per period";
+      const char* name = variant == 0   ? "Rodas3"
+                         : variant == 1 ? "Rodas4"
+                         : variant == 2 ? "Rodas3 rigid once per period"
+                                        : "ROS34PW2";
       for (std::size_t j = 0; j < ref.size(); ++j) {
         EXPECT_LT(normalisedRmsDifference(ref[j].q, r[j].q), 2.0 * PlantTolerance::kIssueRtolRms)
             << name << " " << config.joints[j].name << " from limit " << from_limit;

@@ -56,8 +56,12 @@ TEST(PlantConfig, IntegratorIsSelectable) {
   const std::string rodas4 =
       replaced(defaultText(), "  jacobian: analytic\n", "  jacobian: analytic\n  integrator: rodas4\n");
   EXPECT_EQ(parsePlantConfig(rodas4, "test_plant.yaml", test::dtsModel()).solver.integrator, IntegratorKind::kRodas4);
+  const std::string ros34pw2 =
+      replaced(defaultText(), "  jacobian: analytic\n", "  jacobian: analytic\n  integrator: ros34pw2\n");
+  EXPECT_EQ(parsePlantConfig(ros34pw2, "test_plant.yaml", test::dtsModel()).solver.integrator,
+            IntegratorKind::kRos34pw2);
   expectConfigError(replaced(defaultText(), "  jacobian: analytic\n", "  jacobian: analytic\n  integrator: euler\n"),
-                    "solver.integrator", "expected cvodes, rodas3 or rodas4");
+                    "solver.integrator", "expected cvodes, rodas3, rodas4 or ros34pw2");
 }
 
 TEST(PlantConfig, UnknownJointNameIsAClearError) {

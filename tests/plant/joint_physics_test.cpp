@@ -163,11 +163,13 @@ TEST_P(JointPhysics, ClosedValveIsPassive) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Integrators, JointPhysics,
-                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3, IntegratorKind::kRodas4),
+                         ::testing::Values(IntegratorKind::kCvodes, IntegratorKind::kRodas3, IntegratorKind::kRodas4,
+                                           IntegratorKind::kRos34pw2),
                          [](const ::testing::TestParamInfo<IntegratorKind>& param_info) {
                            return param_info.param == IntegratorKind::kCvodes   ? "Cvodes"
                                   : param_info.param == IntegratorKind::kRodas3 ? "Rodas3"
-                                                                                : "Rodas4";
+                                  : param_info.param == IntegratorKind::kRodas4 ? "Rodas4"
+                                                                                : "Ros34pw2";
                          });
 
 }  // namespace

@@ -170,6 +170,38 @@ TEST(ReducedDynamics, AnalyticDerivativesMatchCentralDifferencesOfArmInverseDyna
   }
 }
 
+// The composite-subtree form (R13, one dot product per entry) = the body-by-body derivatives
+// (R6-R8, O(n^2) spatial operations; the form the central-difference test above also checks) to
+// 1e-9 relative, on every active set, with random states.
+TEST(ReducedDynamics, CompositeDerivativesEqualBodyByBodyDerivatives) {
+  const arm::ArmModel& model = test::dtsModel();
+  const Eigen::VectorXd posture = testPosture(model);
+  std::mt19937 rng(11);
+  for (const std::vector<int>& active : activeSets(model)) {
+    const ReducedArmModel reduced = reduceArmModel(model, active, posture);
+    const int n = reduced.n;
+    ReducedArmData data;
+    for (int trial = 0; trial < 20; ++trial) {
+      const Sample s = randomSample(n, rng);
+      computeReducedKinematics(reduced, data, s.q, s.qd);
+      ReducedVector tau;
+      ReducedVector tau_ref;
+      ReducedMatrix dq, dqd, dq_ref, dqd_ref;
+      computeReducedInverseDynamicsDerivatives(reduced, data, s.qdd, tau, dq, dqd);
+      computeReducedInverseDynamicsDerivativesPerBody(reduced, data, s.qdd, tau_ref, dq_ref, dqd_ref);
+      const double scale = dq_ref.cwiseAbs().maxCoeff() + dqd_ref.cwiseAbs().maxCoeff();
+      ASSERT_GT(scale, 0.0);
+      EXPECT_LE((dq - dq_ref).cwiseAbs().maxCoeff(), 1e-9 * scale) << "n = " << n << "\ncomposite\n"
+                                                                   << dq << "\nper body\n"
+                                                                   << dq_ref;
+      EXPECT_LE((dqd - dqd_ref).cwiseAbs().maxCoeff(), 1e-9 * scale) << "n = " << n << "\ncomposite\n"
+                                                                     << dqd << "\nper body\n"
+                                                                     << dqd_ref;
+      EXPECT_EQ(tau, tau_ref);
+    }
+  }
+}
+
 TEST(ReducedDynamics, ComputeFunctionsDoNotAllocate) {
   const arm::ArmModel& model = test::dtsModel();
   const ReducedArmModel reduced = reduceArmModel(model, activeSets(model)[0], model.defaultPosture());
@@ -184,6 +216,7 @@ TEST(ReducedDynamics, ComputeFunctionsDoNotAllocate) {
   EXPECT_NO_HEAP_ALLOCATION(computeReducedInverseDynamics(reduced, data, s.qdd, tau));
   EXPECT_NO_HEAP_ALLOCATION(computeReducedMassMatrix(reduced, data, mass));
   EXPECT_NO_HEAP_ALLOCATION(computeReducedInverseDynamicsDerivatives(reduced, data, s.qdd, tau, dq, dqd));
+  EXPECT_NO_HEAP_ALLOCATION(computeReducedInverseDynamicsDerivativesPerBody(reduced, data, s.qdd, tau, dq, dqd));
 }
 
 TEST(ReducedDynamics, RejectsBadActiveSets) {

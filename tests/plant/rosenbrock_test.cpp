@@ -115,8 +115,11 @@ struct Stiff {
 };
 
 TEST(Rodas3, StiffLinearSystemMatchesMatrixExponential) {
-  for (const RosenbrockMethod method : {RosenbrockMethod::kRodas3, RosenbrockMethod::kRodas4}) {
-    SCOPED_TRACE(method == RosenbrockMethod::kRodas3 ? "Rodas3" : "Rodas4");
+  for (const RosenbrockMethod method :
+       {RosenbrockMethod::kRodas3, RosenbrockMethod::kRodas4, RosenbrockMethod::kRos34pw2}) {
+    SCOPED_TRACE(method == RosenbrockMethod::kRodas3   ? "Rodas3"
+                 : method == RosenbrockMethod::kRodas4 ? "Rodas4"
+                                                       : "ROS34PW2");
     Stiff s;
     Eigen::Matrix2d v;
     v << 1.0, 1.0, 0.5, -1.0;
@@ -219,8 +222,11 @@ struct Bordered {
 // the same state to 1e-12 relative.
 template <class System>
 void expectBlockEliminationMatchesDense(System& s, bool expect_halved_border) {
-  for (const RosenbrockMethod method : {RosenbrockMethod::kRodas3, RosenbrockMethod::kRodas4}) {
-    SCOPED_TRACE(method == RosenbrockMethod::kRodas3 ? "Rodas3" : "Rodas4");
+  for (const RosenbrockMethod method :
+       {RosenbrockMethod::kRodas3, RosenbrockMethod::kRodas4, RosenbrockMethod::kRos34pw2}) {
+    SCOPED_TRACE(method == RosenbrockMethod::kRodas3   ? "Rodas3"
+                 : method == RosenbrockMethod::kRodas4 ? "Rodas4"
+                                                       : "ROS34PW2");
     constexpr int kN = decltype(System::a)::RowsAtCompileTime;
     using Vector = Eigen::Matrix<double, kN, 1>;
     std::array<double, kN> atol{};

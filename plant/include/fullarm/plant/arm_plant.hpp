@@ -51,6 +51,9 @@ enum class IntegratorKind {
   kCvodes,  ///< CVODES BDF with root-found hard-stop events: the reference (default)
   kRodas3,  ///< adaptive one-step Rosenbrock (Rodas3) for real-time use; validated against CVODES
   kRodas4,  ///< the same with the order-4(3) scheme (Hairer & Wanner's RODAS)
+  /// Rosenbrock-W ROS34PW2 (Rang & Angermann 2005): order 3(2) with the Jacobian built once per
+  /// control period (and after two rejections in a row), the factorisation reused while h stays
+  kRos34pw2,
 };
 
 /// Integrator settings.
@@ -66,15 +69,15 @@ struct SolverOptions {
   /// (valve mode: 1/amplifier gain volts; torque mode: the joint torque limit) in one period.
   double reinit_command_jump = 0.002;
   JacobianKind jacobian = JacobianKind::kAnalytic;
-  /// kRodas3 and kRodas4 use rtol, the absolute tolerances, max_steps_per_period and the analytic
+  /// kRodas3, kRodas4 and kRos34pw2 use rtol, the absolute tolerances, max_steps_per_period and the analytic
   /// Jacobian; they ignore reinit_command_jump and `jacobian` (docs/plant.md, Integration).
   IntegratorKind integrator = IntegratorKind::kCvodes;
   /// Rosenbrock integrators on a partial or whole arm, opt-in speed/accuracy trade: true computes
   /// the rigid-body derivatives d ID/d(q, qd) of the Jacobian (R6-R9) at the first Jacobian of
   /// each control period only and reuses them, with the current M^-1, in the period's later
   /// steps. Not exact after the first step, and the error estimate does not see the difference:
-  /// on the arm chirp about 15 % faster, the big joints' angle error against the tight reference
-  /// about 2x larger (docs/plant.md). false (default): exact at every Jacobian.
+  /// on the arm chirp about 10 % faster (15 % before the composite derivatives, R13), the big joints' angle error
+  /// against the tight reference about 2x larger (docs/plant.md). false (default): exact at every Jacobian.
   bool rigid_derivatives_once_per_period = false;
 };
 

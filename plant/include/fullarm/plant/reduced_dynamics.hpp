@@ -114,11 +114,18 @@ void computeReducedInverseDynamics(const ReducedArmModel& model, ReducedArmData&
 void computeReducedMassMatrix(const ReducedArmModel& model, const ReducedArmData& data, ReducedMatrix& mass) noexcept;
 
 /// Analytic partial derivatives of the inverse dynamics ID(q, qd, qdd) with respect to q and
-/// qd (n x n each) at the last kinematics and `qdd` (R6-R8). Runs the Newton-Euler pass at qdd
-/// itself (tau is left in `tau`). @rt
+/// qd (n x n each) at the last kinematics and `qdd` (R6-R8 collected into composite subtree
+/// quantities, R13: O(n) 6 x 6 work and one dot product per entry). Runs the Newton-Euler pass
+/// at qdd itself (tau is left in `tau`). @rt
 void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, ReducedArmData& data,
                                               const ReducedVector& qdd, ReducedVector& tau, ReducedMatrix& dtau_dq,
                                               ReducedMatrix& dtau_dqd) noexcept;
+
+/// The same derivatives body by body (R6-R8: for each joint, every body it moves; O(n^2) spatial
+/// operations): the first implementation, kept as an independent check of the composite form. @rt
+void computeReducedInverseDynamicsDerivativesPerBody(const ReducedArmModel& model, ReducedArmData& data,
+                                                     const ReducedVector& qdd, ReducedVector& tau,
+                                                     ReducedMatrix& dtau_dq, ReducedMatrix& dtau_dqd) noexcept;
 
 /// World position of a body point after computeReducedKinematics.
 [[nodiscard]] inline Eigen::Vector3d reducedPointInWorld(const ReducedArmData& data, int body,

@@ -22,6 +22,13 @@
 /// block elimination, error norm) to RODAS of Hairer & Wanner (Solving ODEs II, sec. IV.7), order
 /// 4 with an embedded order-3 estimate, gamma = 1/4: six stages, five new f evaluations and six
 /// solves per attempt (equation R11 of reports/equations.md).
+///
+/// setMethod(RosenbrockMethod::kRos34pw2) selects the Rosenbrock-W method ROS34PW2 of Rang &
+/// Angermann ("New Rosenbrock W-methods of order 3 for partial differential algebraic equations of
+/// index 1", BIT Numer. Math. 45, 2005, 761-787): order 3 with an embedded order-2 estimate for ANY
+/// matrix in place of the Jacobian (the W order conditions), so advance() builds the Jacobian once
+/// per call (one control period) and again only after two rejections in a row, evaluates f(y0) by
+/// itself at the later steps, and refactorises G only when h changes (equation R12).
 
 #include <Eigen/Core>
 #include <array>
@@ -36,10 +43,10 @@ inline constexpr int kRosenbrockBlock = 4;
 
 /// Counters of a RosenbrockIntegrator (since configure() or resetCounters()).
 struct RosenbrockStats {
-  long steps = 0;           ///< accepted steps
-  long rejected = 0;        ///< steps rejected by the error test
-  long rhs_evals = 0;       ///< f evaluations (including the one inside each Jacobian call)
-  long jac_evals = 0;       ///< Jacobian evaluations (one per attempted step)
+  long steps = 0;      ///< accepted steps
+  long rejected = 0;   ///< steps rejected by the error test
+  long rhs_evals = 0;  ///< f evaluations (including the one inside each Jacobian call)
+  long jac_evals = 0;  ///< Jacobian evaluations (Rodas: one per accepted step; W: one per advance() call + refreshes)
   long factorizations = 0;  ///< LU factorisations of G
 };
 
@@ -47,7 +54,16 @@ struct RosenbrockStats {
 enum class RosenbrockMethod {
   kRodas3,  ///< order 3(2), 4 stages: 3 f evaluations (one inside the Jacobian pass), 4 solves per attempt
   kRodas4,  ///< order 4(3), 6 stages (Hairer & Wanner's RODAS): 6 f evaluations, 6 solves per attempt
+  /// Rosenbrock-W, order 3(2) with any Jacobian approximation, 4 stages, L-stable, stiffly accurate
+  /// (ROS34PW2, Rang & Angermann 2005): 4 f evaluations and 4 solves per attempt, Jacobian once per advance().
+  kRos34pw2,
 };
+
+/// True for the W-methods (kRos34pw2), which keep their order with a stale Jacobian. (The three-stage
+/// ROS3PW of the same paper is order 3 only with the exact Jacobian: order 2 with a wrong one, measured.)
+[[nodiscard]] constexpr bool isWMethod(RosenbrockMethod method) noexcept {
+  return method == RosenbrockMethod::kRos34pw2;
+}
 
 /// Outcome of RosenbrockIntegrator::advance().
 enum class RosenbrockStatus { kOk, kTooManySteps, kStepTooSmall, kNonFinite };
@@ -61,7 +77,7 @@ struct RosenbrockSystem {
   void* user = nullptr;
 };
 
-/// Adaptive Rodas3 or Rodas4 (setMethod) with weighted-RMS error control (the norm CVODES uses):
+/// Adaptive Rodas3, Rodas4 or ROS34PW2 (setMethod) with weighted-RMS error control (the norm CVODES uses):
 /// ||e|| = sqrt(mean_i (e_i / (rtol max(|y0_i|, |y1_i|) + atol_i))^2) <= 1.
 class RosenbrockIntegrator {
  public:
@@ -89,7 +105,7 @@ class RosenbrockIntegrator {
   void setBlockStructure(int blocks);
 
   /// Selects the scheme (default kRodas3); takes effect at the next step.
-  void setMethod(RosenbrockMethod method) noexcept { method_ = method; }
+  void setMethod(RosenbrockMethod method) noexcept;
   [[nodiscard]] RosenbrockMethod method() const noexcept { return method_; }
 
   /// Forgets the step-size history (the next advance() starts from `initial_step_s`). @rt
@@ -106,10 +122,14 @@ class RosenbrockIntegrator {
   double attempt(double h) noexcept;
   /// The Rodas4 stages of attempt() after the factorisation.
   double attemptRodas4(double h) noexcept;
+  /// The stages of a W-method (transformed tableau w_) after the factorisation.
+  double attemptW(double h) noexcept;
   /// Weighted RMS norm of an embedded error estimate against y0_ and y1_ (inf if not finite).
   double errorNorm(const Vector& estimate) const noexcept;
-  /// Factorises G = I / (h gamma) - J; false if singular.
+  /// Factorises G = I / (h gamma) - J unless the last factorisation is of the same J and h; false if singular.
   bool factor(double h) noexcept;
+  /// Factorises G = d I - J (d = 1 / (h gamma)) unconditionally; false if singular.
+  bool factorG(double d) noexcept;
   /// x = G^-1 b with the last factorisation.
   void solve(const Vector& b, Vector& x) noexcept;
 
@@ -121,7 +141,20 @@ class RosenbrockIntegrator {
   RosenbrockMethod method_ = RosenbrockMethod::kRodas3;
   RosenbrockStats stats_{};
   Vector atol_, y0_, f0_, y1_, k1_, k2_, k3_, k4_, stage_, fstage_;
-  std::array<Vector, 6> ks_;  // Rodas4 stage increments
+  std::array<Vector, 6> ks_;  // Rodas4 and W-method stage increments
+  // W-method tableau in the transformed form of attempt(): stage i at y0 + sum_j a_ij u_j,
+  // G u_i = f(stage i) + sum_j (c_ij / h) u_j, y1 = y0 + sum m_j u_j, error estimate sum e_j u_j.
+  struct WTableau {
+    int stages = 0;
+    double gamma = 0.0;
+    double a[4][4] = {};
+    double c[4][4] = {};
+    double m[4] = {};
+    double e[4] = {};
+  };
+  WTableau w_tab_{};
+  double factored_h_ = 0.0;    // h of the factorisation in g_ / the block storage
+  bool factor_valid_ = false;  // g_ is the factorisation of I/(h gamma) - jac_ at factored_h_
   Matrix jac_, g_;
   std::array<int, kMaxRosenbrockStates> pivots_{};
   // Block elimination: per-block inverse of D_k, W = D^-1 B (blocks x border), Schur S = E - C W.
