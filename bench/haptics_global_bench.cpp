@@ -66,6 +66,7 @@ void setSnchCounters(benchmark::State& state, const haptics::SnchQueryStats& st)
   state.counters["node_pairs"] = static_cast<double>(st.node_pairs_visited);
   state.counters["dist_pruned"] = static_cast<double>(st.pruned_by_distance);
   state.counters["cone_pruned"] = static_cast<double>(st.pruned_by_cone);
+  state.counters["convex_pruned"] = static_cast<double>(st.pruned_by_convex_bound);
 }
 
 void BM_GlobalSearch_Snch(benchmark::State& state) {

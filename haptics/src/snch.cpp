@@ -283,6 +283,38 @@ struct Builder {
   }
 };
 
+// SnchTree::convex: closed (every edge has exactly two triangles) and every vertex on or
+// behind every face plane within kConvexTolerance x the box diagonal. Every locally convex
+// edge first (O(edges)): that rejects the usual non-convex mesh at once.
+bool isClosedConvex(const TriMesh& mesh) {
+  const int nt = mesh.numTriangles();
+  const int nv = mesh.numVertices();
+  if (nt < 4 || static_cast<long>(nt) * nv > kConvexCheckMaxWork) return false;
+  Vector3d lo = mesh.vertex(0);
+  Vector3d hi = lo;
+  for (int v = 1; v < nv; ++v) {
+    lo = lo.cwiseMin(mesh.vertex(v));
+    hi = hi.cwiseMax(mesh.vertex(v));
+  }
+  const double tol = kConvexTolerance * (hi - lo).norm();
+  const auto inFront = [&](int t, int v) {
+    return mesh.faceNormal(t).dot(mesh.vertex(v) - mesh.vertex(mesh.triangle(t)[0])) > tol;
+  };
+  for (int e = 0; e < mesh.numEdges(); ++e) {
+    const auto tris = mesh.edgeTriangles(e);
+    if (tris.size() != 2) return false;
+    for (int k = 0; k < 3; ++k) {
+      if (inFront(tris[0], mesh.triangle(tris[1])[k]) || inFront(tris[1], mesh.triangle(tris[0])[k])) return false;
+    }
+  }
+  for (int t = 0; t < nt; ++t) {
+    for (int v = 0; v < nv; ++v) {
+      if (inFront(t, v)) return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 SnchTree buildSnchTree(const TriMesh& mesh) {
@@ -319,6 +351,7 @@ SnchTree buildSnchTree(const TriMesh& mesh) {
   std::iota(b.tris.begin(), b.tris.end(), 0);
   b.tree.nodes.reserve(static_cast<std::size_t>(2 * nt));
   b.build(0, nt);
+  b.tree.convex = isClosedConvex(mesh);
   return std::move(b.tree);
 }
 
@@ -347,14 +380,17 @@ namespace {
 
 // evaluateTrianglePair with the link vertices in the object frame given by `link_vertex_O(v)`
 // (X_OL * vertex, computed on the fly or read from a per-query cache: the same values).
+// `pair_distance_m` receives the distance of the two triangles (a minimum or not).
 template <class LinkVertex>
 bool evaluatePair(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int tri_link, const TriMesh& object_mesh,
-                  int tri_object, const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
+                  int tri_object, const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out,
+                  double& pair_distance_m) noexcept {
   const auto& ta = link_mesh.triangle(tri_link);
   const auto& tb = object_mesh.triangle(tri_object);
   const TriangleTriangleResult r =
       closestPointsTriangleTriangle(link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2]),
                                     object_mesh.vertex(tb[0]), object_mesh.vertex(tb[1]), object_mesh.vertex(tb[2]));
+  pair_distance_m = r.distance_m;
   if (r.distance_m > cutoff_m) return false;
   const Feature fl = meshFeature(link_mesh, tri_link, r.feature_a);
   const Feature fo = meshFeature(object_mesh, tri_object, r.feature_b);
@@ -405,9 +441,10 @@ bool evaluatePair(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int
 
 bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh, int tri_object,
                           const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
+  double pair_distance_m = 0.0;
   return evaluatePair(
       link_mesh, [&](int v) -> Vector3d { return X_OL * link_mesh.vertex(v); }, tri_link, object_mesh, tri_object, X_OL,
-      cutoff_m, out);
+      cutoff_m, out, pair_distance_m);
 }
 
 std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t begin) noexcept {
@@ -586,11 +623,27 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
     scratch.link_node_O.resize(n_link_nodes);
     scratch.link_node_query.resize(n_link_nodes, 0);
   }
+  // Convex link (SnchTree::convex): per object triangle, the smallest distance to a link
+  // triangle found so far bounds the distance of every minimum on it (kConvexBoundSlack_m).
+  const bool convex_link = link_tree.convex;
+  const auto n_obj_triangles = static_cast<std::size_t>(obj_mesh.numTriangles());
+  if (convex_link && scratch.object_leaf_bound_m.size() < n_obj_triangles) {
+    scratch.object_leaf_bound_m.resize(n_obj_triangles);
+    scratch.object_leaf_query.resize(n_obj_triangles, 0);
+  }
   if (++scratch.query == 0) {  // wrapped: every entry stale
     std::fill(scratch.link_node_query.begin(), scratch.link_node_query.end(), 0U);
+    std::fill(scratch.object_leaf_query.begin(), scratch.object_leaf_query.end(), 0U);
     scratch.query = 1;
   }
   const std::uint32_t query = scratch.query;
+  // The distance above which a link node cannot pair with object triangle t: the cutoff, or
+  // for a convex link the nearest link triangle found so far plus the slack.
+  const auto objectLeafLimit = [&](int t) noexcept {
+    const auto k = static_cast<std::size_t>(t);
+    if (!convex_link || scratch.object_leaf_query[k] != query) return cutoff_m;
+    return std::min(cutoff_m, scratch.object_leaf_bound_m[k] + kConvexBoundSlack_m);
+  };
   const auto link_node_O = [&](int i) -> const SnchQueryScratch::LinkNodeO& {
     const auto k = static_cast<std::size_t>(i);
     SnchQueryScratch::LinkNodeO& n = scratch.link_node_O[k];
@@ -649,6 +702,11 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
       ++st.pruned_by_distance;
       continue;
     }
+    const double limit = b.isLeaf() ? objectLeafLimit(b.triangle) : cutoff_m;
+    if (gap > limit) {
+      ++st.pruned_by_convex_bound;
+      continue;
+    }
     if (gap > kConeTestMinGap_m && !conesAdmit(a, a_O.axis, b, R_OL, diff, dist, gap)) {
       ++st.pruned_by_cone;
       continue;
@@ -667,9 +725,13 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
       const Vector3d va[3] = {link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2])};
       const Vector3d vb[3] = {obj_mesh.vertex(tb[0]), obj_mesh.vertex(tb[1]), obj_mesh.vertex(tb[2])};
       const double tri_gap = triangleGapLowerBound(va, R_OL * link_mesh.faceNormal(a.triangle), vb,
-                                                   obj_mesh.faceNormal(b.triangle), cutoff_m);
+                                                   obj_mesh.faceNormal(b.triangle), limit);
       if (tri_gap > cutoff_m) {
         ++st.pruned_by_distance;
+        continue;
+      }
+      if (tri_gap > limit) {
+        ++st.pruned_by_convex_bound;
         continue;
       }
       // The triangles' own gap often proves a separation that the boxes could not (a long link
@@ -683,13 +745,37 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
         continue;
       }
       ++st.triangle_pairs_tested;
-      if (evaluatePair(link_mesh, link_vertex_O, a.triangle, obj_mesh, b.triangle, X_OL, cutoff_m, m)) {
+      double pair_distance_m = 0.0;
+      if (evaluatePair(link_mesh, link_vertex_O, a.triangle, obj_mesh, b.triangle, X_OL, cutoff_m, m,
+                       pair_distance_m)) {
         m.u_W = X_WO.linear() * m.u_W;
         out.push_back(m);
       }
+      if (convex_link) {
+        const auto k = static_cast<std::size_t>(b.triangle);
+        if (scratch.object_leaf_query[k] != query || pair_distance_m < scratch.object_leaf_bound_m[k]) {
+          scratch.object_leaf_bound_m[k] = pair_distance_m;
+          scratch.object_leaf_query[k] = query;
+        }
+      }
     } else if (b.isLeaf() || (!a.isLeaf() && a.radius_m >= b.radius_m)) {
-      stack.emplace_back(a.left, j);
-      stack.emplace_back(a.right, j);
+      // Against an object leaf of a convex link, the nearer child first (popped first), so
+      // that the leaf's bound shrinks early.
+      bool left_first = false;  // popped right first otherwise
+      if (convex_link && b.isLeaf()) {
+        const SnchNode& l = link_tree.nodes[static_cast<std::size_t>(a.left)];
+        const SnchNode& r = link_tree.nodes[static_cast<std::size_t>(a.right)];
+        const double dl = (link_node_O(a.left).centre_m - b.centre_m).norm() - l.radius_m;
+        const double dr = (link_node_O(a.right).centre_m - b.centre_m).norm() - r.radius_m;
+        left_first = dl <= dr;
+      }
+      if (left_first) {
+        stack.emplace_back(a.right, j);
+        stack.emplace_back(a.left, j);
+      } else {
+        stack.emplace_back(a.left, j);
+        stack.emplace_back(a.right, j);
+      }
     } else {
       stack.emplace_back(i, b.left);
       stack.emplace_back(i, b.right);

@@ -76,7 +76,30 @@ struct SnchNode {
 /// e from the feature into an incident triangle), or a full cone when they do not fit in one.
 struct SnchTree {
   std::vector<SnchNode> nodes;
+  /// The mesh is the closed surface of a convex body: every edge has exactly two triangles and
+  /// no vertex lies more than kConvexTolerance x (box diagonal) in front of any face plane (the
+  /// link capsules are). querySnchPair then bounds each object triangle's minima by its
+  /// distance to the link (kConvexBoundSlack_m). Meshes above kConvexCheckMaxWork (triangles x
+  /// vertices) are not checked and count as not convex.
+  bool convex = false;
 };
+
+/// Relative tolerance of the convexity check (of the mesh's bounding-box diagonal).
+inline constexpr double kConvexTolerance = 1e-9;
+/// Largest triangles x vertices product for which buildSnchTree checks convexity.
+inline constexpr long kConvexCheckMaxWork = 50'000'000;
+/// Slack of the convex-link bound [m]. When the link mesh is convex (SnchTree::convex), every
+/// local minimum (p, q) with q on object triangle B has distance d = dist(B, link body): p is
+/// the projection of q on the link body (condition (1) of the file comment at p is first-order
+/// optimality over p's star, whose directions span the body's tangent cone at p), and q
+/// minimises dist(., link body) over B (condition (1) at q, and that function is convex with
+/// gradient u). Hence d <= the distance from B to any link triangle, and a link node whose
+/// distance lower bound to B exceeds the smallest B-to-link-triangle distance seen so far plus
+/// this slack cannot pair with B. The local-minimum test accepts up to kLocalMinimumTolerance_m,
+/// which moves d by about (1 / sine of the smallest angle at p)^2 x 1e-12 m; the convexity
+/// tolerance adds about 1e-9 x the link's size. 1e-6 m covers both by two orders of magnitude
+/// and costs nothing measurable in pruning (node gaps are millimetres).
+inline constexpr double kConvexBoundSlack_m = 1e-6;
 
 /// Builds the hierarchy (top-down median split along the longest extent of the centroids).
 [[nodiscard]] SnchTree buildSnchTree(const TriMesh& mesh);
@@ -99,13 +122,19 @@ struct SnchQueryScratch {
   std::uint32_t query = 0;
   /// The link mesh's vertices in the object frame (filled once per query).
   std::vector<Eigen::Vector3d> link_vertex_O;
+  /// Per object triangle, the smallest distance to a link triangle found by the exact tests of
+  /// this query (convex links only; entries whose object_leaf_query is not `query` are stale).
+  std::vector<double> object_leaf_bound_m;
+  std::vector<std::uint32_t> object_leaf_query;
 };
 
 /// Counters of the last querySnchPair call.
 struct SnchQueryStats {
   long node_pairs_visited = 0;
-  long pruned_by_distance = 0;     ///< distance lower bound (sphere or box) above the cutoff
-  long pruned_by_cone = 0;         ///< any normal-cone test
+  long pruned_by_distance = 0;  ///< distance lower bound (sphere or box) above the cutoff
+  long pruned_by_cone = 0;      ///< any normal-cone test
+  /// convex link: farther from the object leaf than its nearest link triangle found so far
+  long pruned_by_convex_bound = 0;
   long triangle_pairs_tested = 0;  ///< leaf pairs given to the exact test (evaluateTrianglePair)
 };
 
