@@ -67,6 +67,7 @@ void setSnchCounters(benchmark::State& state, const haptics::SnchQueryStats& st)
   state.counters["dist_pruned"] = static_cast<double>(st.pruned_by_distance);
   state.counters["cone_pruned"] = static_cast<double>(st.pruned_by_cone);
   state.counters["convex_pruned"] = static_cast<double>(st.pruned_by_convex_bound);
+  state.counters["gjk_tests"] = static_cast<double>(st.convex_hull_tests);
 }
 
 void BM_GlobalSearch_Snch(benchmark::State& state) {

@@ -1,7 +1,10 @@
 #include "fullarm/haptics/snch.hpp"
 
+#include "fullarm/haptics/convex_distance.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <numeric>
 #include <tuple>
@@ -627,23 +630,17 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
   // triangle found so far bounds the distance of every minimum on it (kConvexBoundSlack_m).
   const bool convex_link = link_tree.convex;
   const auto n_obj_triangles = static_cast<std::size_t>(obj_mesh.numTriangles());
-  if (convex_link && scratch.object_leaf_bound_m.size() < n_obj_triangles) {
-    scratch.object_leaf_bound_m.resize(n_obj_triangles);
+  if (convex_link && scratch.object_leaf_query.size() < n_obj_triangles) {
     scratch.object_leaf_query.resize(n_obj_triangles, 0);
+    scratch.object_leaf_slot.resize(n_obj_triangles, 0);
   }
+  scratch.object_leaves.clear();
   if (++scratch.query == 0) {  // wrapped: every entry stale
     std::fill(scratch.link_node_query.begin(), scratch.link_node_query.end(), 0U);
     std::fill(scratch.object_leaf_query.begin(), scratch.object_leaf_query.end(), 0U);
     scratch.query = 1;
   }
   const std::uint32_t query = scratch.query;
-  // The distance above which a link node cannot pair with object triangle t: the cutoff, or
-  // for a convex link the nearest link triangle found so far plus the slack.
-  const auto objectLeafLimit = [&](int t) noexcept {
-    const auto k = static_cast<std::size_t>(t);
-    if (!convex_link || scratch.object_leaf_query[k] != query) return cutoff_m;
-    return std::min(cutoff_m, scratch.object_leaf_bound_m[k] + kConvexBoundSlack_m);
-  };
   const auto link_node_O = [&](int i) -> const SnchQueryScratch::LinkNodeO& {
     const auto k = static_cast<std::size_t>(i);
     SnchQueryScratch::LinkNodeO& n = scratch.link_node_O[k];
@@ -660,6 +657,14 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
   // reads them; most link/object pairs are pruned before any leaf).
   auto& vertex_O = scratch.link_vertex_O;
   bool vertices_ready = false;
+  const auto prepareLinkVertices = [&]() {
+    if (vertices_ready) return;
+    vertex_O.resize(static_cast<std::size_t>(link_mesh.numVertices()));
+    for (int v = 0; v < link_mesh.numVertices(); ++v)
+      vertex_O[static_cast<std::size_t>(v)] = X_OL * link_mesh.vertex(v);
+    vertices_ready = true;
+  };
+  int support_warm_vertex = 0;
   const auto link_vertex_O = [&vertex_O](int v) -> const Vector3d& { return vertex_O[static_cast<std::size_t>(v)]; };
   auto& stack = scratch.stack;
   stack.clear();
@@ -702,28 +707,64 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
       ++st.pruned_by_distance;
       continue;
     }
-    const double limit = b.isLeaf() ? objectLeafLimit(b.triangle) : cutoff_m;
-    if (gap > limit) {
-      ++st.pruned_by_convex_bound;
-      continue;
+    // Convex link against an object leaf B: every minimum on B lies at distance
+    // dist(B, link body) <= limit (kConvexBoundSlack_m), and the link points of B's minima are
+    // the body's points farthest along the GJK axis (within the bounds' tolerance): a link node
+    // whose extent along the axis stays below B's by more than `limit` cannot pair with B.
+    double limit = cutoff_m;
+    SnchQueryScratch::ObjectLeaf* leaf = nullptr;
+    if (convex_link && b.isLeaf()) {
+      const auto k = static_cast<std::size_t>(b.triangle);
+      if (scratch.object_leaf_query[k] != query) {
+        // First visit: GJK bounds on B's distance to the whole link body. Beyond the cutoff
+        // (plus the slack) no minimum lies on B; otherwise the upper bound starts its bound.
+        prepareLinkVertices();
+        const auto& tb = obj_mesh.triangle(b.triangle);
+        const Vector3d& b0 = obj_mesh.vertex(tb[0]);
+        const Vector3d& b1 = obj_mesh.vertex(tb[1]);
+        const Vector3d& b2 = obj_mesh.vertex(tb[2]);
+        const DistanceBounds db =
+            triangleConvexMeshDistanceBounds(b0, b1, b2, link_mesh, vertex_O, cutoff_m + kConvexBoundSlack_m,
+                                             kConvexHullTolerance_m, support_warm_vertex);
+        ++st.convex_hull_tests;
+        SnchQueryScratch::ObjectLeaf rec;
+        rec.bound_m = db.lower_m > cutoff_m + kConvexBoundSlack_m ? -std::numeric_limits<double>::max() : db.upper_m;
+        rec.axis = db.axis;
+        rec.b_min = std::min({db.axis.dot(b0), db.axis.dot(b1), db.axis.dot(b2)});
+        scratch.object_leaf_query[k] = query;
+        scratch.object_leaf_slot[k] = static_cast<std::uint32_t>(scratch.object_leaves.size());
+        scratch.object_leaves.push_back(rec);
+      }
+      leaf = &scratch.object_leaves[scratch.object_leaf_slot[k]];
+      limit = std::min(cutoff_m, leaf->bound_m + kConvexBoundSlack_m);
+      // Along the axis: B's lowest point minus the node's highest (sphere or box support).
+      const double node_top =
+          leaf->axis.dot(a_O.centre_m) + std::min(a.radius_m, leaf->axis.cwiseAbs().dot(a_O.box_half_m));
+      if (leaf->b_min - node_top > limit) {
+        ++st.pruned_by_convex_bound;
+        continue;
+      }
+      if (gap > limit) {
+        ++st.pruned_by_convex_bound;
+        continue;
+      }
     }
     if (gap > kConeTestMinGap_m && !conesAdmit(a, a_O.axis, b, R_OL, diff, dist, gap)) {
       ++st.pruned_by_cone;
       continue;
     }
     if (a.isLeaf() && b.isLeaf()) {
-      if (!vertices_ready) {
-        vertex_O.resize(static_cast<std::size_t>(link_mesh.numVertices()));
-        for (int v = 0; v < link_mesh.numVertices(); ++v) {
-          vertex_O[static_cast<std::size_t>(v)] = X_OL * link_mesh.vertex(v);
-        }
-        vertices_ready = true;
-      }
+      prepareLinkVertices();
       // Exact separating-axis bound of the two triangles before the closest-point computation.
       const auto& ta = link_mesh.triangle(a.triangle);
       const auto& tb = obj_mesh.triangle(b.triangle);
       const Vector3d va[3] = {link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2])};
       const Vector3d vb[3] = {obj_mesh.vertex(tb[0]), obj_mesh.vertex(tb[1]), obj_mesh.vertex(tb[2])};
+      if (leaf != nullptr &&
+          leaf->b_min - std::max({leaf->axis.dot(va[0]), leaf->axis.dot(va[1]), leaf->axis.dot(va[2])}) > limit) {
+        ++st.pruned_by_convex_bound;
+        continue;
+      }
       const double tri_gap = triangleGapLowerBound(va, R_OL * link_mesh.faceNormal(a.triangle), vb,
                                                    obj_mesh.faceNormal(b.triangle), limit);
       if (tri_gap > cutoff_m) {
@@ -751,13 +792,7 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
         m.u_W = X_WO.linear() * m.u_W;
         out.push_back(m);
       }
-      if (convex_link) {
-        const auto k = static_cast<std::size_t>(b.triangle);
-        if (scratch.object_leaf_query[k] != query || pair_distance_m < scratch.object_leaf_bound_m[k]) {
-          scratch.object_leaf_bound_m[k] = pair_distance_m;
-          scratch.object_leaf_query[k] = query;
-        }
-      }
+      if (leaf != nullptr) leaf->bound_m = std::min(leaf->bound_m, pair_distance_m);
     } else if (b.isLeaf() || (!a.isLeaf() && a.radius_m >= b.radius_m)) {
       // Against an object leaf of a convex link, the nearer child first (popped first), so
       // that the leaf's bound shrinks early.

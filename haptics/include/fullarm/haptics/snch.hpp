@@ -100,6 +100,9 @@ inline constexpr long kConvexCheckMaxWork = 50'000'000;
 /// tolerance adds about 1e-9 x the link's size. 1e-6 m covers both by two orders of magnitude
 /// and costs nothing measurable in pruning (node gaps are millimetres).
 inline constexpr double kConvexBoundSlack_m = 1e-6;
+/// GJK stops once its bounds on an object triangle's distance to a convex link are this close
+/// [m] (the upper bound then starts the triangle's bound; the exact tests tighten it).
+inline constexpr double kConvexHullTolerance_m = 2e-5;
 
 /// Builds the hierarchy (top-down median split along the longest extent of the centroids).
 [[nodiscard]] SnchTree buildSnchTree(const TriMesh& mesh);
@@ -122,10 +125,19 @@ struct SnchQueryScratch {
   std::uint32_t query = 0;
   /// The link mesh's vertices in the object frame (filled once per query).
   std::vector<Eigen::Vector3d> link_vertex_O;
-  /// Per object triangle, the smallest distance to a link triangle found by the exact tests of
-  /// this query (convex links only; entries whose object_leaf_query is not `query` are stale).
-  std::vector<double> object_leaf_bound_m;
+  /// Convex links: per object triangle reached in this query, its bound on the distance of its
+  /// minima (GJK upper bound, then the smallest exact triangle-pair distance) [m] and the GJK
+  /// axis with the triangle's lowest value along it (-max for a triangle beyond the cutoff).
+  struct ObjectLeaf {
+    double bound_m = 0.0;
+    Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+    double b_min = 0.0;
+  };
+  std::vector<ObjectLeaf> object_leaves;
+  /// Per object triangle: the query that filled object_leaf_slot (stale below `query`) and the
+  /// index of its entry in object_leaves.
   std::vector<std::uint32_t> object_leaf_query;
+  std::vector<std::uint32_t> object_leaf_slot;
 };
 
 /// Counters of the last querySnchPair call.
@@ -135,6 +147,8 @@ struct SnchQueryStats {
   long pruned_by_cone = 0;      ///< any normal-cone test
   /// convex link: farther from the object leaf than its nearest link triangle found so far
   long pruned_by_convex_bound = 0;
+  /// convex link: object triangles bounded against the whole link body by GJK (once each)
+  long convex_hull_tests = 0;
   long triangle_pairs_tested = 0;  ///< leaf pairs given to the exact test (evaluateTrianglePair)
 };
 
