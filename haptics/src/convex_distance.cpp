@@ -142,22 +142,42 @@ bool closestOnSimplex(Simplex& s, Vector3d& v) noexcept {
 
 }  // namespace
 
-int convexSupportVertex(const TriMesh& mesh, std::span<const Vector3d> vertices, const Vector3d& direction,
+VertexGraph buildVertexGraph(const TriMesh& mesh) {
+  VertexGraph g;
+  const auto n = static_cast<std::size_t>(mesh.numVertices());
+  g.offset.assign(n + 1, 0);
+  std::vector<int> ring;
+  for (std::size_t v = 0; v < n; ++v) {
+    ring.clear();
+    for (const int t : mesh.vertexTriangles(static_cast<int>(v))) {
+      for (const int w : mesh.triangle(t)) {
+        if (w != static_cast<int>(v)) ring.push_back(w);
+      }
+    }
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    g.neighbours.insert(g.neighbours.end(), ring.begin(), ring.end());
+    g.offset[v + 1] = static_cast<int>(g.neighbours.size());
+  }
+  return g;
+}
+
+int convexSupportVertex(const VertexGraph& graph, std::span<const Vector3d> vertices, const Vector3d& direction,
                         int start) noexcept {
   int best = start;
   double best_value = vertices[static_cast<std::size_t>(start)].dot(direction);
   // Each step moves to a strictly farther vertex, so the climb ends within numVertices steps.
   for (bool moved = true; moved;) {
     moved = false;
-    const int from = best;
-    for (const int t : mesh.vertexTriangles(from)) {
-      for (const int w : mesh.triangle(t)) {
-        const double value = vertices[static_cast<std::size_t>(w)].dot(direction);
-        if (value > best_value) {
-          best_value = value;
-          best = w;
-          moved = true;
-        }
+    const auto from = static_cast<std::size_t>(best);
+    const int end = graph.offset[from + 1];
+    for (int k = graph.offset[from]; k < end; ++k) {
+      const int w = graph.neighbours[static_cast<std::size_t>(k)];
+      const double value = vertices[static_cast<std::size_t>(w)].dot(direction);
+      if (value > best_value) {
+        best_value = value;
+        best = w;
+        moved = true;
       }
     }
   }
@@ -165,7 +185,7 @@ int convexSupportVertex(const TriMesh& mesh, std::span<const Vector3d> vertices,
 }
 
 DistanceBounds triangleConvexMeshDistanceBounds(const Vector3d& t0, const Vector3d& t1, const Vector3d& t2,
-                                                const TriMesh& mesh, std::span<const Vector3d> vertices,
+                                                const VertexGraph& graph, std::span<const Vector3d> vertices,
                                                 double stop_above_m, double tolerance_m, int& warm_vertex) noexcept {
   DistanceBounds out;
   const Vector3d tri[3] = {t0, t1, t2};
@@ -190,7 +210,7 @@ DistanceBounds triangleConvexMeshDistanceBounds(const Vector3d& t0, const Vector
         k = i;
       }
     }
-    warm_vertex = convexSupportVertex(mesh, vertices, v, warm_vertex);
+    warm_vertex = convexSupportVertex(graph, vertices, v, warm_vertex);
     const Vector3d w = tri[k] - vertices[static_cast<std::size_t>(warm_vertex)];
     ++out.iterations;
     const double v_dot_w = v.dot(w);

@@ -355,6 +355,12 @@ SnchTree buildSnchTree(const TriMesh& mesh) {
   b.tree.nodes.reserve(static_cast<std::size_t>(2 * nt));
   b.build(0, nt);
   b.tree.convex = isClosedConvex(mesh);
+  if (b.tree.convex) b.tree.vertex_graph = buildVertexGraph(mesh);
+  b.tree.leaf_of_triangle.assign(static_cast<std::size_t>(nt), -1);
+  for (int i = 0; i < static_cast<int>(b.tree.nodes.size()); ++i) {
+    const SnchNode& node = b.tree.nodes[static_cast<std::size_t>(i)];
+    if (node.isLeaf()) b.tree.leaf_of_triangle[static_cast<std::size_t>(node.triangle)] = i;
+  }
   return std::move(b.tree);
 }
 
@@ -605,6 +611,154 @@ bool leafConesAdmit(const SnchNode& a, const Vector3d& a_axis, const SnchNode& b
   return true;
 }
 
+// Bumps a per-element stamp counter; on wrap-around clears the stamps so no entry looks current.
+std::uint32_t nextStamp(std::uint32_t& counter, std::vector<std::uint32_t>& a, std::vector<std::uint32_t>& b) noexcept {
+  if (++counter == 0) {
+    std::fill(a.begin(), a.end(), 0U);
+    std::fill(b.begin(), b.end(), 0U);
+    counter = 1;
+  }
+  return counter;
+}
+
+// querySnchPair for a convex link (SnchTree::convex): a traversal of the object tree alone
+// against the whole link body. An object node is dropped when its sphere is farther than L
+// from the body (GJK lower bound); at an object leaf B, GJK bounds B's distance to the body,
+// which bounds the distance of every minimum on B (kConvexBoundSlack_m), and the link
+// triangles that can pair with B are those reaching within that bound of B along the GJK axis:
+// on a convex body the vertices above a level along an axis are connected in the vertex graph
+// (from any vertex below the top some neighbour is strictly higher), so a search from the
+// topmost vertex finds them all. Each candidate pair then goes through the same leaf tests and
+// exact test as in the two-tree traversal.
+void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_OL,
+                     const SnchTree& obj_tree, const TriMesh& obj_mesh, const Isometry3d& X_WO, double cutoff_m,
+                     SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats& st) {
+  const Eigen::Matrix3d R_OL = X_OL.linear();
+  const Eigen::Matrix3d abs_R_OL = R_OL.cwiseAbs();
+  auto& vertex_O = scratch.link_vertex_O;
+  const auto n_link_vertices = static_cast<std::size_t>(link_mesh.numVertices());
+  const auto n_link_triangles = static_cast<std::size_t>(link_mesh.numTriangles());
+  vertex_O.resize(n_link_vertices);
+  for (std::size_t v = 0; v < n_link_vertices; ++v) vertex_O[v] = X_OL * link_mesh.vertex(static_cast<int>(v));
+  if (scratch.link_vertex_stamp.size() < n_link_vertices) scratch.link_vertex_stamp.resize(n_link_vertices, 0);
+  if (scratch.link_triangle_stamp.size() < n_link_triangles) scratch.link_triangle_stamp.resize(n_link_triangles, 0);
+  const SnchNode& root = link_tree.nodes[0];
+  const Vector3d root_centre = X_OL * root.centre_m;
+  const Vector3d root_half = abs_R_OL * root.box_half_m;
+  int warm = 0;
+  LocalMinimum m;
+  auto& stack = scratch.stack;
+  stack.clear();
+  stack.emplace_back(0, 0);
+  while (!stack.empty()) {
+    const int j = stack.back().second;
+    stack.pop_back();
+    ++st.node_pairs_visited;
+    const SnchNode& b = obj_tree.nodes[static_cast<std::size_t>(j)];
+    // The link root's sphere and box first (cheap), then GJK against the body.
+    const Vector3d diff = b.centre_m - root_centre;
+    const double reach = root.radius_m + b.radius_m + cutoff_m;
+    if (diff.squaredNorm() > reach * reach || (diff.cwiseAbs() - b.box_half_m - root_half).maxCoeff() > cutoff_m) {
+      ++st.pruned_by_distance;
+      continue;
+    }
+    if (!b.isLeaf()) {
+      // The node's sphere against the body: its centre's distance minus its radius.
+      const DistanceBounds db =
+          triangleConvexMeshDistanceBounds(b.centre_m, b.centre_m, b.centre_m, link_tree.vertex_graph, vertex_O,
+                                           cutoff_m + b.radius_m, kConvexNodeTolerance_m, warm);
+      ++st.convex_hull_tests;
+      if (db.lower_m - b.radius_m > cutoff_m) {
+        ++st.pruned_by_distance;
+        continue;
+      }
+      stack.emplace_back(0, b.left);
+      stack.emplace_back(0, b.right);
+      continue;
+    }
+    const auto& tb = obj_mesh.triangle(b.triangle);
+    const Vector3d vb[3] = {obj_mesh.vertex(tb[0]), obj_mesh.vertex(tb[1]), obj_mesh.vertex(tb[2])};
+    const DistanceBounds db =
+        triangleConvexMeshDistanceBounds(vb[0], vb[1], vb[2], link_tree.vertex_graph, vertex_O,
+                                         cutoff_m + kConvexBoundSlack_m, kConvexHullTolerance_m, warm);
+    ++st.convex_hull_tests;
+    if (db.lower_m > cutoff_m + kConvexBoundSlack_m) {
+      ++st.pruned_by_distance;
+      continue;
+    }
+    double bound_m = db.upper_m;
+    const Vector3d& axis = db.axis;
+    const double b_min = std::min({axis.dot(vb[0]), axis.dot(vb[1]), axis.dot(vb[2])});
+    // Link vertices at or above `level` along the axis: every triangle that can pair with B has
+    // one (its top reaches b_min - limit >= level). The search is exact on a convex body; the
+    // slack absorbs the convexity tolerance.
+    const double level = b_min - std::min(cutoff_m, bound_m + kConvexBoundSlack_m) - kConvexBoundSlack_m;
+    const std::uint32_t stamp = nextStamp(scratch.link_stamp, scratch.link_vertex_stamp, scratch.link_triangle_stamp);
+    auto& frontier = scratch.link_frontier;
+    frontier.clear();
+    const int top = convexSupportVertex(link_tree.vertex_graph, vertex_O, axis, warm);
+    if (vertex_O[static_cast<std::size_t>(top)].dot(axis) >= level) {
+      frontier.push_back(top);
+      scratch.link_vertex_stamp[static_cast<std::size_t>(top)] = stamp;
+    }
+    for (std::size_t f = 0; f < frontier.size(); ++f) {
+      for (const int t : link_mesh.vertexTriangles(frontier[f])) {
+        for (const int w : link_mesh.triangle(t)) {
+          const auto wk = static_cast<std::size_t>(w);
+          if (scratch.link_vertex_stamp[wk] == stamp || vertex_O[wk].dot(axis) < level) continue;
+          scratch.link_vertex_stamp[wk] = stamp;
+          frontier.push_back(w);
+        }
+      }
+    }
+    for (const int v : frontier) {
+      for (const int tri_link : link_mesh.vertexTriangles(v)) {
+        const auto tk = static_cast<std::size_t>(tri_link);
+        if (scratch.link_triangle_stamp[tk] == stamp) continue;
+        scratch.link_triangle_stamp[tk] = stamp;
+        ++st.node_pairs_visited;
+        const double limit = std::min(cutoff_m, bound_m + kConvexBoundSlack_m);
+        const auto& ta = link_mesh.triangle(tri_link);
+        const Vector3d va[3] = {vertex_O[static_cast<std::size_t>(ta[0])], vertex_O[static_cast<std::size_t>(ta[1])],
+                                vertex_O[static_cast<std::size_t>(ta[2])]};
+        if (b_min - std::max({axis.dot(va[0]), axis.dot(va[1]), axis.dot(va[2])}) > limit) {
+          ++st.pruned_by_convex_bound;
+          continue;
+        }
+        const double tri_gap = triangleGapLowerBound(va, R_OL * link_mesh.faceNormal(tri_link), vb,
+                                                     obj_mesh.faceNormal(b.triangle), limit);
+        if (tri_gap > cutoff_m) {
+          ++st.pruned_by_distance;
+          continue;
+        }
+        if (tri_gap > limit) {
+          ++st.pruned_by_convex_bound;
+          continue;
+        }
+        const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(link_tree.leaf_of_triangle[tk])];
+        if (tri_gap > kConeTestMinGap_m) {
+          const Vector3d a_axis = R_OL * a.cone_axis;
+          const Vector3d leaf_diff = b.centre_m - X_OL * a.centre_m;
+          if (!conesAdmit(a, a_axis, b, R_OL, leaf_diff, leaf_diff.norm(), tri_gap) ||
+              !leafConesAdmit(a, a_axis, b, va, vb, tri_gap)) {
+            ++st.pruned_by_cone;
+            continue;
+          }
+        }
+        ++st.triangle_pairs_tested;
+        double pair_distance_m = 0.0;
+        if (evaluatePair(
+                link_mesh, [&](int w) -> const Vector3d& { return vertex_O[static_cast<std::size_t>(w)]; }, tri_link,
+                obj_mesh, b.triangle, X_OL, cutoff_m, m, pair_distance_m)) {
+          m.u_W = X_WO.linear() * m.u_W;
+          out.push_back(m);
+        }
+        bound_m = std::min(bound_m, pair_distance_m);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_WL,
@@ -617,6 +771,11 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
   if (link_tree.nodes.empty() || obj_tree.nodes.empty()) return;
   // Everything in the object frame: only the link's nodes need transforming.
   const Isometry3d X_OL = X_WO.inverse() * X_WL;
+  if (link_tree.convex) {
+    queryConvexLink(link_tree, link_mesh, X_OL, obj_tree, obj_mesh, X_WO, cutoff_m, scratch, out, st);
+    mergeDuplicateMinima(out, begin);
+    return;
+  }
   const Eigen::Matrix3d R_OL = X_OL.linear();
   const Eigen::Matrix3d abs_R_OL = R_OL.cwiseAbs();
   // The link's nodes in the object frame, each when the traversal first reaches it (the link
@@ -626,18 +785,8 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
     scratch.link_node_O.resize(n_link_nodes);
     scratch.link_node_query.resize(n_link_nodes, 0);
   }
-  // Convex link (SnchTree::convex): per object triangle, the smallest distance to a link
-  // triangle found so far bounds the distance of every minimum on it (kConvexBoundSlack_m).
-  const bool convex_link = link_tree.convex;
-  const auto n_obj_triangles = static_cast<std::size_t>(obj_mesh.numTriangles());
-  if (convex_link && scratch.object_leaf_query.size() < n_obj_triangles) {
-    scratch.object_leaf_query.resize(n_obj_triangles, 0);
-    scratch.object_leaf_slot.resize(n_obj_triangles, 0);
-  }
-  scratch.object_leaves.clear();
   if (++scratch.query == 0) {  // wrapped: every entry stale
     std::fill(scratch.link_node_query.begin(), scratch.link_node_query.end(), 0U);
-    std::fill(scratch.object_leaf_query.begin(), scratch.object_leaf_query.end(), 0U);
     scratch.query = 1;
   }
   const std::uint32_t query = scratch.query;
@@ -657,14 +806,6 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
   // reads them; most link/object pairs are pruned before any leaf).
   auto& vertex_O = scratch.link_vertex_O;
   bool vertices_ready = false;
-  const auto prepareLinkVertices = [&]() {
-    if (vertices_ready) return;
-    vertex_O.resize(static_cast<std::size_t>(link_mesh.numVertices()));
-    for (int v = 0; v < link_mesh.numVertices(); ++v)
-      vertex_O[static_cast<std::size_t>(v)] = X_OL * link_mesh.vertex(v);
-    vertices_ready = true;
-  };
-  int support_warm_vertex = 0;
   const auto link_vertex_O = [&vertex_O](int v) -> const Vector3d& { return vertex_O[static_cast<std::size_t>(v)]; };
   auto& stack = scratch.stack;
   stack.clear();
@@ -707,72 +848,27 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
       ++st.pruned_by_distance;
       continue;
     }
-    // Convex link against an object leaf B: every minimum on B lies at distance
-    // dist(B, link body) <= limit (kConvexBoundSlack_m), and the link points of B's minima are
-    // the body's points farthest along the GJK axis (within the bounds' tolerance): a link node
-    // whose extent along the axis stays below B's by more than `limit` cannot pair with B.
-    double limit = cutoff_m;
-    SnchQueryScratch::ObjectLeaf* leaf = nullptr;
-    if (convex_link && b.isLeaf()) {
-      const auto k = static_cast<std::size_t>(b.triangle);
-      if (scratch.object_leaf_query[k] != query) {
-        // First visit: GJK bounds on B's distance to the whole link body. Beyond the cutoff
-        // (plus the slack) no minimum lies on B; otherwise the upper bound starts its bound.
-        prepareLinkVertices();
-        const auto& tb = obj_mesh.triangle(b.triangle);
-        const Vector3d& b0 = obj_mesh.vertex(tb[0]);
-        const Vector3d& b1 = obj_mesh.vertex(tb[1]);
-        const Vector3d& b2 = obj_mesh.vertex(tb[2]);
-        const DistanceBounds db =
-            triangleConvexMeshDistanceBounds(b0, b1, b2, link_mesh, vertex_O, cutoff_m + kConvexBoundSlack_m,
-                                             kConvexHullTolerance_m, support_warm_vertex);
-        ++st.convex_hull_tests;
-        SnchQueryScratch::ObjectLeaf rec;
-        rec.bound_m = db.lower_m > cutoff_m + kConvexBoundSlack_m ? -std::numeric_limits<double>::max() : db.upper_m;
-        rec.axis = db.axis;
-        rec.b_min = std::min({db.axis.dot(b0), db.axis.dot(b1), db.axis.dot(b2)});
-        scratch.object_leaf_query[k] = query;
-        scratch.object_leaf_slot[k] = static_cast<std::uint32_t>(scratch.object_leaves.size());
-        scratch.object_leaves.push_back(rec);
-      }
-      leaf = &scratch.object_leaves[scratch.object_leaf_slot[k]];
-      limit = std::min(cutoff_m, leaf->bound_m + kConvexBoundSlack_m);
-      // Along the axis: B's lowest point minus the node's highest (sphere or box support).
-      const double node_top =
-          leaf->axis.dot(a_O.centre_m) + std::min(a.radius_m, leaf->axis.cwiseAbs().dot(a_O.box_half_m));
-      if (leaf->b_min - node_top > limit) {
-        ++st.pruned_by_convex_bound;
-        continue;
-      }
-      if (gap > limit) {
-        ++st.pruned_by_convex_bound;
-        continue;
-      }
-    }
     if (gap > kConeTestMinGap_m && !conesAdmit(a, a_O.axis, b, R_OL, diff, dist, gap)) {
       ++st.pruned_by_cone;
       continue;
     }
     if (a.isLeaf() && b.isLeaf()) {
-      prepareLinkVertices();
+      if (!vertices_ready) {
+        vertex_O.resize(static_cast<std::size_t>(link_mesh.numVertices()));
+        for (int v = 0; v < link_mesh.numVertices(); ++v) {
+          vertex_O[static_cast<std::size_t>(v)] = X_OL * link_mesh.vertex(v);
+        }
+        vertices_ready = true;
+      }
       // Exact separating-axis bound of the two triangles before the closest-point computation.
       const auto& ta = link_mesh.triangle(a.triangle);
       const auto& tb = obj_mesh.triangle(b.triangle);
       const Vector3d va[3] = {link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2])};
       const Vector3d vb[3] = {obj_mesh.vertex(tb[0]), obj_mesh.vertex(tb[1]), obj_mesh.vertex(tb[2])};
-      if (leaf != nullptr &&
-          leaf->b_min - std::max({leaf->axis.dot(va[0]), leaf->axis.dot(va[1]), leaf->axis.dot(va[2])}) > limit) {
-        ++st.pruned_by_convex_bound;
-        continue;
-      }
       const double tri_gap = triangleGapLowerBound(va, R_OL * link_mesh.faceNormal(a.triangle), vb,
-                                                   obj_mesh.faceNormal(b.triangle), limit);
+                                                   obj_mesh.faceNormal(b.triangle), cutoff_m);
       if (tri_gap > cutoff_m) {
         ++st.pruned_by_distance;
-        continue;
-      }
-      if (tri_gap > limit) {
-        ++st.pruned_by_convex_bound;
         continue;
       }
       // The triangles' own gap often proves a separation that the boxes could not (a long link
@@ -792,25 +888,9 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
         m.u_W = X_WO.linear() * m.u_W;
         out.push_back(m);
       }
-      if (leaf != nullptr) leaf->bound_m = std::min(leaf->bound_m, pair_distance_m);
     } else if (b.isLeaf() || (!a.isLeaf() && a.radius_m >= b.radius_m)) {
-      // Against an object leaf of a convex link, the nearer child first (popped first), so
-      // that the leaf's bound shrinks early.
-      bool left_first = false;  // popped right first otherwise
-      if (convex_link && b.isLeaf()) {
-        const SnchNode& l = link_tree.nodes[static_cast<std::size_t>(a.left)];
-        const SnchNode& r = link_tree.nodes[static_cast<std::size_t>(a.right)];
-        const double dl = (link_node_O(a.left).centre_m - b.centre_m).norm() - l.radius_m;
-        const double dr = (link_node_O(a.right).centre_m - b.centre_m).norm() - r.radius_m;
-        left_first = dl <= dr;
-      }
-      if (left_first) {
-        stack.emplace_back(a.right, j);
-        stack.emplace_back(a.left, j);
-      } else {
-        stack.emplace_back(a.left, j);
-        stack.emplace_back(a.right, j);
-      }
+      stack.emplace_back(a.left, j);
+      stack.emplace_back(a.right, j);
     } else {
       stack.emplace_back(i, b.left);
       stack.emplace_back(i, b.right);

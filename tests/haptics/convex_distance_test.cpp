@@ -83,10 +83,11 @@ TEST(ConvexDistanceTest, SupportVertexIsTheFarthestVertex) {
   for (int trial = 0; trial < 300; ++trial) {
     const TriMesh m = randomConvexMesh(rng);
     const std::vector<Vector3d> v = verticesOf(m);
+    const VertexGraph graph = buildVertexGraph(m);
     for (int k = 0; k < 10; ++k) {
       const Vector3d d = randomUnit(rng);
       const int start = std::uniform_int_distribution<int>(0, m.numVertices() - 1)(rng);
-      const int s = convexSupportVertex(m, v, d, start);
+      const int s = convexSupportVertex(graph, v, d, start);
       double best = -std::numeric_limits<double>::infinity();
       for (const Vector3d& p : v) best = std::max(best, p.dot(d));
       EXPECT_EQ(v[static_cast<std::size_t>(s)].dot(d), best) << "trial " << trial;
@@ -102,6 +103,7 @@ TEST(ConvexDistanceTest, TriangleBoundsBracketTheBruteForceDistance) {
   for (int trial = 0; trial < 400; ++trial) {
     const TriMesh m = randomConvexMesh(rng);
     const std::vector<Vector3d> v = verticesOf(m);
+    const VertexGraph graph = buildVertexGraph(m);
     // A random triangle 1-60 mm across around a point from inside the body to 0.1 m outside.
     std::uniform_real_distribution<double> u(-0.2, 0.2);
     const Vector3d centre = Vector3d(u(rng), u(rng), u(rng) + 0.1);
@@ -111,7 +113,7 @@ TEST(ConvexDistanceTest, TriangleBoundsBracketTheBruteForceDistance) {
     const double brute = bruteForceDistance(t, m);
     int warm = std::uniform_int_distribution<int>(0, m.numVertices() - 1)(rng);
     const DistanceBounds b = triangleConvexMeshDistanceBounds(
-        t[0], t[1], t[2], m, v, std::numeric_limits<double>::infinity(), kTolerance_m, warm);
+        t[0], t[1], t[2], graph, v, std::numeric_limits<double>::infinity(), kTolerance_m, warm);
     EXPECT_LE(b.lower_m, brute + 1e-12) << "trial " << trial;
     EXPECT_GE(b.upper_m, brute - 1e-12) << "trial " << trial;
     EXPECT_LE(b.upper_m - b.lower_m, kTolerance_m + 1e-12) << "trial " << trial;
@@ -123,7 +125,8 @@ TEST(ConvexDistanceTest, TriangleBoundsBracketTheBruteForceDistance) {
     (brute == 0.0 ? touching : apart) += 1;
     // The early stop: a lower bound above the threshold, or bounds already within tolerance.
     int warm2 = 0;
-    const DistanceBounds s = triangleConvexMeshDistanceBounds(t[0], t[1], t[2], m, v, 0.5 * brute, kTolerance_m, warm2);
+    const DistanceBounds s =
+        triangleConvexMeshDistanceBounds(t[0], t[1], t[2], graph, v, 0.5 * brute, kTolerance_m, warm2);
     EXPECT_LE(s.lower_m, brute + 1e-12);
     EXPECT_GE(s.upper_m, brute - 1e-12);
   }
@@ -207,12 +210,13 @@ TEST(ConvexDistanceTest, ConvexLinkQueryKeepsEveryBruteForceMinimumWithFewerExac
 TEST(ConvexDistanceTest, KernelsDoNotAllocate) {
   const TriMesh m = makeCapsule({0, 0, 0}, {0, 0, 0.3}, 0.05, 16, 4);
   const std::vector<Vector3d> v = verticesOf(m);
+  const VertexGraph graph = buildVertexGraph(m);
   int warm = 0;
   int s = 0;
   DistanceBounds b;
-  EXPECT_NO_HEAP_ALLOCATION(s = convexSupportVertex(m, v, Vector3d(0.3, -0.2, 0.9).normalized(), 0));
+  EXPECT_NO_HEAP_ALLOCATION(s = convexSupportVertex(graph, v, Vector3d(0.3, -0.2, 0.9).normalized(), 0));
   EXPECT_NO_HEAP_ALLOCATION(b = triangleConvexMeshDistanceBounds(Vector3d(0.1, 0, 0.1), Vector3d(0.1, 0.05, 0.12),
-                                                                 Vector3d(0.12, 0, 0.2), m, v, 1.0, 1e-9, warm));
+                                                                 Vector3d(0.12, 0, 0.2), graph, v, 1.0, 1e-9, warm));
   EXPECT_GE(s, 0);
   EXPECT_GT(b.lower_m, 0.04);  // the capsule's side at x = 0.05 (inscribed: up to 1 % in)
   EXPECT_LT(b.upper_m, 0.0501);

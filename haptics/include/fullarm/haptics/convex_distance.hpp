@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <span>
+#include <vector>
 
 #include "fullarm/haptics/tri_mesh.hpp"
 
@@ -22,13 +23,23 @@ struct DistanceBounds {
   int iterations = 0;  ///< GJK iterations (support evaluations) used
 };
 
+/// The edge graph of a mesh's vertices (compressed rows: the neighbours of vertex v are
+/// neighbours[offset[v]] .. neighbours[offset[v + 1] - 1], each once).
+struct VertexGraph {
+  std::vector<int> offset;
+  std::vector<int> neighbours;
+};
+
+/// The vertex graph of `mesh` (vertices joined by an edge of a triangle).
+[[nodiscard]] VertexGraph buildVertexGraph(const TriMesh& mesh);
+
 /// The vertex of a closed convex mesh farthest along `direction` (largest vertex . direction),
 /// found by climbing the vertex graph from `start`: on a convex body a vertex with no neighbour
 /// farther along a direction is farthest overall. `vertices[v]` is mesh vertex v in any frame
-/// (the mesh only gives the adjacency). Precondition: the mesh is closed and convex
-/// (SnchTree::convex); on a non-convex mesh the result is a local maximum only.
+/// (`graph` = buildVertexGraph(mesh) gives the adjacency). Precondition: the mesh is closed and
+/// convex (SnchTree::convex); on a non-convex mesh the result is a local maximum only.
 /// @rt
-[[nodiscard]] int convexSupportVertex(const TriMesh& mesh, std::span<const Eigen::Vector3d> vertices,
+[[nodiscard]] int convexSupportVertex(const VertexGraph& graph, std::span<const Eigen::Vector3d> vertices,
                                       const Eigen::Vector3d& direction, int start) noexcept;
 
 /// Bounds on the distance between triangle (t0, t1, t2) and the convex body of a closed convex
@@ -42,7 +53,7 @@ struct DistanceBounds {
 /// last support vertex so that nearby queries start close.
 /// @rt
 [[nodiscard]] DistanceBounds triangleConvexMeshDistanceBounds(const Eigen::Vector3d& t0, const Eigen::Vector3d& t1,
-                                                              const Eigen::Vector3d& t2, const TriMesh& mesh,
+                                                              const Eigen::Vector3d& t2, const VertexGraph& graph,
                                                               std::span<const Eigen::Vector3d> vertices,
                                                               double stop_above_m, double tolerance_m,
                                                               int& warm_vertex) noexcept;

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "fullarm/haptics/convex_distance.hpp"
 #include "fullarm/haptics/geometry.hpp"
 #include "fullarm/haptics/minima.hpp"
 #include "fullarm/haptics/tri_mesh.hpp"
@@ -82,6 +83,10 @@ struct SnchTree {
   /// distance to the link (kConvexBoundSlack_m). Meshes above kConvexCheckMaxWork (triangles x
   /// vertices) are not checked and count as not convex.
   bool convex = false;
+  /// Leaf node of each triangle.
+  std::vector<int> leaf_of_triangle;
+  /// The mesh's vertex graph (convex meshes only; empty otherwise).
+  VertexGraph vertex_graph;
 };
 
 /// Relative tolerance of the convexity check (of the mesh's bounding-box diagonal).
@@ -103,6 +108,8 @@ inline constexpr double kConvexBoundSlack_m = 1e-6;
 /// GJK stops once its bounds on an object triangle's distance to a convex link are this close
 /// [m] (the upper bound then starts the triangle's bound; the exact tests tighten it).
 inline constexpr double kConvexHullTolerance_m = 2e-5;
+/// Same for an object node's sphere against a convex link [m] (only its lower bound is used).
+inline constexpr double kConvexNodeTolerance_m = 1e-3;
 
 /// Builds the hierarchy (top-down median split along the longest extent of the centroids).
 [[nodiscard]] SnchTree buildSnchTree(const TriMesh& mesh);
@@ -125,19 +132,12 @@ struct SnchQueryScratch {
   std::uint32_t query = 0;
   /// The link mesh's vertices in the object frame (filled once per query).
   std::vector<Eigen::Vector3d> link_vertex_O;
-  /// Convex links: per object triangle reached in this query, its bound on the distance of its
-  /// minima (GJK upper bound, then the smallest exact triangle-pair distance) [m] and the GJK
-  /// axis with the triangle's lowest value along it (-max for a triangle beyond the cutoff).
-  struct ObjectLeaf {
-    double bound_m = 0.0;
-    Eigen::Vector3d axis = Eigen::Vector3d::Zero();
-    double b_min = 0.0;
-  };
-  std::vector<ObjectLeaf> object_leaves;
-  /// Per object triangle: the query that filled object_leaf_slot (stale below `query`) and the
-  /// index of its entry in object_leaves.
-  std::vector<std::uint32_t> object_leaf_query;
-  std::vector<std::uint32_t> object_leaf_slot;
+  /// Convex links: stamps of the link vertices and triangles already taken for the current
+  /// object triangle, and the vertex search's frontier.
+  std::vector<std::uint32_t> link_vertex_stamp;
+  std::vector<std::uint32_t> link_triangle_stamp;
+  std::uint32_t link_stamp = 0;
+  std::vector<int> link_frontier;
 };
 
 /// Counters of the last querySnchPair call.
