@@ -645,13 +645,14 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
   const SnchNode& root = link_tree.nodes[0];
   const Vector3d root_centre = X_OL * root.centre_m;
   const Vector3d root_half = abs_R_OL * root.box_half_m;
-  int warm = 0;
   LocalMinimum m;
   auto& stack = scratch.stack;
   stack.clear();
   stack.emplace_back(0, 0);
   while (!stack.empty()) {
-    const int j = stack.back().second;
+    // Each entry: (link vertex to start the support climbs from, object node). The children
+    // of a node start from its last support vertex: their GJK directions are close to its own.
+    auto [warm, j] = stack.back();
     stack.pop_back();
     ++st.node_pairs_visited;
     const SnchNode& b = obj_tree.nodes[static_cast<std::size_t>(j)];
@@ -672,8 +673,8 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
         ++st.pruned_by_distance;
         continue;
       }
-      stack.emplace_back(0, b.left);
-      stack.emplace_back(0, b.right);
+      stack.emplace_back(warm, b.left);
+      stack.emplace_back(warm, b.right);
       continue;
     }
     const auto& tb = obj_mesh.triangle(b.triangle);
@@ -721,8 +722,22 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
         const auto& ta = link_mesh.triangle(tri_link);
         const Vector3d va[3] = {vertex_O[static_cast<std::size_t>(ta[0])], vertex_O[static_cast<std::size_t>(ta[1])],
                                 vertex_O[static_cast<std::size_t>(ta[2])]};
-        if (b_min - std::max({axis.dot(va[0]), axis.dot(va[1]), axis.dot(va[2])}) > limit) {
+        // Lower bounds on the pair's distance: along the GJK axis (3 dot products), then the
+        // triangles' separating axes. The cone tests run with the axis bound first (cheaper than
+        // the separating axes, and most pairs they reject never reach them), again with the
+        // separating-axis bound when it is larger.
+        const double axis_gap = b_min - std::max({axis.dot(va[0]), axis.dot(va[1]), axis.dot(va[2])});
+        if (axis_gap > limit) {
           ++st.pruned_by_convex_bound;
+          continue;
+        }
+        const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(link_tree.leaf_of_triangle[tk])];
+        const Vector3d a_axis = R_OL * a.cone_axis;
+        const Vector3d leaf_diff = b.centre_m - X_OL * a.centre_m;
+        const double leaf_dist = leaf_diff.norm();
+        if (axis_gap > kConeTestMinGap_m && (!conesAdmit(a, a_axis, b, R_OL, leaf_diff, leaf_dist, axis_gap) ||
+                                             !leafConesAdmit(a, a_axis, b, va, vb, axis_gap))) {
+          ++st.pruned_by_cone;
           continue;
         }
         const double tri_gap = triangleGapLowerBound(va, R_OL * link_mesh.faceNormal(tri_link), vb,
@@ -735,15 +750,11 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
           ++st.pruned_by_convex_bound;
           continue;
         }
-        const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(link_tree.leaf_of_triangle[tk])];
-        if (tri_gap > kConeTestMinGap_m) {
-          const Vector3d a_axis = R_OL * a.cone_axis;
-          const Vector3d leaf_diff = b.centre_m - X_OL * a.centre_m;
-          if (!conesAdmit(a, a_axis, b, R_OL, leaf_diff, leaf_diff.norm(), tri_gap) ||
-              !leafConesAdmit(a, a_axis, b, va, vb, tri_gap)) {
-            ++st.pruned_by_cone;
-            continue;
-          }
+        if (tri_gap > std::max(axis_gap, kConeTestMinGap_m) &&
+            (!conesAdmit(a, a_axis, b, R_OL, leaf_diff, leaf_dist, tri_gap) ||
+             !leafConesAdmit(a, a_axis, b, va, vb, tri_gap))) {
+          ++st.pruned_by_cone;
+          continue;
         }
         ++st.triangle_pairs_tested;
         double pair_distance_m = 0.0;
