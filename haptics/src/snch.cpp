@@ -642,6 +642,22 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
   for (std::size_t v = 0; v < n_link_vertices; ++v) vertex_O[v] = X_OL * link_mesh.vertex(static_cast<int>(v));
   if (scratch.link_vertex_stamp.size() < n_link_vertices) scratch.link_vertex_stamp.resize(n_link_vertices, 0);
   if (scratch.link_triangle_stamp.size() < n_link_triangles) scratch.link_triangle_stamp.resize(n_link_triangles, 0);
+  // Support test of an object node's cone against the whole body (test 3 of conesAdmit with
+  // the body in place of a link node): a minimum on the node has -u in its cone, so
+  // (p - q) . a_B >= cos(alpha_B) |p - q| >= cos(alpha_B) gap for p on the body and q on the
+  // node (|.| of it for a double cone); [q_lo, q_hi] bounds q . a_B over the node. The body's
+  // extent along a_B comes from its support vertices.
+  int cone_warm = 0;
+  const auto objectConeAdmits = [&](const SnchNode& b, double q_lo, double q_hi, double gap) noexcept {
+    cone_warm = convexSupportVertex(link_tree.vertex_graph, vertex_O, b.cone_axis, cone_warm);
+    const double p_hi = vertex_O[static_cast<std::size_t>(cone_warm)].dot(b.cone_axis);
+    const double need = b.cone_cos * gap;
+    if (p_hi - q_lo >= need) return true;
+    if (!b.cone_two_sided) return false;
+    const int low = convexSupportVertex(link_tree.vertex_graph, vertex_O, -b.cone_axis, cone_warm);
+    const double p_lo = vertex_O[static_cast<std::size_t>(low)].dot(b.cone_axis);
+    return q_hi - p_lo >= need;
+  };
   const SnchNode& root = link_tree.nodes[0];
   const Vector3d root_centre = X_OL * root.centre_m;
   const Vector3d root_half = abs_R_OL * root.box_half_m;
@@ -673,6 +689,31 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
         ++st.pruned_by_distance;
         continue;
       }
+      const double gap = db.lower_m - b.radius_m;
+      if (gap > kConeTestMinGap_m && b.cone_cos > 0.0) {
+        const double axis_centre = b.cone_axis.dot(b.centre_m);
+        const double axis_extent = b.cone_axis.cwiseAbs().dot(b.box_half_m);
+        if (!objectConeAdmits(b, axis_centre - axis_extent, axis_centre + axis_extent, gap)) {
+          ++st.pruned_by_cone;
+          continue;
+        }
+      }
+      // Directions of the minima under the node: a minimum at q has u = (q - P(q)) / |q - P(q)|
+      // with P the projection on the body (see kConvexBoundSlack_m). P is nonexpansive, so for
+      // q within r_B of the centre c, |(q - P(q)) - (c - P(c))| <= 2 r_B, and u lies within
+      // asin(2 r_B / D) of u(c), D = |c - P(c)| >= lower; u(c) lies within acos(lower / upper)
+      // of the GJK axis (axis . (c - P(c)) >= lower). -u must lie in the node's cone.
+      if (gap > kConeTestMinGap_m && b.cone_cos > -1.0 && 2.0 * b.radius_m < db.lower_m) {
+        const double spread =
+            std::asin(2.0 * b.radius_m / db.lower_m) + std::acos(std::min(1.0, db.lower_m / db.upper_m));
+        const double open = b.cone_half_angle_rad + kConeSlack_rad + spread;
+        const double c = -db.axis.dot(b.cone_axis);
+        if ((b.cone_two_sided && open < 0.5 * kPi && std::abs(c) < std::cos(open)) ||
+            (!b.cone_two_sided && open < kPi && c < std::cos(open))) {
+          ++st.pruned_by_cone;
+          continue;
+        }
+      }
       stack.emplace_back(warm, b.left);
       stack.emplace_back(warm, b.right);
       continue;
@@ -686,6 +727,15 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
     if (db.lower_m > cutoff_m + kConvexBoundSlack_m) {
       ++st.pruned_by_distance;
       continue;
+    }
+    if (db.lower_m > kConeTestMinGap_m && b.cone_cos > 0.0) {
+      const double v0 = b.cone_axis.dot(vb[0]);
+      const double v1 = b.cone_axis.dot(vb[1]);
+      const double v2 = b.cone_axis.dot(vb[2]);
+      if (!objectConeAdmits(b, std::min({v0, v1, v2}), std::max({v0, v1, v2}), db.lower_m)) {
+        ++st.pruned_by_cone;
+        continue;
+      }
     }
     double bound_m = db.upper_m;
     const Vector3d& axis = db.axis;
