@@ -207,6 +207,46 @@ TEST(ConvexDistanceTest, ConvexLinkQueryKeepsEveryBruteForceMinimumWithFewerExac
   RecordProperty("exact_tests_plain", static_cast<int>(tests_without));
 }
 
+// A capsule hovering 2-25 mm over the top face of a densely triangulated box (1 cm grid), at
+// random tilts: many object nodes small enough (2 r < D) for the node-direction cone test, and
+// minima under the capsule that it must keep. Brute force over all triangle pairs decides.
+TEST(ConvexDistanceTest, CapsuleOverADenseFaceKeepsEveryBruteForceMinimum) {
+  std::mt19937 rng(14);
+  constexpr double kCutoff_m = 0.03;
+  const TriMesh box = makeBox({0.12, 0.12, 0.06}, 0.01);  // top face at z = 0.03
+  const SnchTree box_tree = buildSnchTree(box);
+  const TriMesh capsule = makeCapsule({-0.04, 0, 0}, {0.04, 0, 0}, 0.015, 8, 2);
+  const SnchTree capsule_tree = buildSnchTree(capsule);
+  ASSERT_TRUE(capsule_tree.convex);
+  SnchQueryScratch scratch;
+  int minima = 0;
+  long pruned_by_cone = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Eigen::Isometry3d X_WL = Eigen::Isometry3d::Identity();
+    X_WL.linear() =
+        (Eigen::AngleAxisd(0.4 * u(rng), Vector3d::UnitX()) * Eigen::AngleAxisd(0.4 * u(rng), Vector3d::UnitY()) *
+         Eigen::AngleAxisd(3.2 * u(rng), Vector3d::UnitZ()))
+            .toRotationMatrix();
+    X_WL.translation() = Vector3d(0.03 * u(rng), 0.03 * u(rng), 0.03 + 0.015 + 0.0135 + 0.0115 * u(rng));
+    std::vector<LocalMinimum> snch;
+    SnchQueryStats stats;
+    querySnchPair(capsule_tree, capsule, X_WL, box_tree, box, Eigen::Isometry3d::Identity(), kCutoff_m, scratch, snch,
+                  &stats);
+    const std::vector<LocalMinimum> brute =
+        test::bruteForceMinima(capsule, X_WL, box, Eigen::Isometry3d::Identity(), kCutoff_m);
+    ASSERT_EQ(snch.size(), brute.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < snch.size(); ++i) {
+      EXPECT_TRUE(sameFeaturePair(snch[i], brute[i])) << "trial " << trial;
+      EXPECT_NEAR(snch[i].distance_m, brute[i].distance_m, 1e-12);
+    }
+    minima += static_cast<int>(snch.size());
+    pruned_by_cone += stats.pruned_by_cone;
+  }
+  EXPECT_GT(minima, 30);
+  EXPECT_GT(pruned_by_cone, 0);
+}
+
 TEST(ConvexDistanceTest, KernelsDoNotAllocate) {
   const TriMesh m = makeCapsule({0, 0, 0}, {0, 0, 0.3}, 0.05, 16, 4);
   const std::vector<Vector3d> v = verticesOf(m);
