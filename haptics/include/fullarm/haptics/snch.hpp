@@ -108,7 +108,8 @@ inline constexpr double kConvexBoundSlack_m = 1e-6;
 /// GJK stops once its bounds on an object triangle's distance to a convex link are this close
 /// [m] (the upper bound then starts the triangle's bound; the exact tests tighten it).
 inline constexpr double kConvexHullTolerance_m = 2e-5;
-/// Same for an object node's sphere against a convex link [m] (only its lower bound is used).
+/// Same for an object node's sphere against a convex link [m] (its lower bound prunes the node;
+/// both bounds bound the direction of its minima).
 inline constexpr double kConvexNodeTolerance_m = 1e-3;
 
 /// Builds the hierarchy (top-down median split along the longest extent of the centroids).
@@ -145,9 +146,10 @@ struct SnchQueryStats {
   long node_pairs_visited = 0;
   long pruned_by_distance = 0;  ///< distance lower bound (sphere or box) above the cutoff
   long pruned_by_cone = 0;      ///< any normal-cone test
-  /// convex link: farther from the object leaf than its nearest link triangle found so far
+  /// convex link: a candidate link triangle proven (along the GJK axis or by separating axes)
+  /// farther from the object triangle than the triangle's bound
   long pruned_by_convex_bound = 0;
-  /// convex link: object triangles bounded against the whole link body by GJK (once each)
+  /// convex link: GJK calls (object nodes and triangles against the whole link body)
   long convex_hull_tests = 0;
   long triangle_pairs_tested = 0;  ///< leaf pairs given to the exact test (evaluateTrianglePair)
 };
@@ -174,7 +176,9 @@ bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh&
                           const Eigen::Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept;
 
 /// Appends to `out` every local minimum between a link mesh and an object mesh within
-/// `cutoff_m`, merged by feature pair. link/object fields of the appended minima are -1 (the
+/// `cutoff_m`, merged by feature pair. A convex link tree (SnchTree::convex) is queried as one
+/// body against the object tree (GJK bounds; docs/haptics.md, "Convex links"), any other by the
+/// two-tree traversal; both give the brute-force set. link/object fields of the appended minima are -1 (the
 /// caller fills them); u_W is in the world frame.
 /// @param X_WL pose of the link mesh frame; @param X_WO pose of the object mesh frame
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Eigen::Isometry3d& X_WL,
