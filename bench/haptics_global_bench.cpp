@@ -2,7 +2,9 @@
 // valve, truss, opening frame): SNCH vs the Bullet alternative search, which returns the same
 // minima (checked before timing), in the same run; then both on the same scene with every
 // object subdivided to ~100k and ~1M triangles (midpoint subdivision keeps the surfaces).
-// Counters: minima, triangle pairs given to the exact test, node pairs visited and pruned.
+// Counters: minima, triangle pairs given to the exact test, node pairs visited and pruned
+// (by distance, cone, and for the convex link capsules the per-triangle bound or GJK axis), and
+// the GJK calls of the convex-link path.
 //
 // build/release/bench/haptics_global_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
@@ -66,6 +68,8 @@ void setSnchCounters(benchmark::State& state, const haptics::SnchQueryStats& st)
   state.counters["node_pairs"] = static_cast<double>(st.node_pairs_visited);
   state.counters["dist_pruned"] = static_cast<double>(st.pruned_by_distance);
   state.counters["cone_pruned"] = static_cast<double>(st.pruned_by_cone);
+  state.counters["convex_pruned"] = static_cast<double>(st.pruned_by_convex_bound);
+  state.counters["gjk_tests"] = static_cast<double>(st.convex_hull_tests);
 }
 
 void BM_GlobalSearch_Snch(benchmark::State& state) {

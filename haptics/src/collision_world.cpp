@@ -77,6 +77,8 @@ void SnchGlobalSearch::search(const CollisionWorld& world, const arm::ArmData& f
       stats_.node_pairs_visited += pair_stats.node_pairs_visited;
       stats_.pruned_by_distance += pair_stats.pruned_by_distance;
       stats_.pruned_by_cone += pair_stats.pruned_by_cone;
+      stats_.pruned_by_convex_bound += pair_stats.pruned_by_convex_bound;
+      stats_.convex_hull_tests += pair_stats.convex_hull_tests;
       stats_.triangle_pairs_tested += pair_stats.triangle_pairs_tested;
     }
   }

@@ -1,7 +1,10 @@
 #include "fullarm/haptics/snch.hpp"
 
+#include "fullarm/haptics/convex_distance.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <numeric>
 #include <tuple>
@@ -283,6 +286,38 @@ struct Builder {
   }
 };
 
+// SnchTree::convex: closed (every edge has exactly two triangles) and every vertex on or
+// behind every face plane within kConvexTolerance x the box diagonal. Every locally convex
+// edge first (O(edges)): that rejects the usual non-convex mesh at once.
+bool isClosedConvex(const TriMesh& mesh) {
+  const int nt = mesh.numTriangles();
+  const int nv = mesh.numVertices();
+  if (nt < 4 || static_cast<long>(nt) * nv > kConvexCheckMaxWork) return false;
+  Vector3d lo = mesh.vertex(0);
+  Vector3d hi = lo;
+  for (int v = 1; v < nv; ++v) {
+    lo = lo.cwiseMin(mesh.vertex(v));
+    hi = hi.cwiseMax(mesh.vertex(v));
+  }
+  const double tol = kConvexTolerance * (hi - lo).norm();
+  const auto inFront = [&](int t, int v) {
+    return mesh.faceNormal(t).dot(mesh.vertex(v) - mesh.vertex(mesh.triangle(t)[0])) > tol;
+  };
+  for (int e = 0; e < mesh.numEdges(); ++e) {
+    const auto tris = mesh.edgeTriangles(e);
+    if (tris.size() != 2) return false;
+    for (int k = 0; k < 3; ++k) {
+      if (inFront(tris[0], mesh.triangle(tris[1])[k]) || inFront(tris[1], mesh.triangle(tris[0])[k])) return false;
+    }
+  }
+  for (int t = 0; t < nt; ++t) {
+    for (int v = 0; v < nv; ++v) {
+      if (inFront(t, v)) return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 SnchTree buildSnchTree(const TriMesh& mesh) {
@@ -319,6 +354,13 @@ SnchTree buildSnchTree(const TriMesh& mesh) {
   std::iota(b.tris.begin(), b.tris.end(), 0);
   b.tree.nodes.reserve(static_cast<std::size_t>(2 * nt));
   b.build(0, nt);
+  b.tree.convex = isClosedConvex(mesh);
+  if (b.tree.convex) b.tree.vertex_graph = buildVertexGraph(mesh);
+  b.tree.leaf_of_triangle.assign(static_cast<std::size_t>(nt), -1);
+  for (int i = 0; i < static_cast<int>(b.tree.nodes.size()); ++i) {
+    const SnchNode& node = b.tree.nodes[static_cast<std::size_t>(i)];
+    if (node.isLeaf()) b.tree.leaf_of_triangle[static_cast<std::size_t>(node.triangle)] = i;
+  }
   return std::move(b.tree);
 }
 
@@ -347,14 +389,17 @@ namespace {
 
 // evaluateTrianglePair with the link vertices in the object frame given by `link_vertex_O(v)`
 // (X_OL * vertex, computed on the fly or read from a per-query cache: the same values).
+// `pair_distance_m` receives the distance of the two triangles (a minimum or not).
 template <class LinkVertex>
 bool evaluatePair(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int tri_link, const TriMesh& object_mesh,
-                  int tri_object, const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
+                  int tri_object, const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out,
+                  double& pair_distance_m) noexcept {
   const auto& ta = link_mesh.triangle(tri_link);
   const auto& tb = object_mesh.triangle(tri_object);
   const TriangleTriangleResult r =
       closestPointsTriangleTriangle(link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2]),
                                     object_mesh.vertex(tb[0]), object_mesh.vertex(tb[1]), object_mesh.vertex(tb[2]));
+  pair_distance_m = r.distance_m;
   if (r.distance_m > cutoff_m) return false;
   const Feature fl = meshFeature(link_mesh, tri_link, r.feature_a);
   const Feature fo = meshFeature(object_mesh, tri_object, r.feature_b);
@@ -405,9 +450,10 @@ bool evaluatePair(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int
 
 bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh, int tri_object,
                           const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
+  double pair_distance_m = 0.0;
   return evaluatePair(
       link_mesh, [&](int v) -> Vector3d { return X_OL * link_mesh.vertex(v); }, tri_link, object_mesh, tri_object, X_OL,
-      cutoff_m, out);
+      cutoff_m, out, pair_distance_m);
 }
 
 std::size_t mergeDuplicateMinima(std::vector<LocalMinimum>& minima, std::size_t begin) noexcept {
@@ -565,6 +611,215 @@ bool leafConesAdmit(const SnchNode& a, const Vector3d& a_axis, const SnchNode& b
   return true;
 }
 
+// Bumps a per-element stamp counter; on wrap-around clears the stamps so no entry looks current.
+std::uint32_t nextStamp(std::uint32_t& counter, std::vector<std::uint32_t>& a, std::vector<std::uint32_t>& b) noexcept {
+  if (++counter == 0) {
+    std::fill(a.begin(), a.end(), 0U);
+    std::fill(b.begin(), b.end(), 0U);
+    counter = 1;
+  }
+  return counter;
+}
+
+// querySnchPair for a convex link (SnchTree::convex): a traversal of the object tree alone
+// against the whole link body. An object node is dropped when its sphere is farther than L
+// from the body (GJK lower bound); at an object leaf B, GJK bounds B's distance to the body,
+// which bounds the distance of every minimum on B (kConvexBoundSlack_m), and the link
+// triangles that can pair with B are those reaching within that bound of B along the GJK axis:
+// on a convex body the vertices above a level along an axis are connected in the vertex graph
+// (from any vertex below the top some neighbour is strictly higher), so a search from the
+// topmost vertex finds them all. Each candidate pair then goes through the same leaf tests and
+// exact test as in the two-tree traversal.
+void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_OL,
+                     const SnchTree& obj_tree, const TriMesh& obj_mesh, const Isometry3d& X_WO, double cutoff_m,
+                     SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats& st) {
+  const Eigen::Matrix3d R_OL = X_OL.linear();
+  const Eigen::Matrix3d abs_R_OL = R_OL.cwiseAbs();
+  auto& vertex_O = scratch.link_vertex_O;
+  const auto n_link_vertices = static_cast<std::size_t>(link_mesh.numVertices());
+  const auto n_link_triangles = static_cast<std::size_t>(link_mesh.numTriangles());
+  vertex_O.resize(n_link_vertices);
+  for (std::size_t v = 0; v < n_link_vertices; ++v) vertex_O[v] = X_OL * link_mesh.vertex(static_cast<int>(v));
+  if (scratch.link_vertex_stamp.size() < n_link_vertices) scratch.link_vertex_stamp.resize(n_link_vertices, 0);
+  if (scratch.link_triangle_stamp.size() < n_link_triangles) scratch.link_triangle_stamp.resize(n_link_triangles, 0);
+  // Support test of an object node's cone against the whole body (test 3 of conesAdmit with
+  // the body in place of a link node): a minimum on the node has -u in its cone, so
+  // (p - q) . a_B >= cos(alpha_B) |p - q| >= cos(alpha_B) gap for p on the body and q on the
+  // node (|.| of it for a double cone); [q_lo, q_hi] bounds q . a_B over the node. The body's
+  // extent along a_B comes from its support vertices.
+  int cone_warm = 0;
+  const auto objectConeAdmits = [&](const SnchNode& b, double q_lo, double q_hi, double gap) noexcept {
+    cone_warm = convexSupportVertex(link_tree.vertex_graph, vertex_O, b.cone_axis, cone_warm);
+    const double p_hi = vertex_O[static_cast<std::size_t>(cone_warm)].dot(b.cone_axis);
+    const double need = b.cone_cos * gap;
+    if (p_hi - q_lo >= need) return true;
+    if (!b.cone_two_sided) return false;
+    const int low = convexSupportVertex(link_tree.vertex_graph, vertex_O, -b.cone_axis, cone_warm);
+    const double p_lo = vertex_O[static_cast<std::size_t>(low)].dot(b.cone_axis);
+    return q_hi - p_lo >= need;
+  };
+  const SnchNode& root = link_tree.nodes[0];
+  const Vector3d root_centre = X_OL * root.centre_m;
+  const Vector3d root_half = abs_R_OL * root.box_half_m;
+  LocalMinimum m;
+  auto& stack = scratch.stack;
+  stack.clear();
+  stack.emplace_back(0, 0);
+  while (!stack.empty()) {
+    // Each entry: (link vertex to start the support climbs from, object node). The children
+    // of a node start from its last support vertex: their GJK directions are close to its own.
+    auto [warm, j] = stack.back();
+    stack.pop_back();
+    ++st.node_pairs_visited;
+    const SnchNode& b = obj_tree.nodes[static_cast<std::size_t>(j)];
+    // The link root's sphere and box first (cheap), then GJK against the body.
+    const Vector3d diff = b.centre_m - root_centre;
+    const double reach = root.radius_m + b.radius_m + cutoff_m;
+    if (diff.squaredNorm() > reach * reach || (diff.cwiseAbs() - b.box_half_m - root_half).maxCoeff() > cutoff_m) {
+      ++st.pruned_by_distance;
+      continue;
+    }
+    if (!b.isLeaf()) {
+      // The node's sphere against the body: its centre's distance minus its radius.
+      const DistanceBounds db =
+          triangleConvexMeshDistanceBounds(b.centre_m, b.centre_m, b.centre_m, link_tree.vertex_graph, vertex_O,
+                                           cutoff_m + b.radius_m, kConvexNodeTolerance_m, warm);
+      ++st.convex_hull_tests;
+      if (db.lower_m - b.radius_m > cutoff_m) {
+        ++st.pruned_by_distance;
+        continue;
+      }
+      const double gap = db.lower_m - b.radius_m;
+      if (gap > kConeTestMinGap_m && b.cone_cos > 0.0) {
+        const double axis_centre = b.cone_axis.dot(b.centre_m);
+        const double axis_extent = b.cone_axis.cwiseAbs().dot(b.box_half_m);
+        if (!objectConeAdmits(b, axis_centre - axis_extent, axis_centre + axis_extent, gap)) {
+          ++st.pruned_by_cone;
+          continue;
+        }
+      }
+      // Directions of the minima under the node: a minimum at q has u = (q - P(q)) / |q - P(q)|
+      // with P the projection on the body (see kConvexBoundSlack_m). P is nonexpansive, so for
+      // q within r_B of the centre c, |(q - P(q)) - (c - P(c))| <= 2 r_B, and u lies within
+      // asin(2 r_B / D) of u(c), D = |c - P(c)| >= lower; u(c) lies within acos(lower / upper)
+      // of the GJK axis (axis . (c - P(c)) >= lower). -u must lie in the node's cone.
+      if (gap > kConeTestMinGap_m && b.cone_cos > -1.0 && 2.0 * b.radius_m < db.lower_m) {
+        const double spread =
+            std::asin(2.0 * b.radius_m / db.lower_m) + std::acos(std::min(1.0, db.lower_m / db.upper_m));
+        const double open = b.cone_half_angle_rad + kConeSlack_rad + spread;
+        const double c = -db.axis.dot(b.cone_axis);
+        if ((b.cone_two_sided && open < 0.5 * kPi && std::abs(c) < std::cos(open)) ||
+            (!b.cone_two_sided && open < kPi && c < std::cos(open))) {
+          ++st.pruned_by_cone;
+          continue;
+        }
+      }
+      stack.emplace_back(warm, b.left);
+      stack.emplace_back(warm, b.right);
+      continue;
+    }
+    const auto& tb = obj_mesh.triangle(b.triangle);
+    const Vector3d vb[3] = {obj_mesh.vertex(tb[0]), obj_mesh.vertex(tb[1]), obj_mesh.vertex(tb[2])};
+    const DistanceBounds db =
+        triangleConvexMeshDistanceBounds(vb[0], vb[1], vb[2], link_tree.vertex_graph, vertex_O,
+                                         cutoff_m + kConvexBoundSlack_m, kConvexHullTolerance_m, warm);
+    ++st.convex_hull_tests;
+    if (db.lower_m > cutoff_m + kConvexBoundSlack_m) {
+      ++st.pruned_by_distance;
+      continue;
+    }
+    if (db.lower_m > kConeTestMinGap_m && b.cone_cos > 0.0) {
+      const double v0 = b.cone_axis.dot(vb[0]);
+      const double v1 = b.cone_axis.dot(vb[1]);
+      const double v2 = b.cone_axis.dot(vb[2]);
+      if (!objectConeAdmits(b, std::min({v0, v1, v2}), std::max({v0, v1, v2}), db.lower_m)) {
+        ++st.pruned_by_cone;
+        continue;
+      }
+    }
+    double bound_m = db.upper_m;
+    const Vector3d& axis = db.axis;
+    const double b_min = std::min({axis.dot(vb[0]), axis.dot(vb[1]), axis.dot(vb[2])});
+    // Link vertices at or above `level` along the axis: every triangle that can pair with B has
+    // one (its top reaches b_min - limit >= level). The search is exact on a convex body; the
+    // slack absorbs the convexity tolerance.
+    const double level = b_min - std::min(cutoff_m, bound_m + kConvexBoundSlack_m) - kConvexBoundSlack_m;
+    const std::uint32_t stamp = nextStamp(scratch.link_stamp, scratch.link_vertex_stamp, scratch.link_triangle_stamp);
+    auto& frontier = scratch.link_frontier;
+    frontier.clear();
+    const int top = convexSupportVertex(link_tree.vertex_graph, vertex_O, axis, warm);
+    if (vertex_O[static_cast<std::size_t>(top)].dot(axis) >= level) {
+      frontier.push_back(top);
+      scratch.link_vertex_stamp[static_cast<std::size_t>(top)] = stamp;
+    }
+    for (std::size_t f = 0; f < frontier.size(); ++f) {
+      for (const int t : link_mesh.vertexTriangles(frontier[f])) {
+        for (const int w : link_mesh.triangle(t)) {
+          const auto wk = static_cast<std::size_t>(w);
+          if (scratch.link_vertex_stamp[wk] == stamp || vertex_O[wk].dot(axis) < level) continue;
+          scratch.link_vertex_stamp[wk] = stamp;
+          frontier.push_back(w);
+        }
+      }
+    }
+    for (const int v : frontier) {
+      for (const int tri_link : link_mesh.vertexTriangles(v)) {
+        const auto tk = static_cast<std::size_t>(tri_link);
+        if (scratch.link_triangle_stamp[tk] == stamp) continue;
+        scratch.link_triangle_stamp[tk] = stamp;
+        ++st.node_pairs_visited;
+        const double limit = std::min(cutoff_m, bound_m + kConvexBoundSlack_m);
+        const auto& ta = link_mesh.triangle(tri_link);
+        const Vector3d va[3] = {vertex_O[static_cast<std::size_t>(ta[0])], vertex_O[static_cast<std::size_t>(ta[1])],
+                                vertex_O[static_cast<std::size_t>(ta[2])]};
+        // Lower bounds on the pair's distance: along the GJK axis (3 dot products), then the
+        // triangles' separating axes. The cone tests run with the axis bound first (cheaper than
+        // the separating axes, and most pairs they reject never reach them), again with the
+        // separating-axis bound when it is larger.
+        const double axis_gap = b_min - std::max({axis.dot(va[0]), axis.dot(va[1]), axis.dot(va[2])});
+        if (axis_gap > limit) {
+          ++st.pruned_by_convex_bound;
+          continue;
+        }
+        const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(link_tree.leaf_of_triangle[tk])];
+        const Vector3d a_axis = R_OL * a.cone_axis;
+        const Vector3d leaf_diff = b.centre_m - X_OL * a.centre_m;
+        const double leaf_dist = leaf_diff.norm();
+        if (axis_gap > kConeTestMinGap_m && (!conesAdmit(a, a_axis, b, R_OL, leaf_diff, leaf_dist, axis_gap) ||
+                                             !leafConesAdmit(a, a_axis, b, va, vb, axis_gap))) {
+          ++st.pruned_by_cone;
+          continue;
+        }
+        const double tri_gap = triangleGapLowerBound(va, R_OL * link_mesh.faceNormal(tri_link), vb,
+                                                     obj_mesh.faceNormal(b.triangle), limit);
+        if (tri_gap > cutoff_m) {
+          ++st.pruned_by_distance;
+          continue;
+        }
+        if (tri_gap > limit) {
+          ++st.pruned_by_convex_bound;
+          continue;
+        }
+        if (tri_gap > std::max(axis_gap, kConeTestMinGap_m) &&
+            (!conesAdmit(a, a_axis, b, R_OL, leaf_diff, leaf_dist, tri_gap) ||
+             !leafConesAdmit(a, a_axis, b, va, vb, tri_gap))) {
+          ++st.pruned_by_cone;
+          continue;
+        }
+        ++st.triangle_pairs_tested;
+        double pair_distance_m = 0.0;
+        if (evaluatePair(
+                link_mesh, [&](int w) -> const Vector3d& { return vertex_O[static_cast<std::size_t>(w)]; }, tri_link,
+                obj_mesh, b.triangle, X_OL, cutoff_m, m, pair_distance_m)) {
+          m.u_W = X_WO.linear() * m.u_W;
+          out.push_back(m);
+        }
+        bound_m = std::min(bound_m, pair_distance_m);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_WL,
@@ -577,6 +832,11 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
   if (link_tree.nodes.empty() || obj_tree.nodes.empty()) return;
   // Everything in the object frame: only the link's nodes need transforming.
   const Isometry3d X_OL = X_WO.inverse() * X_WL;
+  if (link_tree.convex) {
+    queryConvexLink(link_tree, link_mesh, X_OL, obj_tree, obj_mesh, X_WO, cutoff_m, scratch, out, st);
+    mergeDuplicateMinima(out, begin);
+    return;
+  }
   const Eigen::Matrix3d R_OL = X_OL.linear();
   const Eigen::Matrix3d abs_R_OL = R_OL.cwiseAbs();
   // The link's nodes in the object frame, each when the traversal first reaches it (the link
@@ -683,7 +943,9 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Is
         continue;
       }
       ++st.triangle_pairs_tested;
-      if (evaluatePair(link_mesh, link_vertex_O, a.triangle, obj_mesh, b.triangle, X_OL, cutoff_m, m)) {
+      double pair_distance_m = 0.0;
+      if (evaluatePair(link_mesh, link_vertex_O, a.triangle, obj_mesh, b.triangle, X_OL, cutoff_m, m,
+                       pair_distance_m)) {
         m.u_W = X_WO.linear() * m.u_W;
         out.push_back(m);
       }

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "fullarm/haptics/convex_distance.hpp"
 #include "fullarm/haptics/geometry.hpp"
 #include "fullarm/haptics/minima.hpp"
 #include "fullarm/haptics/tri_mesh.hpp"
@@ -76,7 +77,40 @@ struct SnchNode {
 /// e from the feature into an incident triangle), or a full cone when they do not fit in one.
 struct SnchTree {
   std::vector<SnchNode> nodes;
+  /// The mesh is the closed surface of a convex body: every edge has exactly two triangles and
+  /// no vertex lies more than kConvexTolerance x (box diagonal) in front of any face plane (the
+  /// link capsules are). querySnchPair then bounds each object triangle's minima by its
+  /// distance to the link (kConvexBoundSlack_m). Meshes above kConvexCheckMaxWork (triangles x
+  /// vertices) are not checked and count as not convex.
+  bool convex = false;
+  /// Leaf node of each triangle.
+  std::vector<int> leaf_of_triangle;
+  /// The mesh's vertex graph (convex meshes only; empty otherwise).
+  VertexGraph vertex_graph;
 };
+
+/// Relative tolerance of the convexity check (of the mesh's bounding-box diagonal).
+inline constexpr double kConvexTolerance = 1e-9;
+/// Largest triangles x vertices product for which buildSnchTree checks convexity.
+inline constexpr long kConvexCheckMaxWork = 50'000'000;
+/// Slack of the convex-link bound [m]. When the link mesh is convex (SnchTree::convex), every
+/// local minimum (p, q) with q on object triangle B has distance d = dist(B, link body): p is
+/// the projection of q on the link body (condition (1) of the file comment at p is first-order
+/// optimality over p's star, whose directions span the body's tangent cone at p), and q
+/// minimises dist(., link body) over B (condition (1) at q, and that function is convex with
+/// gradient u). Hence d <= the distance from B to any link triangle, and a link node whose
+/// distance lower bound to B exceeds the smallest B-to-link-triangle distance seen so far plus
+/// this slack cannot pair with B. The local-minimum test accepts up to kLocalMinimumTolerance_m,
+/// which moves d by about (1 / sine of the smallest angle at p)^2 x 1e-12 m; the convexity
+/// tolerance adds about 1e-9 x the link's size. 1e-6 m covers both by two orders of magnitude
+/// and costs nothing measurable in pruning (node gaps are millimetres).
+inline constexpr double kConvexBoundSlack_m = 1e-6;
+/// GJK stops once its bounds on an object triangle's distance to a convex link are this close
+/// [m] (the upper bound then starts the triangle's bound; the exact tests tighten it).
+inline constexpr double kConvexHullTolerance_m = 2e-5;
+/// Same for an object node's sphere against a convex link [m] (its lower bound prunes the node;
+/// both bounds bound the direction of its minima).
+inline constexpr double kConvexNodeTolerance_m = 1e-3;
 
 /// Builds the hierarchy (top-down median split along the longest extent of the centroids).
 [[nodiscard]] SnchTree buildSnchTree(const TriMesh& mesh);
@@ -99,13 +133,24 @@ struct SnchQueryScratch {
   std::uint32_t query = 0;
   /// The link mesh's vertices in the object frame (filled once per query).
   std::vector<Eigen::Vector3d> link_vertex_O;
+  /// Convex links: stamps of the link vertices and triangles already taken for the current
+  /// object triangle, and the vertex search's frontier.
+  std::vector<std::uint32_t> link_vertex_stamp;
+  std::vector<std::uint32_t> link_triangle_stamp;
+  std::uint32_t link_stamp = 0;
+  std::vector<int> link_frontier;
 };
 
 /// Counters of the last querySnchPair call.
 struct SnchQueryStats {
   long node_pairs_visited = 0;
-  long pruned_by_distance = 0;     ///< distance lower bound (sphere or box) above the cutoff
-  long pruned_by_cone = 0;         ///< any normal-cone test
+  long pruned_by_distance = 0;  ///< distance lower bound (sphere or box) above the cutoff
+  long pruned_by_cone = 0;      ///< any normal-cone test
+  /// convex link: a candidate link triangle proven (along the GJK axis or by separating axes)
+  /// farther from the object triangle than the triangle's bound
+  long pruned_by_convex_bound = 0;
+  /// convex link: GJK calls (object nodes and triangles against the whole link body)
+  long convex_hull_tests = 0;
   long triangle_pairs_tested = 0;  ///< leaf pairs given to the exact test (evaluateTrianglePair)
 };
 
@@ -131,7 +176,9 @@ bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh&
                           const Eigen::Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept;
 
 /// Appends to `out` every local minimum between a link mesh and an object mesh within
-/// `cutoff_m`, merged by feature pair. link/object fields of the appended minima are -1 (the
+/// `cutoff_m`, merged by feature pair. A convex link tree (SnchTree::convex) is queried as one
+/// body against the object tree (GJK bounds; docs/haptics.md, "Convex links"), any other by the
+/// two-tree traversal; both give the brute-force set. link/object fields of the appended minima are -1 (the
 /// caller fills them); u_W is in the world frame.
 /// @param X_WL pose of the link mesh frame; @param X_WO pose of the object mesh frame
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Eigen::Isometry3d& X_WL,

@@ -1,0 +1,266 @@
+// The convex-link path of the SNCH query (branch snch-1ms) against independent oracles:
+// - convexSupportVertex (hill climbing on the vertex graph) against the maximum over all
+//   vertices (brute force);
+// - triangleConvexMeshDistanceBounds (GJK) against brute force: the distance between a
+//   triangle and a closed convex mesh's body is 0 when the triangle touches the body, else the
+//   smallest triangle-triangle distance over the mesh's triangles; the bounds must bracket it,
+//   converge to the tolerance, and the returned axis must separate the triangle from every
+//   mesh vertex by the lower bound;
+// - SnchTree::convex against the definition (capsules, boxes, cylinders yes; I-beams, frames,
+//   a dented capsule, an open sheet no);
+// - querySnchPair with a convex link: exactly the brute-force minima and the same minima as the
+//   same query with the convex-link bound switched off (a copy of the tree with convex =
+//   false), with fewer exact tests; this is the test that fails when the bound is made too
+//   tight (checked by mutation: limit = bound - 0.1 mm, and the GJK axis negated).
+#include "fullarm/haptics/convex_distance.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "alloc_guard.hpp"
+#include "fullarm/haptics/geometry.hpp"
+#include "fullarm/haptics/primitives.hpp"
+#include "fullarm/haptics/snch.hpp"
+#include "haptics_test_util.hpp"
+
+namespace fullarm::haptics {
+namespace {
+
+using Eigen::Vector3d;
+
+Vector3d randomUnit(std::mt19937& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  return Vector3d(n(rng), n(rng), n(rng)).normalized();
+}
+
+// A random closed convex mesh: capsule, box or cylinder, 0.05-0.3 m.
+TriMesh randomConvexMesh(std::mt19937& rng) {
+  std::uniform_real_distribution<double> size(0.05, 0.3);
+  switch (std::uniform_int_distribution<int>(0, 2)(rng)) {
+    case 0:
+      return makeCapsule({0, 0, 0}, {0, 0, size(rng)}, 0.2 * size(rng), std::uniform_int_distribution<int>(5, 16)(rng),
+                         std::uniform_int_distribution<int>(1, 4)(rng));
+    case 1:
+      return makeBox({size(rng), size(rng), size(rng)}, std::uniform_real_distribution<double>(0.03, 0.3)(rng));
+    default:
+      return makeCylinder(0.5 * size(rng), size(rng), std::uniform_int_distribution<int>(5, 16)(rng), 0.1);
+  }
+}
+
+std::vector<Vector3d> verticesOf(const TriMesh& m) {
+  std::vector<Vector3d> v;
+  for (int i = 0; i < m.numVertices(); ++i) v.push_back(m.vertex(i));
+  return v;
+}
+
+// Brute force: 0 if a triangle vertex is inside the closed convex mesh (behind every face
+// plane) or the triangle meets a mesh triangle; else the smallest triangle-triangle distance.
+double bruteForceDistance(const Vector3d (&t)[3], const TriMesh& m) {
+  for (const Vector3d& p : t) {
+    bool inside = true;
+    for (int f = 0; f < m.numTriangles() && inside; ++f) {
+      inside = m.faceNormal(f).dot(p - m.vertex(m.triangle(f)[0])) <= 0.0;
+    }
+    if (inside) return 0.0;
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < m.numTriangles(); ++f) {
+    const auto& tri = m.triangle(f);
+    best = std::min(
+        best, closestPointsTriangleTriangle(t[0], t[1], t[2], m.vertex(tri[0]), m.vertex(tri[1]), m.vertex(tri[2]))
+                  .distance_m);
+  }
+  return best;
+}
+
+TEST(ConvexDistanceTest, SupportVertexIsTheFarthestVertex) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 300; ++trial) {
+    const TriMesh m = randomConvexMesh(rng);
+    const std::vector<Vector3d> v = verticesOf(m);
+    const VertexGraph graph = buildVertexGraph(m);
+    for (int k = 0; k < 10; ++k) {
+      const Vector3d d = randomUnit(rng);
+      const int start = std::uniform_int_distribution<int>(0, m.numVertices() - 1)(rng);
+      const int s = convexSupportVertex(graph, v, d, start);
+      double best = -std::numeric_limits<double>::infinity();
+      for (const Vector3d& p : v) best = std::max(best, p.dot(d));
+      EXPECT_EQ(v[static_cast<std::size_t>(s)].dot(d), best) << "trial " << trial;
+    }
+  }
+}
+
+TEST(ConvexDistanceTest, TriangleBoundsBracketTheBruteForceDistance) {
+  std::mt19937 rng(12);
+  constexpr double kTolerance_m = 1e-6;
+  int touching = 0;
+  int apart = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const TriMesh m = randomConvexMesh(rng);
+    const std::vector<Vector3d> v = verticesOf(m);
+    const VertexGraph graph = buildVertexGraph(m);
+    // A random triangle 1-60 mm across around a point from inside the body to 0.1 m outside.
+    std::uniform_real_distribution<double> u(-0.2, 0.2);
+    const Vector3d centre = Vector3d(u(rng), u(rng), u(rng) + 0.1);
+    const double size = std::uniform_real_distribution<double>(0.001, 0.06)(rng);
+    const Vector3d t[3] = {centre + size * randomUnit(rng), centre + size * randomUnit(rng),
+                           centre + size * randomUnit(rng)};
+    const double brute = bruteForceDistance(t, m);
+    int warm = std::uniform_int_distribution<int>(0, m.numVertices() - 1)(rng);
+    const DistanceBounds b = triangleConvexMeshDistanceBounds(
+        t[0], t[1], t[2], graph, v, std::numeric_limits<double>::infinity(), kTolerance_m, warm);
+    EXPECT_LE(b.lower_m, brute + 1e-12) << "trial " << trial;
+    EXPECT_GE(b.upper_m, brute - 1e-12) << "trial " << trial;
+    EXPECT_LE(b.upper_m - b.lower_m, kTolerance_m + 1e-12) << "trial " << trial;
+    if (b.lower_m > 0.0) {
+      for (const Vector3d& p : t) {
+        for (const Vector3d& q : v) EXPECT_GE(b.axis.dot(p - q), b.lower_m - 1e-12) << "trial " << trial;
+      }
+    }
+    (brute == 0.0 ? touching : apart) += 1;
+    // The early stop: a lower bound above the threshold, or bounds already within tolerance.
+    int warm2 = 0;
+    const DistanceBounds s =
+        triangleConvexMeshDistanceBounds(t[0], t[1], t[2], graph, v, 0.5 * brute, kTolerance_m, warm2);
+    EXPECT_LE(s.lower_m, brute + 1e-12);
+    EXPECT_GE(s.upper_m, brute - 1e-12);
+  }
+  EXPECT_GT(touching, 20);
+  EXPECT_GT(apart, 200);
+}
+
+TEST(ConvexDistanceTest, ConvexFlagFollowsTheDefinition) {
+  EXPECT_TRUE(buildSnchTree(makeCapsule({0, 0, 0}, {0, 0, 0.3}, 0.05, 16, 4)).convex);
+  EXPECT_TRUE(buildSnchTree(makeBox({0.1, 0.2, 0.3}, 0.04)).convex);
+  EXPECT_TRUE(buildSnchTree(makeCylinder(0.05, 0.2, 12, 0.05)).convex);
+  EXPECT_FALSE(buildSnchTree(makeIBeam(0.12, 0.08, 0.015, 0.01, 0.2, 0.1)).convex);
+  EXPECT_FALSE(buildSnchTree(makeRectangularFrame(0.2, 0.16, 0.04, 0.03, 0.08)).convex);
+  // A capsule with one vertex of a hemisphere ring pushed 2 mm towards the sphere's centre: a dent.
+  const TriMesh capsule = makeCapsule({0, 0, 0}, {0, 0, 0.3}, 0.05, 16, 4);
+  std::vector<Vector3d> v = verticesOf(capsule);
+  std::vector<Eigen::Vector3i> t;
+  for (int i = 0; i < capsule.numTriangles(); ++i) t.push_back(capsule.triangle(i));
+  int ring = -1;
+  for (int i = 0; i < capsule.numVertices() && ring < 0; ++i) {
+    if (v[static_cast<std::size_t>(i)].z() > 0.31 && v[static_cast<std::size_t>(i)].z() < 0.34) ring = i;
+  }
+  ASSERT_GE(ring, 0);
+  Vector3d& p = v[static_cast<std::size_t>(ring)];
+  p -= 0.002 * (p - Vector3d(0, 0, 0.3)).normalized();
+  EXPECT_FALSE(buildSnchTree(TriMesh::build("dented capsule", v, t)).convex);
+  // An open sheet (one panel of a fold grid) is not a closed surface.
+  test::FoldGrid g = test::foldGrid(std::numbers::pi, 3, false);
+  EXPECT_FALSE(buildSnchTree(TriMesh::build("sheet", std::move(g.vertices), std::move(g.triangles), 1e-9)).convex);
+}
+
+TEST(ConvexDistanceTest, ConvexLinkQueryKeepsEveryBruteForceMinimumWithFewerExactTests) {
+  std::mt19937 rng(13);
+  constexpr double kCutoff_m = 0.05;
+  SnchQueryScratch scratch;
+  long tests_with = 0;
+  long tests_without = 0;
+  long pruned = 0;
+  int cases_with_minima = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const TriMesh link = randomConvexMesh(rng);
+    const TriMesh obj = test::randomSmallMesh(rng);
+    const SnchTree link_tree = buildSnchTree(link);
+    ASSERT_TRUE(link_tree.convex);
+    SnchTree plain_tree = link_tree;
+    plain_tree.convex = false;
+    const SnchTree obj_tree = buildSnchTree(obj);
+    // The link placed 0-0.1 m from the object's surface region: many contacts within L.
+    const Eigen::Isometry3d X_WO = test::randomPose(rng, 0.5);
+    Eigen::Isometry3d X_WL = test::randomPose(rng, 0.0);
+    X_WL.translation() = X_WO.translation() + std::uniform_real_distribution<double>(0.05, 0.3)(rng) * randomUnit(rng);
+    std::vector<LocalMinimum> with;
+    std::vector<LocalMinimum> without;
+    SnchQueryStats s_with;
+    SnchQueryStats s_without;
+    querySnchPair(link_tree, link, X_WL, obj_tree, obj, X_WO, kCutoff_m, scratch, with, &s_with);
+    querySnchPair(plain_tree, link, X_WL, obj_tree, obj, X_WO, kCutoff_m, scratch, without, &s_without);
+    const std::vector<LocalMinimum> brute = test::bruteForceMinima(link, X_WL, obj, X_WO, kCutoff_m);
+    ASSERT_EQ(with.size(), brute.size()) << "trial " << trial;
+    ASSERT_EQ(without.size(), brute.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < with.size(); ++i) {
+      EXPECT_TRUE(sameFeaturePair(with[i], brute[i])) << "trial " << trial;
+      EXPECT_EQ(with[i].tri_link, without[i].tri_link) << "trial " << trial;
+      EXPECT_EQ(with[i].tri_object, without[i].tri_object) << "trial " << trial;
+      EXPECT_NEAR(with[i].distance_m, brute[i].distance_m, 1e-12);
+      EXPECT_NEAR((with[i].u_W - brute[i].u_W).norm(), 0.0, 1e-9);
+    }
+    tests_with += s_with.triangle_pairs_tested;
+    tests_without += s_without.triangle_pairs_tested;
+    pruned += s_with.pruned_by_convex_bound;
+    EXPECT_EQ(s_without.pruned_by_convex_bound, 0);
+    if (!with.empty()) ++cases_with_minima;
+  }
+  EXPECT_GT(cases_with_minima, 100);
+  EXPECT_GT(pruned, 0);
+  EXPECT_LT(tests_with, tests_without);
+  RecordProperty("exact_tests_convex", static_cast<int>(tests_with));
+  RecordProperty("exact_tests_plain", static_cast<int>(tests_without));
+}
+
+// A capsule hovering 2-25 mm over the top face of a densely triangulated box (1 cm grid), at
+// random tilts: many object nodes small enough (2 r < D) for the node-direction cone test, and
+// minima under the capsule that it must keep. Brute force over all triangle pairs decides.
+TEST(ConvexDistanceTest, CapsuleOverADenseFaceKeepsEveryBruteForceMinimum) {
+  std::mt19937 rng(14);
+  constexpr double kCutoff_m = 0.03;
+  const TriMesh box = makeBox({0.12, 0.12, 0.06}, 0.01);  // top face at z = 0.03
+  const SnchTree box_tree = buildSnchTree(box);
+  const TriMesh capsule = makeCapsule({-0.04, 0, 0}, {0.04, 0, 0}, 0.015, 8, 2);
+  const SnchTree capsule_tree = buildSnchTree(capsule);
+  ASSERT_TRUE(capsule_tree.convex);
+  SnchQueryScratch scratch;
+  int minima = 0;
+  long pruned_by_cone = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Eigen::Isometry3d X_WL = Eigen::Isometry3d::Identity();
+    X_WL.linear() =
+        (Eigen::AngleAxisd(0.4 * u(rng), Vector3d::UnitX()) * Eigen::AngleAxisd(0.4 * u(rng), Vector3d::UnitY()) *
+         Eigen::AngleAxisd(3.2 * u(rng), Vector3d::UnitZ()))
+            .toRotationMatrix();
+    X_WL.translation() = Vector3d(0.03 * u(rng), 0.03 * u(rng), 0.03 + 0.015 + 0.0135 + 0.0115 * u(rng));
+    std::vector<LocalMinimum> snch;
+    SnchQueryStats stats;
+    querySnchPair(capsule_tree, capsule, X_WL, box_tree, box, Eigen::Isometry3d::Identity(), kCutoff_m, scratch, snch,
+                  &stats);
+    const std::vector<LocalMinimum> brute =
+        test::bruteForceMinima(capsule, X_WL, box, Eigen::Isometry3d::Identity(), kCutoff_m);
+    ASSERT_EQ(snch.size(), brute.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < snch.size(); ++i) {
+      EXPECT_TRUE(sameFeaturePair(snch[i], brute[i])) << "trial " << trial;
+      EXPECT_NEAR(snch[i].distance_m, brute[i].distance_m, 1e-12);
+    }
+    minima += static_cast<int>(snch.size());
+    pruned_by_cone += stats.pruned_by_cone;
+  }
+  EXPECT_GT(minima, 30);
+  EXPECT_GT(pruned_by_cone, 0);
+}
+
+TEST(ConvexDistanceTest, KernelsDoNotAllocate) {
+  const TriMesh m = makeCapsule({0, 0, 0}, {0, 0, 0.3}, 0.05, 16, 4);
+  const std::vector<Vector3d> v = verticesOf(m);
+  const VertexGraph graph = buildVertexGraph(m);
+  int warm = 0;
+  int s = 0;
+  DistanceBounds b;
+  EXPECT_NO_HEAP_ALLOCATION(s = convexSupportVertex(graph, v, Vector3d(0.3, -0.2, 0.9).normalized(), 0));
+  EXPECT_NO_HEAP_ALLOCATION(b = triangleConvexMeshDistanceBounds(Vector3d(0.1, 0, 0.1), Vector3d(0.1, 0.05, 0.12),
+                                                                 Vector3d(0.12, 0, 0.2), graph, v, 1.0, 1e-9, warm));
+  EXPECT_GE(s, 0);
+  EXPECT_GT(b.lower_m, 0.04);  // the capsule's side at x = 0.05 (inscribed: up to 1 % in)
+  EXPECT_LT(b.upper_m, 0.0501);
+}
+
+}  // namespace
+}  // namespace fullarm::haptics
