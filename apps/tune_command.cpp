@@ -88,42 +88,53 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
   std::vector<controllers::JointPlantModel> models;
   for (int slot : slots) models.push_back(jointModel(model, plant_config, validation, gains.joints[slot].name));
   const auto start = std::chrono::steady_clock::now();
-  // One job per joint; each tuning is self-contained and seeded, so the result does not depend
-  // on the thread count.
+  // Each joint's tuning is self-contained and seeded, so the result does not depend on the thread
+  // count. The linear stage runs one job per joint; the nonlinear stage, whose cost differs most
+  // between joints (a joint that needs the search and several check batches costs several times
+  // one that does not), runs joint after joint with its simulations spread over the threads.
+  std::vector<controllers::JointScenario> scenarios(slots.size());
+  std::vector<controllers::LinearHardGoals> hard(slots.size());
   controllers::parallelFor(static_cast<int>(slots.size()), o.threads, [&](int i) {
     const auto k = static_cast<std::size_t>(i);
     const JointGains& initial = gains.joints[static_cast<std::size_t>(slots[k])];
     const double q = model.defaultPosture()[model.jointIndex(initial.name)];
     controllers::TunerOptions joint_options = options;
-    joint_options.seed = options.seed + k;
+    // Seeded by the joint's place in the gains file, not in --joints: a joint's result does not
+    // depend on which other joints are tuned with it.
+    joint_options.seed = options.seed + static_cast<std::uint64_t>(slots[k]);
     // validate's scenario of this joint: its free move and detector set the coupled goal's
     // damping requirement (coupled_stability.hpp).
-    const controllers::JointScenario sc = controllers::validationScenario(
+    scenarios[k] = controllers::validationScenario(
         controllers::makeJointScenario(model, plant_config, gains, initial.name), validation);
     controllers::TuningGoals joint_goals = goals;
-    joint_goals.detector = controllers::detectorModelOf(sc);
+    joint_goals.detector = controllers::detectorModelOf(scenarios[k]);
     run.results[k] = controllers::tuneJoint(models[k], q, initial, setup, joint_goals, controllers::TuningBounds{},
                                             validation.ranges, joint_options);
     run.nominal[k] = controllers::prepareJoint(models[k], controllers::solveOperatingPoint(models[k], q), setup);
     if (o.nonlinear_rounds > 0) {
+      // The linear stage's hard goals on its final model set: the nonlinear stage prefers
+      // candidates that meet them and says so when the written gains do not.
+      hard[k].goals = joint_goals;
+      controllers::LoopSetup goal_setup = setup;
+      goal_setup.grid_points = joint_options.grid_points;
+      for (const controllers::ModelVariation& v : run.results[k].model_set) {
+        hard[k].models.push_back(controllers::prepareVariation(models[k], q, goal_setup, v));
+      }
+      hard[k].coupled_models = run.results[k].coupled_models;
+    }
+  });
+  if (o.nonlinear_rounds > 0) {
+    for (std::size_t k = 0; k < slots.size(); ++k) {
       // Nonlinear verification on validate's closed-loop harness (nonlinear_stage.hpp).
       controllers::NonlinearStageOptions nl;
       nl.rounds = o.nonlinear_rounds;
       nl.seed = o.seed;
-      // The linear stage's hard goals on its final model set: the stage prefers candidates that
-      // meet them and says so when the written gains do not.
-      controllers::LinearHardGoals hard;
-      hard.goals = joint_goals;
-      controllers::LoopSetup goal_setup = setup;
-      goal_setup.grid_points = joint_options.grid_points;
-      for (const controllers::ModelVariation& v : run.results[k].model_set) {
-        hard.models.push_back(controllers::prepareVariation(models[k], q, goal_setup, v));
-      }
-      hard.coupled_models = run.results[k].coupled_models;
-      run.stages[k] = controllers::refineNonlinear(sc, run.results[k].tuned, initial, validation.ranges,
-                                                   validation.linear, nl, &hard);
+      nl.threads = o.threads;
+      run.stages[k] = controllers::refineNonlinear(scenarios[k], run.results[k].tuned,
+                                                   gains.joints[static_cast<std::size_t>(slots[k])], validation.ranges,
+                                                   validation.linear, nl, &hard[k]);
     }
-  });
+  }
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.tuned = gains;
   run.tuned.source.clear();
@@ -358,7 +369,7 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
   tune->add_option("--plant", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)")->check(CLI::ExistingFile);
   tune->add_option("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)")
       ->check(CLI::ExistingFile);
-  tune->add_option("--gains", o.gains, "Starting gains YAML (default: config/dts_gains.yaml); B_o is kept")
+  tune->add_option("--gains", o.gains, "Starting gains YAML (default: config/dts_tune_start.yaml); B_o is kept")
       ->check(CLI::ExistingFile);
   tune->add_option("--ranges", o.validation_config,
                    "User model and uncertainty ranges (default: config/dts_validation.yaml)")
@@ -388,7 +399,7 @@ int runTune(const TuneOptions& o) {
   const plant::PlantConfig plant_config =
       plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), model);
   const GainsConfig gains =
-      controllers::loadGainsConfig(configPathOr(o.gains, controllers::defaultGainsConfigPath), model);
+      controllers::loadGainsConfig(configPathOr(o.gains, controllers::defaultTuneStartGainsPath), model);
   const controllers::ValidationConfig validation =
       controllers::loadValidationConfig(configPathOr(o.validation_config, controllers::defaultValidationConfigPath));
   const TuneRun run = tuneArm(model, plant_config, gains, validation, o.joints, o);
@@ -423,14 +434,12 @@ int runTune(const TuneOptions& o) {
 TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir,
                              reports::Report& report) {
   const plant::PlantConfig plant_config = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
-  const GainsConfig gains = controllers::loadGainsConfig(controllers::defaultGainsConfigPath(), model);
+  const GainsConfig gains = controllers::loadGainsConfig(controllers::defaultTuneStartGainsPath(), model);
   const controllers::ValidationConfig validation =
       controllers::loadValidationConfig(controllers::defaultValidationConfigPath());
-  // A smaller budget than `fullarm tune` keeps the demo short (about a third of the evaluations).
-  TuneOptions o;
-  o.global_evaluations = 150;
-  o.local_evaluations = 75;
-  o.rounds = 2;
+  // `fullarm tune`'s own budget and start: the demo's tuned gains are the shipped dts_gains.yaml
+  // (a smaller linear budget moved the linear optima and with them the nonlinear stage's result).
+  const TuneOptions o;
   const TuneRun run = tuneArm(model, plant_config, gains, validation, {}, o);
   TuneDemoStep step;
   step.gains_file = out_dir / "tuned_gains.yaml";

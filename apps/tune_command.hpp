@@ -16,7 +16,7 @@ namespace fullarm::app {
 struct TuneOptions {
   std::string arm_config;           ///< arm model YAML (default: dts_master.yaml)
   std::string plant_config;         ///< --plant (default: dts_plant.yaml)
-  std::string gains;                ///< starting gains (default: dts_gains.yaml); B_o and filters are kept
+  std::string gains;                ///< starting gains (default: dts_tune_start.yaml); B_o and filters are kept
   std::string validation_config;    ///< user model and uncertainty ranges (default: dts_validation.yaml)
   std::vector<std::string> joints;  ///< short or model names; empty = every joint of the gains file
   std::string out_dir = "out/tune";
@@ -44,8 +44,8 @@ struct TuneDemoStep {
   std::filesystem::path gains_file;  ///< the tuned gains, for the validate step
 };
 
-/// The demo step: tunes all 7 joints on the default plant with a third of `fullarm tune`'s
-/// budget (150 + 75 evaluations, 2 rounds), writes `tuned_gains.yaml` into
+/// The demo step: tunes all 7 joints on the default plant with `fullarm tune`'s default budget
+/// and start (so it writes the shipped dts_gains.yaml's gains), writes `tuned_gains.yaml` into
 /// `out_dir` and adds its section and the `results.tune` keys to `report`.
 TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir, reports::Report& report);
 

@@ -206,6 +206,10 @@ std::filesystem::path defaultGainsConfigPath() {
   return arm::defaultConfigPath("dts_gains.yaml");
 }
 
+std::filesystem::path defaultTuneStartGainsPath() {
+  return arm::defaultConfigPath("dts_tune_start.yaml");
+}
+
 int findGainsJoint(const GainsConfig& config, std::string_view name) {
   std::vector<std::string_view> names;
   names.reserve(config.joints.size());

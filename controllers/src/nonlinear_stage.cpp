@@ -58,6 +58,19 @@ constexpr std::array<std::array<double, 3>, 8> kPollDirections = {{{1.0, 0.0, 0.
                                                                    {1.0, 0.0, 1.0},
                                                                    {-1.0, 0.0, -1.0}}};
 
+bool sameGains(const JointGains& a, const JointGains& b) {
+  return a.impedance.inertia_kgm2 == b.impedance.inertia_kgm2 &&
+         a.impedance.damping_nms_per_rad == b.impedance.damping_nms_per_rad &&
+         a.impedance.stiffness_nm_per_rad == b.impedance.stiffness_nm_per_rad &&
+         a.sliding_mode.lambda_per_s == b.sliding_mode.lambda_per_s &&
+         a.sliding_mode.valve_bound_v == b.sliding_mode.valve_bound_v &&
+         a.sliding_mode.boundary_layer_radps == b.sliding_mode.boundary_layer_radps &&
+         a.torque_filter_hz == b.torque_filter_hz && a.error_rate_filter_hz == b.error_rate_filter_hz &&
+         a.valve_limit_v == b.valve_limit_v && a.passivity.enabled == b.passivity.enabled &&
+         a.passivity.max_damping_nms_per_rad == b.passivity.max_damping_nms_per_rad &&
+         a.passivity.velocity_threshold_radps == b.passivity.velocity_threshold_radps;
+}
+
 bool better(const NonlinearScore& a, const NonlinearScore& b) {
   return a.cost < b.cost;
 }
@@ -137,7 +150,7 @@ std::vector<MonteCarloSample> stageSamples(const UncertaintyRanges& ranges, std:
 
 NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& gains,
                               const std::vector<MonteCarloSample>& set, const LinearRequirements& req, int max_delay,
-                              int failure_cap, const LinearHardGoals* hard_goals) {
+                              int failure_cap, const LinearHardGoals* hard_goals, int threads) {
   NonlinearScore s;
   JointScenario sc = scenario;
   sc.gains = gains;
@@ -156,24 +169,33 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
   }
   double worst_severity = -1.0;
   double rms_sum = 0.0;
-  for (std::size_t i = 0; i < set.size(); ++i) {
-    const ClosedLoopResult r = simulateJoint(applySample(sc, set[i]));
-    rms_sum += r.free_rms_user_torque_nm;
-    if (!r.acceptable()) {
-      ++s.failures;
-    } else {
-      s.worst_passed_severity = std::max(s.worst_passed_severity, runSeverity(r, sc.oscillation_speed_radps));
-      s.worst_passed_detector_margin =
-          std::max(s.worst_passed_detector_margin, std::min(passedRunMargin(r, sc.oscillation_speed_radps), 1.0));
+  // Runs are simulated in blocks of `threads` and taken in set order, so the score (including
+  // where the failure cap stops it) is the sequential one for any thread count.
+  const std::size_t block = static_cast<std::size_t>(std::max(threads, 1));
+  std::vector<ClosedLoopResult> results(block);
+  for (std::size_t first = 0; first < set.size() && s.failures <= failure_cap; first += block) {
+    const std::size_t n = std::min(block, set.size() - first);
+    parallelFor(static_cast<int>(n), threads,
+                [&](int j) { results[static_cast<std::size_t>(j)] = simulateJoint(applySample(sc, set[first + j])); });
+    for (std::size_t j = 0; j < n; ++j) {
+      const ClosedLoopResult& r = results[j];
+      rms_sum += r.free_rms_user_torque_nm;
+      if (!r.acceptable()) {
+        ++s.failures;
+      } else {
+        s.worst_passed_severity = std::max(s.worst_passed_severity, runSeverity(r, sc.oscillation_speed_radps));
+        s.worst_passed_detector_margin =
+            std::max(s.worst_passed_detector_margin, std::min(passedRunMargin(r, sc.oscillation_speed_radps), 1.0));
+      }
+      const double severity = runSeverity(r, sc.oscillation_speed_radps);
+      if (severity > worst_severity) {
+        worst_severity = severity;
+        s.worst = static_cast<int>(first + j);
+        s.worst_failure = r.acceptable() ? std::string() : r.failure;
+      }
+      ++s.runs;
+      if (s.failures > failure_cap) break;  // cannot beat the incumbent any more
     }
-    const double severity = runSeverity(r, sc.oscillation_speed_radps);
-    if (severity > worst_severity) {
-      worst_severity = severity;
-      s.worst = static_cast<int>(i);
-      s.worst_failure = r.acceptable() ? std::string() : r.failure;
-    }
-    ++s.runs;
-    if (s.failures > failure_cap) break;  // cannot beat the incumbent any more
   }
   s.mean_rms_user_torque_nm = s.runs > 0 ? rms_sum / static_cast<double>(s.runs) : 0.0;
   s.cost = static_cast<double>(s.failures) + (s.linear_hard_met ? 0.0 : kHardGoalWeight) +
@@ -191,7 +213,7 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
       !(o.max_damping_nms_per_rad >= o.min_damping_nms_per_rad) || !(o.min_gain_v_s_per_rad > 0.0) ||
       !(o.max_gain_v_s_per_rad >= o.min_gain_v_s_per_rad) || !(o.min_lambda_per_s > 0.0) ||
       !(o.max_lambda_per_s >= o.min_lambda_per_s) || !(o.corner_user_fraction >= 0.0) ||
-      !(o.corner_user_fraction <= 1.0)) {
+      !(o.corner_user_fraction <= 1.0) || o.threads < 1 || !(o.target_margin >= 0.0) || !(o.target_margin <= 1.0)) {
     throw std::invalid_argument("nonlinear stage options: expected samples, rounds >= 1, steps > 0, 0 < min <= max");
   }
   const int max_delay = ranges.delay_max_samples;
@@ -200,9 +222,11 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
   const std::array<double, 3> hi = {std::log10(o.max_damping_nms_per_rad), std::log10(o.max_gain_v_s_per_rad),
                                     std::log10(o.max_lambda_per_s)};
   NonlinearStageResult res;
-  if (o.stress_corners) res.set = stressCorners(ranges, o.corner_user_fraction);
-  if (o.ring_corners) {
-    for (const MonteCarloSample& c : ringCorners(ranges)) res.set.push_back(c);
+  // The ring corners first: they are the runs a candidate fails first (measured on SFE and HR), so
+  // an evaluation capped at the incumbent's failures stops after the fewest simulations.
+  if (o.ring_corners) res.set = ringCorners(ranges);
+  if (o.stress_corners) {
+    for (const MonteCarloSample& c : stressCorners(ranges, o.corner_user_fraction)) res.set.push_back(c);
   }
   for (const MonteCarloSample& sample : stageSamples(ranges, o.seed, scenario.joint_name, 0, o.samples)) {
     res.set.push_back(sample);
@@ -211,18 +235,22 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
   const std::size_t initial_size = res.set.size();
 
   const auto score = [&](const JointGains& g, int cap = std::numeric_limits<int>::max()) {
-    const NonlinearScore s = scoreNonlinear(scenario, g, res.set, req, max_delay, cap, hard_goals);
+    const NonlinearScore s = scoreNonlinear(scenario, g, res.set, req, max_delay, cap, hard_goals, o.threads);
     ++res.evaluations;
     res.simulations += s.linear_ok ? s.runs : 0;
     return s;
   };
   res.linear_optimum = score(linear_optimum);
-  res.start = score(start);
+  // The linear stage returns its starting gains when no point meets its hard goals: score once.
+  res.start = sameGains(start, linear_optimum) ? res.linear_optimum : score(start);
   // J_m, K_m, lambda (and everything else) of the better of the two; B_m and B_o/eps are searched.
   const bool from_start = better(res.start, res.linear_optimum);
   const JointGains base = from_start ? start : linear_optimum;
   Point best_p = pointOf(base);
+  JointGains best_gains = base;  // the incumbent (base itself until the search moves)
   NonlinearScore best = from_start ? res.start : res.linear_optimum;
+  // `best` holds the incumbent's score on the whole current set (no early stop) while this is true.
+  bool best_is_final = true;
   res.history.push_back(best.cost);
 
   for (int round = 0; round < o.rounds; ++round) {
@@ -233,7 +261,8 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
     // so a poll that lands on one again (a clamped direction) is skipped without an evaluation.
     std::vector<Point> visited = {best_p};
     while (evaluations < o.max_evaluations && step >= o.min_step_decades &&
-           (best.failures > 0 || !best.linear_ok || best.worst_passed_severity >= 1.0)) {
+           (best.failures > 0 || !best.linear_ok || best.worst_passed_severity >= 1.0 ||
+            best.worst_passed_detector_margin > o.target_margin)) {
       bool improved = false;
       for (std::size_t dir = 0; dir < kPollDirections.size() && evaluations < o.max_evaluations; ++dir) {
         const std::array<double, 3>& d = kPollDirections[dir];
@@ -248,6 +277,7 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
         if (better(s, best)) {
           best = s;
           best_p = p;
+          best_gains = gainsAt(base, p);
           improved = true;
           res.history.push_back(best.cost);
           break;  // poll again around the new incumbent
@@ -261,14 +291,25 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
         stageSamples(ranges, o.seed, scenario.joint_name, next_index, o.check_samples);
     next_index += o.check_samples;
     JointScenario sc = scenario;
-    sc.gains = gainsAt(base, best_p);
+    sc.gains = best_gains;
     std::vector<std::pair<double, MonteCarloSample>> failed;
-    for (const MonteCarloSample& sample : check) {
-      const ClosedLoopResult r = simulateJoint(applySample(sc, sample));
-      ++res.simulations;
-      if (!r.acceptable()) failed.emplace_back(runSeverity(r, sc.oscillation_speed_radps), sample);
-      // Enough worst cases for this round: the rest of the batch would not join the set.
-      if (static_cast<int>(failed.size()) >= o.max_added_per_round) break;
+    // Blocks of `threads` runs taken in batch order: the same failures for any thread count.
+    const std::size_t block = static_cast<std::size_t>(std::max(o.threads, 1));
+    std::vector<ClosedLoopResult> results(block);
+    for (std::size_t first = 0; first < check.size() && static_cast<int>(failed.size()) < o.max_added_per_round;
+         first += block) {
+      const std::size_t n = std::min(block, check.size() - first);
+      parallelFor(static_cast<int>(n), o.threads, [&](int j) {
+        results[static_cast<std::size_t>(j)] = simulateJoint(applySample(sc, check[first + j]));
+      });
+      for (std::size_t j = 0; j < n; ++j) {
+        ++res.simulations;
+        if (!results[j].acceptable()) {
+          failed.emplace_back(runSeverity(results[j], sc.oscillation_speed_radps), check[first + j]);
+        }
+        // Enough worst cases for this round: the rest of the batch would not join the set.
+        if (static_cast<int>(failed.size()) >= o.max_added_per_round) break;
+      }
     }
     res.check_failures.push_back(static_cast<int>(failed.size()));
     if (failed.empty() && best.failures == 0 && best.linear_ok) {
@@ -279,16 +320,25 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
     for (std::size_t i = 0; i < failed.size() && static_cast<int>(i) < o.max_added_per_round; ++i) {
       res.set.push_back(failed[i].second);
     }
+    best_is_final = false;
     if (round + 1 < o.rounds) {
       best = score(sc.gains);  // re-score the incumbent on the grown set
+      best_is_final = true;
       res.history.push_back(best.cost);
     }
   }
-  res.gains = gainsAt(base, best_p);
-  res.final_score =
-      scoreNonlinear(scenario, res.gains, res.set, req, max_delay, std::numeric_limits<int>::max(), hard_goals);
+  res.gains = best_gains;
+  // The incumbent's score on the final set is already known when the set did not grow after it
+  // was scored in full (a capped score stops only past the incumbent's failures, so a
+  // zero-failure incumbent's score ran every run); otherwise score it.
+  if (best_is_final && best.linear_ok && best.runs == static_cast<int>(res.set.size())) {
+    res.final_score = best;
+  } else {
+    res.final_score = scoreNonlinear(scenario, res.gains, res.set, req, max_delay, std::numeric_limits<int>::max(),
+                                     hard_goals, o.threads);
+    res.simulations += res.final_score.runs;
+  }
   res.linear_hard_goals_met = res.final_score.linear_hard_met;
-  res.simulations += res.final_score.runs;
   res.verified = res.verified && res.final_score.failures == 0;
   std::ostringstream v;
   v << scenario.joint_name << ": nonlinear stage " << (res.verified ? "verified" : "NOT verified") << " - "

@@ -54,6 +54,34 @@ TEST(TuneCli, WritesLoadableGainsAndSummary) {
   EXPECT_EQ(met, r.output.find("VIOLATE the linear hard goal") == std::string::npos) << r.output;
 }
 
+// Reproducibility: `fullarm tune` starts from the fixed config/dts_tune_start.yaml (not from the
+// gains file it writes) and seeds each joint by its place in the file, so tuning one joint with the
+// default budget writes exactly the gains the shipped config/dts_gains.yaml holds for it (that file
+// is the output of `fullarm tune --out DIR`, all joints). WR: its stage needs no search, so the run
+// is short (the linear stage plus one 300-run check batch).
+TEST(TuneCli, OneJointWithTheDefaultBudgetReproducesTheShippedGains) {
+  const auto dir = tempDir("wr_default");
+  const Result r = runFullarm("tune --joints WR --out " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fullarm::arm::ArmModel model = fullarm::arm::loadArmModel(fullarm::arm::defaultArmModelPath());
+  const auto tuned = fullarm::controllers::loadGainsConfig(dir / "gains.yaml", model);
+  const auto shipped = fullarm::controllers::loadGainsConfig(fullarm::controllers::defaultGainsConfigPath(), model);
+  const auto start = fullarm::controllers::loadGainsConfig(fullarm::controllers::defaultTuneStartGainsPath(), model);
+  const auto at = [](const fullarm::controllers::GainsConfig& g) {
+    return g.joints[static_cast<std::size_t>(fullarm::controllers::findGainsJoint(g, "WR"))];
+  };
+  EXPECT_EQ(at(tuned).impedance.inertia_kgm2, at(shipped).impedance.inertia_kgm2);
+  EXPECT_EQ(at(tuned).impedance.damping_nms_per_rad, at(shipped).impedance.damping_nms_per_rad);
+  EXPECT_EQ(at(tuned).impedance.stiffness_nm_per_rad, at(shipped).impedance.stiffness_nm_per_rad);
+  EXPECT_EQ(at(tuned).sliding_mode.lambda_per_s, at(shipped).sliding_mode.lambda_per_s);
+  EXPECT_EQ(at(tuned).sliding_mode.boundary_layer_radps, at(shipped).sliding_mode.boundary_layer_radps);
+  // The untuned joints are copied from the start file, not from the shipped gains.
+  const auto sfe = [](const fullarm::controllers::GainsConfig& g) {
+    return g.joints[static_cast<std::size_t>(fullarm::controllers::findGainsJoint(g, "SFE"))];
+  };
+  EXPECT_EQ(sfe(tuned).impedance.damping_nms_per_rad, sfe(start).impedance.damping_nms_per_rad);
+}
+
 TEST(TuneCli, UnknownJointIsBadInput) {
   const Result r = runFullarm("tune --joints XX --out " + tempDir("bad").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;

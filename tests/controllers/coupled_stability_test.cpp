@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -151,6 +152,38 @@ TEST(CoupledStability, DetectorScoreMatchesTheDetectorAppliedToTheSampledMode) {
       if (std::abs(brute - 1.0) > 0.02) {
         EXPECT_EQ(score > 1.0, judged) << sigma << " /s, " << f << " Hz";
       }
+    }
+  }
+}
+
+// detectorModeScore() sums its windows in closed form (geometric series); against the direct
+// sample-by-sample sums over the same 360 phases (pi k / 360) to 1e-9 relative, including slow,
+// nearly constant modes (sigma T and w T near 0, where the series' ratio is near 1) and growing ones.
+// The absolute 1e-8 (a speed deviation of 5e-10 rad/s) covers the variance's cancellation in both
+// paths for a mode that barely changes over the hold (scores of 1e-6 to 1e-4).
+TEST(CoupledStability, DetectorScoreClosedFormEqualsTheDirectWindowSums) {
+  DetectorModel d;
+  const long n = std::lround(d.hold_s / d.period_s);
+  const long win = std::lround(d.window_s / d.period_s);
+  for (double sigma : {0.0, 1e-6, 0.05, 0.7, 1.386, 4.0, 30.0, -0.3}) {
+    for (double f : {0.0, 1e-5, 0.02, 0.9, 1.1, 14.0, 250.0}) {
+      const double w = 2.0 * std::numbers::pi * f;
+      double worst = 0.0;
+      for (int k = 0; k < (f == 0.0 ? 1 : 360); ++k) {
+        const double phi = std::numbers::pi * k / 360.0;
+        std::vector<double> v;
+        for (long i = 0; i < n; ++i) {
+          const double t = static_cast<double>(i) * d.period_s;
+          v.push_back(d.initial_speed_radps * std::exp(-sigma * t) * std::cos(w * t + phi));
+        }
+        const double late = windowStd(v, static_cast<std::size_t>(n - win), static_cast<std::size_t>(n));
+        const double early = windowStd(v, static_cast<std::size_t>(n - 2 * win), static_cast<std::size_t>(n - win));
+        if (!(late > 0.0)) continue;
+        worst =
+            std::max(worst, std::min(late / d.threshold_radps, early > 0.0 ? late / (d.sustain_ratio * early)
+                                                                           : std::numeric_limits<double>::infinity()));
+      }
+      EXPECT_NEAR(detectorModeScore(sigma, w, d), worst, 1e-9 * worst + 1e-8) << sigma << " /s, " << f << " Hz";
     }
   }
 }

@@ -102,6 +102,12 @@ void validateJointGains(const JointGains& g, double control_period_s, const std:
 /// $FULLARM_CONFIG_DIR/dts_gains.yaml if set, else the source-tree or installed config folder.
 [[nodiscard]] std::filesystem::path defaultGainsConfigPath();
 
+/// $FULLARM_CONFIG_DIR/dts_tune_start.yaml if set, else the source-tree or installed config
+/// folder: the fixed starting gains of `fullarm tune` (docs/analysis.md, "Start"), so that the
+/// tune's result does not depend on the gains file it writes (tune on the default plant
+/// reproduces dts_gains.yaml).
+[[nodiscard]] std::filesystem::path defaultTuneStartGainsPath();
+
 /// Index in config.joints of the joint called `name` (model name "R_EB" or short name "EB").
 /// @throws arm::ConfigError listing the known names when there is no such joint.
 [[nodiscard]] int findGainsJoint(const GainsConfig& config, std::string_view name);
