@@ -196,37 +196,6 @@ TEST(Cli, PlantSimulateRejectsAMalformedCsv) {
   EXPECT_NE(r.output.find(csv.string()), std::string::npos) << r.output;
 }
 
-TEST(Cli, DemoRunsAndSaysWhatIsNotBuiltYet) {
-  const auto dir = tempDir("demo");
-  // The validate step's Monte-Carlo is kept small here; its verdict decides the exit code.
-  const Result r = runFullarm("demo --validate-samples 2 --out " + dir.string());
-  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
-  EXPECT_NE(r.output.find("not built yet"), std::string::npos) << r.output;
-  std::ifstream in(dir / "summary.json");
-  const nlohmann::json summary = nlohmann::json::parse(in);
-  EXPECT_EQ(summary["subcommand"], "demo");
-  ASSERT_EQ(summary["results"]["steps"].size(), 7u);
-  EXPECT_EQ(summary["results"]["steps"][0]["status"], "done");
-  EXPECT_EQ(summary["results"]["steps"][1]["status"], "done");  // plant chirp experiment
-  EXPECT_EQ(summary["results"]["steps"][2]["status"], "not built yet");
-  EXPECT_EQ(summary["verdict"]["pass"].get<bool>(), r.exit_code == 0);
-  EXPECT_EQ(summary["results"]["steps"][4]["status"],
-            summary["results"]["validate"]["pass"].get<bool>() ? "done" : "failed");
-  // Haptics step: the valve scene at its reach posture, both modes; the valve study is not built.
-  const nlohmann::json& haptics = summary["results"]["haptics_demo"];
-  EXPECT_EQ(summary["results"]["steps"][5]["status"], haptics["pass"].get<bool>() ? "done" : "failed");
-  EXPECT_EQ(summary["results"]["steps"][6]["status"], "not built yet");
-  EXPECT_EQ(haptics["posture"], "reach_valve");
-  EXPECT_GE(haptics["num_minima"].get<int>(), 1);
-  EXPECT_EQ(haptics["minima"].size(), haptics["num_minima"].get<std::size_t>());
-  for (const char* mode : {"full_arm", "hand_only"}) {
-    EXPECT_FALSE(haptics[mode]["fault"].get<bool>()) << mode;
-    EXPECT_EQ(haptics[mode]["tau_contact_nm"].size(), haptics["tau_gravity_nm"].size()) << mode;
-    EXPECT_EQ(haptics[mode]["links"].size(), haptics["tau_gravity_nm"].size()) << mode;
-  }
-  EXPECT_GE(haptics["full_arm"]["active_springs"].get<int>(), haptics["hand_only"]["active_springs"].get<int>());
-}
-
 // `fullarm validate`: the verdict is the exit code (0 pass, 1 fail) and summary.json names each
 // joint's result; bad input is exit 2 with the file and key path.
 TEST(Cli, ValidateWritesAVerdictPerJoint) {

@@ -1,0 +1,57 @@
+// `fullarm demo --validate-samples 2`, run once by the report_demo_browser test (a ctest fixture,
+// tests/apps/CMakeLists.txt): its exit code, stdout and summary.json.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace {
+
+const std::filesystem::path kDemoDir = FULLARM_DEMO_DIR;
+
+std::string readFile(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  EXPECT_TRUE(in.good()) << "cannot read " << file << " (written by the report_demo_browser test)";
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(DemoRun, PassesAndSaysWhatIsNotBuiltYet) {
+  // tune (full budget) then validate (Monte-Carlo kept small here) on the default plant, the plant
+  // chirp and the haptics step: the demo's verdict is PASS, exit code 0.
+  const int exit_code = std::stoi(readFile(kDemoDir / "fullarm_exit_code.txt"));
+  const std::string output = readFile(kDemoDir / "fullarm_stdout.txt");
+  EXPECT_EQ(exit_code, 0) << output;
+  EXPECT_NE(output.find("not built yet"), std::string::npos) << output;
+  std::ifstream in(kDemoDir / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary["subcommand"], "demo");
+  ASSERT_EQ(summary["results"]["steps"].size(), 7u);
+  EXPECT_EQ(summary["results"]["steps"][0]["status"], "done");
+  EXPECT_EQ(summary["results"]["steps"][1]["status"], "done");  // plant chirp experiment
+  EXPECT_EQ(summary["results"]["steps"][2]["status"], "not built yet");
+  EXPECT_EQ(summary["results"]["steps"][3]["status"], "done");  // tune: every joint verified
+  EXPECT_EQ(summary["verdict"]["pass"].get<bool>(), exit_code == 0);
+  EXPECT_EQ(summary["results"]["steps"][4]["status"],
+            summary["results"]["validate"]["pass"].get<bool>() ? "done" : "failed");
+  // Haptics step: the valve scene at its reach posture, both modes; the valve study is not built.
+  const nlohmann::json& haptics = summary["results"]["haptics_demo"];
+  EXPECT_EQ(summary["results"]["steps"][5]["status"], haptics["pass"].get<bool>() ? "done" : "failed");
+  EXPECT_EQ(summary["results"]["steps"][6]["status"], "not built yet");
+  EXPECT_EQ(haptics["posture"], "reach_valve");
+  EXPECT_GE(haptics["num_minima"].get<int>(), 1);
+  EXPECT_EQ(haptics["minima"].size(), haptics["num_minima"].get<std::size_t>());
+  for (const char* mode : {"full_arm", "hand_only"}) {
+    EXPECT_FALSE(haptics[mode]["fault"].get<bool>()) << mode;
+    EXPECT_EQ(haptics[mode]["tau_contact_nm"].size(), haptics["tau_gravity_nm"].size()) << mode;
+    EXPECT_EQ(haptics[mode]["links"].size(), haptics["tau_gravity_nm"].size()) << mode;
+  }
+  EXPECT_GE(haptics["full_arm"]["active_springs"].get<int>(), haptics["hand_only"]["active_springs"].get<int>());
+}
+
+}  // namespace
