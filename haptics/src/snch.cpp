@@ -355,7 +355,10 @@ SnchTree buildSnchTree(const TriMesh& mesh) {
   b.tree.nodes.reserve(static_cast<std::size_t>(2 * nt));
   b.build(0, nt);
   b.tree.convex = isClosedConvex(mesh);
-  if (b.tree.convex) b.tree.vertex_graph = buildVertexGraph(mesh);
+  if (b.tree.convex) {
+    b.tree.vertex_graph = buildVertexGraph(mesh);
+    b.tree.support_start_vertex = mesh.triangle(0)[0];
+  }
   b.tree.leaf_of_triangle.assign(static_cast<std::size_t>(nt), -1);
   for (int i = 0; i < static_cast<int>(b.tree.nodes.size()); ++i) {
     const SnchNode& node = b.tree.nodes[static_cast<std::size_t>(i)];
@@ -647,7 +650,7 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
   // (p - q) . a_B >= cos(alpha_B) |p - q| >= cos(alpha_B) gap for p on the body and q on the
   // node (|.| of it for a double cone); [q_lo, q_hi] bounds q . a_B over the node. The body's
   // extent along a_B comes from its support vertices.
-  int cone_warm = 0;
+  int cone_warm = link_tree.support_start_vertex;
   const auto objectConeAdmits = [&](const SnchNode& b, double q_lo, double q_hi, double gap) noexcept {
     cone_warm = convexSupportVertex(link_tree.vertex_graph, vertex_O, b.cone_axis, cone_warm);
     const double p_hi = vertex_O[static_cast<std::size_t>(cone_warm)].dot(b.cone_axis);
@@ -664,7 +667,7 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
   LocalMinimum m;
   auto& stack = scratch.stack;
   stack.clear();
-  stack.emplace_back(0, 0);
+  stack.emplace_back(link_tree.support_start_vertex, 0);
   while (!stack.empty()) {
     // Each entry: (link vertex to start the support climbs from, object node). The children
     // of a node start from its last support vertex: their GJK directions are close to its own.

@@ -247,6 +247,48 @@ TEST(ConvexDistanceTest, CapsuleOverADenseFaceKeepsEveryBruteForceMinimum) {
   EXPECT_GT(pruned_by_cone, 0);
 }
 
+// A convex link mesh whose vertex 0 no triangle uses (as welding or a dropped degenerate
+// triangle leaves behind), placed at the body's centre: it is still convex, and the support
+// climbs must not start from that isolated vertex (they would never move, GJK would bound the
+// distance to one point, and minima would be pruned). Brute force decides.
+TEST(ConvexDistanceTest, ConvexLinkWithAnUnusedVertexZeroKeepsEveryBruteForceMinimum) {
+  std::mt19937 rng(15);
+  constexpr double kCutoff_m = 0.05;
+  SnchQueryScratch scratch;
+  int minima = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    const TriMesh base = randomConvexMesh(rng);
+    Vector3d centre = Vector3d::Zero();
+    std::vector<Vector3d> vertices{Vector3d::Zero()};
+    for (int v = 0; v < base.numVertices(); ++v) {
+      vertices.push_back(base.vertex(v));
+      centre += base.vertex(v) / base.numVertices();
+    }
+    vertices[0] = centre;
+    std::vector<Eigen::Vector3i> triangles;
+    for (int t = 0; t < base.numTriangles(); ++t) triangles.push_back(base.triangle(t) + Eigen::Vector3i::Ones());
+    const TriMesh link = TriMesh::build("capsule with an unused vertex 0", vertices, triangles);
+    ASSERT_EQ(link.numVertices(), base.numVertices() + 1);
+    const SnchTree link_tree = buildSnchTree(link);
+    ASSERT_TRUE(link_tree.convex);
+    const TriMesh obj = test::randomSmallMesh(rng);
+    const SnchTree obj_tree = buildSnchTree(obj);
+    const Eigen::Isometry3d X_WO = test::randomPose(rng, 0.5);
+    Eigen::Isometry3d X_WL = test::randomPose(rng, 0.0);
+    X_WL.translation() = X_WO.translation() + std::uniform_real_distribution<double>(0.05, 0.3)(rng) * randomUnit(rng);
+    std::vector<LocalMinimum> snch;
+    querySnchPair(link_tree, link, X_WL, obj_tree, obj, X_WO, kCutoff_m, scratch, snch);
+    const std::vector<LocalMinimum> brute = test::bruteForceMinima(link, X_WL, obj, X_WO, kCutoff_m);
+    ASSERT_EQ(snch.size(), brute.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < snch.size(); ++i) {
+      EXPECT_TRUE(sameFeaturePair(snch[i], brute[i])) << "trial " << trial;
+      EXPECT_NEAR(snch[i].distance_m, brute[i].distance_m, 1e-12);
+    }
+    minima += static_cast<int>(snch.size());
+  }
+  EXPECT_GT(minima, 30);
+}
+
 TEST(ConvexDistanceTest, KernelsDoNotAllocate) {
   const TriMesh m = makeCapsule({0, 0, 0}, {0, 0, 0.3}, 0.05, 16, 4);
   const std::vector<Vector3d> v = verticesOf(m);

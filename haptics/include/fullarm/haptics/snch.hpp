@@ -87,6 +87,10 @@ struct SnchTree {
   std::vector<int> leaf_of_triangle;
   /// The mesh's vertex graph (convex meshes only; empty otherwise).
   VertexGraph vertex_graph;
+  /// A vertex of a triangle, where the support climbs on the vertex graph start (convex meshes
+  /// only). Not simply vertex 0: a vertex no triangle uses (a copy removed by welding, or one of
+  /// a dropped degenerate triangle) has no neighbours, and a climb from it would never move.
+  int support_start_vertex = 0;
 };
 
 /// Relative tolerance of the convexity check (of the mesh's bounding-box diagonal).
