@@ -22,6 +22,13 @@ std::string readFile(const std::filesystem::path& file) {
 }
 
 TEST(DemoRun, PassesAndSaysWhatIsNotBuiltYet) {
+  // The files must come from this build's program, not from an earlier run (the binary run by
+  // hand, or ctest told to skip the fixture's setup).
+  ASSERT_TRUE(std::filesystem::exists(kDemoDir / "fullarm_exit_code.txt"))
+      << "no demo run in " << kDemoDir << ": run it through ctest (the report_demo_browser fixture)";
+  ASSERT_GE(std::filesystem::last_write_time(kDemoDir / "fullarm_exit_code.txt"),
+            std::filesystem::last_write_time(FULLARM_EXE))
+      << "the demo output in " << kDemoDir << " is older than " << FULLARM_EXE;
   // tune (full budget) then validate (Monte-Carlo kept small here) on the default plant, the plant
   // chirp and the haptics step: the demo's verdict is PASS, exit code 0.
   const int exit_code = std::stoi(readFile(kDemoDir / "fullarm_exit_code.txt"));

@@ -69,8 +69,8 @@ struct NonlinearStageOptions {
   bool stress_corners = true;  ///< start the sample set with stressCorners()
   /// Position of the corners' user (K_h, B_h) in its ranges, from the weak end (stressCorners()).
   double corner_user_fraction = 0.05;
-  /// Add ringCorners() (the undamped users on the slow plant) to the sample set after the
-  /// stress corners.
+  /// Add ringCorners() (the undamped users on the slow plant) to the sample set, before the
+  /// stress corners (candidates fail them first, so a capped evaluation stops sooner).
   bool ring_corners = true;
   /// The compass search also goes on while a passed run of the set came closer than this to a
   /// failing verdict (NonlinearScore::worst_passed_detector_margin above it, in [0, 1]). At 1 the
