@@ -99,8 +99,12 @@ std::complex<double> expMinusOne(std::complex<double> z) {
   return {std::expm1(x) * std::cos(y) - 2.0 * half_sin * half_sin, std::exp(x) * std::sin(y)};
 }
 
-// sum_{k = begin}^{begin + n - 1} e^{k z}, in closed form (a geometric series).
+// sum_{k = begin}^{begin + n - 1} e^{k z}, in closed form (a geometric series). e^{k z} does not
+// change when Im z moves by 2 pi, so Im z is first reduced to [-pi, pi]: then e^z near 1 means z
+// near 0, where expMinusOne keeps its relative accuracy. (Unreduced, a mode at a multiple of the
+// sampling frequency made e^z - 1 rounding noise and the ratio meaningless.)
 std::complex<double> geometricSum(std::complex<double> z, long begin, long n) {
+  z = {z.real(), std::remainder(z.imag(), 2.0 * std::numbers::pi)};
   const std::complex<double> den = expMinusOne(z);
   if (den == std::complex<double>(0.0, 0.0)) return {static_cast<double>(n), 0.0};
   return std::exp(static_cast<double>(begin) * z) * expMinusOne(static_cast<double>(n) * z) / den;

@@ -166,7 +166,9 @@ TEST(CoupledStability, DetectorScoreClosedFormEqualsTheDirectWindowSums) {
   const long n = std::lround(d.hold_s / d.period_s);
   const long win = std::lround(d.window_s / d.period_s);
   for (double sigma : {0.0, 1e-6, 0.05, 0.7, 1.386, 4.0, 30.0, -0.3}) {
-    for (double f : {0.0, 1e-5, 0.02, 0.9, 1.1, 14.0, 250.0}) {
+    // 500 Hz is the Nyquist frequency of the 1 ms period (q = -1 when sigma = 0, so q^2 = 1 with
+    // rounding noise in its imaginary part) and 1000 Hz aliases to DC.
+    for (double f : {0.0, 1e-5, 0.02, 0.9, 1.1, 14.0, 250.0, 500.0, 1000.0}) {
       const double w = 2.0 * std::numbers::pi * f;
       double worst = 0.0;
       for (int k = 0; k < (f == 0.0 ? 1 : 360); ++k) {
