@@ -12,46 +12,14 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "fullarm/plant/rosenbrock.hpp"
+#include "rosenbrock_test_system.hpp"
 
 namespace fullarm::plant {
 namespace {
 
-// y0' = y0 (1 - y0) (logistic), y1' = y2, y2' = -y1 (rotation): closed form
-// y0 = 1 / (1 + 9 e^-t) from 0.1, (y1, y2) = (sin t, cos t) from (0, 1).
-struct NonStiff {
-  static void rhs(void* /*user*/, const double* y, double* f) noexcept {
-    f[0] = y[0] * (1.0 - y[0]);
-    f[1] = y[2];
-    f[2] = -y[1];
-  }
-  static void jacobian(void* user, const double* y, double* f, double* j) noexcept {
-    rhs(user, y, f);
-    Eigen::Map<Eigen::Matrix3d> J(j);
-    J.setZero();
-    J(0, 0) = 1.0 - 2.0 * y[0];
-    J(1, 2) = 1.0;
-    J(2, 1) = -1.0;
-  }
-};
-
-Eigen::Vector3d nonStiffExact(double t) {
-  return {1.0 / (1.0 + 9.0 * std::exp(-t)), std::sin(t), std::cos(t)};
-}
-
-double fixedStepError(double h, RosenbrockMethod method = RosenbrockMethod::kRodas3) {
-  RosenbrockIntegrator r;
-  r.setMethod(method);
-  const double atol[3] = {1e3, 1e3, 1e3};  // every step accepted: a fixed-step run
-  r.configure(3, atol, 1e-2, 10, {&NonStiff::rhs, &NonStiff::jacobian, nullptr});
-  Eigen::Vector3d y(0.1, 0.0, 1.0);
-  const int steps = static_cast<int>(std::lround(2.0 / h));
-  for (int k = 0; k < steps; ++k) {
-    r.resetStepSize(h);
-    EXPECT_EQ(r.advance(y.data(), h), RosenbrockStatus::kOk);
-  }
-  EXPECT_EQ(r.stats().steps, steps);
-  return (y - nonStiffExact(2.0)).norm();
-}
+using test::fixedStepError;
+using test::NonStiff;
+using test::nonStiffExact;
 
 TEST(Rodas3, ConvergesWithOrderThree) {
   const double e1 = fixedStepError(0.1);
