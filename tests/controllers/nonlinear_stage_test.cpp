@@ -349,6 +349,16 @@ TEST(NonlinearStage, ScoresAndReportsTheLinearHardGoals) {
   EXPECT_NE(st.verdict.find("VIOLATE the linear hard goal peak sensitivity Ms"), std::string::npos) << st.verdict;
 }
 
+// validate's SFE scenario with the gains shipped on 2026-11-21 (J_m 0.5, B_m 12.65, K_m 20,
+// lambda 300, B_o/eps 5/57.05), which the stage left "NOT verified".
+JointScenario sfeWithItsOldGains(const ValidationConfig& vc) {
+  GainsConfig g = test::dtsGains();
+  JointGains& sfe = g.joints[static_cast<std::size_t>(findGainsJoint(g, "R_SFE"))];
+  sfe.impedance = {0.5, 12.650895102857465, 20.0};
+  sfe.sliding_mode = {300.00000000000011, 5.0, 57.048106916976913};
+  return validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), g, "SFE"), vc);
+}
+
 // SFE with the gains shipped on 2026-11-21 (J_m 0.5, B_m 12.65, K_m 20, lambda 300, B_o/eps 5/57.05),
 // which the stage left "NOT verified": the ring corner K_h 37.5 (half the range, B_h 0, the box's
 // own lower bound) rings in the free hold above the threshold and decays, but slower than the
@@ -358,11 +368,7 @@ TEST(NonlinearStage, ScoresAndReportsTheLinearHardGoals) {
 // trace); the result passes 40 draws of validate's own stream (seed 1), which the stage never saw.
 TEST(NonlinearStage, SfeRingCornerRingsTooSlowlyAndTheSearchGoesOnToMoreMargin) {
   const ValidationConfig vc = defaultValidation();
-  GainsConfig g = test::dtsGains();
-  JointGains& sfe = g.joints[static_cast<std::size_t>(findGainsJoint(g, "R_SFE"))];
-  sfe.impedance = {0.5, 12.650895102857465, 20.0};
-  sfe.sliding_mode = {300.00000000000011, 5.0, 57.048106916976913};
-  const JointScenario sc = validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), g, "SFE"), vc);
+  const JointScenario sc = sfeWithItsOldGains(vc);
   const auto rings = ringCorners(vc.ranges);
   EXPECT_EQ(rings[1].user_damping_nms_per_rad, vc.ranges.user_damping_nms_per_rad.min);
   ClosedLoopTrace trace;
@@ -414,11 +420,7 @@ TEST(NonlinearStage, SfeRingCornerRingsTooSlowlyAndTheSearchGoesOnToMoreMargin) 
 // in set order): against the sequential evaluation.
 TEST(NonlinearStage, ScoreDoesNotDependOnTheThreadCount) {
   const ValidationConfig vc = defaultValidation();
-  GainsConfig g = test::dtsGains();
-  JointGains& sfe = g.joints[static_cast<std::size_t>(findGainsJoint(g, "R_SFE"))];
-  sfe.impedance = {0.5, 12.650895102857465, 20.0};
-  sfe.sliding_mode = {300.00000000000011, 5.0, 57.048106916976913};
-  const JointScenario sc = validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), g, "SFE"), vc);
+  const JointScenario sc = sfeWithItsOldGains(vc);
   std::vector<MonteCarloSample> set = ringCorners(vc.ranges);
   set.push_back(stageSamples(vc.ranges, 1, "R_SFE", 0, 1)[0]);
   for (const int cap : {0, 1000}) {
