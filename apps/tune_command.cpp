@@ -13,6 +13,7 @@
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/config_error.hpp"
 #include "fullarm/controllers/gains.hpp"
+#include "fullarm/controllers/job_pool.hpp"
 #include "fullarm/controllers/linear_analysis.hpp"
 #include "fullarm/controllers/nonlinear_stage.hpp"
 #include "fullarm/controllers/tuner.hpp"
@@ -89,12 +90,15 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
   for (int slot : slots) models.push_back(jointModel(model, plant_config, validation, gains.joints[slot].name));
   const auto start = std::chrono::steady_clock::now();
   // Each joint's tuning is self-contained and seeded, so the result does not depend on the thread
-  // count. The linear stage runs one job per joint; the nonlinear stage, whose cost differs most
-  // between joints (a joint that needs the search and several check batches costs several times
-  // one that does not), runs joint after joint with its simulations spread over the threads.
+  // count or on the scheduling. One job per joint (its linear stage, then its nonlinear stage) on a
+  // shared pool: a thread takes the next joint as soon as it is free, so a joint's nonlinear stage
+  // starts as soon as its linear stage ends, and a thread that finds no joint left helps the
+  // running nonlinear stages with their simulations (job_pool.hpp, docs/controllers.md "Scheduling
+  // of tune"). The stage takes its runs in set order, so its result is the sequential one.
   std::vector<controllers::JointScenario> scenarios(slots.size());
   std::vector<controllers::LinearHardGoals> hard(slots.size());
-  controllers::parallelFor(static_cast<int>(slots.size()), o.threads, [&](int i) {
+  controllers::JobPool pool(o.threads);
+  pool.run(static_cast<int>(slots.size()), [&](int i) {
     const auto k = static_cast<std::size_t>(i);
     const JointGains& initial = gains.joints[static_cast<std::size_t>(slots[k])];
     const double q = model.defaultPosture()[model.jointIndex(initial.name)];
@@ -121,20 +125,15 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
         hard[k].models.push_back(controllers::prepareVariation(models[k], q, goal_setup, v));
       }
       hard[k].coupled_models = run.results[k].coupled_models;
-    }
-  });
-  if (o.nonlinear_rounds > 0) {
-    for (std::size_t k = 0; k < slots.size(); ++k) {
       // Nonlinear verification on validate's closed-loop harness (nonlinear_stage.hpp).
       controllers::NonlinearStageOptions nl;
       nl.rounds = o.nonlinear_rounds;
       nl.seed = o.seed;
-      nl.threads = o.threads;
-      run.stages[k] = controllers::refineNonlinear(scenarios[k], run.results[k].tuned,
-                                                   gains.joints[static_cast<std::size_t>(slots[k])], validation.ranges,
+      nl.pool = &pool;
+      run.stages[k] = controllers::refineNonlinear(scenarios[k], run.results[k].tuned, initial, validation.ranges,
                                                    validation.linear, nl, &hard[k]);
     }
-  }
+  });
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.tuned = gains;
   run.tuned.source.clear();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -81,6 +82,25 @@ constexpr double kMarginWeight = 0.25;
 constexpr double kTransparencyWeight = 0.25;
 constexpr int kCornerIndex = 1000000;
 
+// Where a block of runs is simulated: on `threads` threads of its own, or on the calling thread
+// and the pool's idle workers (a block as large as the threads available now, so no thread
+// simulates runs past a failure cap that a sequential evaluation would not reach, unless it
+// would otherwise idle).
+struct RunSpread {
+  int threads = 1;
+  JobPool* pool = nullptr;
+  [[nodiscard]] std::size_t blockSize() const {
+    return static_cast<std::size_t>(pool != nullptr ? pool->available() : std::max(threads, 1));
+  }
+  void run(int n, const std::function<void(int)>& task) const {
+    if (pool != nullptr) {
+      pool->fanOut(n, task);
+    } else {
+      parallelFor(n, threads, task);
+    }
+  }
+};
+
 }  // namespace
 
 std::vector<MonteCarloSample> stressCorners(const UncertaintyRanges& r, double user_fraction) {
@@ -150,7 +170,7 @@ std::vector<MonteCarloSample> stageSamples(const UncertaintyRanges& ranges, std:
 
 NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& gains,
                               const std::vector<MonteCarloSample>& set, const LinearRequirements& req, int max_delay,
-                              int failure_cap, const LinearHardGoals* hard_goals, int threads) {
+                              int failure_cap, const LinearHardGoals* hard_goals, int threads, JobPool* pool) {
   NonlinearScore s;
   JointScenario sc = scenario;
   sc.gains = gains;
@@ -169,14 +189,16 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
   }
   double worst_severity = -1.0;
   double rms_sum = 0.0;
-  // Runs are simulated in blocks of `threads` and taken in set order, so the score (including
-  // where the failure cap stops it) is the sequential one for any thread count.
-  const std::size_t block = static_cast<std::size_t>(std::max(threads, 1));
-  std::vector<ClosedLoopResult> results(block);
-  for (std::size_t first = 0; first < set.size() && s.failures <= failure_cap; first += block) {
-    const std::size_t n = std::min(block, set.size() - first);
-    parallelFor(static_cast<int>(n), threads,
-                [&](int j) { results[static_cast<std::size_t>(j)] = simulateJoint(applySample(sc, set[first + j])); });
+  // Runs are simulated in blocks (of `threads`, or of the pool's available threads) and taken in
+  // set order, so the score (including where the failure cap stops it) is the sequential one for
+  // any thread count and any scheduling.
+  const RunSpread spread{threads, pool};
+  std::vector<ClosedLoopResult> results;
+  for (std::size_t first = 0; first < set.size() && s.failures <= failure_cap;) {
+    const std::size_t n = std::min(spread.blockSize(), set.size() - first);
+    results.resize(std::max(results.size(), n));
+    spread.run(static_cast<int>(n),
+               [&](int j) { results[static_cast<std::size_t>(j)] = simulateJoint(applySample(sc, set[first + j])); });
     for (std::size_t j = 0; j < n; ++j) {
       const ClosedLoopResult& r = results[j];
       rms_sum += r.free_rms_user_torque_nm;
@@ -196,6 +218,7 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
       ++s.runs;
       if (s.failures > failure_cap) break;  // cannot beat the incumbent any more
     }
+    first += n;
   }
   s.mean_rms_user_torque_nm = s.runs > 0 ? rms_sum / static_cast<double>(s.runs) : 0.0;
   s.cost = static_cast<double>(s.failures) + (s.linear_hard_met ? 0.0 : kHardGoalWeight) +
@@ -235,7 +258,7 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
   const std::size_t initial_size = res.set.size();
 
   const auto score = [&](const JointGains& g, int cap = std::numeric_limits<int>::max()) {
-    const NonlinearScore s = scoreNonlinear(scenario, g, res.set, req, max_delay, cap, hard_goals, o.threads);
+    const NonlinearScore s = scoreNonlinear(scenario, g, res.set, req, max_delay, cap, hard_goals, o.threads, o.pool);
     ++res.evaluations;
     res.simulations += s.linear_ok ? s.runs : 0;
     return s;
@@ -293,13 +316,14 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
     JointScenario sc = scenario;
     sc.gains = best_gains;
     std::vector<std::pair<double, MonteCarloSample>> failed;
-    // Blocks of `threads` runs taken in batch order: the same failures for any thread count.
-    const std::size_t block = static_cast<std::size_t>(std::max(o.threads, 1));
-    std::vector<ClosedLoopResult> results(block);
-    for (std::size_t first = 0; first < check.size() && static_cast<int>(failed.size()) < o.max_added_per_round;
-         first += block) {
-      const std::size_t n = std::min(block, check.size() - first);
-      parallelFor(static_cast<int>(n), o.threads, [&](int j) {
+    // Blocks of runs taken in batch order: the same failures for any thread count and scheduling.
+    const RunSpread spread{o.threads, o.pool};
+    std::vector<ClosedLoopResult> results;
+    for (std::size_t first = 0, n = 0; first < check.size() && static_cast<int>(failed.size()) < o.max_added_per_round;
+         first += n) {
+      n = std::min(spread.blockSize(), check.size() - first);
+      results.resize(std::max(results.size(), n));
+      spread.run(static_cast<int>(n), [&](int j) {
         results[static_cast<std::size_t>(j)] = simulateJoint(applySample(sc, check[first + j]));
       });
       for (std::size_t j = 0; j < n; ++j) {
@@ -335,7 +359,7 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
     res.final_score = best;
   } else {
     res.final_score = scoreNonlinear(scenario, res.gains, res.set, req, max_delay, std::numeric_limits<int>::max(),
-                                     hard_goals, o.threads);
+                                     hard_goals, o.threads, o.pool);
     res.simulations += res.final_score.runs;
   }
   res.linear_hard_goals_met = res.final_score.linear_hard_met;

@@ -14,6 +14,7 @@
 #include "controllers_fixture.hpp"
 #include "fullarm/controllers/closed_loop.hpp"
 #include "fullarm/controllers/coupled_stability.hpp"
+#include "fullarm/controllers/job_pool.hpp"
 #include "fullarm/controllers/joint_linearization.hpp"
 #include "fullarm/controllers/linear_analysis.hpp"
 #include "fullarm/controllers/nonlinear_stage.hpp"
@@ -435,6 +436,53 @@ TEST(NonlinearStage, ScoreDoesNotDependOnTheThreadCount) {
     }
     EXPECT_EQ(one.failures, 1);
     EXPECT_EQ(one.runs, cap == 0 ? 2 : static_cast<int>(set.size()));  // the K_h 37.5 corner is the 2nd run
+  }
+}
+
+// `fullarm tune` runs each joint's stage as a job of a shared pool whose idle workers help with its
+// runs, in blocks sized by how many threads are free at that moment: the stage's result must be the
+// sequential one (threads = 1) whatever the scheduling. Two stages on the pool at once (the same
+// joint with two seeds: the second job's own runs compete with the first job's blocks), small budget
+// with capped evaluations (SFE's old gains fail a ring corner) and a check batch.
+TEST(NonlinearStage, OnASharedPoolTheStageGivesTheSequentialResult) {
+  const ValidationConfig vc = defaultValidation();
+  const JointScenario sc = sfeWithItsOldGains(vc);
+  NonlinearStageOptions o;
+  o.samples = 1;
+  o.check_samples = 4;
+  o.rounds = 1;
+  o.max_evaluations = 2;
+  o.stress_corners = false;
+  std::vector<NonlinearStageResult> sequential;
+  for (const std::uint64_t seed : {1u, 2u}) {
+    o.seed = seed;
+    sequential.push_back(refineNonlinear(sc, sc.gains, sc.gains, vc.ranges, vc.linear, o));
+  }
+  EXPECT_EQ(sequential[0].evaluations, 3);  // the start and two capped evaluations of the search
+  {
+    JobPool pool(2);
+    std::vector<NonlinearStageResult> pooled(2);
+    pool.run(2, [&](int k) {
+      NonlinearStageOptions po = o;
+      po.seed = static_cast<std::uint64_t>(k + 1);
+      po.pool = &pool;
+      pooled[static_cast<std::size_t>(k)] = refineNonlinear(sc, sc.gains, sc.gains, vc.ranges, vc.linear, po);
+    });
+    for (std::size_t k = 0; k < 2; ++k) {
+      const NonlinearStageResult& a = sequential[k];
+      const NonlinearStageResult& b = pooled[k];
+      EXPECT_EQ(b.gains.impedance.damping_nms_per_rad, a.gains.impedance.damping_nms_per_rad);
+      EXPECT_EQ(b.gains.sliding_mode.lambda_per_s, a.gains.sliding_mode.lambda_per_s);
+      EXPECT_EQ(b.gains.sliding_mode.boundary_layer_radps, a.gains.sliding_mode.boundary_layer_radps);
+      EXPECT_EQ(b.evaluations, a.evaluations);
+      EXPECT_EQ(b.simulations, a.simulations);
+      EXPECT_EQ(b.history, a.history);
+      EXPECT_EQ(b.check_failures, a.check_failures);
+      EXPECT_EQ(b.set.size(), a.set.size());
+      EXPECT_EQ(b.final_score.cost, a.final_score.cost);
+      EXPECT_EQ(b.final_score.runs, a.final_score.runs);
+      EXPECT_EQ(b.verdict, a.verdict);
+    }
   }
 }
 

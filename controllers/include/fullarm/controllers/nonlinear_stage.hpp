@@ -40,6 +40,7 @@
 
 #include "fullarm/controllers/closed_loop.hpp"
 #include "fullarm/controllers/gains.hpp"
+#include "fullarm/controllers/job_pool.hpp"
 #include "fullarm/controllers/scenario_analysis.hpp"
 #include "fullarm/controllers/tuner.hpp"
 #include "fullarm/controllers/validation.hpp"
@@ -81,6 +82,10 @@ struct NonlinearStageOptions {
   /// Worker threads for the runs of an evaluation and of a check batch. Runs are taken in set
   /// order in blocks of this size, so the result is identical for any count.
   int threads = 1;
+  /// When set, `threads` is ignored: the runs are simulated on the calling thread (a job of the
+  /// pool) and on the pool's workers that have no job left, in blocks of JobPool::available()
+  /// taken in set order, so the result is the same as with any `threads`.
+  JobPool* pool = nullptr;
 };
 
 /// The linear stage's hard goals, checked on a candidate of the nonlinear stage.
@@ -174,10 +179,12 @@ inline constexpr double kRingStiffnessFractions[] = {0.25, 0.5, 0.75, 1.0};
 /// than `failure_cap` have failed (`runs` then counts the runs made; the candidate cannot beat an
 /// incumbent with `failure_cap` failures).
 /// `hard_goals` (may be null): the linear stage's hard goals, evaluated before any simulation.
+/// `pool` (may be null): as NonlinearStageOptions::pool (then `threads` is ignored).
 [[nodiscard]] NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& gains,
                                             const std::vector<MonteCarloSample>& set, const LinearRequirements& req,
                                             int max_delay, int failure_cap = std::numeric_limits<int>::max(),
-                                            const LinearHardGoals* hard_goals = nullptr, int threads = 1);
+                                            const LinearHardGoals* hard_goals = nullptr, int threads = 1,
+                                            JobPool* pool = nullptr);
 
 /// Draws `count` samples of the stage's own stream (seed salted, so not validate's draws) for
 /// joint `joint_name`, indices [first, first + count).

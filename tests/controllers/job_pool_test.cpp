@@ -1,0 +1,123 @@
+// The job pool under `fullarm tune`: every job and every fanned-out task runs exactly once for any
+// thread count (brute-force counts), a worker with no job left really runs another job's tasks
+// (two tasks that can only finish together), errors reach the caller, and bad sizes are refused.
+
+#include "fullarm/controllers/job_pool.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+namespace fullarm::controllers {
+namespace {
+
+// Waits (bounded, so that a scheduling bug fails the test instead of hanging it) until `done()`.
+template <typename Done>
+bool waitFor(Done done) {
+  const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > limit) return false;
+    std::this_thread::yield();
+  }
+  return true;
+}
+
+TEST(JobPool, EveryJobAndEveryTaskRunsExactlyOnceForAnyThreadCount) {
+  constexpr int kJobs = 9;
+  for (const int threads : {1, 2, 3, 5}) {
+    JobPool pool(threads);
+    EXPECT_EQ(pool.threads(), threads);
+    std::vector<std::atomic<int>> job_hits(kJobs);
+    // Job j fans out 3 + j tasks twice (two blocks, as the nonlinear stage does).
+    std::vector<std::vector<std::atomic<int>>> task_hits(kJobs);
+    for (int j = 0; j < kJobs; ++j) task_hits[static_cast<std::size_t>(j)] = std::vector<std::atomic<int>>(3 + j);
+    pool.run(kJobs, [&](int j) {
+      ++job_hits[static_cast<std::size_t>(j)];
+      auto& hits = task_hits[static_cast<std::size_t>(j)];
+      for (int block = 0; block < 2; ++block) {
+        EXPECT_GE(pool.available(), 1);
+        EXPECT_LE(pool.available(), threads);
+        pool.fanOut(static_cast<int>(hits.size()), [&](int i) { ++hits[static_cast<std::size_t>(i)]; });
+      }
+    });
+    for (int j = 0; j < kJobs; ++j) {
+      EXPECT_EQ(job_hits[static_cast<std::size_t>(j)].load(), 1) << "threads " << threads << " job " << j;
+      for (const std::atomic<int>& h : task_hits[static_cast<std::size_t>(j)]) EXPECT_EQ(h.load(), 2);
+    }
+    // The pool can run again.
+    std::atomic<int> again{0};
+    pool.run(4, [&](int) { ++again; });
+    EXPECT_EQ(again.load(), 4);
+  }
+}
+
+// One job on two threads: the second thread has no job, so it must run task 1 while the job's own
+// thread is inside task 0, which waits for task 1 to start (a sequential fan-out would never end:
+// the bounded wait then fails the test).
+TEST(JobPool, AWorkerWithNoJobLeftRunsTheTasksOfAnother) {
+  JobPool pool(2);
+  std::thread::id owner;
+  std::thread::id helper;
+  std::atomic<bool> task1_started{false};
+  bool helper_was_idle = false;
+  bool task0_saw_task1 = false;
+  pool.run(1, [&](int) {
+    owner = std::this_thread::get_id();
+    helper_was_idle = waitFor([&] { return pool.available() == 2; });
+    pool.fanOut(2, [&](int i) {
+      if (i == 0) {
+        task0_saw_task1 = waitFor([&] { return task1_started.load(); });
+      } else {
+        helper = std::this_thread::get_id();
+        task1_started = true;
+      }
+    });
+  });
+  EXPECT_TRUE(helper_was_idle);
+  EXPECT_TRUE(task0_saw_task1);
+  EXPECT_NE(helper, owner);
+  EXPECT_NE(helper, std::thread::id());
+}
+
+TEST(JobPool, AFanOutOutsideARunIsDoneByTheCaller) {
+  JobPool pool(3);
+  EXPECT_EQ(pool.available(), 1);
+  std::vector<std::thread::id> ran(6);
+  pool.fanOut(6, [&](int i) { ran[static_cast<std::size_t>(i)] = std::this_thread::get_id(); });
+  for (const std::thread::id& id : ran) EXPECT_EQ(id, std::this_thread::get_id());
+}
+
+TEST(JobPool, ErrorsOfJobsAndTasksReachTheCallerAfterTheOthersEnd) {
+  JobPool pool(2);
+  std::atomic<int> finished{0};
+  EXPECT_THROW(pool.run(6,
+                        [&](int j) {
+                          if (j == 2) throw std::runtime_error("job 2");
+                          ++finished;
+                        }),
+               std::runtime_error);
+  EXPECT_EQ(finished.load(), 5);
+  // A task's error reaches the job that fanned it out; the other tasks still run.
+  std::atomic<int> tasks{0};
+  bool caught = false;
+  pool.run(1, [&](int) {
+    try {
+      pool.fanOut(5, [&](int i) {
+        ++tasks;
+        if (i == 1) throw std::out_of_range("task 1");
+      });
+    } catch (const std::out_of_range&) {
+      caught = true;
+    }
+  });
+  EXPECT_TRUE(caught);
+  EXPECT_EQ(tasks.load(), 5);
+  EXPECT_THROW(JobPool(0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace fullarm::controllers
