@@ -738,13 +738,14 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
         }
       }
       // Directions of the minima under the node: a minimum at q has u = (q - P(q)) / |q - P(q)|
-      // with P the projection on the body (see kConvexBoundSlack_m). P is nonexpansive, so for
-      // q within r_B of the centre c, |(q - P(q)) - (c - P(c))| <= 2 r_B, and u lies within
-      // asin(2 r_B / D) of u(c), D = |c - P(c)| >= lower; u(c) lies within acos(lower / upper)
-      // of the GJK axis (axis . (c - P(c)) >= lower). -u must lie in the node's cone.
-      if (gap > kConeTestMinGap_m && b.cone_cos > -1.0 && 2.0 * b.radius_m < db.lower_m) {
-        const double spread =
-            std::asin(2.0 * b.radius_m / db.lower_m) + std::acos(std::min(1.0, db.lower_m / db.upper_m));
+      // with P the projection on the body (see kConvexBoundSlack_m). The residual map
+      // F = I - P is firmly nonexpansive like P itself (|F x - F y|^2 <= (F x - F y) . (x - y),
+      // which is P's firm nonexpansiveness rewritten), so |F x - F y| <= |x - y|: for q within
+      // r_B of the centre c, |F(q) - F(c)| <= r_B, and u lies within asin(r_B / D) of u(c),
+      // D = |c - P(c)| >= lower. u(c) lies within acos(lower / upper) of the bound's axis
+      // (axis . (c - P(c)) >= lower). -u must lie in the node's cone.
+      if (gap > kConeTestMinGap_m && b.cone_cos > -1.0 && b.radius_m < db.lower_m) {
+        const double spread = std::asin(b.radius_m / db.lower_m) + std::acos(std::min(1.0, db.lower_m / db.upper_m));
         const double open = b.cone_half_angle_rad + kConeSlack_rad + spread;
         const double c = -db.axis.dot(b.cone_axis);
         if ((b.cone_two_sided && open < 0.5 * kPi && std::abs(c) < std::cos(open)) ||

@@ -444,6 +444,51 @@ TEST(ConvexDistanceTest, SupportTableStartsNearTheFarthestVertex) {
   EXPECT_THROW((void)buildSupportTable(makeBox({1, 1, 1}, 0.5), 0), std::invalid_argument);
 }
 
+// The direction test of the convex-link query (snch.cpp) rests on the residual of the
+// projection onto the body, F(x) = x - P(x), being nonexpansive: the directions of points q
+// within r of c lie within asin(r / |F(c)|) of F(c). Checked with the brute-force projection
+// (nearest point over all triangles) on random convex meshes; the bound is also nearly
+// attained (so half of it would be wrong: the test would catch asin(r / (2 D))).
+TEST(ConvexDistanceTest, ProjectionResidualIsNonexpansive) {
+  std::mt19937 rng(24);
+  const auto residual = [](const Vector3d& x, const TriMesh& m) {
+    Vector3d best_point = x;
+    double best = std::numeric_limits<double>::infinity();
+    for (int f = 0; f < m.numTriangles(); ++f) {
+      const auto& tri = m.triangle(f);
+      const PointTriangleResult r = closestPointTriangle(x, m.vertex(tri[0]), m.vertex(tri[1]), m.vertex(tri[2]));
+      if (r.distance_m < best) {
+        best = r.distance_m;
+        best_point = r.point;
+      }
+    }
+    return Vector3d(x - best_point);
+  };
+  int near_tight = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const TriMesh m = randomConvexMesh(rng);
+    const ConvexBracket br = buildConvexBracket(m);
+    const Vector3d mid = 0.5 * (br.a_m + br.b_m);
+    const Vector3d c = mid +
+                       (br.outer_radius_m + std::uniform_real_distribution<double>(0.005, 0.1)(rng)) * randomUnit(rng) +
+                       std::uniform_real_distribution<double>(-0.5, 0.5)(rng) * (br.b_m - br.a_m);
+    if (bruteForcePointDistance(c, m) == 0.0) continue;
+    const Vector3d fc = residual(c, m);
+    const double d = fc.norm();
+    for (int k = 0; k < 10; ++k) {
+      const double r = std::uniform_real_distribution<double>(0.0, 0.95)(rng) * d;
+      const Vector3d q = c + r * randomUnit(rng);
+      if (bruteForcePointDistance(q, m) == 0.0) continue;
+      const Vector3d fq = residual(q, m);
+      EXPECT_LE((fq - fc).norm(), (q - c).norm() + 1e-12) << "trial " << trial;
+      const double angle = std::atan2(fq.cross(fc).norm(), fq.dot(fc));
+      EXPECT_LE(angle, std::asin(std::min(1.0, (q - c).norm() / d)) + 1e-9) << "trial " << trial;
+      if ((fq - fc).norm() > 0.9 * (q - c).norm()) ++near_tight;
+    }
+  }
+  EXPECT_GT(near_tight, 100);
+}
+
 TEST(ConvexDistanceTest, KernelsDoNotAllocate) {
   const TriMesh m = makeCapsule({0, 0, 0}, {0, 0, 0.3}, 0.05, 16, 4);
   const std::vector<Vector3d> v = verticesOf(m);
