@@ -122,7 +122,8 @@ inline constexpr double kConvexBoundSlack_m = 1e-6;
 /// [m] (the upper bound then starts the triangle's bound; the exact tests tighten it).
 inline constexpr double kConvexHullTolerance_m = 2e-5;
 /// Same for an object node's sphere against a convex link [m] (its lower bound prunes the node;
-/// both bounds bound the direction of its minima).
+/// both bounds bound the direction of its minima). Used only for links whose SnchTree::bracket
+/// is not valid; otherwise the bracket capsules bound the node.
 inline constexpr double kConvexNodeTolerance_m = 1e-3;
 
 /// Builds the hierarchy (top-down median split along the longest extent of the centroids).
