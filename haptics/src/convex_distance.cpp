@@ -1,8 +1,12 @@
 #include "fullarm/haptics/convex_distance.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+
+#include "fullarm/haptics/geometry.hpp"
 
 namespace fullarm::haptics {
 
@@ -160,6 +164,198 @@ VertexGraph buildVertexGraph(const TriMesh& mesh) {
     g.offset[v + 1] = static_cast<int>(g.neighbours.size());
   }
   return g;
+}
+
+namespace {
+
+// Cube-map cell of a direction: face 0-5 (+x, -x, +y, -y, +z, -z), then the two other
+// coordinates over the largest one's magnitude, each in [-1, 1], binned.
+int cubeCell(const Vector3d& d, int k) noexcept {
+  const Vector3d a = d.cwiseAbs();
+  int axis = 0;
+  if (a.y() > a.x()) axis = 1;
+  if (a.z() > a[axis]) axis = 2;
+  const double m = a[axis];
+  if (!(m > 0.0) || !std::isfinite(m)) return 0;
+  const int face = 2 * axis + (d[axis] < 0.0 ? 1 : 0);
+  const double u = d[(axis + 1) % 3] / m;
+  const double w = d[(axis + 2) % 3] / m;
+  const auto bin = [k](double x) { return std::clamp(static_cast<int>((x + 1.0) * 0.5 * k), 0, k - 1); };
+  return (face * k + bin(u)) * k + bin(w);
+}
+
+}  // namespace
+
+SupportTable buildSupportTable(const TriMesh& mesh, int cells_per_edge) {
+  if (cells_per_edge < 1) throw std::invalid_argument("buildSupportTable: cells_per_edge must be at least 1");
+  SupportTable table;
+  table.cells_per_edge = cells_per_edge;
+  const int k = cells_per_edge;
+  table.start_vertex.assign(static_cast<std::size_t>(6 * k * k), mesh.numTriangles() > 0 ? mesh.triangle(0)[0] : 0);
+  for (int face = 0; face < 6; ++face) {
+    const int axis = face / 2;
+    const double sign = face % 2 == 0 ? 1.0 : -1.0;
+    for (int i = 0; i < k; ++i) {
+      for (int j = 0; j < k; ++j) {
+        Vector3d d = Vector3d::Zero();
+        d[axis] = sign;
+        d[(axis + 1) % 3] = -1.0 + (2.0 * i + 1.0) / k;
+        d[(axis + 2) % 3] = -1.0 + (2.0 * j + 1.0) / k;
+        double best = -std::numeric_limits<double>::infinity();
+        int best_vertex = table.start_vertex[0];
+        for (int t = 0; t < mesh.numTriangles(); ++t) {
+          for (const int v : mesh.triangle(t)) {
+            const double value = mesh.vertex(v).dot(d);
+            if (value > best) {
+              best = value;
+              best_vertex = v;
+            }
+          }
+        }
+        table.start_vertex[static_cast<std::size_t>((face * k + i) * k + j)] = best_vertex;
+      }
+    }
+  }
+  return table;
+}
+
+int supportTableStart(const SupportTable& table, const Vector3d& direction) noexcept {
+  return table.start_vertex[static_cast<std::size_t>(cubeCell(direction, table.cells_per_edge))];
+}
+
+ConvexBracket buildConvexBracket(const TriMesh& mesh) {
+  ConvexBracket out;
+  const int nv = mesh.numVertices();
+  if (nv == 0 || mesh.numTriangles() == 0) return out;
+  // Only vertices that some triangle uses belong to the body.
+  std::vector<char> used(static_cast<std::size_t>(nv), 0);
+  for (int t = 0; t < mesh.numTriangles(); ++t) {
+    for (const int v : mesh.triangle(t)) used[static_cast<std::size_t>(v)] = 1;
+  }
+  Vector3d mean = Vector3d::Zero();
+  int count = 0;
+  for (int v = 0; v < nv; ++v) {
+    if (used[static_cast<std::size_t>(v)] == 0) continue;
+    mean += mesh.vertex(v);
+    ++count;
+  }
+  mean /= count;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int v = 0; v < nv; ++v) {
+    if (used[static_cast<std::size_t>(v)] == 0) continue;
+    const Vector3d d = mesh.vertex(v) - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const Vector3d axis = eig.eigenvectors().col(2).normalized();  // largest eigenvalue last
+  double t_lo = std::numeric_limits<double>::infinity();
+  double t_hi = -t_lo;
+  double rho = 0.0;
+  for (int v = 0; v < nv; ++v) {
+    if (used[static_cast<std::size_t>(v)] == 0) continue;
+    const Vector3d d = mesh.vertex(v) - mean;
+    const double t = d.dot(axis);
+    t_lo = std::min(t_lo, t);
+    t_hi = std::max(t_hi, t);
+    rho = std::max(rho, (d - t * axis).norm());
+  }
+  double s_lo = t_lo + rho;
+  double s_hi = t_hi - rho;
+  if (s_lo > s_hi) s_lo = s_hi = 0.5 * (t_lo + t_hi);
+  out.a_m = mean + s_lo * axis;
+  out.b_m = mean + s_hi * axis;
+  const Vector3d ab = out.b_m - out.a_m;
+  const double ab_sq = ab.squaredNorm();
+  double outer = 0.0;
+  for (int v = 0; v < nv; ++v) {
+    if (used[static_cast<std::size_t>(v)] == 0) continue;
+    const Vector3d d = mesh.vertex(v) - out.a_m;
+    const double s = ab_sq > 0.0 ? std::clamp(d.dot(ab) / ab_sq, 0.0, 1.0) : 0.0;
+    outer = std::max(outer, (d - s * ab).norm());
+  }
+  // Inner: the segment's ends behind every face plane by at least `inner` (the body is the
+  // intersection of the face half-spaces, and a capsule lies in a half-space iff both ends of
+  // its segment lie at least its radius inside it).
+  double inner = std::numeric_limits<double>::infinity();
+  for (int t = 0; t < mesh.numTriangles(); ++t) {
+    const Vector3d& n = mesh.faceNormal(t);
+    const Vector3d& p = mesh.vertex(mesh.triangle(t)[0]);
+    inner = std::min({inner, n.dot(p - out.a_m), n.dot(p - out.b_m)});
+  }
+  // Rounding margins: the outer capsule grown and the inner one shrunk by 1e-12 relative.
+  out.outer_radius_m = outer * (1.0 + 1e-12) + 1e-15;
+  out.inner_radius_m = inner * (1.0 - 1e-12) - 1e-15;
+  return out;
+}
+
+DistanceBounds pointConvexBracketBounds(const Vector3d& c, const Vector3d& a, const Vector3d& b, double outer_radius_m,
+                                        double inner_radius_m) noexcept {
+  DistanceBounds out;
+  const Vector3d ab = b - a;
+  const Vector3d ac = c - a;
+  const double ab_sq = ab.squaredNorm();
+  const double s = ab_sq > 0.0 ? std::clamp(ac.dot(ab) / ab_sq, 0.0, 1.0) : 0.0;
+  const Vector3d d = ac - s * ab;
+  const double dist = d.norm();
+  out.upper_m = std::max(0.0, dist - inner_radius_m);
+  out.lower_m = dist - outer_radius_m;
+  if (out.lower_m > 0.0) {
+    out.axis = d / dist;
+  } else {
+    out.lower_m = 0.0;
+  }
+  return out;
+}
+
+DistanceBounds triangleConvexBracketBounds(const Vector3d& t0, const Vector3d& t1, const Vector3d& t2,
+                                           const Vector3d& a, const Vector3d& b, double outer_radius_m,
+                                           double inner_radius_m) noexcept {
+  DistanceBounds out;
+  // Closest pair (q on the triangle, s on the segment).
+  Vector3d q = t0;
+  Vector3d s = a;
+  double best_sq = std::numeric_limits<double>::infinity();
+  const auto consider = [&](const Vector3d& on_triangle, const Vector3d& on_segment) {
+    const double d_sq = (on_triangle - on_segment).squaredNorm();
+    if (d_sq < best_sq) {
+      best_sq = d_sq;
+      q = on_triangle;
+      s = on_segment;
+    }
+  };
+  const Vector3d ab = b - a;
+  const Vector3d n = (t1 - t0).cross(t2 - t0);
+  const double side_a = n.dot(a - t0);
+  const double side_b = n.dot(b - t0);
+  bool crosses = false;
+  if (ab.squaredNorm() > 0.0 && side_a * side_b <= 0.0 && side_a != side_b) {
+    // The segment meets the triangle's plane at x: inside the triangle (same side of each edge
+    // as the normal) means the two touch.
+    const Vector3d x = a + (side_a / (side_a - side_b)) * ab;
+    crosses = n.dot((t1 - t0).cross(x - t0)) >= 0.0 && n.dot((t2 - t1).cross(x - t1)) >= 0.0 &&
+              n.dot((t0 - t2).cross(x - t2)) >= 0.0;
+    if (crosses) consider(x, x);
+  }
+  if (!crosses) {
+    consider(closestPointTriangle(a, t0, t1, t2).point, a);
+    if (ab.squaredNorm() > 0.0) {
+      consider(closestPointTriangle(b, t0, t1, t2).point, b);
+      const Vector3d* v[3] = {&t0, &t1, &t2};
+      for (int k = 0; k < 3; ++k) {
+        const SegmentSegmentResult r = closestPointsSegmentSegment(a, b, *v[k], *v[(k + 1) % 3]);
+        consider(r.q, r.p);
+      }
+    }
+  }
+  const double dist = std::sqrt(best_sq);
+  out.upper_m = std::max(0.0, dist - inner_radius_m);
+  out.lower_m = dist - outer_radius_m;
+  if (out.lower_m > 0.0) {
+    out.axis = (q - s) / dist;
+  } else {
+    out.lower_m = 0.0;
+  }
+  return out;
 }
 
 int convexSupportVertex(const VertexGraph& graph, std::span<const Vector3d> vertices, const Vector3d& direction,

@@ -11,15 +11,20 @@
 // - querySnchPair with a convex link: exactly the brute-force minima and the same minima as the
 //   same query with the convex-link bound switched off (a copy of the tree with convex =
 //   false), with fewer exact tests; this is the test that fails when the bound is made too
-//   tight (checked by mutation: limit = bound - 0.1 mm, and the GJK axis negated).
+//   tight (checked by mutation: limit = bound - 0.1 mm, and the GJK axis negated);
+// - the bracket capsules (buildConvexBracket) and their point and triangle distance bounds
+//   against brute force and a golden-section search along the segment; the support table's
+//   start vertices against the brute-force maximum.
 #include "fullarm/haptics/convex_distance.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <numbers>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "alloc_guard.hpp"
@@ -289,6 +294,201 @@ TEST(ConvexDistanceTest, ConvexLinkWithAnUnusedVertexZeroKeepsEveryBruteForceMin
   EXPECT_GT(minima, 30);
 }
 
+// Brute force: distance from a point to the body of a closed convex mesh (0 inside, behind
+// every face plane; else the nearest triangle).
+double bruteForcePointDistance(const Vector3d& p, const TriMesh& m) {
+  bool inside = true;
+  for (int f = 0; f < m.numTriangles() && inside; ++f) {
+    inside = m.faceNormal(f).dot(p - m.vertex(m.triangle(f)[0])) <= 0.0;
+  }
+  if (inside) return 0.0;
+  double best = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < m.numTriangles(); ++f) {
+    const auto& tri = m.triangle(f);
+    best = std::min(best, closestPointTriangle(p, m.vertex(tri[0]), m.vertex(tri[1]), m.vertex(tri[2])).distance_m);
+  }
+  return best;
+}
+
+// Independent oracle of the segment-triangle distance: the distance from the segment's point
+// at parameter s to the triangle is convex in s; golden-section search on it.
+double segmentTriangleDistanceBySearch(const Vector3d& a, const Vector3d& b, const Vector3d (&t)[3]) {
+  const auto f = [&](double s) { return closestPointTriangle(a + s * (b - a), t[0], t[1], t[2]).distance_m; };
+  double lo = 0.0;
+  double hi = 1.0;
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  for (int it = 0; it < 200; ++it) {
+    const double x1 = hi - g * (hi - lo);
+    const double x2 = lo + g * (hi - lo);
+    if (f(x1) < f(x2)) {
+      hi = x2;
+    } else {
+      lo = x1;
+    }
+  }
+  return std::min({f(0.0), f(1.0), f(0.5 * (lo + hi))});
+}
+
+// The bracket: every vertex within the outer capsule (brute force over the vertices), the inner
+// capsule inside the body (its segment's points sampled along with sphere directions: each
+// point at the inner radius is behind every face plane), and on the arm's 16 x 4 capsules the
+// radii within 4 % of the capsule's (the principal-axis segment found the capsule's axis).
+TEST(ConvexDistanceTest, BracketCapsulesHoldTheBodyBetweenThem) {
+  std::mt19937 rng(21);
+  for (int trial = 0; trial < 200; ++trial) {
+    const TriMesh m = randomConvexMesh(rng);
+    const ConvexBracket br = buildConvexBracket(m);
+    ASSERT_TRUE(br.valid()) << "trial " << trial;
+    ASSERT_GE(br.outer_radius_m, br.inner_radius_m);
+    for (int v = 0; v < m.numVertices(); ++v) {
+      const SegmentSegmentResult r = closestPointsSegmentSegment(m.vertex(v), m.vertex(v), br.a_m, br.b_m);
+      EXPECT_LE(r.distance_m, br.outer_radius_m) << "trial " << trial;
+    }
+    for (int k = 0; k < 40; ++k) {
+      const double s = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+      const Vector3d p = br.a_m + s * (br.b_m - br.a_m) + br.inner_radius_m * randomUnit(rng);
+      EXPECT_EQ(bruteForcePointDistance(p, m), 0.0) << "trial " << trial;
+    }
+  }
+  const double radius = 0.045;
+  const TriMesh capsule = makeCapsule({0.01, 0.02, 0.0}, {0.05, -0.1, 0.25}, radius, 16, 4);
+  const ConvexBracket br = buildConvexBracket(capsule);
+  EXPECT_NEAR(br.outer_radius_m, radius, 1e-9);
+  EXPECT_GT(br.inner_radius_m, 0.96 * radius);
+  const Vector3d from(0.01, 0.02, 0.0);
+  const Vector3d to(0.05, -0.1, 0.25);
+  // The capsule's own axis segment, in either direction.
+  EXPECT_LT(std::min((br.a_m - from).norm() + (br.b_m - to).norm(), (br.a_m - to).norm() + (br.b_m - from).norm()),
+            1e-9);
+}
+
+// The bracket's distance bounds against brute force, for points and for triangles (1-60 mm
+// across, from inside the body to 0.1 m out): lower <= distance <= upper, the axis separates
+// the point or triangle from every mesh vertex by the lower bound, and the triangle's closest
+// pair with the segment is exact (golden-section search along the segment, 1e-9 m).
+TEST(ConvexDistanceTest, BracketBoundsBracketTheBruteForceDistance) {
+  std::mt19937 rng(22);
+  int apart = 0;
+  int touching = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const TriMesh m = randomConvexMesh(rng);
+    const std::vector<Vector3d> v = verticesOf(m);
+    const ConvexBracket br = buildConvexBracket(m);
+    std::uniform_real_distribution<double> u(-0.2, 0.2);
+    const Vector3d centre = Vector3d(u(rng), u(rng), u(rng) + 0.1);
+    const double size = std::uniform_real_distribution<double>(0.001, 0.06)(rng);
+    const Vector3d t[3] = {centre + size * randomUnit(rng), centre + size * randomUnit(rng),
+                           centre + size * randomUnit(rng)};
+    const DistanceBounds pb = pointConvexBracketBounds(centre, br.a_m, br.b_m, br.outer_radius_m, br.inner_radius_m);
+    const double point_brute = bruteForcePointDistance(centre, m);
+    EXPECT_LE(pb.lower_m, point_brute + 1e-12) << "trial " << trial;
+    EXPECT_GE(pb.upper_m, point_brute - 1e-12) << "trial " << trial;
+    if (pb.lower_m > 0.0) {
+      for (const Vector3d& q : v) EXPECT_GE(pb.axis.dot(centre - q), pb.lower_m - 1e-12) << "trial " << trial;
+    }
+    const DistanceBounds tb =
+        triangleConvexBracketBounds(t[0], t[1], t[2], br.a_m, br.b_m, br.outer_radius_m, br.inner_radius_m);
+    const double brute = bruteForceDistance(t, m);
+    EXPECT_LE(tb.lower_m, brute + 1e-12) << "trial " << trial;
+    EXPECT_GE(tb.upper_m, brute - 1e-12) << "trial " << trial;
+    const double segment_distance = segmentTriangleDistanceBySearch(br.a_m, br.b_m, t);
+    if (segment_distance > br.inner_radius_m) {
+      EXPECT_NEAR(tb.upper_m, segment_distance - br.inner_radius_m, 1e-9) << "trial " << trial;
+    } else {
+      EXPECT_EQ(tb.upper_m, 0.0) << "trial " << trial;
+    }
+    if (tb.lower_m > 0.0) {
+      EXPECT_NEAR(tb.lower_m, segment_distance - br.outer_radius_m, 1e-9) << "trial " << trial;
+      for (const Vector3d& p : t) {
+        for (const Vector3d& q : v) EXPECT_GE(tb.axis.dot(p - q), tb.lower_m - 1e-12) << "trial " << trial;
+      }
+      ++apart;
+    } else if (brute == 0.0) {
+      ++touching;
+    }
+  }
+  EXPECT_GT(apart, 150);
+  EXPECT_GT(touching, 10);
+}
+
+// The table's start vertices: a vertex that some triangle uses (also when vertex 0 is an
+// isolated interior point), near the top along the looked-up direction (within the cell's
+// angular size of the brute-force maximum: the climb from it is short), and the climb from it
+// exact.
+TEST(ConvexDistanceTest, SupportTableStartsNearTheFarthestVertex) {
+  std::mt19937 rng(23);
+  for (int trial = 0; trial < 100; ++trial) {
+    const TriMesh base = randomConvexMesh(rng);
+    std::vector<Vector3d> vertices{Vector3d::Zero()};
+    for (int v = 0; v < base.numVertices(); ++v) vertices.push_back(base.vertex(v));
+    std::vector<Eigen::Vector3i> triangles;
+    for (int t = 0; t < base.numTriangles(); ++t) triangles.push_back(base.triangle(t) + Eigen::Vector3i::Ones());
+    const TriMesh m = TriMesh::build("convex mesh with an unused vertex 0", vertices, triangles);
+    const SupportTable table = buildSupportTable(m, kSupportTableCells);
+    const VertexGraph graph = buildVertexGraph(m);
+    const std::vector<Vector3d> v = verticesOf(m);
+    double extent = 0.0;
+    for (const Vector3d& p : v) extent = std::max(extent, p.norm());
+    for (int k = 0; k < 50; ++k) {
+      const Vector3d d = randomUnit(rng);
+      const int start = supportTableStart(table, d);
+      EXPECT_FALSE(m.vertexTriangles(start).empty()) << "trial " << trial;
+      double best = -std::numeric_limits<double>::infinity();
+      for (const Vector3d& p : v) best = std::max(best, p.dot(d));
+      // A cell of a 6 x 6 cube face spans less than 0.5 rad: its vertex is the maximum along a
+      // direction e with |e - d| < 0.5, so v_start . d >= best - 2 x 0.5 x extent.
+      EXPECT_GE(v[static_cast<std::size_t>(start)].dot(d), best - extent) << "trial " << trial;
+      EXPECT_EQ(v[static_cast<std::size_t>(convexSupportVertex(graph, v, d, start))].dot(d), best);
+    }
+  }
+  EXPECT_THROW((void)buildSupportTable(makeBox({1, 1, 1}, 0.5), 0), std::invalid_argument);
+}
+
+// The direction test of the convex-link query (snch.cpp) rests on the residual of the
+// projection onto the body, F(x) = x - P(x), being nonexpansive: the directions of points q
+// within r of c lie within asin(r / |F(c)|) of F(c). Checked with the brute-force projection
+// (nearest point over all triangles) on random convex meshes; the bound is also nearly
+// attained (so half of it would be wrong: the test would catch asin(r / (2 D))).
+TEST(ConvexDistanceTest, ProjectionResidualIsNonexpansive) {
+  std::mt19937 rng(24);
+  const auto residual = [](const Vector3d& x, const TriMesh& m) {
+    Vector3d best_point = x;
+    double best = std::numeric_limits<double>::infinity();
+    for (int f = 0; f < m.numTriangles(); ++f) {
+      const auto& tri = m.triangle(f);
+      const PointTriangleResult r = closestPointTriangle(x, m.vertex(tri[0]), m.vertex(tri[1]), m.vertex(tri[2]));
+      if (r.distance_m < best) {
+        best = r.distance_m;
+        best_point = r.point;
+      }
+    }
+    return Vector3d(x - best_point);
+  };
+  int near_tight = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const TriMesh m = randomConvexMesh(rng);
+    const ConvexBracket br = buildConvexBracket(m);
+    const Vector3d mid = 0.5 * (br.a_m + br.b_m);
+    const Vector3d c = mid +
+                       (br.outer_radius_m + std::uniform_real_distribution<double>(0.005, 0.1)(rng)) * randomUnit(rng) +
+                       std::uniform_real_distribution<double>(-0.5, 0.5)(rng) * (br.b_m - br.a_m);
+    if (bruteForcePointDistance(c, m) == 0.0) continue;
+    const Vector3d fc = residual(c, m);
+    const double d = fc.norm();
+    for (int k = 0; k < 10; ++k) {
+      const double r = std::uniform_real_distribution<double>(0.0, 0.95)(rng) * d;
+      const Vector3d q = c + r * randomUnit(rng);
+      if (bruteForcePointDistance(q, m) == 0.0) continue;
+      const Vector3d fq = residual(q, m);
+      EXPECT_LE((fq - fc).norm(), (q - c).norm() + 1e-12) << "trial " << trial;
+      const double angle = std::atan2(fq.cross(fc).norm(), fq.dot(fc));
+      EXPECT_LE(angle, std::asin(std::min(1.0, (q - c).norm() / d)) + 1e-9) << "trial " << trial;
+      if ((fq - fc).norm() > 0.9 * (q - c).norm()) ++near_tight;
+    }
+  }
+  EXPECT_GT(near_tight, 100);
+}
+
 TEST(ConvexDistanceTest, KernelsDoNotAllocate) {
   const TriMesh m = makeCapsule({0, 0, 0}, {0, 0, 0.3}, 0.05, 16, 4);
   const std::vector<Vector3d> v = verticesOf(m);
@@ -299,6 +499,20 @@ TEST(ConvexDistanceTest, KernelsDoNotAllocate) {
   EXPECT_NO_HEAP_ALLOCATION(s = convexSupportVertex(graph, v, Vector3d(0.3, -0.2, 0.9).normalized(), 0));
   EXPECT_NO_HEAP_ALLOCATION(b = triangleConvexMeshDistanceBounds(Vector3d(0.1, 0, 0.1), Vector3d(0.1, 0.05, 0.12),
                                                                  Vector3d(0.12, 0, 0.2), graph, v, 1.0, 1e-9, warm));
+  const ConvexBracket br = buildConvexBracket(m);
+  const SupportTable table = buildSupportTable(m, kSupportTableCells);
+  DistanceBounds pb;
+  DistanceBounds tb;
+  int start = -1;
+  EXPECT_NO_HEAP_ALLOCATION(
+      pb = pointConvexBracketBounds(Vector3d(0.1, 0, 0.1), br.a_m, br.b_m, br.outer_radius_m, br.inner_radius_m));
+  EXPECT_NO_HEAP_ALLOCATION(tb = triangleConvexBracketBounds(Vector3d(0.1, 0, 0.1), Vector3d(0.1, 0.05, 0.12),
+                                                             Vector3d(0.12, 0, 0.2), br.a_m, br.b_m, br.outer_radius_m,
+                                                             br.inner_radius_m));
+  EXPECT_NO_HEAP_ALLOCATION(start = supportTableStart(table, Vector3d(0.3, -0.2, 0.9)));
+  EXPECT_NEAR(pb.lower_m, 0.05, 1e-9);  // the outer capsule is the capsule: 0.1 - 0.05
+  EXPECT_NEAR(tb.lower_m, 0.05, 1e-9);
+  EXPECT_GE(start, 0);
   EXPECT_GE(s, 0);
   EXPECT_GT(b.lower_m, 0.04);  // the capsule's side at x = 0.05 (inscribed: up to 1 % in)
   EXPECT_LT(b.upper_m, 0.0501);

@@ -91,7 +91,16 @@ struct SnchTree {
   /// only). Not simply vertex 0: a vertex no triangle uses (a copy removed by welding, or one of
   /// a dropped degenerate triangle) has no neighbours, and a climb from it would never move.
   int support_start_vertex = 0;
+  /// Capsules around a common segment that bracket the body (convex meshes only): the query
+  /// bounds an object node's distance to the link by them before (or instead of) GJK.
+  ConvexBracket bracket;
+  /// Start vertices of the support climbs by direction (convex meshes only; mesh frame).
+  SupportTable support_table;
 };
+
+/// Cells per cube-face edge of SnchTree::support_table (6 x 6 x 6 = 216 directions, about 15
+/// degrees each: finer than the facets of the arm's 16-segment capsules).
+inline constexpr int kSupportTableCells = 6;
 
 /// Relative tolerance of the convexity check (of the mesh's bounding-box diagonal).
 inline constexpr double kConvexTolerance = 1e-9;
@@ -113,7 +122,8 @@ inline constexpr double kConvexBoundSlack_m = 1e-6;
 /// [m] (the upper bound then starts the triangle's bound; the exact tests tighten it).
 inline constexpr double kConvexHullTolerance_m = 2e-5;
 /// Same for an object node's sphere against a convex link [m] (its lower bound prunes the node;
-/// both bounds bound the direction of its minima).
+/// both bounds bound the direction of its minima). Used only for links whose SnchTree::bracket
+/// is not valid; otherwise the bracket capsules bound the node.
 inline constexpr double kConvexNodeTolerance_m = 1e-3;
 
 /// Builds the hierarchy (top-down median split along the longest extent of the centroids).
