@@ -288,15 +288,26 @@ ConvexBracket buildConvexBracket(const TriMesh& mesh) {
   return out;
 }
 
+namespace {
+// Bounds that prune nothing: lower 0 (the node or triangle must be visited) and upper infinity.
+DistanceBounds uninformativeBounds() noexcept {
+  DistanceBounds out;
+  out.upper_m = std::numeric_limits<double>::infinity();
+  return out;
+}
+}  // namespace
+
 DistanceBounds pointConvexBracketBounds(const Vector3d& c, const Vector3d& a, const Vector3d& b, double outer_radius_m,
                                         double inner_radius_m) noexcept {
   DistanceBounds out;
   const Vector3d ab = b - a;
   const Vector3d ac = c - a;
   const double ab_sq = ab.squaredNorm();
+  if (!std::isfinite(ab_sq)) return uninformativeBounds();
   const double s = ab_sq > 0.0 ? std::clamp(ac.dot(ab) / ab_sq, 0.0, 1.0) : 0.0;
   const Vector3d d = ac - s * ab;
   const double dist = d.norm();
+  if (!std::isfinite(dist)) return uninformativeBounds();
   out.upper_m = std::max(0.0, dist - inner_radius_m);
   out.lower_m = dist - outer_radius_m;
   if (out.lower_m > 0.0) {
@@ -324,6 +335,9 @@ DistanceBounds triangleConvexBracketBounds(const Vector3d& t0, const Vector3d& t
     }
   };
   const Vector3d ab = b - a;
+  if (!(std::isfinite(ab.squaredNorm()) && t0.allFinite() && t1.allFinite() && t2.allFinite())) {
+    return uninformativeBounds();
+  }
   const Vector3d n = (t1 - t0).cross(t2 - t0);
   const double side_a = n.dot(a - t0);
   const double side_b = n.dot(b - t0);
@@ -347,6 +361,9 @@ DistanceBounds triangleConvexBracketBounds(const Vector3d& t0, const Vector3d& t
       }
     }
   }
+  // NaN or infinite input (a NaN pose): no candidate compared below infinity. Say nothing
+  // rather than "far apart", which would prune silently.
+  if (!std::isfinite(best_sq)) return uninformativeBounds();
   const double dist = std::sqrt(best_sq);
   out.upper_m = std::max(0.0, dist - inner_radius_m);
   out.lower_m = dist - outer_radius_m;
