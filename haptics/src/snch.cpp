@@ -815,7 +815,8 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
     const std::uint32_t stamp = nextStamp(scratch.link_stamp, scratch.link_vertex_stamp, scratch.link_triangle_stamp);
     auto& frontier = scratch.link_frontier;
     frontier.clear();
-    const int top = convexSupportVertex(link_tree.vertex_graph, vertex_O, axis, warm);
+    const int top = convexSupportVertex(link_tree.vertex_graph, vertex_O, axis, climbStart(axis, warm));
+    warm = top;
     if (vertex_O[static_cast<std::size_t>(top)].dot(axis) >= level) {
       frontier.push_back(top);
       scratch.link_vertex_stamp[static_cast<std::size_t>(top)] = stamp;
