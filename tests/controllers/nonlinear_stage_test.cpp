@@ -443,7 +443,9 @@ TEST(NonlinearStage, ScoreDoesNotDependOnTheThreadCount) {
 // runs, in blocks sized by how many threads are free at that moment: the stage's result must be the
 // sequential one (threads = 1) whatever the scheduling. Two stages on the pool at once (the same
 // joint with two seeds: the second job's own runs compete with the first job's blocks), small budget
-// with capped evaluations (SFE's old gains fail a ring corner) and a check batch.
+// with capped evaluations (SFE's old gains fail a ring corner) and a check batch. Three threads for
+// two jobs, so that a worker is idle from the start and the blocks are larger than one run (with
+// two threads they could stay at one run, the sequential path, until a job ends).
 TEST(NonlinearStage, OnASharedPoolTheStageGivesTheSequentialResult) {
   const ValidationConfig vc = defaultValidation();
   const JointScenario sc = sfeWithItsOldGains(vc);
@@ -460,7 +462,7 @@ TEST(NonlinearStage, OnASharedPoolTheStageGivesTheSequentialResult) {
   }
   EXPECT_EQ(sequential[0].evaluations, 3);  // the start and two capped evaluations of the search
   {
-    JobPool pool(2);
+    JobPool pool(3);
     std::vector<NonlinearStageResult> pooled(2);
     pool.run(2, [&](int k) {
       NonlinearStageOptions po = o;
