@@ -395,16 +395,12 @@ namespace {
 // evaluateTrianglePair with the link vertices in the object frame given by `link_vertex_O(v)`
 // (X_OL * vertex, computed on the fly or read from a per-query cache: the same values).
 // `pair_distance_m` receives the distance of the two triangles (a minimum or not).
+// evaluatePair with the triangles' closest pair `r` already computed (the convex-link path
+// prepares the object triangle once per leaf).
 template <class LinkVertex>
-bool evaluatePair(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int tri_link, const TriMesh& object_mesh,
-                  int tri_object, const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out,
-                  double& pair_distance_m) noexcept {
-  const auto& ta = link_mesh.triangle(tri_link);
-  const auto& tb = object_mesh.triangle(tri_object);
-  const TriangleTriangleResult r =
-      closestPointsTriangleTriangle(link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2]),
-                                    object_mesh.vertex(tb[0]), object_mesh.vertex(tb[1]), object_mesh.vertex(tb[2]));
-  pair_distance_m = r.distance_m;
+bool evaluatePairResult(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int tri_link,
+                        const TriMesh& object_mesh, int tri_object, const Isometry3d& X_OL, double cutoff_m,
+                        const TriangleTriangleResult& r, LocalMinimum& out) noexcept {
   if (r.distance_m > cutoff_m) return false;
   const Feature fl = meshFeature(link_mesh, tri_link, r.feature_a);
   const Feature fo = meshFeature(object_mesh, tri_object, r.feature_b);
@@ -449,6 +445,19 @@ bool evaluatePair(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int
   out.u_W = u;
   out.previous_distance_m = std::numeric_limits<double>::quiet_NaN();
   return true;
+}
+
+template <class LinkVertex>
+bool evaluatePair(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int tri_link, const TriMesh& object_mesh,
+                  int tri_object, const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out,
+                  double& pair_distance_m) noexcept {
+  const auto& ta = link_mesh.triangle(tri_link);
+  const auto& tb = object_mesh.triangle(tri_object);
+  const TriangleTriangleResult r =
+      closestPointsTriangleTriangle(link_vertex_O(ta[0]), link_vertex_O(ta[1]), link_vertex_O(ta[2]),
+                                    object_mesh.vertex(tb[0]), object_mesh.vertex(tb[1]), object_mesh.vertex(tb[2]));
+  pair_distance_m = r.distance_m;
+  return evaluatePairResult(link_mesh, link_vertex_O, tri_link, object_mesh, tri_object, X_OL, cutoff_m, r, out);
 }
 
 }  // namespace
@@ -647,7 +656,14 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
   const auto n_link_vertices = static_cast<std::size_t>(link_mesh.numVertices());
   const auto n_link_triangles = static_cast<std::size_t>(link_mesh.numTriangles());
   vertex_O.resize(n_link_vertices);
-  for (std::size_t v = 0; v < n_link_vertices; ++v) vertex_O[v] = X_OL * link_mesh.vertex(static_cast<int>(v));
+  // The link's vertices in the object frame, on first use: most link/object pairs end at the
+  // roots or at the bracket bounds of the object's inner nodes and never read them.
+  bool vertices_ready = false;
+  const auto readyVertices = [&]() noexcept {
+    if (vertices_ready) return;
+    for (std::size_t v = 0; v < n_link_vertices; ++v) vertex_O[v] = X_OL * link_mesh.vertex(static_cast<int>(v));
+    vertices_ready = true;
+  };
   if (scratch.link_vertex_stamp.size() < n_link_vertices) scratch.link_vertex_stamp.resize(n_link_vertices, 0);
   if (scratch.link_triangle_stamp.size() < n_link_triangles) scratch.link_triangle_stamp.resize(n_link_triangles, 0);
   // The bracket capsules in the object frame (SnchTree::bracket; GJK on the node centres when
@@ -682,6 +698,7 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
     if (use_bracket && seg_hi + bracket.inner_radius_m - q_lo >= need) {
       admits = true;
     } else if (!use_bracket || seg_hi + bracket.outer_radius_m - q_lo >= need) {
+      readyVertices();
       cone_warm = convexSupportVertex(link_tree.vertex_graph, vertex_O, axis, climbStart(axis, cone_warm));
       admits = vertex_O[static_cast<std::size_t>(cone_warm)].dot(axis) - q_lo >= need;
     }
@@ -690,6 +707,7 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
     // Lowest, p_lo in [seg_lo - outer, seg_lo - inner].
     if (use_bracket && q_hi - seg_lo + bracket.inner_radius_m >= need) return true;
     if (use_bracket && q_hi - seg_lo + bracket.outer_radius_m < need) return false;
+    readyVertices();
     const int low = convexSupportVertex(link_tree.vertex_graph, vertex_O, -axis, climbStart(-axis, cone_warm));
     const double p_lo = vertex_O[static_cast<std::size_t>(low)].dot(axis);
     return q_hi - p_lo >= need;
@@ -723,6 +741,7 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
       if (use_bracket) {
         db = pointConvexBracketBounds(b.centre_m, bracket_a, bracket_b, bracket.outer_radius_m, bracket.inner_radius_m);
       } else {
+        readyVertices();
         db = triangleConvexMeshDistanceBounds(b.centre_m, b.centre_m, b.centre_m, link_tree.vertex_graph, vertex_O,
                                               cutoff_m + b.radius_m, kConvexNodeTolerance_m, warm);
         ++st.convex_hull_tests;
@@ -788,6 +807,7 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
     }
     if (!use_bracket || !(db.lower_m > 0.0) ||
         (db.lower_m <= cutoff_m + kConvexBoundSlack_m && db.upper_m > cutoff_m + kConvexBoundSlack_m)) {
+      readyVertices();
       db = triangleConvexMeshDistanceBounds(vb[0], vb[1], vb[2], link_tree.vertex_graph, vertex_O,
                                             cutoff_m + kConvexBoundSlack_m, kConvexHullTolerance_m, warm);
       ++st.convex_hull_tests;
@@ -805,6 +825,10 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
         continue;
       }
     }
+    readyVertices();
+    // B prepared for the exact tests on first use (most leaves reach none).
+    PreparedTriangle prepared_b;
+    bool b_prepared = false;
     double bound_m = db.upper_m;
     const Vector3d& axis = db.axis;
     const double b_min = std::min({axis.dot(vb[0]), axis.dot(vb[1]), axis.dot(vb[2])});
@@ -870,14 +894,19 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
           continue;
         }
         ++st.triangle_pairs_tested;
-        double pair_distance_m = 0.0;
-        if (evaluatePair(
+        if (!b_prepared) {
+          prepared_b = prepareTriangle(vb[0], vb[1], vb[2]);
+          b_prepared = true;
+        }
+        const TriangleTriangleResult r =
+            closestPointsTriangleTriangle(prepareTriangle(va[0], va[1], va[2]), prepared_b);
+        if (evaluatePairResult(
                 link_mesh, [&](int w) -> const Vector3d& { return vertex_O[static_cast<std::size_t>(w)]; }, tri_link,
-                obj_mesh, b.triangle, X_OL, limit, m, pair_distance_m)) {
+                obj_mesh, b.triangle, X_OL, limit, r, m)) {
           m.u_W = X_WO.linear() * m.u_W;
           out.push_back(m);
         }
-        bound_m = std::min(bound_m, pair_distance_m);
+        bound_m = std::min(bound_m, r.distance_m);
       }
     }
   }
