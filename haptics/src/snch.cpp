@@ -848,14 +848,18 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
       frontier.push_back(top);
       scratch.link_vertex_stamp[static_cast<std::size_t>(top)] = stamp;
     }
+    // Over the vertex graph's edges (on a closed mesh a vertex's neighbours are the other
+    // vertices of its triangles, each listed once); a vertex is stamped when first tested, so
+    // one below the level is not tested again from its other neighbours.
+    const VertexGraph& graph = link_tree.vertex_graph;
     for (std::size_t f = 0; f < frontier.size(); ++f) {
-      for (const int t : link_mesh.vertexTriangles(frontier[f])) {
-        for (const int w : link_mesh.triangle(t)) {
-          const auto wk = static_cast<std::size_t>(w);
-          if (scratch.link_vertex_stamp[wk] == stamp || vertex_O[wk].dot(axis) < level) continue;
-          scratch.link_vertex_stamp[wk] = stamp;
-          frontier.push_back(w);
-        }
+      const auto v = static_cast<std::size_t>(frontier[f]);
+      for (int k = graph.offset[v]; k < graph.offset[v + 1]; ++k) {
+        const int w = graph.neighbours[static_cast<std::size_t>(k)];
+        const auto wk = static_cast<std::size_t>(w);
+        if (scratch.link_vertex_stamp[wk] == stamp) continue;
+        scratch.link_vertex_stamp[wk] = stamp;
+        if (vertex_O[wk].dot(axis) >= level) frontier.push_back(w);
       }
     }
     for (const int v : frontier) {
