@@ -668,6 +668,7 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
     vertices_ready = true;
   };
   if (scratch.link_vertex_stamp.size() < n_link_vertices) scratch.link_vertex_stamp.resize(n_link_vertices, 0);
+  if (scratch.link_vertex_height.size() < n_link_vertices) scratch.link_vertex_height.resize(n_link_vertices, 0.0);
   if (scratch.link_triangle_stamp.size() < n_link_triangles) scratch.link_triangle_stamp.resize(n_link_triangles, 0);
   // The bracket capsules in the object frame (SnchTree::bracket; GJK on the node centres when
   // it is not valid).
@@ -844,7 +845,9 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
     frontier.clear();
     const int top = convexSupportVertex(link_tree.vertex_graph, vertex_O, axis, climbStart(axis, warm));
     warm = top;
-    if (vertex_O[static_cast<std::size_t>(top)].dot(axis) >= level) {
+    auto& height = scratch.link_vertex_height;
+    height[static_cast<std::size_t>(top)] = vertex_O[static_cast<std::size_t>(top)].dot(axis);
+    if (height[static_cast<std::size_t>(top)] >= level) {
       frontier.push_back(top);
       scratch.link_vertex_stamp[static_cast<std::size_t>(top)] = stamp;
     }
@@ -859,7 +862,8 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
         const auto wk = static_cast<std::size_t>(w);
         if (scratch.link_vertex_stamp[wk] == stamp) continue;
         scratch.link_vertex_stamp[wk] = stamp;
-        if (vertex_O[wk].dot(axis) >= level) frontier.push_back(w);
+        height[wk] = vertex_O[wk].dot(axis);
+        if (height[wk] >= level) frontier.push_back(w);
       }
     }
     for (const int v : frontier) {
@@ -870,17 +874,20 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
         ++st.node_pairs_visited;
         const double limit = std::min(cutoff_m, bound_m + kConvexBoundSlack_m);
         const auto& ta = link_mesh.triangle(tri_link);
-        const Vector3d va[3] = {vertex_O[static_cast<std::size_t>(ta[0])], vertex_O[static_cast<std::size_t>(ta[1])],
-                                vertex_O[static_cast<std::size_t>(ta[2])]};
-        // A lower bound on the pair's distance along the leaf's axis (3 dot products): above the
-        // bound B's minima cannot be this far; else the cone tests with it, the face-normal
-        // separating axes, then the exact test, which stops at `limit` (a pair farther than the
-        // bound holds no minimum either).
-        const double axis_gap = b_min - std::max({axis.dot(va[0]), axis.dot(va[1]), axis.dot(va[2])});
+        // A lower bound on the pair's distance along the leaf's axis (the heights of the
+        // triangle's vertices, all taken by the walk: each is in the frontier or a neighbour of a
+        // frontier vertex): above the bound B's minima cannot be this far; else the cone tests
+        // with it, the face-normal separating axes, then the exact test, which stops at `limit`
+        // (a pair farther than the bound holds no minimum either).
+        const double axis_gap =
+            b_min - std::max({height[static_cast<std::size_t>(ta[0])], height[static_cast<std::size_t>(ta[1])],
+                              height[static_cast<std::size_t>(ta[2])]});
         if (axis_gap > limit) {
           ++st.pruned_by_convex_bound;
           continue;
         }
+        const Vector3d va[3] = {vertex_O[static_cast<std::size_t>(ta[0])], vertex_O[static_cast<std::size_t>(ta[1])],
+                                vertex_O[static_cast<std::size_t>(ta[2])]};
         const SnchNode& a = link_tree.nodes[static_cast<std::size_t>(link_tree.leaf_of_triangle[tk])];
         const Vector3d a_axis = R_OL * a.cone_axis;
         const Vector3d leaf_diff = b.centre_m - X_OL * a.centre_m;
