@@ -631,6 +631,28 @@ bool leafConesAdmit(const SnchNode& a, const Vector3d& a_axis, const SnchNode& b
   return true;
 }
 
+// leafConesAdmit with [qb_lo, qb_hi] = the range of q . a_B over B given (the convex-link path
+// computes it once per object leaf): the same tests.
+bool leafConesAdmit(const SnchNode& a, const Vector3d& a_axis, const SnchNode& b, const Vector3d (&va)[3],
+                    const Vector3d (&vb)[3], double qb_lo, double qb_hi, double gap_m) noexcept {
+  if (a.cone_cos > 0.0) {
+    const double p0 = va[0].dot(a_axis), p1 = va[1].dot(a_axis), p2 = va[2].dot(a_axis);
+    const double q0 = vb[0].dot(a_axis), q1 = vb[1].dot(a_axis), q2 = vb[2].dot(a_axis);
+    const double hi = std::max({q0, q1, q2}) - std::min({p0, p1, p2});
+    const double lo = std::min({q0, q1, q2}) - std::max({p0, p1, p2});
+    const double reach = a.cone_two_sided ? std::max(hi, -lo) : hi;
+    if (reach < a.cone_cos * gap_m) return false;
+  }
+  if (b.cone_cos > 0.0) {
+    const double p0 = va[0].dot(b.cone_axis), p1 = va[1].dot(b.cone_axis), p2 = va[2].dot(b.cone_axis);
+    const double hi = qb_hi - std::min({p0, p1, p2});
+    const double lo = qb_lo - std::max({p0, p1, p2});
+    const double reach = b.cone_two_sided ? std::max(hi, -lo) : -lo;
+    if (reach < b.cone_cos * gap_m) return false;
+  }
+  return true;
+}
+
 // Bumps a per-element stamp counter; on wrap-around clears the stamps so no entry looks current.
 std::uint32_t nextStamp(std::uint32_t& counter, std::vector<std::uint32_t>& a, std::vector<std::uint32_t>& b) noexcept {
   if (++counter == 0) {
@@ -820,14 +842,19 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
       ++st.pruned_by_distance;
       continue;
     }
-    if (db.lower_m > kConeTestMinGap_m && b.cone_cos > 0.0) {
+    // B's extent along its cone axis, for the cone tests below.
+    double qb_lo = 0.0;
+    double qb_hi = 0.0;
+    if (b.cone_cos > 0.0) {
       const double v0 = b.cone_axis.dot(vb[0]);
       const double v1 = b.cone_axis.dot(vb[1]);
       const double v2 = b.cone_axis.dot(vb[2]);
-      if (!objectConeAdmits(b, std::min({v0, v1, v2}), std::max({v0, v1, v2}), db.lower_m)) {
-        ++st.pruned_by_cone;
-        continue;
-      }
+      qb_lo = std::min({v0, v1, v2});
+      qb_hi = std::max({v0, v1, v2});
+    }
+    if (db.lower_m > kConeTestMinGap_m && b.cone_cos > 0.0 && !objectConeAdmits(b, qb_lo, qb_hi, db.lower_m)) {
+      ++st.pruned_by_cone;
+      continue;
     }
     readyVertices();
     // B prepared for the exact tests on first use (most leaves reach none).
@@ -893,7 +920,7 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
         const Vector3d leaf_diff = b.centre_m - X_OL * a.centre_m;
         const double leaf_dist = leaf_diff.norm();
         if (axis_gap > kConeTestMinGap_m && (!conesAdmit(a, a_axis, b, R_OL, leaf_diff, leaf_dist, axis_gap) ||
-                                             !leafConesAdmit(a, a_axis, b, va, vb, axis_gap))) {
+                                             !leafConesAdmit(a, a_axis, b, va, vb, qb_lo, qb_hi, axis_gap))) {
           ++st.pruned_by_cone;
           continue;
         }
