@@ -153,6 +153,8 @@ struct SnchQueryScratch {
   std::vector<std::uint32_t> link_triangle_stamp;
   std::uint32_t link_stamp = 0;
   std::vector<int> link_frontier;
+  /// Convex links: each stamped vertex's height along the current object triangle's axis [m].
+  std::vector<double> link_vertex_height;
 };
 
 /// Counters of the last querySnchPair call.
