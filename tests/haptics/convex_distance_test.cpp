@@ -43,6 +43,16 @@ Vector3d randomUnit(std::mt19937& rng) {
   return Vector3d(n(rng), n(rng), n(rng)).normalized();
 }
 
+// A random triangle 1-60 mm across (written to t) around a random centre (returned) that lies
+// from inside the random convex bodies of these tests to 0.1 m outside them.
+Vector3d randomTriangleNearBody(std::mt19937& rng, Vector3d (&t)[3]) {
+  std::uniform_real_distribution<double> u(-0.2, 0.2);
+  const Vector3d centre = Vector3d(u(rng), u(rng), u(rng) + 0.1);
+  const double size = std::uniform_real_distribution<double>(0.001, 0.06)(rng);
+  for (Vector3d& corner : t) corner = centre + size * randomUnit(rng);
+  return centre;
+}
+
 // A random closed convex mesh: capsule, box or cylinder, 0.05-0.3 m.
 TriMesh randomConvexMesh(std::mt19937& rng) {
   std::uniform_real_distribution<double> size(0.05, 0.3);
@@ -110,11 +120,8 @@ TEST(ConvexDistanceTest, TriangleBoundsBracketTheBruteForceDistance) {
     const std::vector<Vector3d> v = verticesOf(m);
     const VertexGraph graph = buildVertexGraph(m);
     // A random triangle 1-60 mm across around a point from inside the body to 0.1 m outside.
-    std::uniform_real_distribution<double> u(-0.2, 0.2);
-    const Vector3d centre = Vector3d(u(rng), u(rng), u(rng) + 0.1);
-    const double size = std::uniform_real_distribution<double>(0.001, 0.06)(rng);
-    const Vector3d t[3] = {centre + size * randomUnit(rng), centre + size * randomUnit(rng),
-                           centre + size * randomUnit(rng)};
+    Vector3d t[3];
+    (void)randomTriangleNearBody(rng, t);
     const double brute = bruteForceDistance(t, m);
     int warm = std::uniform_int_distribution<int>(0, m.numVertices() - 1)(rng);
     const DistanceBounds b = triangleConvexMeshDistanceBounds(
@@ -374,11 +381,8 @@ TEST(ConvexDistanceTest, BracketBoundsBracketTheBruteForceDistance) {
     const TriMesh m = randomConvexMesh(rng);
     const std::vector<Vector3d> v = verticesOf(m);
     const ConvexBracket br = buildConvexBracket(m);
-    std::uniform_real_distribution<double> u(-0.2, 0.2);
-    const Vector3d centre = Vector3d(u(rng), u(rng), u(rng) + 0.1);
-    const double size = std::uniform_real_distribution<double>(0.001, 0.06)(rng);
-    const Vector3d t[3] = {centre + size * randomUnit(rng), centre + size * randomUnit(rng),
-                           centre + size * randomUnit(rng)};
+    Vector3d t[3];
+    const Vector3d centre = randomTriangleNearBody(rng, t);
     const DistanceBounds pb = pointConvexBracketBounds(centre, br.a_m, br.b_m, br.outer_radius_m, br.inner_radius_m);
     const double point_brute = bruteForcePointDistance(centre, m);
     EXPECT_LE(pb.lower_m, point_brute + 1e-12) << "trial " << trial;
