@@ -73,15 +73,19 @@ std::vector<Vector3d> verticesOf(const TriMesh& m) {
   return v;
 }
 
-// Brute force: 0 if a triangle vertex is inside the closed convex mesh (behind every face
-// plane) or the triangle meets a mesh triangle; else the smallest triangle-triangle distance.
+// Whether p is inside the closed convex mesh: behind (or on) every face plane.
+bool insideConvexMesh(const Vector3d& p, const TriMesh& m) {
+  for (int f = 0; f < m.numTriangles(); ++f) {
+    if (!(m.faceNormal(f).dot(p - m.vertex(m.triangle(f)[0])) <= 0.0)) return false;
+  }
+  return true;
+}
+
+// Brute force: 0 if a triangle vertex is inside the closed convex mesh or the triangle meets a
+// mesh triangle; else the smallest triangle-triangle distance.
 double bruteForceDistance(const Vector3d (&t)[3], const TriMesh& m) {
   for (const Vector3d& p : t) {
-    bool inside = true;
-    for (int f = 0; f < m.numTriangles() && inside; ++f) {
-      inside = m.faceNormal(f).dot(p - m.vertex(m.triangle(f)[0])) <= 0.0;
-    }
-    if (inside) return 0.0;
+    if (insideConvexMesh(p, m)) return 0.0;
   }
   double best = std::numeric_limits<double>::infinity();
   for (int f = 0; f < m.numTriangles(); ++f) {
@@ -301,14 +305,10 @@ TEST(ConvexDistanceTest, ConvexLinkWithAnUnusedVertexZeroKeepsEveryBruteForceMin
   EXPECT_GT(minima, 30);
 }
 
-// Brute force: distance from a point to the body of a closed convex mesh (0 inside, behind
-// every face plane; else the nearest triangle).
+// Brute force: distance from a point to the body of a closed convex mesh (0 inside; else the
+// nearest triangle).
 double bruteForcePointDistance(const Vector3d& p, const TriMesh& m) {
-  bool inside = true;
-  for (int f = 0; f < m.numTriangles() && inside; ++f) {
-    inside = m.faceNormal(f).dot(p - m.vertex(m.triangle(f)[0])) <= 0.0;
-  }
-  if (inside) return 0.0;
+  if (insideConvexMesh(p, m)) return 0.0;
   double best = std::numeric_limits<double>::infinity();
   for (int f = 0; f < m.numTriangles(); ++f) {
     const auto& tri = m.triangle(f);
