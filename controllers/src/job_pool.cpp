@@ -27,7 +27,10 @@ void JobPool::runOneTask(Batch& b, std::unique_lock<std::mutex>& lock) {
     error = std::current_exception();
   }
   lock.lock();
-  if (error && !b.error) b.error = error;
+  if (error && i < b.error_index) {  // the lowest index's error, whatever the timing
+    b.error = error;
+    b.error_index = i;
+  }
   if (++b.done == b.size) wake_.notify_all();  // the batch's owner waits for this
 }
 
@@ -44,7 +47,10 @@ void JobPool::worker() {
         error = std::current_exception();
       }
       lock.lock();
-      if (error && !job_error_) job_error_ = error;
+      if (error && i < job_error_index_) {  // the lowest job's error, whatever the timing
+        job_error_ = error;
+        job_error_index_ = i;
+      }
       if (++jobs_done_ == jobs_) wake_.notify_all();
       continue;
     }
@@ -70,6 +76,7 @@ void JobPool::run(int jobs, const std::function<void(int)>& job) {
     next_job_ = 0;
     jobs_done_ = 0;
     job_error_ = nullptr;
+    job_error_index_ = jobs;
   }
   std::vector<std::thread> pool;
   // All threads start even with fewer jobs: the spare ones help with the jobs' fan-outs.
@@ -100,6 +107,7 @@ void JobPool::fanOut(int tasks, const std::function<void(int)>& task) {
   Batch b;
   b.task = &task;
   b.size = tasks;
+  b.error_index = tasks;
   std::unique_lock<std::mutex> lock(mutex_);
   open_.push_back(&b);
   wake_.notify_all();

@@ -1,6 +1,7 @@
 // The job pool under `fullarm tune`: every job and every fanned-out task runs exactly once for any
 // thread count (brute-force counts), a worker with no job left really runs another job's tasks
-// (two tasks that can only finish together), errors reach the caller, and bad sizes are refused.
+// (two tasks that can only finish together), errors reach the caller (the lowest-numbered
+// failure's), and bad sizes are refused.
 
 #include "fullarm/controllers/job_pool.hpp"
 
@@ -9,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -117,6 +119,49 @@ TEST(JobPool, ErrorsOfJobsAndTasksReachTheCallerAfterTheOthersEnd) {
   EXPECT_TRUE(caught);
   EXPECT_EQ(tasks.load(), 5);
   EXPECT_THROW(JobPool(0), std::invalid_argument);
+}
+
+// The error a caller sees is the lowest-numbered failure's, not the first in time: job 1 (task 1)
+// fails and its thread goes idle (available() == 2, so its error is recorded) before job 0 (task
+// 0) fails. The old rule, first in time, reported job 1 and task 1.
+TEST(JobPool, TheLowestNumberedFailureIsReportedWhateverTheTiming) {
+  JobPool pool(2);
+  std::atomic<bool> job1_failed{false};
+  std::string message;
+  try {
+    pool.run(2, [&](int j) {
+      if (j == 1) {
+        job1_failed = true;
+        throw std::runtime_error("job 1");
+      }
+      EXPECT_TRUE(waitFor([&] { return job1_failed.load(); }));
+      EXPECT_TRUE(waitFor([&] { return pool.available() == 2; }));
+      throw std::runtime_error("job 0");
+    });
+  } catch (const std::runtime_error& e) {
+    message = e.what();
+  }
+  EXPECT_EQ(message, "job 0");
+
+  std::atomic<bool> task1_failed{false};
+  message.clear();
+  pool.run(1, [&](int) {
+    EXPECT_TRUE(waitFor([&] { return pool.available() == 2; }));  // the helper waits for tasks
+    try {
+      pool.fanOut(2, [&](int i) {
+        if (i == 1) {
+          task1_failed = true;
+          throw std::runtime_error("task 1");
+        }
+        EXPECT_TRUE(waitFor([&] { return task1_failed.load(); }));
+        EXPECT_TRUE(waitFor([&] { return pool.available() == 2; }));
+        throw std::runtime_error("task 0");
+      });
+    } catch (const std::runtime_error& e) {
+      message = e.what();
+    }
+  });
+  EXPECT_EQ(message, "task 0");
 }
 
 }  // namespace

@@ -32,8 +32,9 @@ class JobPool {
 
   /// Runs job(i) for every i in [0, jobs), started in index order, each on one worker (the
   /// calling thread and threads() - 1 started ones). A worker with no job left runs the tasks
-  /// other jobs fan out. Returns when every job has returned; rethrows the first exception of a
-  /// job after all have ended. Not reentrant (call it from one thread, not from a job).
+  /// other jobs fan out. Returns when every job has returned; after all have ended, rethrows the
+  /// exception of the lowest-numbered job that threw (not the first in time, so the error a caller
+  /// sees does not depend on the thread count or timing). Not reentrant (call it from one thread, not from a job).
   void run(int jobs, const std::function<void(int)>& job);
 
   /// How many threads could run a fan-out now: 1 (the caller) + the workers waiting for work.
@@ -41,18 +42,19 @@ class JobPool {
   [[nodiscard]] int available() const;
 
   /// Runs task(i) for every i in [0, tasks) on the calling thread and on workers that have no
-  /// job; returns when all have returned; rethrows the first exception of a task after all have
-  /// ended. Callable from a job of run() or from any thread (then the caller does all the work
-  /// unless workers are idle in a run()). A task must not call fanOut() itself.
+  /// job; returns when all have returned; after all have ended, rethrows the exception of the
+  /// lowest-numbered task that threw. Callable from a job of run() or from any thread (then the caller does all the
+  /// work unless workers are idle in a run()). A task must not call fanOut() itself.
   void fanOut(int tasks, const std::function<void(int)>& task);
 
  private:
   struct Batch {
     const std::function<void(int)>* task = nullptr;
     int size = 0;
-    int next = 0;  // next unclaimed index
-    int done = 0;  // returned tasks
-    std::exception_ptr error;
+    int next = 0;              // next unclaimed index
+    int done = 0;              // returned tasks
+    std::exception_ptr error;  // of the lowest failed index
+    int error_index = 0;       // its index; size while none failed
   };
   void worker();
   // Claims and runs the next task of `b`; `lock` is held on entry and on return.
@@ -67,7 +69,8 @@ class JobPool {
   int jobs_ = 0;
   int next_job_ = 0;
   int jobs_done_ = 0;
-  std::exception_ptr job_error_;
+  std::exception_ptr job_error_;  // of the lowest failed job
+  int job_error_index_ = 0;       // its index; jobs_ while none failed
 };
 
 }  // namespace fullarm::controllers
