@@ -174,6 +174,9 @@ TEST(ConvexDistanceTest, ConvexFlagFollowsTheDefinition) {
   EXPECT_FALSE(buildSnchTree(TriMesh::build("sheet", std::move(g.vertices), std::move(g.triangles), 1e-9)).convex);
 }
 
+// Random convex links near random objects: the query keeps exactly the brute-force minima with
+// the bracket capsules (the default), with the GJK fallback of a link whose bracket is invalid,
+// and with the convex pruning off; the convex bounds prune and save exact tests.
 TEST(ConvexDistanceTest, ConvexLinkQueryKeepsEveryBruteForceMinimumWithFewerExactTests) {
   std::mt19937 rng(13);
   constexpr double kCutoff_m = 0.05;
@@ -181,14 +184,19 @@ TEST(ConvexDistanceTest, ConvexLinkQueryKeepsEveryBruteForceMinimumWithFewerExac
   long tests_with = 0;
   long tests_without = 0;
   long pruned = 0;
+  long pruned_gjk = 0;
   int cases_with_minima = 0;
   for (int trial = 0; trial < 300; ++trial) {
     const TriMesh link = randomConvexMesh(rng);
     const TriMesh obj = test::randomSmallMesh(rng);
     const SnchTree link_tree = buildSnchTree(link);
     ASSERT_TRUE(link_tree.convex);
+    ASSERT_TRUE(link_tree.bracket.valid());
     SnchTree plain_tree = link_tree;
     plain_tree.convex = false;
+    // Convex but without a bracket: the query falls back to GJK bounds for object nodes and leaves.
+    SnchTree gjk_tree = link_tree;
+    gjk_tree.bracket.inner_radius_m = 0.0;
     const SnchTree obj_tree = buildSnchTree(obj);
     // The link placed 0-0.1 m from the object's surface region: many contacts within L.
     const Eigen::Isometry3d X_WO = test::randomPose(rng, 0.5);
@@ -203,7 +211,14 @@ TEST(ConvexDistanceTest, ConvexLinkQueryKeepsEveryBruteForceMinimumWithFewerExac
     const std::vector<LocalMinimum> brute = test::bruteForceMinima(link, X_WL, obj, X_WO, kCutoff_m);
     ASSERT_EQ(with.size(), brute.size()) << "trial " << trial;
     ASSERT_EQ(without.size(), brute.size()) << "trial " << trial;
+    std::vector<LocalMinimum> with_gjk;
+    SnchQueryStats s_gjk;
+    querySnchPair(gjk_tree, link, X_WL, obj_tree, obj, X_WO, kCutoff_m, scratch, with_gjk, &s_gjk);
+    ASSERT_EQ(with_gjk.size(), brute.size()) << "trial " << trial;
+    pruned_gjk += s_gjk.pruned_by_convex_bound;
     for (std::size_t i = 0; i < with.size(); ++i) {
+      EXPECT_TRUE(sameFeaturePair(with_gjk[i], brute[i])) << "trial " << trial;
+      EXPECT_NEAR(with_gjk[i].distance_m, brute[i].distance_m, 1e-12);
       EXPECT_TRUE(sameFeaturePair(with[i], brute[i])) << "trial " << trial;
       EXPECT_EQ(with[i].tri_link, without[i].tri_link) << "trial " << trial;
       EXPECT_EQ(with[i].tri_object, without[i].tri_object) << "trial " << trial;
@@ -218,6 +233,7 @@ TEST(ConvexDistanceTest, ConvexLinkQueryKeepsEveryBruteForceMinimumWithFewerExac
   }
   EXPECT_GT(cases_with_minima, 100);
   EXPECT_GT(pruned, 0);
+  EXPECT_GT(pruned_gjk, 0);
   EXPECT_LT(tests_with, tests_without);
   RecordProperty("exact_tests_convex", static_cast<int>(tests_with));
   RecordProperty("exact_tests_plain", static_cast<int>(tests_without));
