@@ -210,13 +210,15 @@ void analyseJoint(const Context& c, const std::string& short_name) {
         o.state[fc::kSpool], o.state[fc::kPressureA], o.state[fc::kPressureB], o.command);
   }
   // How often validate's box holds such a model: seeded draws (not validate's stream), each
-  // linearised at the tuner's operating point, closed loop with the shipped gains.
-  {
+  // linearised at the tuner's operating point and at validate's free-hold point, closed loop with
+  // the shipped gains.
+  const double q_hold = sc.start_rad + sc.direction * sc.timing.free_move_rad;
+  for (const double q_lin : {q, q_hold}) {
     constexpr int kDraws = 1000;
     int unstable = 0, ms_over = 0;
     for (int i = 0; i < kDraws; ++i) {
       const fc::MonteCarloSample d = fc::drawSample(c.validation.ranges, 20261123, slot, i);
-      const fc::PreparedJoint pd = fc::prepareVariation(jm, q, goal_setup, d);
+      const fc::PreparedJoint pd = fc::prepareVariation(jm, q_lin, goal_setup, d);
       const fc::LinearChecks l = fc::analyzePrepared(pd, gains, fc::VirtualWall{}, false, false);
       const fc::CoupledGoal cg = fc::evaluateCoupled({pd}, gains, goals.detector);
       if (fc::coupledGoalValue(cg) >= 10.0) {
@@ -230,8 +232,8 @@ void analyseJoint(const Context& c, const std::string& short_name) {
       }
       if (l.margins.peak_sensitivity > goals.max_peak_sensitivity) ++ms_over;
     }
-    std::printf("  %d seeded draws of validate's box: %d with a growing coupled mode, %d with Ms > %.1f\n", kDraws,
-                unstable, ms_over, goals.max_peak_sensitivity);
+    std::printf("  %d seeded draws of validate's box at q %.3f: %d with a growing coupled mode, %d with Ms > %.1f\n",
+                kDraws, q_lin, unstable, ms_over, goals.max_peak_sensitivity);
   }
   for (std::size_t i = 0; i < models.size(); ++i) {
     const fc::ModelVariation& v = tr.model_set[i];
