@@ -192,6 +192,15 @@ void analyseJoint(const Context& c, const std::string& short_name) {
       "(%.3f Hz, sigma %.3f /s); worst '%s' %.3f\n",
       initial.name.c_str(), q, gv.peak_sensitivity, gv.min_real_loop, gv.coupled_detector_score, gv.coupled_mode_hz,
       gv.coupled_mode_decay_per_s, name.c_str(), hard);
+  // The coupled goal with each mode's own amplitude after the free move (Eq. C5) instead of V0.
+  {
+    fc::TuningGoals modal = goals;
+    modal.detector.modal_amplitude = true;
+    const fc::GoalValues gm = fc::evaluateGoals(models, gains, modal, tr.coupled_models);
+    const auto [hm, nm] = fc::worstHardGoal(gm, modal);
+    std::printf("  with modal V0 (Eq. C5): coupled score %.3f (%.3f Hz, sigma %.3f /s); worst '%s' %.3f\n",
+                gm.coupled_detector_score, gm.coupled_mode_hz, gm.coupled_mode_decay_per_s, nm.c_str(), hm);
+  }
   // validate's own linear check of the nominal scenario (operating points: end of the free move, wall).
   const fc::ScenarioLinearResult vr = fc::analyzeScenario(sc, c.validation.linear, 1, {});
   std::printf("  validate's nominal: Ms free %.3f at %.3f Hz (q %.4f), contact %.3f at %.3f Hz\n",
