@@ -112,6 +112,7 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
         controllers::makeJointScenario(model, plant_config, gains, initial.name), validation);
     controllers::TuningGoals joint_goals = goals;
     joint_goals.detector = controllers::detectorModelOf(scenarios[k]);
+    joint_goals.detector.modal_amplitude = o.modal_amplitude;
     run.results[k] = controllers::tuneJoint(models[k], q, initial, setup, joint_goals, controllers::TuningBounds{},
                                             validation.ranges, joint_options);
     run.nominal[k] = controllers::prepareJoint(models[k], controllers::solveOperatingPoint(models[k], q), setup);
@@ -389,6 +390,9 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
                    "Rounds of the nonlinear verification stage (0: linear stage only)")
       ->check(CLI::Range(0, 20))
       ->capture_default_str();
+  tune->add_flag("--modal-amplitude", o.modal_amplitude,
+                 "Coupled goal: each mode's own speed amplitude after the free move (Eq. C5) instead of the move's "
+                 "peak speed (Eq. C3)");
   tune->add_option("--out", o.out_dir, "Output folder")->capture_default_str();
   return tune;
 }

@@ -26,6 +26,9 @@ struct TuneOptions {
   std::uint64_t seed = 1;
   int threads = 2;
   int nonlinear_rounds = 3;  ///< rounds of the nonlinear verification stage (0: linear stage only)
+  /// The coupled goal's V0 per mode from the free move through the closed loop (Eq. C5) instead of
+  /// the move's peak speed (Eq. C3); off by default (docs/analysis.md, "Conservatism").
+  bool modal_amplitude = false;
 };
 
 /// Adds `tune` to `app`.

@@ -1,5 +1,8 @@
 #include "fullarm/controllers/coupled_stability.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -80,6 +83,8 @@ DetectorModel detectorModelOf(const JointScenario& sc) noexcept {
   d.threshold_radps = sc.oscillation_speed_radps;
   d.initial_speed_radps = sc.timing.free_move_s > 0.0 ? 1.875 * sc.timing.free_move_rad / sc.timing.free_move_s : 0.0;
   d.period_s = sc.dt_s;
+  d.move_amplitude_rad = sc.timing.free_move_rad;
+  d.move_duration_s = sc.timing.free_move_s;
   return d;
 }
 
@@ -129,6 +134,43 @@ Cov2 windowCovariance(double sigma, double w, double T, long begin, long end) {
   return c;
 }
 
+// Power-of-two diagonal balancing (Parlett & Reinsch 1969, as LAPACK gebal without permutation):
+// d such that diag(d)^-1 A diag(d) has comparable row and column norms; A is balanced in place.
+Eigen::VectorXd balance(Eigen::MatrixXd& a) {
+  const Eigen::Index n = a.rows();
+  Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+  bool done = false;
+  for (int sweep = 0; sweep < 100 && !done; ++sweep) {
+    done = true;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double c = 0.0, r = 0.0;
+      for (Eigen::Index j = 0; j < n; ++j) {
+        if (j == i) continue;
+        c += std::abs(a(j, i));
+        r += std::abs(a(i, j));
+      }
+      if (c == 0.0 || r == 0.0) continue;
+      const double total = c + r;
+      double f = 1.0;
+      while (c < 0.5 * r) {
+        c *= 4.0;
+        f *= 2.0;
+      }
+      while (c > 2.0 * r) {
+        c *= 0.25;
+        f *= 0.5;
+      }
+      if ((c + r) / f < 0.95 * total) {
+        done = false;
+        d[i] *= f;
+        a.row(i) /= f;
+        a.col(i) *= f;
+      }
+    }
+  }
+  return d;
+}
+
 constexpr int kPhases = 360;
 // Detector score of a growing mode (plus its growth rate [1/s], capped at 1e3).
 constexpr double kUnstableModeScore = 10.0;
@@ -168,6 +210,43 @@ double detectorModeScore(double sigma, double w, const DetectorModel& d) {
   return worst;
 }
 
+std::vector<ModalSpeed> modalHoldSpeeds(const PreparedJoint& m, const JointGains& gains, const DetectorModel& d) {
+  const StateSpace cl = closedLoopSystem(m, gains, VirtualWall{});
+  const double T = m.setup.control_period_s;
+  Eigen::MatrixXd a = cl.A;
+  const Eigen::VectorXd scale = balance(a);  // a = D^-1 A D
+  const Eigen::EigenSolver<Eigen::MatrixXd> es(a, true);
+  const Eigen::VectorXcd poles = es.eigenvalues();
+  const Eigen::MatrixXcd vb = es.eigenvectors();  // A = D vb diag(poles) vb^-1 D^-1
+  const Eigen::VectorXd b = cl.B.col(0).cwiseQuotient(scale);
+  const Eigen::VectorXcd g = vb.partialPivLu().solve(b.cast<std::complex<double>>());  // modal input
+  const Eigen::RowVectorXcd c = scale[kVelocity] * vb.row(kVelocity);                  // modal speed output
+  // The user's torque of the free move (validate's harness: K_h (r - q) + B_h (r' - q') with the
+  // spring and damper in the plant): input K_h r(kT) + B_h r'(kT), held over period k.
+  const double k_h = m.model.include_user ? m.model.load.user_stiffness_nm_per_rad : 0.0;
+  const double b_h = m.model.include_user ? m.model.load.user_damping_nms_per_rad : 0.0;
+  const long steps = std::lround(d.move_duration_s / T);
+  std::vector<double> u(static_cast<std::size_t>(std::max(steps, 0L)));
+  for (long k = 0; k < steps; ++k) {
+    const MinJerk r = minimumJerk(static_cast<double>(k) * T, d.move_duration_s);
+    u[static_cast<std::size_t>(k)] = d.move_amplitude_rad * (k_h * r.position + b_h * r.rate_per_s);
+  }
+  const double u_end = d.move_amplitude_rad * k_h;
+  std::vector<ModalSpeed> out;
+  out.reserve(static_cast<std::size_t>(poles.size()));
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    const std::complex<double> z = poles[i];
+    // Modal coordinate at the end of the move: sum_k z^(N-1-k) g u[k] (Horner), less its steady
+    // state g u_end / (1 - z) under the final torque (none for a pole at 1: then u_end = 0).
+    std::complex<double> mode(0.0, 0.0);
+    for (double uk : u) mode = z * mode + uk;
+    mode *= g[i];
+    if (std::abs(1.0 - z) > 1e-12) mode -= g[i] * u_end / (1.0 - z);
+    out.push_back({z, c[i] * mode});
+  }
+  return out;
+}
+
 CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const JointGains& gains,
                             const DetectorModel& detector) {
   CoupledGoal g;
@@ -178,7 +257,21 @@ CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const Join
   for (std::size_t i = 0; i < models.size(); ++i) {
     const PreparedJoint& m = models[i];
     const double T = m.setup.control_period_s;
-    const Eigen::VectorXcd z = closedLoopPoles(m, gains, VirtualWall{});
+    Eigen::VectorXcd z;
+    std::vector<double> amplitude;  // each pole's V0 (modal_amplitude)
+    if (detector.modal_amplitude) {
+      const std::vector<ModalSpeed> modes = modalHoldSpeeds(m, gains, detector);
+      z.resize(static_cast<Eigen::Index>(modes.size()));
+      for (std::size_t k = 0; k < modes.size(); ++k) {
+        z[static_cast<Eigen::Index>(k)] = modes[k].pole;
+        // A conjugate pair's speed is 2 Re(c z^n): amplitude 2 |c|; a real pole's (z > 0 or z < 0) |c|.
+        const std::complex<double> zk = modes[k].pole;
+        const bool pair = std::abs(zk.imag()) > kOscillatoryArgTolerance * std::abs(zk);
+        amplitude.push_back((pair ? 2.0 : 1.0) * std::abs(modes[k].coefficient));
+      }
+    } else {
+      z = closedLoopPoles(m, gains, VirtualWall{});
+    }
     const ModeDecay d = slowestOscillatoryMode(z, T);
     // Spectral radius without the free-position drift (a real pole within kDriftPoleTolerance of
     // z = 1: with K_h = 0 the position has no restoring torque, and the residual slope of the
@@ -196,15 +289,24 @@ CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const Join
       const double radius = std::abs(z[k]);
       if (radius == 0.0 || z[k].imag() < 0.0) continue;  // deadbeat, or the conjugate of a pole seen
       const double sigma = -std::log(radius) / T;
-      if (sigma > skip_above) continue;
+      DetectorModel mode_detector = detector;
+      if (detector.modal_amplitude) {
+        mode_detector.initial_speed_radps = amplitude[static_cast<std::size_t>(k)];
+        const double skip = std::log(1e3 * std::max(mode_detector.initial_speed_radps, detector.threshold_radps) /
+                                     detector.threshold_radps) /
+                            (detector.hold_s - detector.window_s);
+        if (sigma > skip) continue;
+      } else if (sigma > skip_above) {
+        continue;
+      }
       const double angle = std::abs(std::arg(z[k]));
       const double w = angle > kOscillatoryArgTolerance ? angle / T : 0.0;
       if (w == 0.0 && std::abs(radius - 1.0) <= kMarginalPoleTolerance) continue;  // free-position pole
       // A growing mode fails outright; the score stays finite (and rises with the growth rate) so
       // that the optimisers see a slope instead of an infinity.
       const bool drift = w == 0.0 && radius <= 1.0 + kDriftPoleTolerance;  // scored like any real mode
-      const double score =
-          sigma < 0.0 && !drift ? kUnstableModeScore + std::min(-sigma, 1e3) : detectorModeScore(sigma, w, detector);
+      const double score = sigma < 0.0 && !drift ? kUnstableModeScore + std::min(-sigma, 1e3)
+                                                 : detectorModeScore(sigma, w, mode_detector);
       if (score > g.detector_score) {
         g.detector_score = score;
         g.detector_hz = w / (2.0 * std::numbers::pi);

@@ -236,6 +236,11 @@ double closedLoopSpectralRadius(const PreparedJoint& joint, const JointGains& ga
   return radiusOf(o, joint.setup.delay_samples, 1.0);
 }
 
+StateSpace closedLoopSystem(const PreparedJoint& joint, const JointGains& gains, const VirtualWall& wall) {
+  const OpenLoop o = openLoop(joint.coupled, controllerFor(joint, gains, wall));
+  return closeLoop(o, joint.setup.delay_samples, 1.0);
+}
+
 Eigen::VectorXcd closedLoopPoles(const PreparedJoint& joint, const JointGains& gains, const VirtualWall& wall) {
   const OpenLoop o = openLoop(joint.coupled, controllerFor(joint, gains, wall));
   return eigenvalues(closeLoop(o, joint.setup.delay_samples, 1.0).A);

@@ -25,6 +25,7 @@
 /// Offline (allocates), not @rt.
 
 #include <Eigen/Core>
+#include <complex>
 #include <limits>
 #include <vector>
 
@@ -89,6 +90,14 @@ struct DetectorModel {
   double sustain_ratio = kOscillationSustainRatio;
   double initial_speed_radps = 1.125;  ///< V0: the free move's peak reference speed, 15/8 A / T
   double period_s = 1e-3;              ///< sampling of the windows (the control period)
+  /// The scenario's free move (minimum jerk from rest, amplitude and duration), used when
+  /// `modal_amplitude` is set.
+  double move_amplitude_rad = 0.3;
+  double move_duration_s = 0.5;
+  /// V0 of each mode: false, initial_speed_radps for every mode (the bound of Eq. C3); true, the
+  /// mode's own speed amplitude at the start of the hold from the discrete closed loop driven by
+  /// the move (modalHoldSpeeds(), Eq. C5).
+  bool modal_amplitude = false;
 };
 /// The detector model of a scenario's free hold (its timing, threshold and free move).
 [[nodiscard]] DetectorModel detectorModelOf(const JointScenario& scenario) noexcept;
@@ -98,6 +107,24 @@ struct DetectorModel {
 /// last two windows. <= 1: judged decaying for every phase; > 1: judged oscillating for some.
 /// @throws std::invalid_argument unless hold_s >= 2 window_s > 0 and the other fields are > 0.
 [[nodiscard]] double detectorModeScore(double decay_rate_per_s, double w_radps, const DetectorModel& detector);
+
+/// One closed-loop mode's share of the free hold's speed: q'[N + n] - q'_ss = sum_i coefficient_i
+/// pole_i^n over all poles (conjugate pairs carry conjugate coefficients), n counted from the start
+/// of the hold.
+struct ModalSpeed {
+  std::complex<double> pole;         ///< z
+  std::complex<double> coefficient;  ///< [rad/s]
+};
+
+/// The free hold's speed in the modes of the coupled closed loop (free motion, the model's user and
+/// delay) after the scenario's free move (Eq. C5): the user's torque K_h r + B_h r' (r the
+/// minimum-jerk reference from rest, sampled and held as validate's harness applies it) drives
+/// the closed loop from rest for round(move_duration_s / T) periods; the modal coordinates at the
+/// end of the move, less those of the steady state under the final torque, give the coefficients,
+/// in one pass over the move's samples per mode (no simulation). The eigenvectors come from the
+/// closed loop after a power-of-two diagonal balancing (its states mix pascals and radians).
+[[nodiscard]] std::vector<ModalSpeed> modalHoldSpeeds(const PreparedJoint& model, const JointGains& gains,
+                                                      const DetectorModel& detector);
 
 /// The coupled goal of one gain set over a set of coupled models (free motion, each model's own
 /// user and delay).

@@ -131,6 +131,11 @@ struct PreparedJoint {
 [[nodiscard]] Eigen::VectorXcd closedLoopPoles(const PreparedJoint& joint, const JointGains& gains,
                                                const VirtualWall& wall);
 
+/// The coupled closed loop itself (device + the model's user, `wall` in the controller, the setup's
+/// delay register): states [plant (7), controller, delay], input the user's torque tau_user [N m]
+/// (the plant's kInUserTorque column), outputs [q, applied command]. Its A has closedLoopPoles().
+[[nodiscard]] StateSpace closedLoopSystem(const PreparedJoint& joint, const JointGains& gains, const VirtualWall& wall);
+
 /// Rendered impedance of the device at w [rad/s] (first-harmonic model of the sampled loop:
 /// aliases neglected; exact for the continuous paths).
 [[nodiscard]] std::complex<double> renderedImpedance(const PreparedJoint& joint, const JointGains& gains,
