@@ -390,9 +390,9 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
                    "Rounds of the nonlinear verification stage (0: linear stage only)")
       ->check(CLI::Range(0, 20))
       ->capture_default_str();
-  tune->add_flag("--modal-amplitude", o.modal_amplitude,
-                 "Coupled goal: each mode's own speed amplitude after the free move (Eq. C5) instead of the move's "
-                 "peak speed (Eq. C3)");
+  tune->add_flag("--modal-amplitude,!--peak-speed-amplitude", o.modal_amplitude,
+                 "Coupled goal: each mode's own speed amplitude after the free move (Eq. C5, the default) or "
+                 "(--peak-speed-amplitude) the move's peak speed (Eq. C3, a bound)");
   tune->add_option("--out", o.out_dir, "Output folder")->capture_default_str();
   return tune;
 }

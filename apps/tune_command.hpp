@@ -26,9 +26,10 @@ struct TuneOptions {
   std::uint64_t seed = 1;
   int threads = 2;
   int nonlinear_rounds = 3;  ///< rounds of the nonlinear verification stage (0: linear stage only)
-  /// The coupled goal's V0 per mode from the free move through the closed loop (Eq. C5) instead of
-  /// the move's peak speed (Eq. C3); off by default (docs/analysis.md, "Conservatism").
-  bool modal_amplitude = false;
+  /// The coupled goal's V0 per mode from the free move through the closed loop (Eq. C5, the
+  /// default) or, when false (`--peak-speed-amplitude`), the move's peak speed (Eq. C3, a bound;
+  /// docs/analysis.md, "Conservatism").
+  bool modal_amplitude = true;
 };
 
 /// Adds `tune` to `app`.

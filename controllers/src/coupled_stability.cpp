@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
@@ -35,6 +36,18 @@ ModeDecay slowestOscillatoryMode(const Eigen::VectorXcd& poles_z, double period_
     }
   }
   return m;
+}
+
+double spectralRadiusWithoutDrift(const Eigen::VectorXcd& poles_z) {
+  double rho = 0.0;
+  for (Eigen::Index k = 0; k < poles_z.size(); ++k) {
+    const std::complex<double> z = poles_z[k];
+    if (!std::isfinite(std::abs(z))) return std::numeric_limits<double>::infinity();
+    const bool drift =
+        std::abs(std::arg(z)) <= kOscillatoryArgTolerance && std::abs(std::abs(z) - 1.0) <= kDriftPoleTolerance;
+    if (!drift) rho = std::max(rho, std::abs(z));
+  }
+  return rho;
 }
 
 double detectorDecayRate(double window_s, double sustain_ratio) {
@@ -276,11 +289,7 @@ CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const Join
     // Spectral radius without the free-position drift (a real pole within kDriftPoleTolerance of
     // z = 1: with K_h = 0 the position has no restoring torque, and the residual slope of the
     // gravity compensation leaves it at |z| = 1 + 1e-7 or so, an e-folding time of hours).
-    for (Eigen::Index k = 0; k < z.size(); ++k) {
-      const bool drift =
-          std::abs(std::arg(z[k])) <= kOscillatoryArgTolerance && std::abs(std::abs(z[k]) - 1.0) <= kDriftPoleTolerance;
-      if (!drift) g.spectral_radius = std::max(g.spectral_radius, std::abs(z[k]));
-    }
+    g.spectral_radius = std::max(g.spectral_radius, spectralRadiusWithoutDrift(z));
     if (g.worst_model < 0 || d.decay_rate_per_s < g.slowest.decay_rate_per_s) {
       g.slowest = d;
       g.worst_model = static_cast<int>(i);

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -51,6 +52,27 @@ TEST(CoupledStability, SlowestModeOfASampledMassSpringDamperIsItsAnalyticDecayRa
 
 // The detector's ratio of consecutive windows for a decaying ring is e^{-sigma W} (Eq. C2):
 // measured on a sampled e^{-sigma t} sin(w t) with its standard deviation, as the detector does.
+// The drift rule by hand: a real pole within 1e-4 of z = 1 (either side) is left out, an
+// oscillatory pole of the same modulus or a real pole farther out is not, and a non-finite pole
+// makes the radius infinite instead of vanishing in std::max.
+TEST(CoupledStability, SpectralRadiusLeavesOutOnlyTheRealDriftPoleNearOne) {
+  using C = std::complex<double>;
+  const auto radius = [](std::initializer_list<C> poles) {
+    Eigen::VectorXcd z(static_cast<Eigen::Index>(poles.size()));
+    Eigen::Index k = 0;
+    for (const C& p : poles) z[k++] = p;
+    return spectralRadiusWithoutDrift(z);
+  };
+  EXPECT_DOUBLE_EQ(radius({C(1.0 + 1e-7, 0.0), C(0.5, 0.0), std::polar(0.9, 0.1), std::polar(0.9, -0.1)}), 0.9);
+  EXPECT_DOUBLE_EQ(radius({C(1.0 - 5e-5, 0.0), C(0.2, 0.0)}), 0.2);
+  EXPECT_DOUBLE_EQ(radius({C(1.0 + 2e-4, 0.0), C(0.2, 0.0)}), 1.0 + 2e-4);
+  EXPECT_DOUBLE_EQ(radius({C(-1.0 - 1e-7, 0.0)}), 1.0 + 1e-7);  // z = -1 is a Nyquist-rate mode, not drift
+  EXPECT_DOUBLE_EQ(radius({std::polar(1.0 + 1e-7, 0.01), C(0.2, 0.0)}), 1.0 + 1e-7);
+  EXPECT_DOUBLE_EQ(radius({C(1.0 + 1e-7, 0.0)}), 0.0);
+  EXPECT_EQ(radius({C(std::numeric_limits<double>::quiet_NaN(), 0.0), C(0.2, 0.0)}),
+            std::numeric_limits<double>::infinity());
+}
+
 TEST(CoupledStability, DetectorDecayRateIsTheWindowRatioOfADecayingRing) {
   const double W = 0.5;
   const double sigma_min = detectorDecayRate(W, kOscillationSustainRatio);

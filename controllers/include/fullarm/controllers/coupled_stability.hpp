@@ -58,6 +58,11 @@ struct ModeDecay {
 /// @throws std::invalid_argument for period_s <= 0.
 [[nodiscard]] ModeDecay slowestOscillatoryMode(const Eigen::VectorXcd& poles_z, double period_s);
 
+/// Largest |z| of `poles_z` without the free-position drift: real poles within
+/// kDriftPoleTolerance of z = 1 are left out (0 when nothing is left). Both the coupled goal and
+/// the tuner's plain spectral-radius goal use it, so one tolerance decides what is drift.
+[[nodiscard]] double spectralRadiusWithoutDrift(const Eigen::VectorXcd& poles_z);
+
 /// The decay rate sigma_min = ln(1/ratio) / window [1/s] a mode needs to be judged decaying by a
 /// detector that compares consecutive windows of length `window_s` (Eq. C2).
 /// @throws std::invalid_argument unless window_s > 0 and 0 < ratio < 1.
