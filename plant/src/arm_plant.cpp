@@ -77,14 +77,19 @@ T* checkPtr(T* p, const char* call) {
 }
 
 constexpr int kMaxEventsPerPeriod = 64;
+// Joint count of the whole DTS arm, for which the small dense loops below are compiled at fixed size.
+constexpr int kArmJoints = 7;
 // First Rodas3 step after a reset [s]; the controller adapts it from there.
 constexpr double kRodasInitialStep_s = 1e-4;
 
 // Cholesky factor M = L L^T of the small SPD joint-space inertia (strict lower triangle of l,
 // with 1 / L_jj on its diagonal so the solves multiply instead of divide; plain loops: at
 // n <= 10 a library call's dispatch costs more than the arithmetic).
-template <typename Matrix>
-void choleskyFactor(const Matrix& m, Matrix& l, int n) noexcept {
+// N > 0: the size at compile time (the whole arm's 7, so that the compiler unrolls the short
+// loops; the run-time bounds cost more than the arithmetic there), 0: the run-time n.
+template <int N, typename Matrix>
+void choleskyFactor(const Matrix& m, Matrix& l, int n_runtime) noexcept {
+  const int n = N > 0 ? N : n_runtime;
   for (int j = 0; j < n; ++j) {
     double d = m(j, j);
     for (int k = 0; k < j; ++k) d -= l(j, k) * l(j, k);
@@ -99,8 +104,9 @@ void choleskyFactor(const Matrix& m, Matrix& l, int n) noexcept {
 }
 
 // x = M^-1 b with the factor of choleskyFactor (b and x may be the same vector).
-template <typename Matrix, typename Vector>
-void choleskySolve(const Matrix& l, const Vector& b, Vector& x, int n) noexcept {
+template <int N, typename Matrix, typename Vector>
+void choleskySolve(const Matrix& l, const Vector& b, Vector& x, int n_runtime) noexcept {
+  const int n = N > 0 ? N : n_runtime;
   for (int i = 0; i < n; ++i) {
     double v = b[i];
     for (int k = 0; k < i; ++k) v -= l(i, k) * x[k];
@@ -115,8 +121,9 @@ void choleskySolve(const Matrix& l, const Vector& b, Vector& x, int n) noexcept 
 
 // M^-1 from the factor of choleskyFactor: column k solves M x = e_k, whose forward
 // substitution is zero above row k.
-template <typename Matrix>
-void choleskyInverse(const Matrix& l, Matrix& inv, int n) noexcept {
+template <int N, typename Matrix>
+void choleskyInverse(const Matrix& l, Matrix& inv, int n_runtime) noexcept {
+  const int n = N > 0 ? N : n_runtime;
   for (int k = 0; k < n; ++k) {
     double x[kMaxPlantJoints];
     for (int i = 0; i < k; ++i) x[i] = 0.0;
@@ -638,8 +645,13 @@ void ArmPlant::evaluateTorques(const double* y) noexcept {
   if (n == 1) {
     qdd_[0] = rhs[0] * mass_inv_(0, 0);
   } else {
-    choleskyFactor(mass_, chol_, n);
-    choleskySolve(chol_, rhs, qdd_, n);
+    if (n == kArmJoints) {
+      choleskyFactor<kArmJoints>(mass_, chol_, n);
+      choleskySolve<kArmJoints>(chol_, rhs, qdd_, n);
+    } else {
+      choleskyFactor<0>(mass_, chol_, n);
+      choleskySolve<0>(chol_, rhs, qdd_, n);
+    }
   }
   // Load cell between the actuator side and the link: tau_cell = tau_act - J_act qdd.
   for (int k = 0; k < n; ++k)
@@ -709,7 +721,11 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
     mass_inv_(0, 0) = 1.0 / mass_(0, 0);
   } else {
     // M^-1 from the factor of the evaluateRhs() pass above.
-    choleskyInverse(chol_, mass_inv_, n);
+    if (n == kArmJoints) {
+      choleskyInverse<kArmJoints>(chol_, mass_inv_, n);
+    } else {
+      choleskyInverse<0>(chol_, mass_inv_, n);
+    }
   }
   // d(generalised torque)/dy: joint k's actuator torque depends on its own p_a, p_b, q, qd
   // (t_pa, t_pb, and the diagonals of Tq, Tqd); the cuff spring/damper and the single-axis
@@ -848,16 +864,31 @@ void ArmPlant::rigidBodyGradients(const double* /*y*/, double* Jdata, int ld) no
   }
   // J(qd rows, q and qd columns) -= M^-1 [d ID/dq, d ID/dqd] (plain loops: at n = 7 a general
   // matrix product's dispatch costs more than the arithmetic).
+  if (n == kArmJoints) {
+    subtractMinvTimesDerivatives<kArmJoints>(Jdata, ld);
+  } else {
+    subtractMinvTimesDerivatives<0>(Jdata, ld);
+  }
+}
+
+template <int N>
+void ArmPlant::subtractMinvTimesDerivatives(double* Jdata, int ld) const noexcept {
+  const int n = N > 0 ? N : n_;
+  const double* minv = mass_inv_.data();  // column-major, leading dimension n
   for (int c = 0; c < 2 * n; ++c) {
     const ReducedMatrix& d = c < n ? rigid_dq_ : rigid_dqd_;
     const int j = c < n ? c : c - n;
     double* out =
         Jdata + velocityIndex(n, 0) + static_cast<std::ptrdiff_t>(c < n ? angleIndex(n, c) : velocityIndex(n, j)) * ld;
+    // The column in a local array the compiler keeps in registers at fixed N (k ascending, as before).
+    double acc[kMaxPlantJoints];
+    for (int r = 0; r < n; ++r) acc[r] = out[r];
     for (int k = 0; k < n; ++k) {
       const double djk = d(k, j);
-      if (djk == 0.0) continue;
-      for (int r = 0; r < n; ++r) out[r] -= mass_inv_(r, k) * djk;
+      const double* minv_k = minv + static_cast<std::ptrdiff_t>(k) * n;
+      for (int r = 0; r < n; ++r) acc[r] -= minv_k[r] * djk;
     }
+    for (int r = 0; r < n; ++r) out[r] = acc[r];
   }
 }
 

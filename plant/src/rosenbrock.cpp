@@ -131,6 +131,7 @@ void RosenbrockIntegrator::configure(int n, const double* atol, double rtol, lon
   g_.setZero(n, n);
   stats_ = {};
   factor_valid_ = false;
+  c_pattern_valid_ = false;
 }
 
 void RosenbrockIntegrator::setBlockStructure(int blocks) {
@@ -139,6 +140,7 @@ void RosenbrockIntegrator::setBlockStructure(int blocks) {
   blocks_ = blocks;
   border_ = n_ - blocks * kRosenbrockBlock;
   factor_valid_ = false;
+  c_pattern_valid_ = false;
   if (blocks_ > 0) {
     w_.setZero(blocks_ * kRosenbrockBlock, border_);
     schur_.setZero(border_, border_);
@@ -351,6 +353,19 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
     bool invertible = false;
     dk.computeInverseAndDetWithCheck(inv, det, invertible, 0.0);
     if (!invertible || !std::isfinite(det) || !inv.allFinite()) return false;
+    // Columns of C_k (block k's columns of the border rows) that hold a nonzero: the others add
+    // exact zeros to S here and to the border in every solve (on the plant, the spool columns).
+    // Found once per Jacobian (a refactorisation after a rejection keeps J).
+    int& c_count = c_count_[static_cast<std::size_t>(k)];
+    if (!c_pattern_valid_) {
+      c_count = 0;
+      for (int c = 0; c < kRosenbrockBlock; ++c) {
+        const double* col = jac + static_cast<std::ptrdiff_t>(r + c) * ld + nb;
+        double sum = 0.0;  // a sum of |entries| (branch-free, so it vectorises; NaN counts as nonzero)
+        for (int i = first_row; i < m; ++i) sum += std::abs(col[i]);
+        if (!(sum == 0.0)) c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + c_count++)] = c;
+      }
+    }
     int& count = nonzero_count_[static_cast<std::size_t>(k)];
     count = 0;
     for (int j = 0; j < m; ++j) {
@@ -360,12 +375,14 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
       const Eigen::Vector4d wj = inv * bj;
       w_.block<4, 1>(r, j) = wj;
       // S -= C_k w_j with C = -J_mh: S(:, j) += J(border, block k) w_j.
-      for (int c = 0; c < kRosenbrockBlock; ++c) {
+      for (int q = 0; q < c_count; ++q) {
+        const int c = c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + q)];
         const double* col = jac + static_cast<std::ptrdiff_t>(r + c) * ld + nb;
         for (int i = first_row; i < m; ++i) schur_(i, j) += col[i] * wj[c];
       }
     }
   }
+  c_pattern_valid_ = true;
   if (second_order_border_) {
     inv_d_ = 1.0 / d;
     for (int j = 0; j < p; ++j) {
@@ -384,8 +401,6 @@ void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {
   }
   const int nb = blocks_ * kRosenbrockBlock;
   const int m = border_;
-  const int ld = static_cast<int>(jac_.rows());
-  const double* jac = jac_.data();
   for (int k = 0; k < blocks_; ++k) {
     const int r = k * kRosenbrockBlock;
     z_.segment<4>(r).noalias() = block_inv_[static_cast<std::size_t>(k)] * b.segment<4>(r);
@@ -393,24 +408,12 @@ void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {
   // Border: S x_m = b_m - C z = b_m + J_mh z (plain loops: the blocks are tiny and sparse).
   double* xm = x.data() + nb;
   for (int i = 0; i < m; ++i) xm[i] = b[nb + i];
-  const int first_row = second_order_border_ ? m / 2 : 0;  // border rows C can reach
-  for (int c = 0; c < nb; ++c) {
-    const double zc = z_[c];
-    if (zc == 0.0) continue;
-    const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
-    for (int i = first_row; i < m; ++i) xm[i] += col[i] * zc;
-  }
-  if (second_order_border_) {
-    const int p = m / 2;
-    double* xv = xm + p;
-    for (int j = 0; j < p; ++j) {
-      const double bx = xm[j] * inv_d_;
-      for (int i = 0; i < p; ++i) xv[i] -= schur_(p + i, j) * bx;
-    }
-    luSolveAny(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data(), xv);
-    for (int i = 0; i < p; ++i) xm[i] = (xm[i] + xv[i]) * inv_d_;
+  if (second_order_border_ && m == 2 * kFixedHalfBorder) {
+    solveHalvedBorder<kFixedHalfBorder>(xm);
+  } else if (second_order_border_) {
+    solveHalvedBorder<0>(xm);
   } else {
-    luSolveAny(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data(), xm);
+    solveBorder(xm);
   }
   // x_h = z - W x_m over the nonzero columns of each block.
   for (int k = 0; k < blocks_; ++k) {
@@ -422,6 +425,55 @@ void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {
     }
     x.segment<4>(r) = xk;
   }
+}
+
+template <int P>
+void RosenbrockIntegrator::solveHalvedBorder(double* xm) const noexcept {
+  // Second-order border [x; v] (see factorG): C reaches the v rows only; the v rows are then the
+  // half-size system. In a local array of the p velocities, which the compiler keeps in registers
+  // when P is known (the plant's seven joints); the same operations in the same order as at run-time p.
+  const int p = P > 0 ? P : border_ / 2;
+  const int nb = blocks_ * kRosenbrockBlock;
+  const int ld = static_cast<int>(jac_.rows());
+  const double* jac = jac_.data();
+  double xv[kMaxRosenbrockStates / 2];
+  for (int i = 0; i < p; ++i) xv[i] = xm[p + i];
+  for (int k = 0; k < blocks_; ++k) {
+    for (int q = 0; q < c_count_[static_cast<std::size_t>(k)]; ++q) {
+      const int c = k * kRosenbrockBlock + c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + q)];
+      const double zc = z_[c];
+      const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb + p;
+      for (int i = 0; i < p; ++i) xv[i] += col[i] * zc;
+    }
+  }
+  const double* s_vx = schur_.data() + p;  // S(p + i, j) = s_vx[i + j * ld_s]
+  const auto ld_s = static_cast<std::ptrdiff_t>(schur_.rows());
+  for (int j = 0; j < p; ++j) {
+    const double bx = xm[j] * inv_d_;
+    for (int i = 0; i < p; ++i) xv[i] -= s_vx[i + j * ld_s] * bx;
+  }
+  luSolveAny(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data(), xv);
+  for (int i = 0; i < p; ++i) {
+    xm[i] = (xm[i] + xv[i]) * inv_d_;
+    xm[p + i] = xv[i];
+  }
+}
+
+void RosenbrockIntegrator::solveBorder(double* xm) const noexcept {
+  const int nb = blocks_ * kRosenbrockBlock;
+  const int m = border_;
+  const int ld = static_cast<int>(jac_.rows());
+  const double* jac = jac_.data();
+  for (int k = 0; k < blocks_; ++k) {
+    for (int q = 0; q < c_count_[static_cast<std::size_t>(k)]; ++q) {
+      const int c = k * kRosenbrockBlock + c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + q)];
+      const double zc = z_[c];
+      if (zc == 0.0) continue;
+      const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
+      for (int i = 0; i < m; ++i) xm[i] += col[i] * zc;
+    }
+  }
+  luSolveAny(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data(), xm);
 }
 
 double RosenbrockIntegrator::attempt(double h) noexcept {
@@ -521,6 +573,7 @@ RosenbrockStatus RosenbrockIntegrator::advance(double* y, double duration_s) noe
     const double h = last ? remaining : remaining / pieces;
     if (need_jacobian) {
       sys_.jacobian(sys_.user, y0_.data(), f0_.data(), jac_.data());
+      c_pattern_valid_ = false;
       ++stats_.jac_evals;
       ++stats_.rhs_evals;
       need_jacobian = false;

@@ -220,6 +220,9 @@ class ArmPlant {
   void evaluateRates(const double* y, double* ydot) noexcept;
   void jacobianEntries(const double* y, double* J) noexcept;
   void rigidBodyGradients(const double* y, double* J, int ld) noexcept;
+  /// J(qd rows, q and qd columns) -= M^-1 [d ID/dq, d ID/dqd]; N > 0: n at compile time.
+  template <int N>
+  void subtractMinvTimesDerivatives(double* J, int ld) const noexcept;
   void reinitSolver() noexcept;
   void harvestStats() noexcept;
   void initialiseSensors() noexcept;

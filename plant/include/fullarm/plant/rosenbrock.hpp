@@ -132,6 +132,12 @@ class RosenbrockIntegrator {
   bool factorG(double d) noexcept;
   /// x = G^-1 b with the last factorisation.
   void solve(const Vector& b, Vector& x) noexcept;
+  /// The border part of solve(): x_m (in place) from b_m and z_. P > 0: the half border size at compile time.
+  template <int P>
+  void solveHalvedBorder(double* xm) const noexcept;
+  void solveBorder(double* xm) const noexcept;
+  /// Half border size compiled at fixed size (the whole arm's seven joint velocities).
+  static constexpr int kFixedHalfBorder = 7;
 
   int n_ = 0;
   double rtol_ = 1e-6;
@@ -169,6 +175,10 @@ class RosenbrockIntegrator {
   Vector z_, stage_scratch_;
   std::array<int, kMaxRosenbrockStates / kRosenbrockBlock> nonzero_count_{};
   std::array<int, kMaxRosenbrockStates / kRosenbrockBlock * kMaxRosenbrockStates> nonzero_cols_{};
+  // Per block: the columns (0..3) of C_k = J(border rows, block k) that hold a nonzero.
+  std::array<int, kMaxRosenbrockStates / kRosenbrockBlock> c_count_{};
+  std::array<int, kMaxRosenbrockStates> c_cols_{};
+  bool c_pattern_valid_ = false;  // c_count_ / c_cols_ describe the current jac_
 };
 
 }  // namespace fullarm::plant
