@@ -7,7 +7,12 @@
 
 namespace fullarm::plant {
 
-ValueSlope regularizedSignedSqrt(double x, double x0) noexcept {
+namespace {
+
+// The bodies of regularizedSignedSqrt and roundedRamp, always inlined into the valve and check-valve
+// flows (eight ramps and four roots per joint and right-hand side; as calls they cost more than their
+// arithmetic).
+[[gnu::always_inline]] inline ValueSlope signedSqrtInline(double x, double x0) noexcept {
   const double ax = std::abs(x);
   if (ax >= x0) {
     const double r = std::sqrt(ax);
@@ -20,11 +25,21 @@ ValueSlope regularizedSignedSqrt(double x, double x0) noexcept {
   return {inv_sqrt * x * (1.25 - 0.25 * u * u), inv_sqrt * (1.25 - 0.75 * u * u)};
 }
 
-ValueSlope roundedRamp(double s, double w) noexcept {
+[[gnu::always_inline]] inline ValueSlope roundedRampInline(double s, double w) noexcept {
   if (s <= -w) return {0.0, 0.0};
   if (s >= w) return {s, 1.0};
   // (H2) quadratic blend with matching value and slope at +-w.
   return {(s + w) * (s + w) / (4.0 * w), (s + w) / (2.0 * w)};
+}
+
+}  // namespace
+
+ValueSlope regularizedSignedSqrt(double x, double x0) noexcept {
+  return signedSqrtInline(x, x0);
+}
+
+ValueSlope roundedRamp(double s, double w) noexcept {
+  return roundedRampInline(s, w);
 }
 
 double airRoot(const FluidParams& f) noexcept {
@@ -114,17 +129,17 @@ ValveFlows valveFlows(const JointParams& p, double x_spool, double p_a_pa, doubl
   const double dx_dxn = (x_spool > -1.0 && x_spool < 1.0) ? stroke : 0.0;
   const double w = v.edge_rounding_m;
   // (H6) edge openings [m] (Hopsan Hydraulic43Valve with per-edge laps; rounded, H2).
-  const ValueSlope o_pa = roundedRamp(x - v.lap_pa_m, w);
-  const ValueSlope o_pb = roundedRamp(-x - v.lap_pb_m, w);
-  const ValueSlope o_at = roundedRamp(-x - v.lap_at_m, w);
-  const ValueSlope o_bt = roundedRamp(x - v.lap_bt_m, w);
+  const ValueSlope o_pa = roundedRampInline(x - v.lap_pa_m, w);
+  const ValueSlope o_pb = roundedRampInline(-x - v.lap_pb_m, w);
+  const ValueSlope o_at = roundedRampInline(-x - v.lap_at_m, w);
+  const ValueSlope o_bt = roundedRampInline(x - v.lap_bt_m, w);
   const double ps = p.supply_pressure_pa;
   const double pr = p.return_pressure_pa;
   const double x0 = v.linear_region_pa;
-  const ValueSlope r_pa = regularizedSignedSqrt(ps - p_a_pa, x0);
-  const ValueSlope r_at = regularizedSignedSqrt(p_a_pa - pr, x0);
-  const ValueSlope r_pb = regularizedSignedSqrt(ps - p_b_pa, x0);
-  const ValueSlope r_bt = regularizedSignedSqrt(p_b_pa - pr, x0);
+  const ValueSlope r_pa = signedSqrtInline(ps - p_a_pa, x0);
+  const ValueSlope r_at = signedSqrtInline(p_a_pa - pr, x0);
+  const ValueSlope r_pb = signedSqrtInline(ps - p_b_pa, x0);
+  const ValueSlope r_bt = signedSqrtInline(p_b_pa - pr, x0);
   const double g = kv / stroke;  // flow per metre of opening per sqrt(Pa)
   ValveFlows f;
   f.q_a_m3ps = g * (o_pa.value * r_pa.value - o_at.value * r_at.value);
@@ -141,8 +156,8 @@ ValueSlope checkValveFlow(const JointParams& p, double p_pa) noexcept {
   if (g <= 0.0) return {0.0, 0.0};
   const double w = 0.1 * p.valve.linear_region_pa;
   // (H11) anti-cavitation (from return) and relief (to supply) check valves, no cracking pressure.
-  const ValueSlope in = roundedRamp(p.return_pressure_pa - p_pa, w);
-  const ValueSlope out = roundedRamp(p_pa - p.supply_pressure_pa, w);
+  const ValueSlope in = roundedRampInline(p.return_pressure_pa - p_pa, w);
+  const ValueSlope out = roundedRampInline(p_pa - p.supply_pressure_pa, w);
   return {g * (in.value - out.value), g * (-in.slope - out.slope)};
 }
 

@@ -131,7 +131,7 @@ void RosenbrockIntegrator::configure(int n, const double* atol, double rtol, lon
   g_.setZero(n, n);
   stats_ = {};
   factor_valid_ = false;
-  c_pattern_valid_ = false;
+  structure_valid_ = false;
 }
 
 void RosenbrockIntegrator::setBlockStructure(int blocks) {
@@ -140,7 +140,7 @@ void RosenbrockIntegrator::setBlockStructure(int blocks) {
   blocks_ = blocks;
   border_ = n_ - blocks * kRosenbrockBlock;
   factor_valid_ = false;
-  c_pattern_valid_ = false;
+  structure_valid_ = false;
   if (blocks_ > 0) {
     w_.setZero(blocks_ * kRosenbrockBlock, border_);
     schur_.setZero(border_, border_);
@@ -324,25 +324,29 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
   // Second-order border [x; v] with x' = v exactly (J's x rows hold only the 1 at v): the x rows
   // of S are (d I, -I) and C has no x rows, so x = (b_x + v) / d and the v rows reduce to the
   // half-size system (S_vv + S_vx / d) v = b_v - S_vx b_x / d.
+  // The structure found below (this flag, and the nonzero columns of B_k and C_k) depends on J
+  // only: it is found once per Jacobian, not again when a rejected step refactorises with the same J.
+  const bool find_structure = !structure_valid_;
   const int p = m / 2;
-  second_order_border_ = m % 2 == 0 && p > 0 && [&]() noexcept {
-    // Sum of |J_x - [0 I 0]| over the x rows: zero exactly when the pattern holds (a sum of
-    // non-negative terms; NaN fails the test). Branch-free, so it vectorises: an entry-by-entry
-    // comparison cost a third of the factorisation.
-    double deviation = 0.0;
-    for (int c = 0; c < n_; ++c) {
-      const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
-      const int one = c - nb - p;  // row of the expected 1 in this column, if in [0, p)
-      if (one < 0 || one >= p) {
-        for (int i = 0; i < p; ++i) deviation += std::abs(col[i]);
-      } else {
-        for (int i = 0; i < one; ++i) deviation += std::abs(col[i]);
-        deviation += std::abs(col[one] - 1.0);
-        for (int i = one + 1; i < p; ++i) deviation += std::abs(col[i]);
+  if (find_structure)
+    second_order_border_ = m % 2 == 0 && p > 0 && [&]() noexcept {
+      // Sum of |J_x - [0 I 0]| over the x rows: zero exactly when the pattern holds (a sum of
+      // non-negative terms; NaN fails the test). Branch-free, so it vectorises: an entry-by-entry
+      // comparison cost a third of the factorisation.
+      double deviation = 0.0;
+      for (int c = 0; c < n_; ++c) {
+        const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
+        const int one = c - nb - p;  // row of the expected 1 in this column, if in [0, p)
+        if (one < 0 || one >= p) {
+          for (int i = 0; i < p; ++i) deviation += std::abs(col[i]);
+        } else {
+          for (int i = 0; i < one; ++i) deviation += std::abs(col[i]);
+          deviation += std::abs(col[one] - 1.0);
+          for (int i = one + 1; i < p; ++i) deviation += std::abs(col[i]);
+        }
       }
-    }
-    return deviation == 0.0;
-  }();
+      return deviation == 0.0;
+    }();
   const int first_row = second_order_border_ ? p : 0;  // border rows C can reach
   for (int k = 0; k < blocks_; ++k) {
     const int r = k * kRosenbrockBlock;
@@ -355,9 +359,8 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
     if (!invertible || !std::isfinite(det) || !inv.allFinite()) return false;
     // Columns of C_k (block k's columns of the border rows) that hold a nonzero: the others add
     // exact zeros to S here and to the border in every solve (on the plant, the spool columns).
-    // Found once per Jacobian (a refactorisation after a rejection keeps J).
     int& c_count = c_count_[static_cast<std::size_t>(k)];
-    if (!c_pattern_valid_) {
+    if (find_structure) {
       c_count = 0;
       for (int c = 0; c < kRosenbrockBlock; ++c) {
         const double* col = jac + static_cast<std::ptrdiff_t>(r + c) * ld + nb;
@@ -367,22 +370,28 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
       }
     }
     int& count = nonzero_count_[static_cast<std::size_t>(k)];
-    count = 0;
-    for (int j = 0; j < m; ++j) {
+    if (find_structure) {
+      count = 0;
+      for (int j = 0; j < m; ++j) {
+        const double* col = jac + static_cast<std::ptrdiff_t>(nb + j) * ld + r;
+        const double sum = (std::abs(col[0]) + std::abs(col[1])) + (std::abs(col[2]) + std::abs(col[3]));
+        if (!(sum == 0.0)) nonzero_cols_[static_cast<std::size_t>(k * kMaxRosenbrockStates + count++)] = j;
+      }
+    }
+    for (int q = 0; q < count; ++q) {
+      const int j = nonzero_cols_[static_cast<std::size_t>(k * kMaxRosenbrockStates + q)];
       const Eigen::Vector4d bj = -jac_.block<4, 1>(r, nb + j);
-      if (bj.isZero(0.0)) continue;
-      nonzero_cols_[static_cast<std::size_t>(k * kMaxRosenbrockStates + count++)] = j;
       const Eigen::Vector4d wj = inv * bj;
       w_.block<4, 1>(r, j) = wj;
       // S -= C_k w_j with C = -J_mh: S(:, j) += J(border, block k) w_j.
-      for (int q = 0; q < c_count; ++q) {
-        const int c = c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + q)];
+      for (int qc = 0; qc < c_count; ++qc) {
+        const int c = c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + qc)];
         const double* col = jac + static_cast<std::ptrdiff_t>(r + c) * ld + nb;
         for (int i = first_row; i < m; ++i) schur_(i, j) += col[i] * wj[c];
       }
     }
   }
-  c_pattern_valid_ = true;
+  structure_valid_ = true;
   if (second_order_border_) {
     inv_d_ = 1.0 / d;
     for (int j = 0; j < p; ++j) {
@@ -573,7 +582,7 @@ RosenbrockStatus RosenbrockIntegrator::advance(double* y, double duration_s) noe
     const double h = last ? remaining : remaining / pieces;
     if (need_jacobian) {
       sys_.jacobian(sys_.user, y0_.data(), f0_.data(), jac_.data());
-      c_pattern_valid_ = false;
+      structure_valid_ = false;
       ++stats_.jac_evals;
       ++stats_.rhs_evals;
       need_jacobian = false;

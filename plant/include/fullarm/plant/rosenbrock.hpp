@@ -178,7 +178,7 @@ class RosenbrockIntegrator {
   // Per block: the columns (0..3) of C_k = J(border rows, block k) that hold a nonzero.
   std::array<int, kMaxRosenbrockStates / kRosenbrockBlock> c_count_{};
   std::array<int, kMaxRosenbrockStates> c_cols_{};
-  bool c_pattern_valid_ = false;  // c_count_ / c_cols_ describe the current jac_
+  bool structure_valid_ = false;  // second_order_border_, nonzero_* and c_* describe the current jac_
 };
 
 }  // namespace fullarm::plant
