@@ -398,6 +398,8 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   cuff_jac_.setZero(3, n_);
   stroke_.clear();
   for (const JointParams& p : params_) stroke_.push_back(strokeRange(p));
+  lever_offset_.clear();
+  for (const JointParams& p : params_) lever_offset_.push_back(leverOffsetSinCos(p.actuator));
   volumes_.assign(static_cast<std::size_t>(n_), ChamberVolumes{});
   terms_.assign(static_cast<std::size_t>(n_), JointTerms{});
   air_root_.clear();
@@ -568,7 +570,8 @@ void ArmPlant::mechanics(const double* y) noexcept {
     const double qd = y[velocityIndex(n, 0)];
     mass_(0, 0) = load_.inertia_kgm2 + params_[0].actuator.inertia_kgm2;
     mass_inv_(0, 0) = 1.0 / mass_(0, 0);
-    h_[0] = load_.gravity_cos_nm * std::cos(q) + load_.gravity_sin_nm * std::sin(q);
+    single_axis_sincos_ = {std::sin(q), std::cos(q)};  // shared with the cylinder geometry
+    h_[0] = load_.gravity_cos_nm * single_axis_sincos_.cos + load_.gravity_sin_nm * single_axis_sincos_.sin;
     tau_cuff_[0] = 0.0;
     cuff_jac_.setZero();
     if (single_axis_cuff_) {
@@ -632,8 +635,12 @@ void ArmPlant::evaluateTorques(const double* y) noexcept {
       tau_act_[k] = tau_hyd_[k];
       continue;
     }
-    const ChamberVolumes& v = volumes_[static_cast<std::size_t>(k)] =
-        chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
+    // sin q, cos q from the rigid-body pass above (mechanics()).
+    const SinCos q_sincos = single_axis_ ? single_axis_sincos_
+                                         : SinCos{reduced_data_->sin_q[static_cast<std::size_t>(k)],
+                                                  reduced_data_->cos_q[static_cast<std::size_t>(k)]};
+    const ChamberVolumes& v = volumes_[static_cast<std::size_t>(k)] = chamberVolumes(
+        p, stroke_[static_cast<std::size_t>(k)], q, q_sincos, lever_offset_[static_cast<std::size_t>(k)]);
     JointTerms& c = terms_[static_cast<std::size_t>(k)];
     c.friction = frictionTorque(p.friction, qd);
     c.stop = hardStopTorque(p, q, qd);

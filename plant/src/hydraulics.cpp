@@ -68,19 +68,38 @@ ValueSlope effectiveBulkModulus(const FluidParams& f, double p_gauge_pa, double 
   return {el * num / den, el * (dnum * den - num * dden) / (den * den)};
 }
 
-ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad) noexcept {
-  if (a.kind != ActuatorKind::kCylinder) return {q_rad, 1.0, 0.0};
+namespace {
+
+// (H4) from cos phi and sin phi.
+ActuatorKinematics cylinderKinematics(const ActuatorParams& a, double c, double s) noexcept {
   const double r = a.lever.moment_arm_m;
   const double d = a.lever.mount_distance_m;
-  const double phi = q_rad + a.lever.lever_angle_offset_rad;
-  const double c = std::cos(phi);
-  // L and R as arm::cylinderLength / arm::actuatorMomentArm (law of cosines and dL/dq), with one
-  // cos and sin.
+  // L and R as arm::cylinderLength / arm::actuatorMomentArm (law of cosines and dL/dq).
   const double L = std::sqrt(r * r + d * d - 2.0 * r * d * c);
-  const double R = r * d * std::sin(phi) / L;
+  const double R = r * d * s / L;
   // dR/dq = r d cos(phi) / L - R^2 / L (differentiating R = r d sin(phi) / L, dL/dq = R).
   const double dR = (r * d * c - R * R) / L;
   return {L, R, dR};
+}
+
+}  // namespace
+
+ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad) noexcept {
+  if (a.kind != ActuatorKind::kCylinder) return {q_rad, 1.0, 0.0};
+  const double phi = q_rad + a.lever.lever_angle_offset_rad;
+  return cylinderKinematics(a, std::cos(phi), std::sin(phi));
+}
+
+SinCos leverOffsetSinCos(const ActuatorParams& a) noexcept {
+  if (a.kind != ActuatorKind::kCylinder) return {};
+  return {std::sin(a.lever.lever_angle_offset_rad), std::cos(a.lever.lever_angle_offset_rad)};
+}
+
+ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad, SinCos q, SinCos lever_offset) noexcept {
+  if (a.kind != ActuatorKind::kCylinder) return {q_rad, 1.0, 0.0};
+  // phi = q + offset by angle addition.
+  return cylinderKinematics(a, q.cos * lever_offset.cos - q.sin * lever_offset.sin,
+                            q.sin * lever_offset.cos + q.cos * lever_offset.sin);
 }
 
 double areaA(const ActuatorParams& a) noexcept {
@@ -97,8 +116,10 @@ StrokeRange strokeRange(const JointParams& p) noexcept {
   return {std::min(s0, s1), std::max(s0, s1), s1 >= s0};
 }
 
-ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, double q_rad) noexcept {
-  const ActuatorKinematics k = actuatorKinematics(p.actuator, q_rad);
+namespace {
+
+// (H5) from the actuator kinematics at q.
+ChamberVolumes volumesFrom(const JointParams& p, const StrokeRange& range, const ActuatorKinematics& k) noexcept {
   // u = sign * s increases with q, so chamber A (filling as u grows) drives q positive.
   const double sign = range.increasing ? 1.0 : -1.0;
   const double u = sign * k.stroke;
@@ -115,6 +136,17 @@ ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, do
   v.d2va_dq2 = aa * sign * k.ratio_slope;
   v.d2vb_dq2 = -ab * sign * k.ratio_slope;
   return v;
+}
+
+}  // namespace
+
+ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, double q_rad) noexcept {
+  return volumesFrom(p, range, actuatorKinematics(p.actuator, q_rad));
+}
+
+ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, double q_rad, SinCos q,
+                              SinCos lever_offset) noexcept {
+  return volumesFrom(p, range, actuatorKinematics(p.actuator, q_rad, q, lever_offset));
 }
 
 double valveCoefficient(const ValveParams& v) noexcept {
