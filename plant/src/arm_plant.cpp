@@ -90,33 +90,48 @@ constexpr double kRodasInitialStep_s = 1e-4;
 template <int N, typename Matrix>
 void choleskyFactor(const Matrix& m, Matrix& l, int n_runtime) noexcept {
   const int n = N > 0 ? N : n_runtime;
+  // Raw column-major storage with leading dimension n (the matrices are n x n), so that at fixed N
+  // every offset is a constant.
+  const double* a = m.data();
+  double* f = l.data();
+#pragma GCC unroll 16
   for (int j = 0; j < n; ++j) {
-    double d = m(j, j);
-    for (int k = 0; k < j; ++k) d -= l(j, k) * l(j, k);
+    double d = a[j + j * n];
+#pragma GCC unroll 16
+    for (int k = 0; k < j; ++k) d -= f[j + k * n] * f[j + k * n];
     const double inv = 1.0 / std::sqrt(d);
-    l(j, j) = inv;
+    f[j + j * n] = inv;
+#pragma GCC unroll 16
     for (int i = j + 1; i < n; ++i) {
-      double v = m(i, j);
-      for (int k = 0; k < j; ++k) v -= l(i, k) * l(j, k);
-      l(i, j) = v * inv;
+      double v = a[i + j * n];
+#pragma GCC unroll 16
+      for (int k = 0; k < j; ++k) v -= f[i + k * n] * f[j + k * n];
+      f[i + j * n] = v * inv;
     }
   }
 }
 
 // x = M^-1 b with the factor of choleskyFactor (b and x may be the same vector).
 template <int N, typename Matrix, typename Vector>
-void choleskySolve(const Matrix& l, const Vector& b, Vector& x, int n_runtime) noexcept {
+void choleskySolve(const Matrix& l, const Vector& b, Vector& x_out, int n_runtime) noexcept {
   const int n = N > 0 ? N : n_runtime;
+  const double* f = l.data();
+  double x[kMaxPlantJoints];
+#pragma GCC unroll 16
   for (int i = 0; i < n; ++i) {
     double v = b[i];
-    for (int k = 0; k < i; ++k) v -= l(i, k) * x[k];
-    x[i] = v * l(i, i);
+#pragma GCC unroll 16
+    for (int k = 0; k < i; ++k) v -= f[i + k * n] * x[k];
+    x[i] = v * f[i + i * n];
   }
+#pragma GCC unroll 16
   for (int i = n - 1; i >= 0; --i) {
     double v = x[i];
-    for (int k = i + 1; k < n; ++k) v -= l(k, i) * x[k];
-    x[i] = v * l(i, i);
+#pragma GCC unroll 16
+    for (int k = i + 1; k < n; ++k) v -= f[k + i * n] * x[k];
+    x[i] = v * f[i + i * n];
   }
+  for (int i = 0; i < n; ++i) x_out[i] = x[i];
 }
 
 // M^-1 from the factor of choleskyFactor: column k solves M x = e_k, whose forward
@@ -124,21 +139,28 @@ void choleskySolve(const Matrix& l, const Vector& b, Vector& x, int n_runtime) n
 template <int N, typename Matrix>
 void choleskyInverse(const Matrix& l, Matrix& inv, int n_runtime) noexcept {
   const int n = N > 0 ? N : n_runtime;
+  const double* f = l.data();
+  double* out = inv.data();
+#pragma GCC unroll 16
   for (int k = 0; k < n; ++k) {
     double x[kMaxPlantJoints];
     for (int i = 0; i < k; ++i) x[i] = 0.0;
-    x[k] = l(k, k);
+    x[k] = f[k + k * n];
+#pragma GCC unroll 16
     for (int i = k + 1; i < n; ++i) {
       double v = 0.0;
-      for (int j = k; j < i; ++j) v -= l(i, j) * x[j];
-      x[i] = v * l(i, i);
+#pragma GCC unroll 16
+      for (int j = k; j < i; ++j) v -= f[i + j * n] * x[j];
+      x[i] = v * f[i + i * n];
     }
+#pragma GCC unroll 16
     for (int i = n - 1; i >= 0; --i) {
       double v = x[i];
-      for (int j = i + 1; j < n; ++j) v -= l(j, i) * x[j];
-      x[i] = v * l(i, i);
+#pragma GCC unroll 16
+      for (int j = i + 1; j < n; ++j) v -= f[j + i * n] * x[j];
+      x[i] = v * f[i + i * n];
     }
-    for (int i = 0; i < n; ++i) inv(i, k) = x[i];
+    for (int i = 0; i < n; ++i) out[i + k * n] = x[i];
   }
 }
 

@@ -269,6 +269,31 @@ bool luFactorFixed(double* a, int* piv) noexcept {
   return true;
 }
 
+// Inverse of a 4 x 4 diagonal block D of the Newton matrix; false if singular or not finite. When
+// D = [A 0; C E] in 2 x 2 blocks (the plant's spool states do not depend on its pressures), by the
+// 2 x 2 cofactor inverses, D^-1 = [A^-1 0; -E^-1 C A^-1 E^-1]; otherwise by Eigen's 4 x 4
+// cofactor inverse. Both are invariant under the rows' very different scales.
+bool invertBlock(const Eigen::Matrix4d& dk, Eigen::Matrix4d& inv) noexcept {
+  if (dk(0, 2) == 0.0 && dk(0, 3) == 0.0 && dk(1, 2) == 0.0 && dk(1, 3) == 0.0) {
+    const double det_a = dk(0, 0) * dk(1, 1) - dk(0, 1) * dk(1, 0);
+    const double det_e = dk(2, 2) * dk(3, 3) - dk(2, 3) * dk(3, 2);
+    if (!(det_a != 0.0 && det_e != 0.0)) return false;
+    const double ia = 1.0 / det_a;
+    const double ie = 1.0 / det_e;
+    const Eigen::Matrix2d a_inv{{dk(1, 1) * ia, -dk(0, 1) * ia}, {-dk(1, 0) * ia, dk(0, 0) * ia}};
+    const Eigen::Matrix2d e_inv{{dk(3, 3) * ie, -dk(2, 3) * ie}, {-dk(3, 2) * ie, dk(2, 2) * ie}};
+    inv.topLeftCorner<2, 2>() = a_inv;
+    inv.topRightCorner<2, 2>().setZero();
+    inv.bottomLeftCorner<2, 2>().noalias() = -(e_inv * (dk.bottomLeftCorner<2, 2>() * a_inv));
+    inv.bottomRightCorner<2, 2>() = e_inv;
+    return inv.allFinite();
+  }
+  double det = 0.0;
+  bool invertible = false;
+  dk.computeInverseAndDetWithCheck(inv, det, invertible, 0.0);
+  return invertible && std::isfinite(det) && inv.allFinite();
+}
+
 // Dispatch on the sizes that occur (4: hydraulic block, 6: one joint, 7: the arm's halved Schur
 // system); `piv` is the swap
 // sequence of luFactor or the permutation of luFactorFixed, consistently per size.
@@ -353,10 +378,7 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
     Eigen::Matrix4d dk = -jac_.block<4, 4>(r, r);
     dk.diagonal().array() += d;
     Eigen::Matrix4d& inv = block_inv_[static_cast<std::size_t>(k)];
-    double det = 0.0;
-    bool invertible = false;
-    dk.computeInverseAndDetWithCheck(inv, det, invertible, 0.0);
-    if (!invertible || !std::isfinite(det) || !inv.allFinite()) return false;
+    if (!invertBlock(dk, inv)) return false;
     // Columns of C_k (block k's columns of the border rows) that hold a nonzero: the others add
     // exact zeros to S here and to the border in every solve (on the plant, the spool columns).
     int& c_count = c_count_[static_cast<std::size_t>(k)];

@@ -356,8 +356,10 @@ TEST(Rodas3, BlockEliminationWithSwitchingBorderColumnsMatchesDenseLu) {
   s.a.setZero();
   std::srand(17);
   using Matrix7 = Eigen::Matrix<double, 7, 7>;
-  // Block 0: two lightly damped oscillators (about 6 and 4 Hz), so its states change sign often.
-  s.a.block<4, 4>(0, 0) << -1.0, 40.0, 0.0, 0.0, -40.0, -1.0, 0.0, 0.0, 0.0, 0.0, -2.0, 25.0, 0.0, 0.0, -25.0, -2.0;
+  // Block 0: two lightly damped oscillators (about 6 and 4 Hz), so its states change sign often, the
+  // second driven by the first: block lower triangular in 2 x 2 blocks, as the plant's spool and
+  // pressures (the integrator's structured block inverse; block 1 takes the general one).
+  s.a.block<4, 4>(0, 0) << -1.0, 40.0, 0.0, 0.0, -40.0, -1.0, 0.0, 0.0, 5.0, 2.0, -2.0, 25.0, 0.0, -3.0, -25.0, -2.0;
   s.a.block<4, 4>(4, 4) = Eigen::Matrix4d::Random() - 500.0 * Eigen::Matrix4d::Identity();
   s.a.block<4, 7>(0, 8) = 0.1 * Eigen::Matrix<double, 4, 7>::Random();             // blocks see x
   s.a.block<4, 7>(4, 15) = Eigen::Matrix<double, 4, 7>::Random();                  // and v
