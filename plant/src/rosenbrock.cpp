@@ -335,17 +335,27 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
     g_.diagonal().array() += d;
     return luFactorAny(g_.data(), static_cast<int>(g_.rows()), n_, pivots_.data());
   }
+  // (At compile-time size for the whole arm's border of seven angles and seven velocities.)
+  return border_ == 2 * kFixedHalfBorder ? factorBlocks<2 * kFixedHalfBorder>(d) : factorBlocks<0>(d);
+}
+
+template <int M>
+bool RosenbrockIntegrator::factorBlocks(double d) noexcept {
   // G = [D B; C E] with D block diagonal: invert each D_k, W = D^-1 B, S = E - C W. B_k (the
   // border columns of block k's rows) and C (the block columns of the border rows) are mostly
   // exact zeros; only nonzero columns of B_k are solved for and used. The 4 x 4 blocks are
   // inverted explicitly (cofactors: invariant under the rows' very different scales), so every
   // later solve with them is a matrix-vector product.
   const int nb = blocks_ * kRosenbrockBlock;
-  const int m = border_;
+  const int m = M > 0 ? M : border_;
   const int ld = static_cast<int>(jac_.rows());
   const double* jac = jac_.data();
-  schur_ = -jac_.block(nb, nb, m, m);
-  schur_.diagonal().array() += d;
+  double* schur = schur_.data();  // m x m, column-major
+  for (int j = 0; j < m; ++j) {
+    const double* col = jac + static_cast<std::ptrdiff_t>(nb + j) * ld + nb;
+    for (int i = 0; i < m; ++i) schur[i + j * m] = -col[i];
+    schur[j + j * m] += d;
+  }
   // Second-order border [x; v] with x' = v exactly (J's x rows hold only the 1 at v): the x rows
   // of S are (d I, -I) and C has no x rows, so x = (b_x + v) / d and the v rows reduce to the
   // half-size system (S_vv + S_vx / d) v = b_v - S_vx b_x / d.
@@ -372,7 +382,6 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
       }
       return deviation == 0.0;
     }();
-  const int first_row = second_order_border_ ? p : 0;  // border rows C can reach
   for (int k = 0; k < blocks_; ++k) {
     const int r = k * kRosenbrockBlock;
     Eigen::Matrix4d dk = -jac_.block<4, 4>(r, r);
@@ -387,7 +396,11 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
       for (int c = 0; c < kRosenbrockBlock; ++c) {
         const double* col = jac + static_cast<std::ptrdiff_t>(r + c) * ld + nb;
         double sum = 0.0;  // a sum of |entries| (branch-free, so it vectorises; NaN counts as nonzero)
-        for (int i = first_row; i < m; ++i) sum += std::abs(col[i]);
+        if (second_order_border_) {
+          for (int i = p; i < m; ++i) sum += std::abs(col[i]);
+        } else {
+          for (int i = 0; i < m; ++i) sum += std::abs(col[i]);
+        }
         if (!(sum == 0.0)) c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + c_count++)] = c;
       }
     }
@@ -409,19 +422,26 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
       for (int qc = 0; qc < c_count; ++qc) {
         const int c = c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + qc)];
         const double* col = jac + static_cast<std::ptrdiff_t>(r + c) * ld + nb;
-        for (int i = first_row; i < m; ++i) schur_(i, j) += col[i] * wj[c];
+        double* s_j = schur + static_cast<std::ptrdiff_t>(j) * m;
+        const double wjc = wj[c];
+        if (second_order_border_) {
+          for (int i = p; i < m; ++i) s_j[i] += col[i] * wjc;
+        } else {
+          for (int i = 0; i < m; ++i) s_j[i] += col[i] * wjc;
+        }
       }
     }
   }
   structure_valid_ = true;
   if (second_order_border_) {
     inv_d_ = 1.0 / d;
+    double* reduced = schur_reduced_.data();  // p x p
     for (int j = 0; j < p; ++j) {
-      for (int i = 0; i < p; ++i) schur_reduced_(i, j) = schur_(p + i, p + j) + schur_(p + i, j) * inv_d_;
+      for (int i = 0; i < p; ++i) reduced[i + j * p] = schur[p + i + (p + j) * m] + schur[p + i + j * m] * inv_d_;
     }
-    return luFactorAny(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data());
+    return luFactorAny(reduced, p, p, pivots_.data());
   }
-  return luFactorAny(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data());
+  return luFactorAny(schur, m, m, pivots_.data());
 }
 
 void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {

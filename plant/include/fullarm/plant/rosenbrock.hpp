@@ -130,6 +130,9 @@ class RosenbrockIntegrator {
   bool factor(double h) noexcept;
   /// Factorises G = d I - J (d = 1 / (h gamma)) unconditionally; false if singular.
   bool factorG(double d) noexcept;
+  /// The block-elimination part of factorG(); M > 0: the border size at compile time.
+  template <int M>
+  bool factorBlocks(double d) noexcept;
   /// x = G^-1 b with the last factorisation.
   void solve(const Vector& b, Vector& x) noexcept;
   /// The border part of solve(): x_m (in place) from b_m and z_. P > 0: the half border size at compile time.
