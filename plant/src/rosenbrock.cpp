@@ -280,12 +280,16 @@ bool invertBlock(const Eigen::Matrix4d& dk, Eigen::Matrix4d& inv) noexcept {
     if (!(det_a != 0.0 && det_e != 0.0)) return false;
     const double ia = 1.0 / det_a;
     const double ie = 1.0 / det_e;
-    const Eigen::Matrix2d a_inv{{dk(1, 1) * ia, -dk(0, 1) * ia}, {-dk(1, 0) * ia, dk(0, 0) * ia}};
-    const Eigen::Matrix2d e_inv{{dk(3, 3) * ie, -dk(2, 3) * ie}, {-dk(3, 2) * ie, dk(2, 2) * ie}};
-    inv.topLeftCorner<2, 2>() = a_inv;
-    inv.topRightCorner<2, 2>().setZero();
-    inv.bottomLeftCorner<2, 2>().noalias() = -(e_inv * (dk.bottomLeftCorner<2, 2>() * a_inv));
-    inv.bottomRightCorner<2, 2>() = e_inv;
+    // A^-1 and E^-1 by cofactors (plain scalars: Eigen's small fixed products cost more here).
+    const double a00 = dk(1, 1) * ia, a01 = -dk(0, 1) * ia, a10 = -dk(1, 0) * ia, a11 = dk(0, 0) * ia;
+    const double e00 = dk(3, 3) * ie, e01 = -dk(2, 3) * ie, e10 = -dk(3, 2) * ie, e11 = dk(2, 2) * ie;
+    // T = C A^-1, lower-left block = -(E^-1 T).
+    const double t00 = dk(2, 0) * a00 + dk(2, 1) * a10, t01 = dk(2, 0) * a01 + dk(2, 1) * a11;
+    const double t10 = dk(3, 0) * a00 + dk(3, 1) * a10, t11 = dk(3, 0) * a01 + dk(3, 1) * a11;
+    inv << a00, a01, 0.0, 0.0,                                         //
+        a10, a11, 0.0, 0.0,                                            //
+        -(e00 * t00 + e01 * t10), -(e00 * t01 + e01 * t11), e00, e01,  //
+        -(e10 * t00 + e11 * t10), -(e10 * t01 + e11 * t11), e10, e11;
     return inv.allFinite();
   }
   double det = 0.0;
