@@ -77,61 +77,90 @@ T* checkPtr(T* p, const char* call) {
 }
 
 constexpr int kMaxEventsPerPeriod = 64;
+// Joint count of the whole DTS arm, for which the small dense loops below are compiled at fixed size.
+constexpr int kArmJoints = 7;
 // First Rodas3 step after a reset [s]; the controller adapts it from there.
 constexpr double kRodasInitialStep_s = 1e-4;
 
 // Cholesky factor M = L L^T of the small SPD joint-space inertia (strict lower triangle of l,
 // with 1 / L_jj on its diagonal so the solves multiply instead of divide; plain loops: at
 // n <= 10 a library call's dispatch costs more than the arithmetic).
-template <typename Matrix>
-void choleskyFactor(const Matrix& m, Matrix& l, int n) noexcept {
+// N > 0: the size at compile time (the whole arm's 7, so that the compiler unrolls the short
+// loops; the run-time bounds cost more than the arithmetic there), 0: the run-time n.
+template <int N, typename Matrix>
+void choleskyFactor(const Matrix& m, Matrix& l, int n_runtime) noexcept {
+  const int n = N > 0 ? N : n_runtime;
+  // Raw column-major storage with leading dimension n (the matrices are n x n), so that at fixed N
+  // every offset is a constant.
+  const double* a = m.data();
+  double* f = l.data();
+#pragma GCC unroll 16
   for (int j = 0; j < n; ++j) {
-    double d = m(j, j);
-    for (int k = 0; k < j; ++k) d -= l(j, k) * l(j, k);
+    double d = a[j + j * n];
+#pragma GCC unroll 16
+    for (int k = 0; k < j; ++k) d -= f[j + k * n] * f[j + k * n];
     const double inv = 1.0 / std::sqrt(d);
-    l(j, j) = inv;
+    f[j + j * n] = inv;
+#pragma GCC unroll 16
     for (int i = j + 1; i < n; ++i) {
-      double v = m(i, j);
-      for (int k = 0; k < j; ++k) v -= l(i, k) * l(j, k);
-      l(i, j) = v * inv;
+      double v = a[i + j * n];
+#pragma GCC unroll 16
+      for (int k = 0; k < j; ++k) v -= f[i + k * n] * f[j + k * n];
+      f[i + j * n] = v * inv;
     }
   }
 }
 
 // x = M^-1 b with the factor of choleskyFactor (b and x may be the same vector).
-template <typename Matrix, typename Vector>
-void choleskySolve(const Matrix& l, const Vector& b, Vector& x, int n) noexcept {
+template <int N, typename Matrix, typename Vector>
+void choleskySolve(const Matrix& l, const Vector& b, Vector& x_out, int n_runtime) noexcept {
+  const int n = N > 0 ? N : n_runtime;
+  const double* f = l.data();
+  double x[kMaxPlantJoints];
+#pragma GCC unroll 16
   for (int i = 0; i < n; ++i) {
     double v = b[i];
-    for (int k = 0; k < i; ++k) v -= l(i, k) * x[k];
-    x[i] = v * l(i, i);
+#pragma GCC unroll 16
+    for (int k = 0; k < i; ++k) v -= f[i + k * n] * x[k];
+    x[i] = v * f[i + i * n];
   }
+#pragma GCC unroll 16
   for (int i = n - 1; i >= 0; --i) {
     double v = x[i];
-    for (int k = i + 1; k < n; ++k) v -= l(k, i) * x[k];
-    x[i] = v * l(i, i);
+#pragma GCC unroll 16
+    for (int k = i + 1; k < n; ++k) v -= f[k + i * n] * x[k];
+    x[i] = v * f[i + i * n];
   }
+  for (int i = 0; i < n; ++i) x_out[i] = x[i];
 }
 
 // M^-1 from the factor of choleskyFactor: column k solves M x = e_k, whose forward
 // substitution is zero above row k.
-template <typename Matrix>
-void choleskyInverse(const Matrix& l, Matrix& inv, int n) noexcept {
+template <int N, typename Matrix>
+void choleskyInverse(const Matrix& l, Matrix& inv, int n_runtime) noexcept {
+  const int n = N > 0 ? N : n_runtime;
+  const double* f = l.data();
+  double* out = inv.data();
+#pragma GCC unroll 16
   for (int k = 0; k < n; ++k) {
     double x[kMaxPlantJoints];
     for (int i = 0; i < k; ++i) x[i] = 0.0;
-    x[k] = l(k, k);
+    x[k] = f[k + k * n];
+#pragma GCC unroll 16
     for (int i = k + 1; i < n; ++i) {
       double v = 0.0;
-      for (int j = k; j < i; ++j) v -= l(i, j) * x[j];
-      x[i] = v * l(i, i);
+#pragma GCC unroll 16
+      for (int j = k; j < i; ++j) v -= f[i + j * n] * x[j];
+      x[i] = v * f[i + i * n];
     }
+#pragma GCC unroll 16
     for (int i = n - 1; i >= 0; --i) {
       double v = x[i];
-      for (int j = i + 1; j < n; ++j) v -= l(j, i) * x[j];
-      x[i] = v * l(i, i);
+#pragma GCC unroll 16
+      for (int j = i + 1; j < n; ++j) v -= f[j + i * n] * x[j];
+      x[i] = v * f[i + i * n];
     }
-    for (int i = 0; i < n; ++i) inv(i, k) = x[i];
+    for (int i = 0; i < n; ++i) out[i + k * n] = x[i];
   }
 }
 
@@ -391,6 +420,8 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   cuff_jac_.setZero(3, n_);
   stroke_.clear();
   for (const JointParams& p : params_) stroke_.push_back(strokeRange(p));
+  lever_offset_.clear();
+  for (const JointParams& p : params_) lever_offset_.push_back(leverOffsetSinCos(p.actuator));
   volumes_.assign(static_cast<std::size_t>(n_), ChamberVolumes{});
   terms_.assign(static_cast<std::size_t>(n_), JointTerms{});
   air_root_.clear();
@@ -561,7 +592,8 @@ void ArmPlant::mechanics(const double* y) noexcept {
     const double qd = y[velocityIndex(n, 0)];
     mass_(0, 0) = load_.inertia_kgm2 + params_[0].actuator.inertia_kgm2;
     mass_inv_(0, 0) = 1.0 / mass_(0, 0);
-    h_[0] = load_.gravity_cos_nm * std::cos(q) + load_.gravity_sin_nm * std::sin(q);
+    single_axis_sincos_ = {std::sin(q), std::cos(q)};  // shared with the cylinder geometry
+    h_[0] = load_.gravity_cos_nm * single_axis_sincos_.cos + load_.gravity_sin_nm * single_axis_sincos_.sin;
     tau_cuff_[0] = 0.0;
     cuff_jac_.setZero();
     if (single_axis_cuff_) {
@@ -625,8 +657,12 @@ void ArmPlant::evaluateTorques(const double* y) noexcept {
       tau_act_[k] = tau_hyd_[k];
       continue;
     }
-    const ChamberVolumes& v = volumes_[static_cast<std::size_t>(k)] =
-        chamberVolumes(p, stroke_[static_cast<std::size_t>(k)], q);
+    // sin q, cos q from the rigid-body pass above (mechanics()).
+    const SinCos q_sincos = single_axis_ ? single_axis_sincos_
+                                         : SinCos{reduced_data_->sin_q[static_cast<std::size_t>(k)],
+                                                  reduced_data_->cos_q[static_cast<std::size_t>(k)]};
+    const ChamberVolumes& v = volumes_[static_cast<std::size_t>(k)] = chamberVolumes(
+        p, stroke_[static_cast<std::size_t>(k)], q, q_sincos, lever_offset_[static_cast<std::size_t>(k)]);
     JointTerms& c = terms_[static_cast<std::size_t>(k)];
     c.friction = frictionTorque(p.friction, qd);
     c.stop = hardStopTorque(p, q, qd);
@@ -638,8 +674,13 @@ void ArmPlant::evaluateTorques(const double* y) noexcept {
   if (n == 1) {
     qdd_[0] = rhs[0] * mass_inv_(0, 0);
   } else {
-    choleskyFactor(mass_, chol_, n);
-    choleskySolve(chol_, rhs, qdd_, n);
+    if (n == kArmJoints) {
+      choleskyFactor<kArmJoints>(mass_, chol_, n);
+      choleskySolve<kArmJoints>(chol_, rhs, qdd_, n);
+    } else {
+      choleskyFactor<0>(mass_, chol_, n);
+      choleskySolve<0>(chol_, rhs, qdd_, n);
+    }
   }
   // Load cell between the actuator side and the link: tau_cell = tau_act - J_act qdd.
   for (int k = 0; k < n; ++k)
@@ -709,7 +750,11 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
     mass_inv_(0, 0) = 1.0 / mass_(0, 0);
   } else {
     // M^-1 from the factor of the evaluateRhs() pass above.
-    choleskyInverse(chol_, mass_inv_, n);
+    if (n == kArmJoints) {
+      choleskyInverse<kArmJoints>(chol_, mass_inv_, n);
+    } else {
+      choleskyInverse<0>(chol_, mass_inv_, n);
+    }
   }
   // d(generalised torque)/dy: joint k's actuator torque depends on its own p_a, p_b, q, qd
   // (t_pa, t_pb, and the diagonals of Tq, Tqd); the cuff spring/damper and the single-axis
@@ -848,16 +893,31 @@ void ArmPlant::rigidBodyGradients(const double* /*y*/, double* Jdata, int ld) no
   }
   // J(qd rows, q and qd columns) -= M^-1 [d ID/dq, d ID/dqd] (plain loops: at n = 7 a general
   // matrix product's dispatch costs more than the arithmetic).
+  if (n == kArmJoints) {
+    subtractMinvTimesDerivatives<kArmJoints>(Jdata, ld);
+  } else {
+    subtractMinvTimesDerivatives<0>(Jdata, ld);
+  }
+}
+
+template <int N>
+void ArmPlant::subtractMinvTimesDerivatives(double* Jdata, int ld) const noexcept {
+  const int n = N > 0 ? N : n_;
+  const double* minv = mass_inv_.data();  // column-major, leading dimension n
   for (int c = 0; c < 2 * n; ++c) {
     const ReducedMatrix& d = c < n ? rigid_dq_ : rigid_dqd_;
     const int j = c < n ? c : c - n;
     double* out =
         Jdata + velocityIndex(n, 0) + static_cast<std::ptrdiff_t>(c < n ? angleIndex(n, c) : velocityIndex(n, j)) * ld;
+    // The column in a local array the compiler keeps in registers at fixed N (k ascending, as before).
+    double acc[kMaxPlantJoints];
+    for (int r = 0; r < n; ++r) acc[r] = out[r];
     for (int k = 0; k < n; ++k) {
       const double djk = d(k, j);
-      if (djk == 0.0) continue;
-      for (int r = 0; r < n; ++r) out[r] -= mass_inv_(r, k) * djk;
+      const double* minv_k = minv + static_cast<std::ptrdiff_t>(k) * n;
+      for (int r = 0; r < n; ++r) acc[r] -= minv_k[r] * djk;
     }
+    for (int r = 0; r < n; ++r) out[r] = acc[r];
   }
 }
 

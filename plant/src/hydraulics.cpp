@@ -7,7 +7,12 @@
 
 namespace fullarm::plant {
 
-ValueSlope regularizedSignedSqrt(double x, double x0) noexcept {
+namespace {
+
+// The bodies of regularizedSignedSqrt and roundedRamp, always inlined into the valve and check-valve
+// flows (eight ramps and four roots per joint and right-hand side; as calls they cost more than their
+// arithmetic).
+[[gnu::always_inline]] inline ValueSlope signedSqrtInline(double x, double x0) noexcept {
   const double ax = std::abs(x);
   if (ax >= x0) {
     const double r = std::sqrt(ax);
@@ -20,11 +25,21 @@ ValueSlope regularizedSignedSqrt(double x, double x0) noexcept {
   return {inv_sqrt * x * (1.25 - 0.25 * u * u), inv_sqrt * (1.25 - 0.75 * u * u)};
 }
 
-ValueSlope roundedRamp(double s, double w) noexcept {
+[[gnu::always_inline]] inline ValueSlope roundedRampInline(double s, double w) noexcept {
   if (s <= -w) return {0.0, 0.0};
   if (s >= w) return {s, 1.0};
   // (H2) quadratic blend with matching value and slope at +-w.
   return {(s + w) * (s + w) / (4.0 * w), (s + w) / (2.0 * w)};
+}
+
+}  // namespace
+
+ValueSlope regularizedSignedSqrt(double x, double x0) noexcept {
+  return signedSqrtInline(x, x0);
+}
+
+ValueSlope roundedRamp(double s, double w) noexcept {
+  return roundedRampInline(s, w);
 }
 
 double airRoot(const FluidParams& f) noexcept {
@@ -53,19 +68,38 @@ ValueSlope effectiveBulkModulus(const FluidParams& f, double p_gauge_pa, double 
   return {el * num / den, el * (dnum * den - num * dden) / (den * den)};
 }
 
-ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad) noexcept {
-  if (a.kind != ActuatorKind::kCylinder) return {q_rad, 1.0, 0.0};
+namespace {
+
+// (H4) from cos phi and sin phi.
+ActuatorKinematics cylinderKinematics(const ActuatorParams& a, double c, double s) noexcept {
   const double r = a.lever.moment_arm_m;
   const double d = a.lever.mount_distance_m;
-  const double phi = q_rad + a.lever.lever_angle_offset_rad;
-  const double c = std::cos(phi);
-  // L and R as arm::cylinderLength / arm::actuatorMomentArm (law of cosines and dL/dq), with one
-  // cos and sin.
+  // L and R as arm::cylinderLength / arm::actuatorMomentArm (law of cosines and dL/dq).
   const double L = std::sqrt(r * r + d * d - 2.0 * r * d * c);
-  const double R = r * d * std::sin(phi) / L;
+  const double R = r * d * s / L;
   // dR/dq = r d cos(phi) / L - R^2 / L (differentiating R = r d sin(phi) / L, dL/dq = R).
   const double dR = (r * d * c - R * R) / L;
   return {L, R, dR};
+}
+
+}  // namespace
+
+ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad) noexcept {
+  if (a.kind != ActuatorKind::kCylinder) return {q_rad, 1.0, 0.0};
+  const double phi = q_rad + a.lever.lever_angle_offset_rad;
+  return cylinderKinematics(a, std::cos(phi), std::sin(phi));
+}
+
+SinCos leverOffsetSinCos(const ActuatorParams& a) noexcept {
+  if (a.kind != ActuatorKind::kCylinder) return {};
+  return {std::sin(a.lever.lever_angle_offset_rad), std::cos(a.lever.lever_angle_offset_rad)};
+}
+
+ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad, SinCos q, SinCos lever_offset) noexcept {
+  if (a.kind != ActuatorKind::kCylinder) return {q_rad, 1.0, 0.0};
+  // phi = q + offset by angle addition.
+  return cylinderKinematics(a, q.cos * lever_offset.cos - q.sin * lever_offset.sin,
+                            q.sin * lever_offset.cos + q.cos * lever_offset.sin);
 }
 
 double areaA(const ActuatorParams& a) noexcept {
@@ -82,8 +116,10 @@ StrokeRange strokeRange(const JointParams& p) noexcept {
   return {std::min(s0, s1), std::max(s0, s1), s1 >= s0};
 }
 
-ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, double q_rad) noexcept {
-  const ActuatorKinematics k = actuatorKinematics(p.actuator, q_rad);
+namespace {
+
+// (H5) from the actuator kinematics at q.
+ChamberVolumes volumesFrom(const JointParams& p, const StrokeRange& range, const ActuatorKinematics& k) noexcept {
   // u = sign * s increases with q, so chamber A (filling as u grows) drives q positive.
   const double sign = range.increasing ? 1.0 : -1.0;
   const double u = sign * k.stroke;
@@ -102,6 +138,17 @@ ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, do
   return v;
 }
 
+}  // namespace
+
+ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, double q_rad) noexcept {
+  return volumesFrom(p, range, actuatorKinematics(p.actuator, q_rad));
+}
+
+ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, double q_rad, SinCos q,
+                              SinCos lever_offset) noexcept {
+  return volumesFrom(p, range, actuatorKinematics(p.actuator, q_rad, q, lever_offset));
+}
+
 double valveCoefficient(const ValveParams& v) noexcept {
   return v.rated_flow_m3ps / std::sqrt(v.rated_pressure_drop_pa);
 }
@@ -114,17 +161,17 @@ ValveFlows valveFlows(const JointParams& p, double x_spool, double p_a_pa, doubl
   const double dx_dxn = (x_spool > -1.0 && x_spool < 1.0) ? stroke : 0.0;
   const double w = v.edge_rounding_m;
   // (H6) edge openings [m] (Hopsan Hydraulic43Valve with per-edge laps; rounded, H2).
-  const ValueSlope o_pa = roundedRamp(x - v.lap_pa_m, w);
-  const ValueSlope o_pb = roundedRamp(-x - v.lap_pb_m, w);
-  const ValueSlope o_at = roundedRamp(-x - v.lap_at_m, w);
-  const ValueSlope o_bt = roundedRamp(x - v.lap_bt_m, w);
+  const ValueSlope o_pa = roundedRampInline(x - v.lap_pa_m, w);
+  const ValueSlope o_pb = roundedRampInline(-x - v.lap_pb_m, w);
+  const ValueSlope o_at = roundedRampInline(-x - v.lap_at_m, w);
+  const ValueSlope o_bt = roundedRampInline(x - v.lap_bt_m, w);
   const double ps = p.supply_pressure_pa;
   const double pr = p.return_pressure_pa;
   const double x0 = v.linear_region_pa;
-  const ValueSlope r_pa = regularizedSignedSqrt(ps - p_a_pa, x0);
-  const ValueSlope r_at = regularizedSignedSqrt(p_a_pa - pr, x0);
-  const ValueSlope r_pb = regularizedSignedSqrt(ps - p_b_pa, x0);
-  const ValueSlope r_bt = regularizedSignedSqrt(p_b_pa - pr, x0);
+  const ValueSlope r_pa = signedSqrtInline(ps - p_a_pa, x0);
+  const ValueSlope r_at = signedSqrtInline(p_a_pa - pr, x0);
+  const ValueSlope r_pb = signedSqrtInline(ps - p_b_pa, x0);
+  const ValueSlope r_bt = signedSqrtInline(p_b_pa - pr, x0);
   const double g = kv / stroke;  // flow per metre of opening per sqrt(Pa)
   ValveFlows f;
   f.q_a_m3ps = g * (o_pa.value * r_pa.value - o_at.value * r_at.value);
@@ -141,8 +188,8 @@ ValueSlope checkValveFlow(const JointParams& p, double p_pa) noexcept {
   if (g <= 0.0) return {0.0, 0.0};
   const double w = 0.1 * p.valve.linear_region_pa;
   // (H11) anti-cavitation (from return) and relief (to supply) check valves, no cracking pressure.
-  const ValueSlope in = roundedRamp(p.return_pressure_pa - p_pa, w);
-  const ValueSlope out = roundedRamp(p_pa - p.supply_pressure_pa, w);
+  const ValueSlope in = roundedRampInline(p.return_pressure_pa - p_pa, w);
+  const ValueSlope out = roundedRampInline(p_pa - p.supply_pressure_pa, w);
   return {g * (in.value - out.value), g * (-in.slope - out.slope)};
 }
 

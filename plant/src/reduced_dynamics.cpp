@@ -190,6 +190,8 @@ void computeReducedKinematics(const ReducedArmModel& model, ReducedArmData& data
     // R_WB = R0 Rz(q): one sincos per joint.
     const double c = std::cos(q[b]);
     const double s = std::sin(q[b]);
+    data.cos_q[k] = c;
+    data.sin_q[k] = s;
     Eigen::Matrix3d& R = data.R_WB[k];
     R.col(0) = c * R0.col(0) + s * R0.col(1);
     R.col(1) = c * R0.col(1) - s * R0.col(0);

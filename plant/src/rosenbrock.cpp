@@ -131,6 +131,7 @@ void RosenbrockIntegrator::configure(int n, const double* atol, double rtol, lon
   g_.setZero(n, n);
   stats_ = {};
   factor_valid_ = false;
+  structure_valid_ = false;
 }
 
 void RosenbrockIntegrator::setBlockStructure(int blocks) {
@@ -139,6 +140,7 @@ void RosenbrockIntegrator::setBlockStructure(int blocks) {
   blocks_ = blocks;
   border_ = n_ - blocks * kRosenbrockBlock;
   factor_valid_ = false;
+  structure_valid_ = false;
   if (blocks_ > 0) {
     w_.setZero(blocks_ * kRosenbrockBlock, border_);
     schur_.setZero(border_, border_);
@@ -267,6 +269,35 @@ bool luFactorFixed(double* a, int* piv) noexcept {
   return true;
 }
 
+// Inverse of a 4 x 4 diagonal block D of the Newton matrix; false if singular or not finite. When
+// D = [A 0; C E] in 2 x 2 blocks (the plant's spool states do not depend on its pressures), by the
+// 2 x 2 cofactor inverses, D^-1 = [A^-1 0; -E^-1 C A^-1 E^-1]; otherwise by Eigen's 4 x 4
+// cofactor inverse. Both are invariant under the rows' very different scales.
+bool invertBlock(const Eigen::Matrix4d& dk, Eigen::Matrix4d& inv) noexcept {
+  if (dk(0, 2) == 0.0 && dk(0, 3) == 0.0 && dk(1, 2) == 0.0 && dk(1, 3) == 0.0) {
+    const double det_a = dk(0, 0) * dk(1, 1) - dk(0, 1) * dk(1, 0);
+    const double det_e = dk(2, 2) * dk(3, 3) - dk(2, 3) * dk(3, 2);
+    if (!(det_a != 0.0 && det_e != 0.0)) return false;
+    const double ia = 1.0 / det_a;
+    const double ie = 1.0 / det_e;
+    // A^-1 and E^-1 by cofactors (plain scalars: Eigen's small fixed products cost more here).
+    const double a00 = dk(1, 1) * ia, a01 = -dk(0, 1) * ia, a10 = -dk(1, 0) * ia, a11 = dk(0, 0) * ia;
+    const double e00 = dk(3, 3) * ie, e01 = -dk(2, 3) * ie, e10 = -dk(3, 2) * ie, e11 = dk(2, 2) * ie;
+    // T = C A^-1, lower-left block = -(E^-1 T).
+    const double t00 = dk(2, 0) * a00 + dk(2, 1) * a10, t01 = dk(2, 0) * a01 + dk(2, 1) * a11;
+    const double t10 = dk(3, 0) * a00 + dk(3, 1) * a10, t11 = dk(3, 0) * a01 + dk(3, 1) * a11;
+    inv << a00, a01, 0.0, 0.0,                                         //
+        a10, a11, 0.0, 0.0,                                            //
+        -(e00 * t00 + e01 * t10), -(e00 * t01 + e01 * t11), e00, e01,  //
+        -(e10 * t00 + e11 * t10), -(e10 * t01 + e11 * t11), e10, e11;
+    return inv.allFinite();
+  }
+  double det = 0.0;
+  bool invertible = false;
+  dk.computeInverseAndDetWithCheck(inv, det, invertible, 0.0);
+  return invertible && std::isfinite(det) && inv.allFinite();
+}
+
 // Dispatch on the sizes that occur (4: hydraulic block, 6: one joint, 7: the arm's halved Schur
 // system); `piv` is the swap
 // sequence of luFactor or the permutation of luFactorFixed, consistently per size.
@@ -308,72 +339,113 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
     g_.diagonal().array() += d;
     return luFactorAny(g_.data(), static_cast<int>(g_.rows()), n_, pivots_.data());
   }
+  // (At compile-time size for the whole arm's border of seven angles and seven velocities.)
+  return border_ == 2 * kFixedHalfBorder ? factorBlocks<2 * kFixedHalfBorder>(d) : factorBlocks<0>(d);
+}
+
+template <int M>
+bool RosenbrockIntegrator::factorBlocks(double d) noexcept {
   // G = [D B; C E] with D block diagonal: invert each D_k, W = D^-1 B, S = E - C W. B_k (the
   // border columns of block k's rows) and C (the block columns of the border rows) are mostly
   // exact zeros; only nonzero columns of B_k are solved for and used. The 4 x 4 blocks are
   // inverted explicitly (cofactors: invariant under the rows' very different scales), so every
   // later solve with them is a matrix-vector product.
   const int nb = blocks_ * kRosenbrockBlock;
-  const int m = border_;
+  const int m = M > 0 ? M : border_;
   const int ld = static_cast<int>(jac_.rows());
   const double* jac = jac_.data();
-  schur_ = -jac_.block(nb, nb, m, m);
-  schur_.diagonal().array() += d;
+  double* schur = schur_.data();  // m x m, column-major
+  for (int j = 0; j < m; ++j) {
+    const double* col = jac + static_cast<std::ptrdiff_t>(nb + j) * ld + nb;
+    for (int i = 0; i < m; ++i) schur[i + j * m] = -col[i];
+    schur[j + j * m] += d;
+  }
   // Second-order border [x; v] with x' = v exactly (J's x rows hold only the 1 at v): the x rows
   // of S are (d I, -I) and C has no x rows, so x = (b_x + v) / d and the v rows reduce to the
   // half-size system (S_vv + S_vx / d) v = b_v - S_vx b_x / d.
+  // The structure found below (this flag, and the nonzero columns of B_k and C_k) depends on J
+  // only: it is found once per Jacobian, not again when a rejected step refactorises with the same J.
+  const bool find_structure = !structure_valid_;
   const int p = m / 2;
-  second_order_border_ = m % 2 == 0 && p > 0 && [&]() noexcept {
-    // Sum of |J_x - [0 I 0]| over the x rows: zero exactly when the pattern holds (a sum of
-    // non-negative terms; NaN fails the test). Branch-free, so it vectorises: an entry-by-entry
-    // comparison cost a third of the factorisation.
-    double deviation = 0.0;
-    for (int c = 0; c < n_; ++c) {
-      const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
-      const int one = c - nb - p;  // row of the expected 1 in this column, if in [0, p)
-      if (one < 0 || one >= p) {
-        for (int i = 0; i < p; ++i) deviation += std::abs(col[i]);
-      } else {
-        for (int i = 0; i < one; ++i) deviation += std::abs(col[i]);
-        deviation += std::abs(col[one] - 1.0);
-        for (int i = one + 1; i < p; ++i) deviation += std::abs(col[i]);
+  if (find_structure)
+    second_order_border_ = m % 2 == 0 && p > 0 && [&]() noexcept {
+      // Sum of |J_x - [0 I 0]| over the x rows: zero exactly when the pattern holds (a sum of
+      // non-negative terms; NaN fails the test). Branch-free, so it vectorises: an entry-by-entry
+      // comparison cost a third of the factorisation.
+      double deviation = 0.0;
+      for (int c = 0; c < n_; ++c) {
+        const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
+        const int one = c - nb - p;  // row of the expected 1 in this column, if in [0, p)
+        if (one < 0 || one >= p) {
+          for (int i = 0; i < p; ++i) deviation += std::abs(col[i]);
+        } else {
+          for (int i = 0; i < one; ++i) deviation += std::abs(col[i]);
+          deviation += std::abs(col[one] - 1.0);
+          for (int i = one + 1; i < p; ++i) deviation += std::abs(col[i]);
+        }
       }
-    }
-    return deviation == 0.0;
-  }();
-  const int first_row = second_order_border_ ? p : 0;  // border rows C can reach
+      return deviation == 0.0;
+    }();
   for (int k = 0; k < blocks_; ++k) {
     const int r = k * kRosenbrockBlock;
     Eigen::Matrix4d dk = -jac_.block<4, 4>(r, r);
     dk.diagonal().array() += d;
     Eigen::Matrix4d& inv = block_inv_[static_cast<std::size_t>(k)];
-    double det = 0.0;
-    bool invertible = false;
-    dk.computeInverseAndDetWithCheck(inv, det, invertible, 0.0);
-    if (!invertible || !std::isfinite(det) || !inv.allFinite()) return false;
+    if (!invertBlock(dk, inv)) return false;
+    // Columns of C_k (block k's columns of the border rows) that hold a nonzero: the others add
+    // exact zeros to S here and to the border in every solve (on the plant, the spool columns).
+    int& c_count = c_count_[static_cast<std::size_t>(k)];
+    if (find_structure) {
+      c_count = 0;
+      for (int c = 0; c < kRosenbrockBlock; ++c) {
+        const double* col = jac + static_cast<std::ptrdiff_t>(r + c) * ld + nb;
+        double sum = 0.0;  // a sum of |entries| (branch-free, so it vectorises; NaN counts as nonzero)
+        if (second_order_border_) {
+          for (int i = p; i < m; ++i) sum += std::abs(col[i]);
+        } else {
+          for (int i = 0; i < m; ++i) sum += std::abs(col[i]);
+        }
+        if (!(sum == 0.0)) c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + c_count++)] = c;
+      }
+    }
     int& count = nonzero_count_[static_cast<std::size_t>(k)];
-    count = 0;
-    for (int j = 0; j < m; ++j) {
+    if (find_structure) {
+      count = 0;
+      for (int j = 0; j < m; ++j) {
+        const double* col = jac + static_cast<std::ptrdiff_t>(nb + j) * ld + r;
+        const double sum = (std::abs(col[0]) + std::abs(col[1])) + (std::abs(col[2]) + std::abs(col[3]));
+        if (!(sum == 0.0)) nonzero_cols_[static_cast<std::size_t>(k * kMaxRosenbrockStates + count++)] = j;
+      }
+    }
+    for (int q = 0; q < count; ++q) {
+      const int j = nonzero_cols_[static_cast<std::size_t>(k * kMaxRosenbrockStates + q)];
       const Eigen::Vector4d bj = -jac_.block<4, 1>(r, nb + j);
-      if (bj.isZero(0.0)) continue;
-      nonzero_cols_[static_cast<std::size_t>(k * kMaxRosenbrockStates + count++)] = j;
       const Eigen::Vector4d wj = inv * bj;
       w_.block<4, 1>(r, j) = wj;
       // S -= C_k w_j with C = -J_mh: S(:, j) += J(border, block k) w_j.
-      for (int c = 0; c < kRosenbrockBlock; ++c) {
+      for (int qc = 0; qc < c_count; ++qc) {
+        const int c = c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + qc)];
         const double* col = jac + static_cast<std::ptrdiff_t>(r + c) * ld + nb;
-        for (int i = first_row; i < m; ++i) schur_(i, j) += col[i] * wj[c];
+        double* s_j = schur + static_cast<std::ptrdiff_t>(j) * m;
+        const double wjc = wj[c];
+        if (second_order_border_) {
+          for (int i = p; i < m; ++i) s_j[i] += col[i] * wjc;
+        } else {
+          for (int i = 0; i < m; ++i) s_j[i] += col[i] * wjc;
+        }
       }
     }
   }
+  structure_valid_ = true;
   if (second_order_border_) {
     inv_d_ = 1.0 / d;
+    double* reduced = schur_reduced_.data();  // p x p
     for (int j = 0; j < p; ++j) {
-      for (int i = 0; i < p; ++i) schur_reduced_(i, j) = schur_(p + i, p + j) + schur_(p + i, j) * inv_d_;
+      for (int i = 0; i < p; ++i) reduced[i + j * p] = schur[p + i + (p + j) * m] + schur[p + i + j * m] * inv_d_;
     }
-    return luFactorAny(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data());
+    return luFactorAny(reduced, p, p, pivots_.data());
   }
-  return luFactorAny(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data());
+  return luFactorAny(schur, m, m, pivots_.data());
 }
 
 void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {
@@ -384,8 +456,6 @@ void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {
   }
   const int nb = blocks_ * kRosenbrockBlock;
   const int m = border_;
-  const int ld = static_cast<int>(jac_.rows());
-  const double* jac = jac_.data();
   for (int k = 0; k < blocks_; ++k) {
     const int r = k * kRosenbrockBlock;
     z_.segment<4>(r).noalias() = block_inv_[static_cast<std::size_t>(k)] * b.segment<4>(r);
@@ -393,24 +463,12 @@ void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {
   // Border: S x_m = b_m - C z = b_m + J_mh z (plain loops: the blocks are tiny and sparse).
   double* xm = x.data() + nb;
   for (int i = 0; i < m; ++i) xm[i] = b[nb + i];
-  const int first_row = second_order_border_ ? m / 2 : 0;  // border rows C can reach
-  for (int c = 0; c < nb; ++c) {
-    const double zc = z_[c];
-    if (zc == 0.0) continue;
-    const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
-    for (int i = first_row; i < m; ++i) xm[i] += col[i] * zc;
-  }
-  if (second_order_border_) {
-    const int p = m / 2;
-    double* xv = xm + p;
-    for (int j = 0; j < p; ++j) {
-      const double bx = xm[j] * inv_d_;
-      for (int i = 0; i < p; ++i) xv[i] -= schur_(p + i, j) * bx;
-    }
-    luSolveAny(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data(), xv);
-    for (int i = 0; i < p; ++i) xm[i] = (xm[i] + xv[i]) * inv_d_;
+  if (second_order_border_ && m == 2 * kFixedHalfBorder) {
+    solveHalvedBorder<kFixedHalfBorder>(xm);
+  } else if (second_order_border_) {
+    solveHalvedBorder<0>(xm);
   } else {
-    luSolveAny(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data(), xm);
+    solveBorder(xm);
   }
   // x_h = z - W x_m over the nonzero columns of each block.
   for (int k = 0; k < blocks_; ++k) {
@@ -422,6 +480,55 @@ void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {
     }
     x.segment<4>(r) = xk;
   }
+}
+
+template <int P>
+void RosenbrockIntegrator::solveHalvedBorder(double* xm) const noexcept {
+  // Second-order border [x; v] (see factorG): C reaches the v rows only; the v rows are then the
+  // half-size system. In a local array of the p velocities, which the compiler keeps in registers
+  // when P is known (the plant's seven joints); the same operations in the same order as at run-time p.
+  const int p = P > 0 ? P : border_ / 2;
+  const int nb = blocks_ * kRosenbrockBlock;
+  const int ld = static_cast<int>(jac_.rows());
+  const double* jac = jac_.data();
+  double xv[kMaxRosenbrockStates / 2];
+  for (int i = 0; i < p; ++i) xv[i] = xm[p + i];
+  for (int k = 0; k < blocks_; ++k) {
+    for (int q = 0; q < c_count_[static_cast<std::size_t>(k)]; ++q) {
+      const int c = k * kRosenbrockBlock + c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + q)];
+      const double zc = z_[c];
+      const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb + p;
+      for (int i = 0; i < p; ++i) xv[i] += col[i] * zc;
+    }
+  }
+  const double* s_vx = schur_.data() + p;  // S(p + i, j) = s_vx[i + j * ld_s]
+  const auto ld_s = static_cast<std::ptrdiff_t>(schur_.rows());
+  for (int j = 0; j < p; ++j) {
+    const double bx = xm[j] * inv_d_;
+    for (int i = 0; i < p; ++i) xv[i] -= s_vx[i + j * ld_s] * bx;
+  }
+  luSolveAny(schur_reduced_.data(), static_cast<int>(schur_reduced_.rows()), p, pivots_.data(), xv);
+  for (int i = 0; i < p; ++i) {
+    xm[i] = (xm[i] + xv[i]) * inv_d_;
+    xm[p + i] = xv[i];
+  }
+}
+
+void RosenbrockIntegrator::solveBorder(double* xm) const noexcept {
+  const int nb = blocks_ * kRosenbrockBlock;
+  const int m = border_;
+  const int ld = static_cast<int>(jac_.rows());
+  const double* jac = jac_.data();
+  for (int k = 0; k < blocks_; ++k) {
+    for (int q = 0; q < c_count_[static_cast<std::size_t>(k)]; ++q) {
+      const int c = k * kRosenbrockBlock + c_cols_[static_cast<std::size_t>(k * kRosenbrockBlock + q)];
+      const double zc = z_[c];
+      if (zc == 0.0) continue;
+      const double* col = jac + static_cast<std::ptrdiff_t>(c) * ld + nb;
+      for (int i = 0; i < m; ++i) xm[i] += col[i] * zc;
+    }
+  }
+  luSolveAny(schur_.data(), static_cast<int>(schur_.rows()), m, pivots_.data(), xm);
 }
 
 double RosenbrockIntegrator::attempt(double h) noexcept {
@@ -521,6 +628,7 @@ RosenbrockStatus RosenbrockIntegrator::advance(double* y, double duration_s) noe
     const double h = last ? remaining : remaining / pieces;
     if (need_jacobian) {
       sys_.jacobian(sys_.user, y0_.data(), f0_.data(), jac_.data());
+      structure_valid_ = false;
       ++stats_.jac_evals;
       ++stats_.rhs_evals;
       need_jacobian = false;

@@ -9,6 +9,8 @@
 #include <random>
 #include <vector>
 
+#include "fullarm/arm/actuator.hpp"
+#include "plant_fixture.hpp"
 #include "plant_test_util.hpp"
 
 namespace fullarm::plant {
@@ -34,6 +36,51 @@ SolverOptions JointPhysics::tightOptions() const {
   o.atol_angle_rad = 1e-10;
   o.atol_velocity_radps = 1e-8;
   return o;
+}
+
+// The cylinder geometry from a shared sin q, cos q (angle addition with the lever offset, as the
+// plant's right-hand side uses it) against fullarm::arm's cylinder length and moment arm, the slope
+// against central differences of that moment arm, and the single-angle form to rounding, for every
+// joint of the DTS configuration over its range and a little beyond.
+TEST(ActuatorGeometry, SharedSinCosFormMatchesTheArmModelsCylinder) {
+  int cylinders = 0;
+  for (const JointParams& p : test::dtsPlant().joints) {
+    SCOPED_TRACE(p.name);
+    const SinCos offset = leverOffsetSinCos(p.actuator);
+    const StrokeRange range = strokeRange(p);
+    const bool cylinder = p.actuator.kind == ActuatorKind::kCylinder;
+    cylinders += cylinder ? 1 : 0;
+    for (int i = 0; i <= 40; ++i) {
+      const double q = p.min_rad - 0.05 + (p.max_rad - p.min_rad + 0.1) * i / 40.0;
+      const SinCos q_sincos{std::sin(q), std::cos(q)};
+      const ActuatorKinematics shared = actuatorKinematics(p.actuator, q, q_sincos, offset);
+      const ActuatorKinematics direct = actuatorKinematics(p.actuator, q);
+      if (!cylinder) {
+        EXPECT_EQ(shared.stroke, q);
+        EXPECT_EQ(shared.ratio, 1.0);
+        EXPECT_EQ(shared.ratio_slope, 0.0);
+        continue;
+      }
+      const double length = arm::cylinderLength(p.actuator.lever, q);
+      const double arm_m = arm::actuatorMomentArm(p.actuator.lever, q);
+      constexpr double kStep = 1e-6;
+      const double slope =
+          (arm::actuatorMomentArm(p.actuator.lever, q + kStep) - arm::actuatorMomentArm(p.actuator.lever, q - kStep)) /
+          (2.0 * kStep);
+      EXPECT_NEAR(shared.stroke, length, 1e-14 * length);
+      EXPECT_NEAR(shared.ratio, arm_m, 1e-12 * std::abs(length));
+      EXPECT_NEAR(shared.ratio_slope, slope, 1e-8 * std::abs(length));
+      EXPECT_NEAR(shared.stroke, direct.stroke, 1e-15 * length);
+      EXPECT_NEAR(shared.ratio, direct.ratio, 1e-14 * std::abs(length));
+      EXPECT_NEAR(shared.ratio_slope, direct.ratio_slope, 1e-13 * std::abs(length));
+      const ChamberVolumes v = chamberVolumes(p, range, q, q_sincos, offset);
+      const ChamberVolumes w = chamberVolumes(p, range, q);
+      EXPECT_NEAR(v.v_a_m3, w.v_a_m3, 1e-13 * w.v_a_m3);
+      EXPECT_NEAR(v.v_b_m3, w.v_b_m3, 1e-13 * w.v_b_m3);
+      EXPECT_NEAR(v.dva_dq, w.dva_dq, 1e-13 * std::abs(w.dva_dq) + 1e-25);
+    }
+  }
+  EXPECT_EQ(cylinders, 5);  // SFE, SAA, EB, WFE, WAA
 }
 
 // Blocked spool (valve overlapped, closed), impulse in velocity: the joint rings at

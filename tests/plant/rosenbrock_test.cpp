@@ -312,6 +312,68 @@ TEST(Rodas3, BlockEliminationWithSevenJointBorderMatchesDenseLu) {
   expectBlockEliminationMatchesDense(s, /*expect_halved_border=*/true);
 }
 
+// The seven-joint shape with a border whose dependence on the first block's states switches on and
+// off: v' gets g_ic max(x_c, 0)^2 from block state c, so the Jacobian's border entries in those
+// columns are exact zeros while x_c <= 0 and nonzero otherwise. The block elimination skips the
+// border columns that are exact zeros, found once per Jacobian; a pattern kept from an earlier
+// Jacobian would drop live entries and leave the dense-LU solution.
+struct GatedBordered {
+  Eigen::Matrix<double, 22, 22> a;
+  Eigen::Matrix<double, 7, 4> g;
+  int zero_columns = 0;  // block-0 columns seen as exact zeros / nonzero by the Jacobian calls
+  int live_columns = 0;
+  static void rhs(void* user, const double* y, double* f) noexcept {
+    const auto* s = static_cast<const GatedBordered*>(user);
+    const Eigen::Map<const Eigen::Matrix<double, 22, 1>> x(y);
+    Eigen::Map<Eigen::Matrix<double, 22, 1>> out(f);
+    out = s->a * x;
+    for (int i = 0; i < 22; ++i) {
+      if (i < 8 || i >= 15) out[i] += 0.1 * x[i] * x[i];
+    }
+    for (int c = 0; c < 4; ++c) {
+      const double on = std::max(x[c], 0.0);
+      for (int i = 0; i < 7; ++i) out[15 + i] += s->g(i, c) * on * on;
+    }
+  }
+  static void jacobian(void* user, const double* y, double* f, double* j) noexcept {
+    rhs(user, y, f);
+    auto* s = static_cast<GatedBordered*>(user);
+    Eigen::Map<Eigen::Matrix<double, 22, 22>> J(j);
+    J = s->a;
+    for (int i = 0; i < 22; ++i) {
+      if (i < 8 || i >= 15) J(i, i) += 0.2 * y[i];
+    }
+    for (int c = 0; c < 4; ++c) {
+      const double on = std::max(y[c], 0.0);
+      ++(on == 0.0 ? s->zero_columns : s->live_columns);
+      for (int i = 0; i < 7; ++i) J(15 + i, c) = 2.0 * s->g(i, c) * on;
+    }
+  }
+};
+
+TEST(Rodas3, BlockEliminationWithSwitchingBorderColumnsMatchesDenseLu) {
+  GatedBordered s;
+  s.a.setZero();
+  std::srand(17);
+  using Matrix7 = Eigen::Matrix<double, 7, 7>;
+  // Block 0: two lightly damped oscillators (about 6 and 4 Hz), so its states change sign often, the
+  // second driven by the first: block lower triangular in 2 x 2 blocks, as the plant's spool and
+  // pressures (the integrator's structured block inverse; block 1 takes the general one).
+  s.a.block<4, 4>(0, 0) << -1.0, 40.0, 0.0, 0.0, -40.0, -1.0, 0.0, 0.0, 5.0, 2.0, -2.0, 25.0, 0.0, -3.0, -25.0, -2.0;
+  s.a.block<4, 4>(4, 4) = Eigen::Matrix4d::Random() - 500.0 * Eigen::Matrix4d::Identity();
+  s.a.block<4, 7>(0, 8) = 0.1 * Eigen::Matrix<double, 4, 7>::Random();             // blocks see x
+  s.a.block<4, 7>(4, 15) = Eigen::Matrix<double, 4, 7>::Random();                  // and v
+  s.a.block<7, 4>(15, 4) = Eigen::Matrix<double, 7, 4>::Random();                  // v' sees block 1 always
+  s.g = Eigen::Matrix<double, 7, 4>::Random();                                     // and block 0 when on
+  s.a.block<7, 7>(15, 8) = -4.0 * Matrix7::Identity() + 0.5 * Matrix7::Random();   // coupled springs
+  s.a.block<7, 7>(15, 15) = -0.5 * Matrix7::Identity() + 0.1 * Matrix7::Random();  // and dampers
+  s.a.block<7, 7>(8, 15) = Matrix7::Identity();                                    // x' = v
+  expectBlockEliminationMatchesDense(s, /*expect_halved_border=*/true);
+  // The pattern did switch: both states of the gate were seen by the Jacobians.
+  EXPECT_GT(s.zero_columns, 100);
+  EXPECT_GT(s.live_columns, 100);
+}
+
 TEST(Rodas3, RejectsBadConfiguration) {
   RosenbrockIntegrator r;
   const double atol[2] = {1e-6, 0.0};

@@ -220,6 +220,9 @@ class ArmPlant {
   void evaluateRates(const double* y, double* ydot) noexcept;
   void jacobianEntries(const double* y, double* J) noexcept;
   void rigidBodyGradients(const double* y, double* J, int ld) noexcept;
+  /// J(qd rows, q and qd columns) -= M^-1 [d ID/dq, d ID/dqd]; N > 0: n at compile time.
+  template <int N>
+  void subtractMinvTimesDerivatives(double* J, int ld) const noexcept;
   void reinitSolver() noexcept;
   void harvestStats() noexcept;
   void initialiseSensors() noexcept;
@@ -270,6 +273,8 @@ class ArmPlant {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPlantJoints, kMaxPlantJoints> chol_;  // M = L L^T
   JointVector qdd_, tau_cell_, tau_hyd_, tau_act_, h_, tau_cuff_;
   std::vector<StrokeRange> stroke_;
+  std::vector<SinCos> lever_offset_;     // per joint: sin, cos of the cylinder's lever angle offset
+  SinCos single_axis_sincos_{};          // sin q, cos q of the single-axis load at the last mechanics()
   std::vector<ChamberVolumes> volumes_;  // per joint, at the state of the last evaluateRhs()
   // Per-joint terms of the last evaluateRhs() that evaluateJacobian() reuses (value and slopes).
   struct JointTerms {

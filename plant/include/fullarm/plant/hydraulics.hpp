@@ -47,6 +47,19 @@ struct ActuatorKinematics {
 /// @rt
 [[nodiscard]] ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad) noexcept;
 
+/// Sine and cosine of an angle, computed once and shared (the joint angle's by the arm kinematics
+/// and the cylinder geometry).
+struct SinCos {
+  double sin = 0.0;
+  double cos = 1.0;
+};
+/// sin and cos of a cylinder's lever angle offset (phi = q + offset); {0, 1} for other actuators.
+[[nodiscard]] SinCos leverOffsetSinCos(const ActuatorParams& a) noexcept;
+/// actuatorKinematics with sin q, cos q given and the lever offset's from leverOffsetSinCos: no
+/// trigonometric call (sin phi, cos phi by angle addition; equal to the other form to rounding). @rt
+[[nodiscard]] ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad, SinCos q,
+                                                    SinCos lever_offset) noexcept;
+
 /// Effective areas of chambers A and B: D (vane) or the piston areas (cylinder).
 /// @rt
 [[nodiscard]] double areaA(const ActuatorParams& a) noexcept;
@@ -74,6 +87,9 @@ struct ChamberVolumes {
 };
 /// @rt
 [[nodiscard]] ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, double q_rad) noexcept;
+/// chamberVolumes with sin q, cos q given (see the actuatorKinematics overload). @rt
+[[nodiscard]] ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, double q_rad, SinCos q,
+                                            SinCos lever_offset) noexcept;
 
 /// (H6) Four-edge orifice flows of the spool valve (Hopsan Hydraulic43Valve edges with laps):
 /// Q_edge = K_v * open(x - lap) / x_max * ssqrt(dp), K_v = Q_rated / sqrt(dp_rated).

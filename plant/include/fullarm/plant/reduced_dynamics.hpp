@@ -88,6 +88,8 @@ struct ReducedArmData {
   std::array<SpatialVector, kMaxReducedBodies> s{};       ///< joint axes (z, o x z)
   std::array<SpatialVector, kMaxReducedBodies> V{};       ///< body velocities
   std::array<double, kMaxReducedBodies> qd{};             ///< joint velocities [rad/s]
+  std::array<double, kMaxReducedBodies> sin_q{};          ///< sin q of each joint (shared with the actuators)
+  std::array<double, kMaxReducedBodies> cos_q{};          ///< cos q
   // Spatial inertias about the world origin: mass, first moment m c, rotational inertia.
   std::array<double, kMaxReducedBodies> mass_kg{};
   std::array<Eigen::Vector3d, kMaxReducedBodies> first_moment_kgm{};

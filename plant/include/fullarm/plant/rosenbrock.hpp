@@ -130,8 +130,17 @@ class RosenbrockIntegrator {
   bool factor(double h) noexcept;
   /// Factorises G = d I - J (d = 1 / (h gamma)) unconditionally; false if singular.
   bool factorG(double d) noexcept;
+  /// The block-elimination part of factorG(); M > 0: the border size at compile time.
+  template <int M>
+  bool factorBlocks(double d) noexcept;
   /// x = G^-1 b with the last factorisation.
   void solve(const Vector& b, Vector& x) noexcept;
+  /// The border part of solve(): x_m (in place) from b_m and z_. P > 0: the half border size at compile time.
+  template <int P>
+  void solveHalvedBorder(double* xm) const noexcept;
+  void solveBorder(double* xm) const noexcept;
+  /// Half border size compiled at fixed size (the whole arm's seven joint velocities).
+  static constexpr int kFixedHalfBorder = 7;
 
   int n_ = 0;
   double rtol_ = 1e-6;
@@ -169,6 +178,10 @@ class RosenbrockIntegrator {
   Vector z_, stage_scratch_;
   std::array<int, kMaxRosenbrockStates / kRosenbrockBlock> nonzero_count_{};
   std::array<int, kMaxRosenbrockStates / kRosenbrockBlock * kMaxRosenbrockStates> nonzero_cols_{};
+  // Per block: the columns (0..3) of C_k = J(border rows, block k) that hold a nonzero.
+  std::array<int, kMaxRosenbrockStates / kRosenbrockBlock> c_count_{};
+  std::array<int, kMaxRosenbrockStates> c_cols_{};
+  bool structure_valid_ = false;  // second_order_border_, nonzero_* and c_* describe the current jac_
 };
 
 }  // namespace fullarm::plant
