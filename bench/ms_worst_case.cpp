@@ -1,7 +1,11 @@
 // Diagnostic (issue 4, docs/analysis.md "Known limits"): where does the tuner's worst-case peak
 // sensitivity Ms of the shipped gains come from, and is it real?
 //
-//   ms_worst_case [JOINT...]        (default: SFE SAA WFE)
+//   ms_worst_case [--peak-speed-amplitude] [JOINT...]        (default: SFE SAA WFE)
+//
+// As `fullarm tune`, the coupled goal uses the modal amplitude (Eq. C5) unless
+// --peak-speed-amplitude asks for Eq. C3's bound (the rule of the figures in docs/analysis.md,
+// measured before the modal amplitude became tune's default).
 //
 // For each joint: rebuilds the linear stage's hard-goal model set exactly as `fullarm tune` does
 // (start gains config/dts_tune_start.yaml, tune's default budget and seed), evaluates the shipped
@@ -41,6 +45,7 @@ struct Context {
   fc::GainsConfig shipped;
   fc::GainsConfig start;
   fc::ValidationConfig validation;
+  bool modal_amplitude = true;  // the coupled goal's V0 as `fullarm tune` (Eq. C5) unless --peak-speed-amplitude
 };
 
 void printPoles(const Eigen::VectorXcd& z, double T, double near_hz) {
@@ -177,6 +182,7 @@ void analyseJoint(const Context& c, const std::string& short_name) {
   const fc::JointScenario sc =
       fc::validationScenario(fc::makeJointScenario(c.model, c.plant, c.shipped, initial.name), c.validation);
   goals.detector = fc::detectorModelOf(sc);
+  goals.detector.modal_amplitude = c.modal_amplitude;
   fc::TunerOptions options;  // tune's defaults: 300 + 150 evaluations, 3 rounds
   options.seed = 1 + static_cast<std::uint64_t>(slot);
   const fc::TuningResult tr =
@@ -291,7 +297,18 @@ int main(int argc, char** argv) {
   c.start = fc::loadGainsConfig(fc::defaultTuneStartGainsPath(), c.model);
   c.validation = fc::loadValidationConfig(fc::defaultValidationConfigPath());
   std::vector<std::string> joints;
-  for (int i = 1; i < argc; ++i) joints.emplace_back(argv[i]);
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--peak-speed-amplitude") {
+      c.modal_amplitude = false;
+    } else if (!arg.empty() && arg[0] == '-') {
+      std::fprintf(stderr, "ms_worst_case: unknown option %s (expected --peak-speed-amplitude or joint names)\n",
+                   arg.c_str());
+      return 2;
+    } else {
+      joints.push_back(arg);
+    }
+  }
   if (joints.empty()) joints = {"SFE", "SAA", "WFE"};
   for (const std::string& j : joints) analyseJoint(c, j);
   return 0;

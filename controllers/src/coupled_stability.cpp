@@ -162,7 +162,8 @@ Eigen::VectorXd balance(Eigen::MatrixXd& a) {
         c += std::abs(a(j, i));
         r += std::abs(a(i, j));
       }
-      if (c == 0.0 || r == 0.0) continue;
+      // A zero or non-finite norm: nothing to balance (scaling an infinity never ends).
+      if (c == 0.0 || r == 0.0 || !std::isfinite(c) || !std::isfinite(r)) continue;
       const double total = c + r;
       double f = 1.0;
       while (c < 0.5 * r) {
@@ -226,9 +227,18 @@ double detectorModeScore(double sigma, double w, const DetectorModel& d) {
 std::vector<ModalSpeed> modalHoldSpeeds(const PreparedJoint& m, const JointGains& gains, const DetectorModel& d) {
   const StateSpace cl = closedLoopSystem(m, gains, VirtualWall{});
   const double T = m.setup.control_period_s;
+  std::vector<ModalSpeed> out;
+  const auto unscorable = [&] {  // non-finite loop or no eigen-decomposition: NaN amplitudes
+    const Eigen::VectorXcd z = closedLoopPoles(m, gains, VirtualWall{});
+    out.clear();
+    for (Eigen::Index i = 0; i < z.size(); ++i) out.push_back({z[i], std::numeric_limits<double>::quiet_NaN()});
+    return out;
+  };
+  if (!cl.A.allFinite() || !cl.B.allFinite()) return unscorable();
   Eigen::MatrixXd a = cl.A;
   const Eigen::VectorXd scale = balance(a);  // a = D^-1 A D
   const Eigen::EigenSolver<Eigen::MatrixXd> es(a, true);
+  if (es.info() != Eigen::Success) return unscorable();
   const Eigen::VectorXcd poles = es.eigenvalues();
   const Eigen::MatrixXcd vb = es.eigenvectors();  // A = D vb diag(poles) vb^-1 D^-1
   const Eigen::VectorXd b = cl.B.col(0).cwiseQuotient(scale);
@@ -245,7 +255,6 @@ std::vector<ModalSpeed> modalHoldSpeeds(const PreparedJoint& m, const JointGains
     u[static_cast<std::size_t>(k)] = d.move_amplitude_rad * (k_h * r.position + b_h * r.rate_per_s);
   }
   const double u_end = d.move_amplitude_rad * k_h;
-  std::vector<ModalSpeed> out;
   out.reserve(static_cast<std::size_t>(poles.size()));
   for (Eigen::Index i = 0; i < poles.size(); ++i) {
     const std::complex<double> z = poles[i];
@@ -300,7 +309,10 @@ CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const Join
       const double sigma = -std::log(radius) / T;
       DetectorModel mode_detector = detector;
       if (detector.modal_amplitude) {
-        mode_detector.initial_speed_radps = amplitude[static_cast<std::size_t>(k)];
+        // A non-finite modal amplitude (non-finite loop) falls back to Eq. C3's bound, so that the
+        // pole, not the amplitude, decides whether the goal is scorable.
+        const double v0 = amplitude[static_cast<std::size_t>(k)];
+        mode_detector.initial_speed_radps = std::isfinite(v0) ? v0 : detector.initial_speed_radps;
         const double skip = std::log(1e3 * std::max(mode_detector.initial_speed_radps, detector.threshold_radps) /
                                      detector.threshold_radps) /
                             (detector.hold_s - detector.window_s);

@@ -295,9 +295,12 @@ GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const JointGa
     const std::complex<double> zw = renderedImpedance(m, gains, wall, wc) * std::complex<double>(0.0, wc);
     const double wall_error = std::abs(zw.real() / goals.wall_stiffness_nm_per_rad - 1.0);
     worst.peak_sensitivity = std::max(worst.peak_sensitivity, c.margins.peak_sensitivity);
-    // The free-position drift pole (K_h = 0 models) is left out as in the coupled goal.
-    worst.spectral_radius =
-        std::max({worst.spectral_radius, spectralRadiusWithoutDrift(c.closed_loop_poles), rho_wall});
+    // The free-position drift pole is left out as in the coupled goal, but only where nothing
+    // restores the position (no user spring): elsewhere a real pole just above 1 is a slow
+    // divergence that validate's linear check would call unstable.
+    const bool free_position = !m.model.include_user || m.model.load.user_stiffness_nm_per_rad == 0.0;
+    const double rho_free = free_position ? spectralRadiusWithoutDrift(c.closed_loop_poles) : c.spectral_radius;
+    worst.spectral_radius = std::max({worst.spectral_radius, rho_free, rho_wall});
     // A loop that goes unstable at a lower gain (conditional stability) fails the sector goal.
     worst.min_real_loop = std::min(worst.min_real_loop, c.low_gain_stable || !c.stable ? c.margins.min_real : -1e3);
     worst.min_real_impedance = std::min(worst.min_real_impedance, c.min_real_impedance);

@@ -128,6 +128,9 @@ struct ModalSpeed {
 /// end of the move, less those of the steady state under the final torque, give the coefficients,
 /// in one pass over the move's samples per mode (no simulation). The eigenvectors come from the
 /// closed loop after a power-of-two diagonal balancing (its states mix pascals and radians).
+/// A non-finite closed loop, or one whose balanced eigen-decomposition fails, gives the poles of
+/// closedLoopPoles() (which throws std::runtime_error when they do not converge) with NaN
+/// coefficients; evaluateCoupled then scores those poles with Eq. C3's bound.
 [[nodiscard]] std::vector<ModalSpeed> modalHoldSpeeds(const PreparedJoint& model, const JointGains& gains,
                                                       const DetectorModel& detector);
 

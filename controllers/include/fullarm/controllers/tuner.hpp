@@ -85,13 +85,14 @@ struct TunerOptions {
 
 /// Goal values of one gain set over a model set (worst model), each normalised.
 struct GoalValues {
-  double peak_sensitivity = 0.0;          ///< Ms (raw)
-  double spectral_radius = 0.0;           ///< worst of free motion and wall (raw)
-  double min_real_loop = 0.0;             ///< min Re L (raw)
+  double peak_sensitivity = 0.0;  ///< Ms (raw)
+  double spectral_radius = 0.0;   ///< worst of free motion and wall (free motion without a user spring: drift pole left
+                                  ///< out, spectralRadiusWithoutDrift)
+  double min_real_loop = 0.0;     ///< min Re L (raw)
   double min_real_impedance = 0.0;        ///< min Re Z [N m s/rad] (raw)
   double rms_user_torque_nm = 0.0;        ///< free-motion reference (raw)
   double wall_error = 0.0;                ///< relative rendered-stiffness error (raw)
-  double coupled_spectral_radius = 0.0;   ///< worst over the coupled grid and the model set (raw)
+  double coupled_spectral_radius = 0.0;   ///< worst over the coupled grid and the model set (drift pole left out)
   double coupled_detector_score = 0.0;    ///< worst detectorModeScore() (<= 1: judged decaying)
   double coupled_mode_hz = 0.0;           ///< frequency of the mode with that score
   double coupled_mode_decay_per_s = 0.0;  ///< and its decay rate

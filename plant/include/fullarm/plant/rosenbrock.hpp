@@ -99,7 +99,7 @@ class RosenbrockIntegrator {
   /// only through the remaining "border" states. The Newton matrix is then factorised by block
   /// elimination (a Schur complement on the border) instead of a dense LU: the plant's
   /// hydraulic states of one joint couple to the other joints only through q and qd. When the
-  /// border is [x; v] with x' = v exactly (detected at every factorisation), the Schur system
+  /// border is [x; v] with x' = v exactly (detected once per Jacobian), the Schur system
   /// is halved to the v unknowns.
   /// blocks = 0 restores the dense LU. @throws std::invalid_argument if it does not fit.
   void setBlockStructure(int blocks);
