@@ -199,7 +199,25 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
   nlohmann::json stages = nlohmann::json::array();
   for (const controllers::NonlinearStageResult& st : run.stages) {
     const auto scoreJson = [](const controllers::NonlinearScore& sc) {
-      return nlohmann::json{{"linear_ok", sc.linear_ok},
+      // Each failed run with its sample.
+      nlohmann::json failed = nlohmann::json::array();
+      for (const controllers::FailedRun& f : sc.failed_runs) {
+        const controllers::MonteCarloSample& m = f.sample;
+        const nlohmann::json entry = {{"set_index", f.set_index},
+                                      {"failure", f.failure},
+                                      {"sample",
+                                       {{"index", m.index},
+                                        {"bulk_modulus_scale", m.bulk_modulus_scale},
+                                        {"valve_gain_scale", m.valve_gain_scale},
+                                        {"friction_scale", m.friction_scale},
+                                        {"inertia_scale", m.inertia_scale},
+                                        {"user_stiffness_nm_per_rad", m.user_stiffness_nm_per_rad},
+                                        {"user_damping_nms_per_rad", m.user_damping_nms_per_rad},
+                                        {"delay_samples", m.delay_samples}}}};
+        failed.push_back(entry);
+      }
+      return nlohmann::json{{"failed_runs", failed},
+                            {"linear_ok", sc.linear_ok},
                             {"failures", sc.failures},
                             {"runs", sc.runs},
                             {"mean_rms_user_torque_nm", sc.mean_rms_user_torque_nm},
@@ -215,6 +233,9 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
                       {"linear_optimum", scoreJson(st.linear_optimum)},
                       {"start", scoreJson(st.start)},
                       {"final", scoreJson(st.final_score)},
+                      {"hard_feasible_search", st.hard_feasible_search},
+                      {"hard_feasible_attempt", scoreJson(st.hard_feasible_attempt)},
+                      {"hard_feasible_attempt_gains", gainsJson(st.hard_feasible_attempt_gains)},
                       {"check_failures", st.check_failures},
                       {"evaluations", st.evaluations},
                       {"simulations", st.simulations}});

@@ -26,38 +26,54 @@ int nameSlot(const std::string& name) noexcept {
 }
 
 struct Point {
-  double log_damping = 0.0;  // log10 B_m
-  double log_gain = 0.0;     // log10 B_o/eps
-  double log_lambda = 0.0;   // log10 lambda
+  double log_damping = 0.0;    // log10 B_m
+  double log_gain = 0.0;       // log10 B_o/eps
+  double log_lambda = 0.0;     // log10 lambda
+  double log_inertia = 0.0;    // log10 J_m
+  double log_stiffness = 0.0;  // log10 K_m
   bool operator==(const Point&) const = default;
 };
 
 Point pointOf(const JointGains& g) {
   return {std::log10(std::max(g.impedance.damping_nms_per_rad, 1e-12)),
           std::log10(g.sliding_mode.valve_bound_v / g.sliding_mode.boundary_layer_radps),
-          std::log10(std::max(g.sliding_mode.lambda_per_s, 1e-12))};
+          std::log10(std::max(g.sliding_mode.lambda_per_s, 1e-12)),
+          std::log10(std::max(g.impedance.inertia_kgm2, 1e-12)),
+          std::log10(std::max(g.impedance.stiffness_nm_per_rad, 1e-12))};
 }
 
+// The gains of `base` at point `p`; J_m and K_m are moved only when they were (a stage that does
+// not search them writes base's values bit for bit).
 JointGains gainsAt(const JointGains& base, const Point& p) {
   JointGains g = base;
+  const Point b = pointOf(base);
   g.impedance.damping_nms_per_rad = std::pow(10.0, p.log_damping);
   g.sliding_mode.boundary_layer_radps = g.sliding_mode.valve_bound_v / std::pow(10.0, p.log_gain);
   g.sliding_mode.lambda_per_s = std::pow(10.0, p.log_lambda);
+  if (p.log_inertia != b.log_inertia) g.impedance.inertia_kgm2 = std::pow(10.0, p.log_inertia);
+  if (p.log_stiffness != b.log_stiffness) g.impedance.stiffness_nm_per_rad = std::pow(10.0, p.log_stiffness);
   return g;
 }
 
-// Poll directions of the compass search, in this order: (d log B_m, d log B_o/eps, d log lambda).
-// The last two move B_m and lambda together: the damping of the user-device mode of a stiff,
-// undamped user grows with B_m only as far as the sliding-mode loop (lambda) renders it
-// (docs/analysis.md, "HR's run 264"), a diagonal valley the axis directions cannot enter.
-constexpr std::array<std::array<double, 3>, 8> kPollDirections = {{{1.0, 0.0, 0.0},
-                                                                   {-1.0, 0.0, 0.0},
-                                                                   {0.0, 1.0, 0.0},
-                                                                   {0.0, -1.0, 0.0},
-                                                                   {0.0, 0.0, 1.0},
-                                                                   {0.0, 0.0, -1.0},
-                                                                   {1.0, 0.0, 1.0},
-                                                                   {-1.0, 0.0, -1.0}}};
+// Poll directions of the compass search, in this order: (d log B_m, d log B_o/eps, d log lambda,
+// d log J_m, d log K_m). The two after the axes move B_m and lambda together: the damping of the
+// user-device mode of a stiff, undamped user grows with B_m only as far as the sliding-mode loop
+// (lambda) renders it (docs/analysis.md, "HR's run 264"), a diagonal valley the axis directions
+// cannot enter. The last four (J_m, K_m) are polled only with
+// NonlinearStageOptions::search_inertia_stiffness.
+constexpr std::size_t kBasePollDirections = 8;
+constexpr std::array<std::array<double, 5>, 12> kPollDirections = {{{1.0, 0.0, 0.0, 0.0, 0.0},
+                                                                    {-1.0, 0.0, 0.0, 0.0, 0.0},
+                                                                    {0.0, 1.0, 0.0, 0.0, 0.0},
+                                                                    {0.0, -1.0, 0.0, 0.0, 0.0},
+                                                                    {0.0, 0.0, 1.0, 0.0, 0.0},
+                                                                    {0.0, 0.0, -1.0, 0.0, 0.0},
+                                                                    {1.0, 0.0, 1.0, 0.0, 0.0},
+                                                                    {-1.0, 0.0, -1.0, 0.0, 0.0},
+                                                                    {0.0, 0.0, 0.0, 1.0, 0.0},
+                                                                    {0.0, 0.0, 0.0, -1.0, 0.0},
+                                                                    {0.0, 0.0, 0.0, 0.0, 1.0},
+                                                                    {0.0, 0.0, 0.0, 0.0, -1.0}}};
 
 bool sameGains(const JointGains& a, const JointGains& b) {
   return a.impedance.inertia_kgm2 == b.impedance.inertia_kgm2 &&
@@ -170,7 +186,8 @@ std::vector<MonteCarloSample> stageSamples(const UncertaintyRanges& ranges, std:
 
 NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& gains,
                               const std::vector<MonteCarloSample>& set, const LinearRequirements& req, int max_delay,
-                              int failure_cap, const LinearHardGoals* hard_goals, int threads, JobPool* pool) {
+                              int failure_cap, const LinearHardGoals* hard_goals, int threads, JobPool* pool,
+                              bool reject_hard_violation) {
   NonlinearScore s;
   JointScenario sc = scenario;
   sc.gains = gains;
@@ -180,6 +197,12 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
     s.linear_hard = value;
     s.linear_hard_goal = name;
     s.linear_hard_met = value <= 1.0;
+    if (reject_hard_violation && !s.linear_hard_met) {
+      s.hard_rejected = true;
+      s.cost = kInf;
+      s.worst_failure = "violates the linear hard goal " + name;
+      return s;
+    }
   }
   s.linear_ok = analyzeScenario(sc, req, max_delay, {}).pass;
   if (!s.linear_ok) {
@@ -204,6 +227,7 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
       rms_sum += r.free_rms_user_torque_nm;
       if (!r.acceptable()) {
         ++s.failures;
+        s.failed_runs.push_back({static_cast<int>(first + j), set[first + j], r.failure});
       } else {
         s.worst_passed_severity = std::max(s.worst_passed_severity, runSeverity(r, sc.oscillation_speed_radps));
         s.worst_passed_detector_margin =
@@ -236,14 +260,19 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
       !(o.max_damping_nms_per_rad >= o.min_damping_nms_per_rad) || !(o.min_gain_v_s_per_rad > 0.0) ||
       !(o.max_gain_v_s_per_rad >= o.min_gain_v_s_per_rad) || !(o.min_lambda_per_s > 0.0) ||
       !(o.max_lambda_per_s >= o.min_lambda_per_s) || !(o.corner_user_fraction >= 0.0) ||
-      !(o.corner_user_fraction <= 1.0) || o.threads < 1 || !(o.target_margin >= 0.0) || !(o.target_margin <= 1.0)) {
+      !(o.corner_user_fraction <= 1.0) || o.threads < 1 || !(o.target_margin >= 0.0) || !(o.target_margin <= 1.0) ||
+      !(o.min_inertia_kgm2 > 0.0) || !(o.max_inertia_kgm2 >= o.min_inertia_kgm2) ||
+      !(o.min_stiffness_nm_per_rad > 0.0) || !(o.max_stiffness_nm_per_rad >= o.min_stiffness_nm_per_rad)) {
     throw std::invalid_argument("nonlinear stage options: expected samples, rounds >= 1, steps > 0, 0 < min <= max");
   }
   const int max_delay = ranges.delay_max_samples;
-  const std::array<double, 3> lo = {std::log10(o.min_damping_nms_per_rad), std::log10(o.min_gain_v_s_per_rad),
-                                    std::log10(o.min_lambda_per_s)};
-  const std::array<double, 3> hi = {std::log10(o.max_damping_nms_per_rad), std::log10(o.max_gain_v_s_per_rad),
-                                    std::log10(o.max_lambda_per_s)};
+  const std::array<double, 5> lo = {std::log10(o.min_damping_nms_per_rad), std::log10(o.min_gain_v_s_per_rad),
+                                    std::log10(o.min_lambda_per_s), std::log10(o.min_inertia_kgm2),
+                                    std::log10(o.min_stiffness_nm_per_rad)};
+  const std::array<double, 5> hi = {std::log10(o.max_damping_nms_per_rad), std::log10(o.max_gain_v_s_per_rad),
+                                    std::log10(o.max_lambda_per_s), std::log10(o.max_inertia_kgm2),
+                                    std::log10(o.max_stiffness_nm_per_rad)};
+
   NonlinearStageResult res;
   // The ring corners first: they are the runs a candidate fails first (measured on SFE and HR), so
   // an evaluation capped at the incumbent's failures stops after the fewest simulations.
@@ -257,8 +286,11 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
   int next_index = o.samples;
   const std::size_t initial_size = res.set.size();
 
+  // Candidates that violate a hard goal are rejected unsimulated once the search is hard-feasible.
+  bool reject_hard = false;
   const auto score = [&](const JointGains& g, int cap = std::numeric_limits<int>::max()) {
-    const NonlinearScore s = scoreNonlinear(scenario, g, res.set, req, max_delay, cap, hard_goals, o.threads, o.pool);
+    const NonlinearScore s =
+        scoreNonlinear(scenario, g, res.set, req, max_delay, cap, hard_goals, o.threads, o.pool, reject_hard);
     ++res.evaluations;
     res.simulations += s.linear_ok ? s.runs : 0;
     return s;
@@ -266,8 +298,17 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
   res.linear_optimum = score(linear_optimum);
   // The linear stage returns its starting gains when no point meets its hard goals: score once.
   res.start = sameGains(start, linear_optimum) ? res.linear_optimum : score(start);
-  // J_m, K_m, lambda (and everything else) of the better of the two; B_m and B_o/eps are searched.
-  const bool from_start = better(res.start, res.linear_optimum);
+  // The better of the two by cost; its J_m, K_m (and filters, B_o) are kept.
+  bool from_start = better(res.start, res.linear_optimum);
+  // Hard-feasible search, when that choice would be the starting gains violating a hard goal
+  // while the linear optimum meets every one (and validate's linear check): from the linear
+  // optimum, whatever its failures, moving only to hard-feasible candidates, J_m and K_m searched
+  // too. Joints whose choice meets the hard goals keep the ranking search unchanged.
+  reject_hard = o.hard_feasible && hard_goals != nullptr && from_start && !res.start.linear_hard_met &&
+                res.linear_optimum.linear_ok && res.linear_optimum.linear_hard_met;
+  if (reject_hard) from_start = false;
+  const std::size_t poll_directions =
+      reject_hard && o.search_inertia_stiffness ? kPollDirections.size() : kBasePollDirections;
   const JointGains base = from_start ? start : linear_optimum;
   Point best_p = pointOf(base);
   JointGains best_gains = base;  // the incumbent (base itself until the search moves)
@@ -287,16 +328,21 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
            (best.failures > 0 || !best.linear_ok || best.worst_passed_severity >= 1.0 ||
             best.worst_passed_detector_margin > o.target_margin)) {
       bool improved = false;
-      for (std::size_t dir = 0; dir < kPollDirections.size() && evaluations < o.max_evaluations; ++dir) {
-        const std::array<double, 3>& d = kPollDirections[dir];
+      for (std::size_t dir = 0; dir < poll_directions && evaluations < o.max_evaluations; ++dir) {
+        const std::array<double, 5>& d = kPollDirections[dir];
         Point p = best_p;
         p.log_damping = std::clamp(p.log_damping + d[0] * step, lo[0], hi[0]);
         p.log_gain = std::clamp(p.log_gain + d[1] * step, lo[1], hi[1]);
         p.log_lambda = std::clamp(p.log_lambda + d[2] * step, lo[2], hi[2]);
+        // J_m and K_m keep their value bit for bit unless polled (a base outside their box is not
+        // pulled onto its edge by the other directions).
+        if (d[3] != 0.0) p.log_inertia = std::clamp(p.log_inertia + d[3] * step, lo[3], hi[3]);
+        if (d[4] != 0.0) p.log_stiffness = std::clamp(p.log_stiffness + d[4] * step, lo[4], hi[4]);
         if (std::find(visited.begin(), visited.end(), p) != visited.end()) continue;
         visited.push_back(p);
         const NonlinearScore s = score(gainsAt(base, p), best.failures);
-        ++evaluations;
+        // A candidate rejected by the hard goals cost no simulation: it does not use the budget.
+        if (!s.hard_rejected) ++evaluations;
         if (better(s, best)) {
           best = s;
           best_p = p;
@@ -359,7 +405,7 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
     res.final_score = best;
   } else {
     res.final_score = scoreNonlinear(scenario, res.gains, res.set, req, max_delay, std::numeric_limits<int>::max(),
-                                     hard_goals, o.threads, o.pool);
+                                     hard_goals, o.threads, o.pool, false);
     res.simulations += res.final_score.runs;
   }
   res.linear_hard_goals_met = res.final_score.linear_hard_met;
@@ -372,7 +418,8 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
       << (res.check_failures.back() == 0 ? "0 of " + std::to_string(o.check_samples)
                                          : std::to_string(res.check_failures.back()) + " failed (batch stopped early)");
   }
-  v << "; started from the " << (from_start ? "starting" : "linearly tuned") << " gains (failures: linear optimum "
+  v << "; started from the " << (from_start ? "starting" : "linearly tuned") << " gains"
+    << (reject_hard ? " and searched only gains that meet the linear hard goals" : "") << " (failures: linear optimum "
     << res.linear_optimum.failures << ", start " << res.start.failures << " of " << initial_size << ")";
   if (!res.verified && !res.final_score.worst_failure.empty()) v << "; worst: " << res.final_score.worst_failure;
   if (hard_goals != nullptr) {
@@ -386,6 +433,27 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
     }
   }
   res.verdict = v.str();
+  res.hard_feasible_search = reject_hard;
+  if (reject_hard && !res.verified) {
+    // The restricted search did not verify: the ranking search (hard goals cost 0.5, from the
+    // better start by cost) instead, written only when it verifies (measured on SFE: the
+    // hard-feasible gains fail stiff users in contact or weak users as too sluggish).
+    NonlinearStageOptions ranking = o;
+    ranking.hard_feasible = false;
+    NonlinearStageResult fallback = refineNonlinear(scenario, linear_optimum, start, ranges, req, ranking, hard_goals);
+    if (fallback.verified) {
+      std::ostringstream f;
+      f << fallback.verdict << " (a search restricted to gains that meet the linear hard goals, from the linear "
+        << "optimum, ended NOT verified: " << res.final_score.failures << " of " << res.final_score.runs
+        << " runs of its sample set fail)";
+      fallback.verdict = f.str();
+      fallback.hard_feasible_attempt = res.final_score;
+      fallback.hard_feasible_attempt_gains = res.gains;
+      fallback.evaluations += res.evaluations;
+      fallback.simulations += res.simulations;
+      return fallback;
+    }
+  }
   return res;
 }
 

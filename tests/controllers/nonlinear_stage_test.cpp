@@ -417,6 +417,104 @@ TEST(NonlinearStage, SfeRingCornerRingsTooSlowlyAndTheSearchGoesOnToMoreMargin) 
   EXPECT_EQ(runMonteCarlo({chosen}, check, 2)[0].failures, 0);
 }
 
+// HR's linear optimum of `fullarm tune` (2026-11-22, modal amplitude; fixed here so that the test
+// does not move with the tuner) fails the ring corners, the tune start file's HR gains (J_m
+// 0.00143, B_m 5.72, K_m 2.41, lambda 300, B_o/eps 5/55.3) fail none. With hard goals that the
+// linear optimum meets and the start violates (Ms on the nominal model, bound between the two, from
+// evaluateGoals directly), the ranking search starts from the start and writes violating gains;
+// the hard-feasible search starts from the linear optimum, rejects violating candidates unsimulated
+// and writes gains that meet the goals (oracle: evaluateGoals on the written gains) with fewer
+// failures than the linear optimum. The failed runs it reports are the runs that fail when
+// simulated directly with validate's runner.
+TEST(NonlinearStage, HardFeasibleSearchStartsFromTheLinearOptimumAndWritesOnlyGainsThatMeetTheHardGoals) {
+  const ValidationConfig vc = defaultValidation();
+  GainsConfig g = test::dtsGains();
+  JointGains& hr = g.joints[static_cast<std::size_t>(findGainsJoint(g, "R_HR"))];
+  hr.impedance = {0.0014300593422729693, 5.7166771577350559, 2.4099075352356882};
+  hr.sliding_mode = {300.00000000000011, 5.0, 55.30928347920247};
+  const JointScenario sc = validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), g, "HR"), vc);
+  JointGains optimum = sc.gains;
+  optimum.impedance = {0.00855261190688038, 0.12665064702172082, 2.4484367468222272};
+  optimum.sliding_mode = {116.85994667774504, 5.0, 636.6610423347029};
+
+  const auto& m = test::dtsModel();
+  const auto& cfg = test::dtsPlant();
+  JointPlantModel model;
+  model.joint = cfg.joints[static_cast<std::size_t>(plant::findPlantJoint(cfg, "HR"))];
+  const int idx = m.jointIndex(model.joint.name);
+  model.load = jointLoadFromArm(m, plant::UserArmParams{}, idx, m.defaultPosture());
+  model.load.user_inertia_kgm2 = vc.user.inertia_kgm2;
+  model.load.user_stiffness_nm_per_rad = vc.user.stiffness_nm_per_rad;
+  model.load.user_damping_nms_per_rad = vc.user.damping_nms_per_rad;
+  LoopSetup setup;
+  setup.grid_points = 60;
+  ModelVariation nominal;
+  nominal.user_stiffness_nm_per_rad = vc.user.stiffness_nm_per_rad;
+  nominal.user_damping_nms_per_rad = vc.user.damping_nms_per_rad;
+  LinearHardGoals hard;
+  hard.models = {prepareVariation(model, m.defaultPosture()[idx], setup, nominal)};
+  hard.goals.passivity_tolerance_nms_per_rad = 1e6;
+  hard.goals.coupled_hard = false;
+  const double ms_optimum = evaluateGoals(hard.models, optimum, hard.goals).peak_sensitivity;
+  const double ms_start = evaluateGoals(hard.models, sc.gains, hard.goals).peak_sensitivity;
+  ASSERT_LT(ms_optimum, ms_start);
+  hard.goals.max_peak_sensitivity = std::sqrt(ms_optimum * ms_start);
+  const auto meets = [&](const JointGains& x) {
+    return worstHardGoal(evaluateGoals(hard.models, x, hard.goals), hard.goals).first <= 1.0;
+  };
+  ASSERT_TRUE(meets(optimum));
+  ASSERT_FALSE(meets(sc.gains));
+
+  // A violating candidate is not simulated when rejection is asked for.
+  std::vector<MonteCarloSample> one = stageSamples(vc.ranges, vc.seed, "R_HR", 0, 1);
+  const NonlinearScore rejected =
+      scoreNonlinear(sc, sc.gains, one, vc.linear, vc.ranges.delay_max_samples, 1000, &hard, 1, nullptr, true);
+  EXPECT_TRUE(rejected.hard_rejected);
+  EXPECT_EQ(rejected.runs, 0);
+  EXPECT_TRUE(std::isinf(rejected.cost));
+
+  NonlinearStageOptions o;
+  o.samples = 1;
+  o.check_samples = 0;
+  o.rounds = 1;
+  o.max_evaluations = 6;
+  o.stress_corners = false;
+  o.threads = 2;
+  const NonlinearStageResult restricted = refineNonlinear(sc, optimum, sc.gains, vc.ranges, vc.linear, o, &hard);
+  o.hard_feasible = false;
+  const NonlinearStageResult ranking = refineNonlinear(sc, optimum, sc.gains, vc.ranges, vc.linear, o, &hard);
+
+  // The premise: the linear optimum fails more runs than the start, so ranking starts from the start.
+  ASSERT_GT(restricted.linear_optimum.failures, restricted.start.failures);
+  EXPECT_FALSE(ranking.hard_feasible_search);
+  EXPECT_EQ(ranking.gains.impedance.inertia_kgm2, sc.gains.impedance.inertia_kgm2);
+  EXPECT_FALSE(ranking.linear_hard_goals_met);
+  EXPECT_FALSE(meets(ranking.gains));
+
+  EXPECT_TRUE(restricted.hard_feasible_search) << restricted.verdict;
+  EXPECT_TRUE(restricted.linear_hard_goals_met);
+  EXPECT_TRUE(meets(restricted.gains));
+  EXPECT_LT(restricted.final_score.failures, restricted.linear_optimum.failures);
+  EXPECT_NE(restricted.verdict.find("searched only gains that meet the linear hard goals"), std::string::npos)
+      << restricted.verdict;
+
+  // The reported failed runs are exactly the runs that fail under validate's runner.
+  ASSERT_EQ(static_cast<int>(restricted.linear_optimum.failed_runs.size()), restricted.linear_optimum.failures);
+  JointScenario at_optimum = sc;
+  at_optimum.gains = optimum;
+  std::size_t next_failed = 0;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(restricted.linear_optimum.runs); ++i) {
+    const ClosedLoopResult r = simulateJoint(applySample(at_optimum, restricted.set[i]));
+    if (r.acceptable()) continue;
+    ASSERT_LT(next_failed, restricted.linear_optimum.failed_runs.size());
+    EXPECT_EQ(restricted.linear_optimum.failed_runs[next_failed].set_index, static_cast<int>(i));
+    EXPECT_EQ(restricted.linear_optimum.failed_runs[next_failed].failure, r.failure);
+    EXPECT_EQ(restricted.linear_optimum.failed_runs[next_failed].sample.index, restricted.set[i].index);
+    ++next_failed;
+  }
+  EXPECT_EQ(next_failed, restricted.linear_optimum.failed_runs.size());
+}
+
 // The score is the same for any thread count, also where the failure cap stops it (runs are taken
 // in set order): against the sequential evaluation.
 TEST(NonlinearStage, ScoreDoesNotDependOnTheThreadCount) {

@@ -10,7 +10,7 @@
 /// log10 B_m, log10 B_o/eps and log10 lambda, with B_m and lambda also moved together (B_m and
 /// B_o/eps trade contact oscillation against sluggishness; the damping of a stiff, undamped
 /// user's ring grows with B_m only as far as lambda lets the loop render it; J_m and K_m keep the
-/// linear stage's values). In the spirit of systune's
+/// linear stage's values, except in the hard-feasible search below). In the spirit of systune's
 /// worst-case model addition, each round ends with a fresh check batch on the incumbent; its
 /// failed samples join the sample set and the search goes on. Offline (allocates), not @rt.
 ///
@@ -79,6 +79,19 @@ struct NonlinearStageOptions {
   /// (2, then 1 run) and the stage ended at the start, NOT verified; with 0.8 it ends at B_m 17.87
   /// (margin 0.83) and the first check batch passes (docs/analysis.md, "Known limits").
   double target_margin = 0.8;
+  /// Hard-feasible search: when hard goals are given, the better start by cost is the starting
+  /// gains, they violate a hard goal and the linear optimum meets every one, start from the linear
+  /// optimum (whatever its failures) and reject, without simulating it, every candidate that
+  /// violates a hard goal, so the written gains meet the hard goals. Otherwise (or when false) the
+  /// search is the ranking one: hard goals cost kHardGoalWeight = 0.5 in the score.
+  bool hard_feasible = true;
+  /// In a hard-feasible search, also poll log10 J_m and log10 K_m (each up and down, after the
+  /// other directions), inside the box below (the tuner's TuningBounds by default).
+  bool search_inertia_stiffness = true;
+  double min_inertia_kgm2 = 1e-3;  ///< search box of J_m
+  double max_inertia_kgm2 = 1.0;
+  double min_stiffness_nm_per_rad = 1.0;  ///< search box of K_m
+  double max_stiffness_nm_per_rad = 1e3;
   /// Worker threads for the runs of an evaluation and of a check batch. Runs are taken in set
   /// order in blocks of this size, so the result is identical for any count.
   int threads = 1;
@@ -93,6 +106,13 @@ struct LinearHardGoals {
   std::vector<PreparedJoint> models;          ///< the linear stage's final model set (prepareVariation())
   std::vector<PreparedJoint> coupled_models;  ///< the linear stage's coupled grid (TuningResult::coupled_models)
   TuningGoals goals;
+};
+
+/// One failed run of a score: where it sits in the sample set and why it failed.
+struct FailedRun {
+  int set_index = 0;        ///< index in the sample set scored
+  MonteCarloSample sample;  ///< that sample
+  std::string failure;      ///< ClosedLoopResult::failure
 };
 
 /// The score of one candidate over a sample set.
@@ -113,6 +133,10 @@ struct NonlinearScore {
   bool linear_hard_met = true;   ///< the linear hard goals hold (true when none were given)
   double linear_hard = 0.0;      ///< worst normalised linear hard goal (<= 1: met; 0 when none given)
   std::string linear_hard_goal;  ///< its name
+  /// Not simulated: violates a hard goal while the stage searches hard-feasible gains only
+  /// (cost +inf, runs 0).
+  bool hard_rejected = false;
+  std::vector<FailedRun> failed_runs;  ///< the failed runs, in set order
 };
 
 /// What refineNonlinear() returns.
@@ -124,13 +148,19 @@ struct NonlinearStageResult {
   std::vector<int> check_failures;    ///< failures of each round's check batch (capped: early stop)
   std::vector<MonteCarloSample> set;  ///< the final sample set (initial + added worst cases)
   std::vector<double> history;        ///< best cost after each evaluation
-  int evaluations = 0;                ///< candidate evaluations (each = set.size() simulations)
-  int simulations = 0;                ///< closed-loop runs in total
-  bool verified = false;              ///< the last check batch and the final set had no failure
+  int evaluations = 0;    ///< candidate evaluations (each up to set.size() simulations; hard-rejected ones none)
+  int simulations = 0;    ///< closed-loop runs in total
+  bool verified = false;  ///< the last check batch and the final set had no failure
   /// The written gains meet the linear stage's hard goals (final_score.linear_hard names the
   /// worst one); true when no hard goals were given.
   bool linear_hard_goals_met = true;
   std::string verdict;  ///< one sentence
+  /// The written gains come from the hard-feasible search (NonlinearStageOptions::hard_feasible).
+  bool hard_feasible_search = false;
+  /// When a hard-feasible search ended NOT verified and the ranking search that replaced it
+  /// verified: the restricted search's final score and gains (runs == 0 otherwise).
+  NonlinearScore hard_feasible_attempt;
+  JointGains hard_feasible_attempt_gains;
 };
 
 /// Three deterministic stress corners of the uncertainty box for the stage's sample set (the
@@ -180,11 +210,13 @@ inline constexpr double kRingStiffnessFractions[] = {0.25, 0.5, 0.75, 1.0};
 /// incumbent with `failure_cap` failures).
 /// `hard_goals` (may be null): the linear stage's hard goals, evaluated before any simulation.
 /// `pool` (may be null): as NonlinearStageOptions::pool (then `threads` is ignored).
+/// `reject_hard_violation`: a candidate that violates a hard goal is not simulated and costs +inf
+/// (NonlinearScore::hard_rejected).
 [[nodiscard]] NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& gains,
                                             const std::vector<MonteCarloSample>& set, const LinearRequirements& req,
                                             int max_delay, int failure_cap = std::numeric_limits<int>::max(),
                                             const LinearHardGoals* hard_goals = nullptr, int threads = 1,
-                                            JobPool* pool = nullptr);
+                                            JobPool* pool = nullptr, bool reject_hard_violation = false);
 
 /// Draws `count` samples of the stage's own stream (seed salted, so not validate's draws) for
 /// joint `joint_name`, indices [first, first + count).
@@ -197,7 +229,11 @@ inline constexpr double kRingStiffnessFractions[] = {0.25, 0.5, 0.75, 1.0};
 /// deviation at or above the threshold, accepted only because it decays) or passes one with a
 /// margin above options.target_margin; a search for hard-goal
 /// feasibility among zero-failure candidates drifted to less robust gains (measured on SAA), so
-/// `hard_goals` (may be null) ranks candidates and is reported but does not extend the search. Deterministic for given
+/// `hard_goals` (may be null) ranks candidates and is reported but does not extend the search. Hard-feasible search
+/// (NonlinearStageOptions::hard_feasible): when the better start would be `start` violating a hard goal while
+/// `linear_optimum` meets them all, the search starts from `linear_optimum`, rejects violating candidates unsimulated
+/// and also polls J_m and K_m; if it ends NOT verified, the ranking search replaces it when that one verifies
+/// (NonlinearStageResult::hard_feasible_attempt keeps the restricted result). Deterministic for given
 /// inputs. @throws std::invalid_argument for bad options.
 [[nodiscard]] NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointGains& linear_optimum,
                                                    const JointGains& start, const UncertaintyRanges& ranges,
