@@ -225,20 +225,24 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
                             {"linear_hard", sc.linear_hard},
                             {"linear_hard_goal", sc.linear_hard_goal}};
     };
-    stages.push_back({{"joint", st.gains.name},
-                      {"verified", st.verified},
-                      {"linear_hard_goals_met", st.linear_hard_goals_met},
-                      {"verdict", st.verdict},
-                      {"gains", gainsJson(st.gains)},
-                      {"linear_optimum", scoreJson(st.linear_optimum)},
-                      {"start", scoreJson(st.start)},
-                      {"final", scoreJson(st.final_score)},
-                      {"hard_feasible_search", st.hard_feasible_search},
-                      {"hard_feasible_attempt", scoreJson(st.hard_feasible_attempt)},
-                      {"hard_feasible_attempt_gains", gainsJson(st.hard_feasible_attempt_gains)},
-                      {"check_failures", st.check_failures},
-                      {"evaluations", st.evaluations},
-                      {"simulations", st.simulations}});
+    const bool attempted = st.hard_feasible_attempt.runs > 0;
+    stages.push_back(
+        {{"joint", st.gains.name},
+         {"verified", st.verified},
+         {"linear_hard_goals_met", st.linear_hard_goals_met},
+         {"verdict", st.verdict},
+         {"gains", gainsJson(st.gains)},
+         {"linear_optimum", scoreJson(st.linear_optimum)},
+         {"start", scoreJson(st.start)},
+         {"final", scoreJson(st.final_score)},
+         {"hard_feasible_search", st.hard_feasible_search},
+         // null where no restricted search was made and replaced (no made-up gains)
+         {"hard_feasible_attempt", attempted ? scoreJson(st.hard_feasible_attempt) : nlohmann::json(nullptr)},
+         {"hard_feasible_attempt_gains",
+          attempted ? gainsJson(st.hard_feasible_attempt_gains) : nlohmann::json(nullptr)},
+         {"check_failures", st.check_failures},
+         {"evaluations", st.evaluations},
+         {"simulations", st.simulations}});
   }
   report.results()["tune"] = {
       {"wall_time_s", run.wall_s}, {"pass", run.pass}, {"joints", joints}, {"nonlinear_stage", stages}};
@@ -291,9 +295,11 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
     section.addParagraph(
         "Nonlinear verification stage (docs/analysis.md): each joint's linearly tuned gains and its starting gains "
         "are scored on a small seeded Monte-Carlo of validate's closed-loop harness (own sample stream); a compass "
-        "search on B_m and B_o/eps then minimises failed runs (unstable or too sluggish to reach the wall), then "
-        "RMS user torque; each round ends with a fresh check batch whose failed runs join the sample set. The "
-        "written gains are the stage's result.");
+        "search on B_m, B_o/eps and lambda then minimises failed runs (unstable or too sluggish to reach the wall), "
+        "then RMS user torque; each round ends with a fresh check batch whose failed runs join the sample set. "
+        "Where the starting gains violate a linear hard goal that the linear optimum meets, the search first runs "
+        "from the linear optimum over hard-feasible gains only (J_m and K_m polled too) and falls back to the "
+        "search above when that does not verify. The written gains are the stage's result.");
     reports::Table nt;
     nt.caption = "Nonlinear stage: failed runs on its sample set";
     nt.columns = {"Joint",

@@ -90,7 +90,7 @@ void compareRing(const fc::JointScenario& nominal, const fc::JointPlantModel& jm
   const double a_v = 5e-4 / unit_spool;
   Eigen::VectorXcd poles;
   const ft::Ring lin = ft::linearRing(p, gains, f, a_v, start_s + len_s, &poles);
-  const ft::Ring nl = ft::nonlinearRing(nominal, ft::variedModel(jm, v), v, gains, q0, f, a_v, start_s + len_s);
+  const ft::Ring nl = ft::nonlinearRing(nominal, fc::applyVariation(jm, v), v, gains, q0, f, a_v, start_s + len_s);
   double dmin = std::numeric_limits<double>::infinity();
   for (Eigen::Index i = 0; i < poles.size(); ++i) dmin = std::min(dmin, std::abs(poles[i] - z_pred));
   std::printf(
@@ -122,7 +122,7 @@ void compareRing(const fc::JointScenario& nominal, const fc::JointPlantModel& jm
       f_l, sig_l, f_n, sig_n, peak_l, peak_n, spool_max);
   // The same model linearised at validate's free-hold and wall operating points.
   {
-    const fc::JointPlantModel jm_v = ft::variedModel(jm, v);
+    const fc::JointPlantModel jm_v = fc::applyVariation(jm, v);
     const double q_free = nominal.start_rad + nominal.direction * nominal.timing.free_move_rad;
     const fc::PreparedJoint pf = fc::prepareJoint(jm_v, fc::solveOperatingPoint(jm_v, q_free), p.setup);
     const fc::PreparedJoint pw =
@@ -141,12 +141,12 @@ void compareRing(const fc::JointScenario& nominal, const fc::JointPlantModel& jm
   }
   // Where the ring ends: the nonlinear ring (ideal sensors, no Coulomb) run for 4 s.
   {
-    const ft::Ring longer = ft::nonlinearRing(nominal, ft::variedModel(jm, v), v, gains, q0, f, a_v, 4.0);
+    const ft::Ring longer = ft::nonlinearRing(nominal, fc::applyVariation(jm, v), v, gains, q0, f, a_v, 4.0);
     const std::size_t n = longer.qd.size();
     double sp = 0.0;
     for (std::size_t k = n - 500; k < n; ++k) sp = std::max(sp, std::abs(longer.spool[k] - longer.spool[0]));
     std::printf("      after 4 s: speed deviation over the last 0.5 s %.2e rad/s, spool excursion %.2e\n",
-                ft::ringStd(longer.qd, n - 500, n), sp);
+                ft::windowStd(longer.qd, n - 500, n), sp);
   }
   // validate's own run of this model (free move, free hold, wall), as drawn and idealised.
   fc::MonteCarloSample sample = v;

@@ -436,23 +436,22 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointG
   res.hard_feasible_search = reject_hard;
   if (reject_hard && !res.verified) {
     // The restricted search did not verify: the ranking search (hard goals cost 0.5, from the
-    // better start by cost) instead, written only when it verifies (measured on SFE: the
-    // hard-feasible gains fail stiff users in contact or weak users as too sluggish).
+    // better start by cost) is written instead, as without the restricted search, whether or not
+    // it verifies (measured on SFE: the hard-feasible gains fail stiff users in contact or weak
+    // users as too sluggish). Its result carries the attempt and both searches' counts.
     NonlinearStageOptions ranking = o;
     ranking.hard_feasible = false;
     NonlinearStageResult fallback = refineNonlinear(scenario, linear_optimum, start, ranges, req, ranking, hard_goals);
-    if (fallback.verified) {
-      std::ostringstream f;
-      f << fallback.verdict << " (a search restricted to gains that meet the linear hard goals, from the linear "
-        << "optimum, ended NOT verified: " << res.final_score.failures << " of " << res.final_score.runs
-        << " runs of its sample set fail)";
-      fallback.verdict = f.str();
-      fallback.hard_feasible_attempt = res.final_score;
-      fallback.hard_feasible_attempt_gains = res.gains;
-      fallback.evaluations += res.evaluations;
-      fallback.simulations += res.simulations;
-      return fallback;
-    }
+    std::ostringstream f;
+    f << fallback.verdict << " (a search restricted to gains that meet the linear hard goals, from the linear "
+      << "optimum, ended NOT verified: " << res.final_score.failures << " of " << res.final_score.runs
+      << " runs of its sample set fail)";
+    fallback.verdict = f.str();
+    fallback.hard_feasible_attempt = res.final_score;
+    fallback.hard_feasible_attempt_gains = res.gains;
+    fallback.evaluations += res.evaluations;
+    fallback.simulations += res.simulations;
+    return fallback;
   }
   return res;
 }

@@ -111,8 +111,7 @@ TEST_P(WorstCaseMs, PoleAtThePeakRingsInTheNonlinearPlantAtThePredictedFrequency
   const test::Ring lin = test::linearRing(p, g, f_pred, a_v, start_s + len_s);
   const JointScenario nominal =
       validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), test::dtsGains(), c.joint), validation);
-  const test::Ring nl =
-      test::nonlinearRing(nominal, test::variedModel(jm, c.v), c.v, g, q0, f_pred, a_v, start_s + len_s);
+  const test::Ring nl = test::nonlinearRing(nominal, applyVariation(jm, c.v), c.v, g, q0, f_pred, a_v, start_s + len_s);
   ASSERT_TRUE(nl.solver_ok);
   const auto b = static_cast<std::size_t>(std::lround(start_s / T));
   const auto e = static_cast<std::size_t>(std::lround((start_s + len_s) / T));
@@ -127,7 +126,7 @@ TEST_P(WorstCaseMs, PoleAtThePeakRingsInTheNonlinearPlantAtThePredictedFrequency
   EXPECT_NEAR(s_nl.imag() / (2.0 * std::numbers::pi), f_pred, kFrequencyTolerance * f_pred);
   EXPECT_NEAR(-s_nl.real(), sigma_pred, c.rate_tolerance * std::abs(sigma_pred));
   // The ring of the nonlinear plant is as large as the linear one (same burst, same window).
-  EXPECT_NEAR(test::ringStd(nl.qd, b, e), test::ringStd(lin.qd, b, e), 0.3 * test::ringStd(lin.qd, b, e));
+  EXPECT_NEAR(test::windowStd(nl.qd, b, e), test::windowStd(lin.qd, b, e), 0.3 * test::windowStd(lin.qd, b, e));
 }
 
 ModelVariation worstVariation(double bulk, double valve, double friction, double inertia, double k_h, double b_h,

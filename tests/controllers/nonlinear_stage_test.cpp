@@ -267,16 +267,13 @@ TEST(NonlinearStage, TheRingCornersExposeTheUndampedStiffUserModeOfHr) {
 }
 
 // The stage's score carries the linear stage's hard goals: the value is the tuner's own
-// evaluateGoals() on the same models (independent path), the cost rises by exactly the hard-goal
-// weight when they are violated, and an impossible goal (Ms <= 0.5) makes the stage say that the
-// written gains violate it.
-TEST(NonlinearStage, ScoresAndReportsTheLinearHardGoals) {
-  const ValidationConfig vc = defaultValidation();
-  const JointScenario sc = validationEb(handSized());
+// The joint at the default posture with validate's nominal user, prepared on a 60-point grid:
+// the one-model hard-goal set of the stage tests below.
+PreparedJoint nominalHardGoalModel(const char* joint, const ValidationConfig& vc) {
   const auto& m = test::dtsModel();
   const auto& cfg = test::dtsPlant();
   JointPlantModel model;
-  model.joint = cfg.joints[static_cast<std::size_t>(plant::findPlantJoint(cfg, "EB"))];
+  model.joint = cfg.joints[static_cast<std::size_t>(plant::findPlantJoint(cfg, joint))];
   const int idx = m.jointIndex(model.joint.name);
   model.load = jointLoadFromArm(m, plant::UserArmParams{}, idx, m.defaultPosture());
   model.load.user_inertia_kgm2 = vc.user.inertia_kgm2;
@@ -287,8 +284,17 @@ TEST(NonlinearStage, ScoresAndReportsTheLinearHardGoals) {
   ModelVariation nominal;
   nominal.user_stiffness_nm_per_rad = vc.user.stiffness_nm_per_rad;
   nominal.user_damping_nms_per_rad = vc.user.damping_nms_per_rad;
+  return prepareVariation(model, m.defaultPosture()[idx], setup, nominal);
+}
+
+// evaluateGoals() on the same models (independent path), the cost rises by exactly the hard-goal
+// weight when they are violated, and an impossible goal (Ms <= 0.5) makes the stage say that the
+// written gains violate it.
+TEST(NonlinearStage, ScoresAndReportsTheLinearHardGoals) {
+  const ValidationConfig vc = defaultValidation();
+  const JointScenario sc = validationEb(handSized());
   LinearHardGoals loose;
-  loose.models = {prepareVariation(model, m.defaultPosture()[idx], setup, nominal)};
+  loose.models = {nominalHardGoalModel("EB", vc)};
   loose.goals.max_peak_sensitivity = 100.0;
   loose.goals.passivity_tolerance_nms_per_rad = 1e6;
   loose.goals.coupled_hard = false;  // the hard goal that replaced passivity (coupled_stability.hpp)
@@ -437,22 +443,8 @@ TEST(NonlinearStage, HardFeasibleSearchStartsFromTheLinearOptimumAndWritesOnlyGa
   optimum.impedance = {0.00855261190688038, 0.12665064702172082, 2.4484367468222272};
   optimum.sliding_mode = {116.85994667774504, 5.0, 636.6610423347029};
 
-  const auto& m = test::dtsModel();
-  const auto& cfg = test::dtsPlant();
-  JointPlantModel model;
-  model.joint = cfg.joints[static_cast<std::size_t>(plant::findPlantJoint(cfg, "HR"))];
-  const int idx = m.jointIndex(model.joint.name);
-  model.load = jointLoadFromArm(m, plant::UserArmParams{}, idx, m.defaultPosture());
-  model.load.user_inertia_kgm2 = vc.user.inertia_kgm2;
-  model.load.user_stiffness_nm_per_rad = vc.user.stiffness_nm_per_rad;
-  model.load.user_damping_nms_per_rad = vc.user.damping_nms_per_rad;
-  LoopSetup setup;
-  setup.grid_points = 60;
-  ModelVariation nominal;
-  nominal.user_stiffness_nm_per_rad = vc.user.stiffness_nm_per_rad;
-  nominal.user_damping_nms_per_rad = vc.user.damping_nms_per_rad;
   LinearHardGoals hard;
-  hard.models = {prepareVariation(model, m.defaultPosture()[idx], setup, nominal)};
+  hard.models = {nominalHardGoalModel("HR", vc)};
   hard.goals.passivity_tolerance_nms_per_rad = 1e6;
   hard.goals.coupled_hard = false;
   const double ms_optimum = evaluateGoals(hard.models, optimum, hard.goals).peak_sensitivity;
@@ -513,6 +505,29 @@ TEST(NonlinearStage, HardFeasibleSearchStartsFromTheLinearOptimumAndWritesOnlyGa
     ++next_failed;
   }
   EXPECT_EQ(next_failed, restricted.linear_optimum.failed_runs.size());
+
+  // With no evaluation the restricted search stays at the failing linear optimum and ends not
+  // verified: the ranking search's result is written instead (the same as running it alone), with
+  // the attempt's score and gains kept beside it and both searches' work counted.
+  o.max_evaluations = 0;
+  o.hard_feasible = false;
+  const NonlinearStageResult ranking_only = refineNonlinear(sc, optimum, sc.gains, vc.ranges, vc.linear, o, &hard);
+  o.hard_feasible = true;
+  const NonlinearStageResult fell_back = refineNonlinear(sc, optimum, sc.gains, vc.ranges, vc.linear, o, &hard);
+  EXPECT_FALSE(fell_back.hard_feasible_search);
+  EXPECT_EQ(fell_back.verified, ranking_only.verified);
+  EXPECT_EQ(fell_back.gains.impedance.inertia_kgm2, ranking_only.gains.impedance.inertia_kgm2);
+  EXPECT_EQ(fell_back.gains.impedance.damping_nms_per_rad, ranking_only.gains.impedance.damping_nms_per_rad);
+  EXPECT_EQ(fell_back.gains.sliding_mode.boundary_layer_radps, ranking_only.gains.sliding_mode.boundary_layer_radps);
+  EXPECT_EQ(fell_back.gains.sliding_mode.lambda_per_s, ranking_only.gains.sliding_mode.lambda_per_s);
+  EXPECT_EQ(fell_back.hard_feasible_attempt.failures, fell_back.linear_optimum.failures);
+  EXPECT_GT(fell_back.hard_feasible_attempt.runs, 0);
+  EXPECT_EQ(fell_back.hard_feasible_attempt_gains.impedance.inertia_kgm2, optimum.impedance.inertia_kgm2);
+  EXPECT_EQ(fell_back.hard_feasible_attempt_gains.sliding_mode.boundary_layer_radps,
+            optimum.sliding_mode.boundary_layer_radps);
+  EXPECT_GE(fell_back.simulations, ranking_only.simulations + fell_back.hard_feasible_attempt.runs);
+  EXPECT_NE(fell_back.verdict.find("ended NOT verified"), std::string::npos) << fell_back.verdict;
+  EXPECT_EQ(ranking_only.hard_feasible_attempt.runs, 0);
 }
 
 // The score is the same for any thread count, also where the failure cap stops it (runs are taken

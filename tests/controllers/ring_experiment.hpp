@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "controllers_fixture.hpp"
 #include "fullarm/controllers/closed_loop.hpp"
 #include "fullarm/controllers/joint_controller.hpp"
 #include "fullarm/controllers/linear_analysis.hpp"
@@ -32,16 +33,6 @@
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::controllers::test {
-
-// Standard deviation of x[begin, end) about its mean (the detector's window statistic).
-inline double ringStd(const std::vector<double>& x, std::size_t begin, std::size_t end) {
-  double mean = 0.0;
-  for (std::size_t i = begin; i < end; ++i) mean += x[i];
-  mean /= static_cast<double>(end - begin);
-  double var = 0.0;
-  for (std::size_t i = begin; i < end; ++i) var += (x[i] - mean) * (x[i] - mean);
-  return std::sqrt(var / static_cast<double>(end - begin));
-}
 
 // The joint model `fullarm tune` designs for (apps/tune_command.cpp): the plant's joint, its load
 // at the default posture, validate's nominal user in joint space.
@@ -56,21 +47,6 @@ inline JointPlantModel tunerJointModel(const arm::ArmModel& model, const plant::
   jm.load.user_damping_nms_per_rad = validation.user.damping_nms_per_rad;
   jm.include_user = true;
   return jm;
-}
-
-// The model of one variation, as prepareVariation() builds it (tuner.cpp).
-inline JointPlantModel variedModel(const JointPlantModel& nominal, const ModelVariation& v) {
-  JointPlantModel m = nominal;
-  m.joint.fluid.oil_bulk_modulus_pa *= v.bulk_modulus_scale;
-  m.joint.valve.rated_flow_m3ps *= v.valve_gain_scale;
-  m.load.inertia_kgm2 *= v.inertia_scale;
-  m.load.user_inertia_kgm2 *= v.inertia_scale;
-  m.joint.friction.viscous_nms_per_rad *= v.friction_scale;
-  m.joint.friction.coulomb_nm *= v.friction_scale;
-  m.joint.friction.static_nm *= v.friction_scale;
-  m.load.user_stiffness_nm_per_rad = v.user_stiffness_nm_per_rad;
-  m.load.user_damping_nms_per_rad = v.user_damping_nms_per_rad;
-  return m;
 }
 
 // The scenario with ideal sensors (24-bit converters over the same span, no noise or bias) and/or

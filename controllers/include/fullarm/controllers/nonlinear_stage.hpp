@@ -10,7 +10,7 @@
 /// log10 B_m, log10 B_o/eps and log10 lambda, with B_m and lambda also moved together (B_m and
 /// B_o/eps trade contact oscillation against sluggishness; the damping of a stiff, undamped
 /// user's ring grows with B_m only as far as lambda lets the loop render it; J_m and K_m keep the
-/// linear stage's values, except in the hard-feasible search below). In the spirit of systune's
+/// values of the point the search starts from, except in the hard-feasible search below). In the spirit of systune's
 /// worst-case model addition, each round ends with a fresh check batch on the incumbent; its
 /// failed samples join the sample set and the search goes on. Offline (allocates), not @rt.
 ///
@@ -57,7 +57,7 @@ struct NonlinearStageOptions {
   int check_samples = 300;
   int rounds = 3;             ///< search rounds (each followed by a check batch)
   int max_evaluations = 14;   ///< candidate evaluations per round's compass search
-  double step_decades = 0.3;  ///< initial compass step on log10 B_m, log10 B_o/eps and log10 lambda
+  double step_decades = 0.3;  ///< initial compass step on every polled log10 gain (B_m, B_o/eps, lambda; J_m, K_m)
   double min_step_decades = 0.04;
   int max_added_per_round = 4;  ///< failed check samples added to the set per round (worst first)
   std::uint64_t seed = 1;
@@ -80,7 +80,8 @@ struct NonlinearStageOptions {
   /// (margin 0.83) and the first check batch passes (docs/analysis.md, "Known limits").
   double target_margin = 0.8;
   /// Hard-feasible search: when hard goals are given, the better start by cost is the starting
-  /// gains, they violate a hard goal and the linear optimum meets every one, start from the linear
+  /// gains, they violate a hard goal and the linear optimum meets every one (and validate's linear
+  /// check, NonlinearScore::linear_ok), start from the linear
   /// optimum (whatever its failures) and reject, without simulating it, every candidate that
   /// violates a hard goal, so the written gains meet the hard goals. Otherwise (or when false) the
   /// search is the ranking one: hard goals cost kHardGoalWeight = 0.5 in the score.
@@ -232,8 +233,9 @@ inline constexpr double kRingStiffnessFractions[] = {0.25, 0.5, 0.75, 1.0};
 /// `hard_goals` (may be null) ranks candidates and is reported but does not extend the search. Hard-feasible search
 /// (NonlinearStageOptions::hard_feasible): when the better start would be `start` violating a hard goal while
 /// `linear_optimum` meets them all, the search starts from `linear_optimum`, rejects violating candidates unsimulated
-/// and also polls J_m and K_m; if it ends NOT verified, the ranking search replaces it when that one verifies
-/// (NonlinearStageResult::hard_feasible_attempt keeps the restricted result). Deterministic for given
+/// and also polls J_m and K_m; if it ends NOT verified, the ranking search replaces it, verified or not
+/// (NonlinearStageResult::hard_feasible_attempt keeps the restricted result; evaluations and simulations
+/// count both searches). Deterministic for given
 /// inputs. @throws std::invalid_argument for bad options.
 [[nodiscard]] NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointGains& linear_optimum,
                                                    const JointGains& start, const UncertaintyRanges& ranges,

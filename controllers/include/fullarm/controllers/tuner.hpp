@@ -122,7 +122,11 @@ struct TuningResult {
   std::vector<std::string> nlopt_results;  ///< result code of every NLopt run, in order
 };
 
-/// Builds the joint model of one variation.
+/// The joint model of one variation: bulk modulus, valve flow gain, inertias and friction scaled,
+/// the variation's user spring and damper.
+[[nodiscard]] JointPlantModel applyVariation(const JointPlantModel& nominal, const ModelVariation& v);
+
+/// Builds the joint model of one variation (applyVariation) at `q_rad` with the variation's delay.
 [[nodiscard]] PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,
                                              const ModelVariation& v);
 
