@@ -35,6 +35,9 @@ struct TuneRun {
   std::vector<TuningResult> results;
   std::vector<controllers::PreparedJoint> nominal;        // nominal model of each tuned joint
   std::vector<controllers::NonlinearStageResult> stages;  // empty when the stage is off
+  // The contact goal (Eq. C6) of each joint's written gains on the linear stage's model set and
+  // coupled grid, whether or not it was a hard goal.
+  std::vector<controllers::CoupledGoal> contact;
   double wall_s = 0.0;
   bool pass = false;
 };
@@ -86,6 +89,7 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
   run.results.resize(slots.size());
   run.nominal.resize(slots.size());
   if (o.nonlinear_rounds > 0) run.stages.resize(slots.size());
+  run.contact.resize(slots.size());
   std::vector<controllers::JointPlantModel> models;
   for (int slot : slots) models.push_back(jointModel(model, plant_config, validation, gains.joints[slot].name));
   const auto start = std::chrono::steady_clock::now();
@@ -113,6 +117,8 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
     controllers::TuningGoals joint_goals = goals;
     joint_goals.detector = controllers::detectorModelOf(scenarios[k]);
     joint_goals.detector.modal_amplitude = o.modal_amplitude;
+    joint_goals.contact_detector = controllers::contactDetectorModelOf(scenarios[k]);
+    joint_goals.contact_hard = o.contact_goal;
     run.results[k] = controllers::tuneJoint(models[k], q, initial, setup, joint_goals, controllers::TuningBounds{},
                                             validation.ranges, joint_options);
     run.nominal[k] = controllers::prepareJoint(models[k], controllers::solveOperatingPoint(models[k], q), setup);
@@ -134,6 +140,16 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
       run.stages[k] = controllers::refineNonlinear(scenarios[k], run.results[k].tuned, initial, validation.ranges,
                                                    validation.linear, nl, &hard[k]);
     }
+    // The contact goal of the written gains (reported whether or not it was a hard goal).
+    std::vector<controllers::PreparedJoint> contact_models = run.results[k].coupled_models;
+    controllers::LoopSetup goal_setup = setup;
+    goal_setup.grid_points = joint_options.grid_points;
+    for (const controllers::ModelVariation& v : run.results[k].model_set) {
+      contact_models.push_back(controllers::prepareVariation(models[k], q, goal_setup, v));
+    }
+    run.contact[k] = controllers::evaluateCoupledContact(
+        contact_models, o.nonlinear_rounds > 0 ? run.stages[k].gains : run.results[k].tuned,
+        {joint_goals.wall_stiffness_nm_per_rad, joint_goals.wall_damping_nms_per_rad}, joint_goals.contact_detector);
   });
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.tuned = gains;
@@ -172,6 +188,15 @@ nlohmann::json goalsJson(const controllers::GoalValues& v) {
           {"feasible", v.feasible()}};
 }
 
+// The contact goal (Eq. C6) of the written gains: <= 1 met.
+nlohmann::json contactJson(const controllers::CoupledGoal& c) {
+  return {{"value", controllers::coupledGoalValue(c)},
+          {"spectral_radius", c.spectral_radius},
+          {"detector_score", c.detector_score},
+          {"mode_hz", c.detector_hz},
+          {"mode_decay_per_s", c.detector_decay_per_s}};
+}
+
 void addToReport(const TuneRun& run, reports::Report& report, const std::string& heading) {
   nlohmann::json joints = nlohmann::json::array();
   for (const TuningResult& r : run.results) {
@@ -194,7 +219,8 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
                       {"initial_goals", goalsJson(r.initial_goals)},
                       {"tuned_goals", goalsJson(r.tuned_goals)},
                       {"model_set", models},
-                      {"nlopt_results", r.nlopt_results}});
+                      {"nlopt_results", r.nlopt_results},
+                      {"contact_goal", contactJson(run.contact[joints.size()])}});
   }
   nlohmann::json stages = nlohmann::json::array();
   for (const controllers::NonlinearStageResult& st : run.stages) {
@@ -420,6 +446,9 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
   tune->add_flag("--modal-amplitude,!--peak-speed-amplitude", o.modal_amplitude,
                  "Coupled goal: each mode's own speed amplitude after the free move (Eq. C5, the default) or "
                  "(--peak-speed-amplitude) the move's peak speed (Eq. C3, a bound)");
+  tune->add_flag("--contact-goal", o.contact_goal,
+                 "Make the contact goal (Eq. C6: every mode against the wall judged decaying by the contact hold's "
+                 "detector) a hard goal of the linear stage; it is reported in summary.json either way");
   tune->add_option("--out", o.out_dir, "Output folder")->capture_default_str();
   return tune;
 }

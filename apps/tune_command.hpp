@@ -30,6 +30,9 @@ struct TuneOptions {
   /// default) or, when false (`--peak-speed-amplitude`), the move's peak speed (Eq. C3, a bound;
   /// docs/analysis.md, "Conservatism").
   bool modal_amplitude = true;
+  /// The contact goal (Eq. C6) as a hard goal of the linear stage (`--contact-goal`); it is
+  /// reported for the written gains either way.
+  bool contact_goal = false;
 };
 
 /// Adds `tune` to `app`.

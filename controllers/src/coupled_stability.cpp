@@ -101,6 +101,17 @@ DetectorModel detectorModelOf(const JointScenario& sc) noexcept {
   return d;
 }
 
+DetectorModel contactDetectorModelOf(const JointScenario& sc) noexcept {
+  DetectorModel d = detectorModelOf(sc);
+  d.hold_s = sc.timing.contact_hold_s;
+  const double travel = sc.timing.wall_gap_rad + sc.timing.push_rad;
+  d.initial_speed_radps = sc.timing.contact_move_s > 0.0 ? 1.875 * travel / sc.timing.contact_move_s : 0.0;
+  d.move_amplitude_rad = travel;
+  d.move_duration_s = sc.timing.contact_move_s;
+  d.modal_amplitude = false;
+  return d;
+}
+
 namespace {
 
 // Covariance (about the window mean) of a = e^{-sigma t} cos(w t), b = -e^{-sigma t} sin(w t)
@@ -269,21 +280,74 @@ std::vector<ModalSpeed> modalHoldSpeeds(const PreparedJoint& m, const JointGains
   return out;
 }
 
+namespace {
+
+// Scores the poles `z` of model `index` by the detector (each pole's own V0 from `amplitude`
+// when given, else detector.initial_speed_radps) into `g`: its spectral radius, slowest mode
+// and worst detector score. `drift_excluded`: a real pole within kDriftPoleTolerance of 1 is
+// the free position's drift (left out of the radius, scored like any real mode).
+void scorePoles(const Eigen::VectorXcd& z, const std::vector<double>* amplitude, double T,
+                const DetectorModel& detector, bool drift_excluded, int index, CoupledGoal& g) {
+  // Poles faster than this leave less than 1e-3 of the threshold in the late window.
+  const auto skipAbove = [&](double v0) {
+    return std::log(1e3 * std::max(v0, detector.threshold_radps) / detector.threshold_radps) /
+           (detector.hold_s - detector.window_s);
+  };
+  const ModeDecay d = slowestOscillatoryMode(z, T);
+  // Spectral radius without the free-position drift (a real pole within kDriftPoleTolerance of
+  // z = 1: with K_h = 0 the position has no restoring torque, and the residual slope of the
+  // gravity compensation leaves it at |z| = 1 + 1e-7 or so, an e-folding time of hours).
+  double radius_max = 0.0;
+  for (Eigen::Index k = 0; k < z.size(); ++k) {
+    const double r = std::abs(z[k]);
+    radius_max = std::isfinite(r) ? std::max(radius_max, r) : std::numeric_limits<double>::infinity();
+  }
+  g.spectral_radius = std::max(g.spectral_radius, drift_excluded ? spectralRadiusWithoutDrift(z) : radius_max);
+  if (g.worst_model < 0 || d.decay_rate_per_s < g.slowest.decay_rate_per_s) {
+    g.slowest = d;
+    g.worst_model = index;
+  }
+  for (Eigen::Index k = 0; k < z.size(); ++k) {
+    const double radius = std::abs(z[k]);
+    if (radius == 0.0 || z[k].imag() < 0.0) continue;  // deadbeat, or the conjugate of a pole seen
+    const double sigma = -std::log(radius) / T;
+    DetectorModel mode_detector = detector;
+    if (amplitude != nullptr) {
+      // A non-finite modal amplitude (non-finite loop) falls back to Eq. C3's bound, so that the
+      // pole, not the amplitude, decides whether the goal is scorable.
+      const double v0 = (*amplitude)[static_cast<std::size_t>(k)];
+      mode_detector.initial_speed_radps = std::isfinite(v0) ? v0 : detector.initial_speed_radps;
+    }
+    if (sigma > skipAbove(mode_detector.initial_speed_radps)) continue;
+    const double angle = std::abs(std::arg(z[k]));
+    const double w = angle > kOscillatoryArgTolerance ? angle / T : 0.0;
+    if (drift_excluded && w == 0.0 && std::abs(radius - 1.0) <= kMarginalPoleTolerance) continue;  // free position
+    // A growing mode fails outright; the score stays finite (and rises with the growth rate) so
+    // that the optimisers see a slope instead of an infinity.
+    const bool drift = drift_excluded && w == 0.0 && radius <= 1.0 + kDriftPoleTolerance;  // scored like any real mode
+    const double score =
+        sigma < 0.0 && !drift ? kUnstableModeScore + std::min(-sigma, 1e3) : detectorModeScore(sigma, w, mode_detector);
+    if (score > g.detector_score) {
+      g.detector_score = score;
+      g.detector_hz = w / (2.0 * std::numbers::pi);
+      g.detector_decay_per_s = sigma;
+      g.detector_model = index;
+    }
+  }
+}
+
+}  // namespace
+
 CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const JointGains& gains,
                             const DetectorModel& detector) {
   CoupledGoal g;
-  // Poles faster than this leave less than 1e-3 of the threshold in the late window.
-  const double skip_above =
-      std::log(1e3 * std::max(detector.initial_speed_radps, detector.threshold_radps) / detector.threshold_radps) /
-      (detector.hold_s - detector.window_s);
   for (std::size_t i = 0; i < models.size(); ++i) {
     const PreparedJoint& m = models[i];
     const double T = m.setup.control_period_s;
-    Eigen::VectorXcd z;
-    std::vector<double> amplitude;  // each pole's V0 (modal_amplitude)
     if (detector.modal_amplitude) {
       const std::vector<ModalSpeed> modes = modalHoldSpeeds(m, gains, detector);
-      z.resize(static_cast<Eigen::Index>(modes.size()));
+      Eigen::VectorXcd z(static_cast<Eigen::Index>(modes.size()));
+      std::vector<double> amplitude;  // each pole's V0
       for (std::size_t k = 0; k < modes.size(); ++k) {
         z[static_cast<Eigen::Index>(k)] = modes[k].pole;
         // A conjugate pair's speed is 2 Re(c z^n): amplitude 2 |c|; a real pole's (z > 0 or z < 0) |c|.
@@ -291,50 +355,22 @@ CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const Join
         const bool pair = std::abs(zk.imag()) > kOscillatoryArgTolerance * std::abs(zk);
         amplitude.push_back((pair ? 2.0 : 1.0) * std::abs(modes[k].coefficient));
       }
+      scorePoles(z, &amplitude, T, detector, true, static_cast<int>(i), g);
     } else {
-      z = closedLoopPoles(m, gains, VirtualWall{});
+      scorePoles(closedLoopPoles(m, gains, VirtualWall{}), nullptr, T, detector, true, static_cast<int>(i), g);
     }
-    const ModeDecay d = slowestOscillatoryMode(z, T);
-    // Spectral radius without the free-position drift (a real pole within kDriftPoleTolerance of
-    // z = 1: with K_h = 0 the position has no restoring torque, and the residual slope of the
-    // gravity compensation leaves it at |z| = 1 + 1e-7 or so, an e-folding time of hours).
-    g.spectral_radius = std::max(g.spectral_radius, spectralRadiusWithoutDrift(z));
-    if (g.worst_model < 0 || d.decay_rate_per_s < g.slowest.decay_rate_per_s) {
-      g.slowest = d;
-      g.worst_model = static_cast<int>(i);
-    }
-    for (Eigen::Index k = 0; k < z.size(); ++k) {
-      const double radius = std::abs(z[k]);
-      if (radius == 0.0 || z[k].imag() < 0.0) continue;  // deadbeat, or the conjugate of a pole seen
-      const double sigma = -std::log(radius) / T;
-      DetectorModel mode_detector = detector;
-      if (detector.modal_amplitude) {
-        // A non-finite modal amplitude (non-finite loop) falls back to Eq. C3's bound, so that the
-        // pole, not the amplitude, decides whether the goal is scorable.
-        const double v0 = amplitude[static_cast<std::size_t>(k)];
-        mode_detector.initial_speed_radps = std::isfinite(v0) ? v0 : detector.initial_speed_radps;
-        const double skip = std::log(1e3 * std::max(mode_detector.initial_speed_radps, detector.threshold_radps) /
-                                     detector.threshold_radps) /
-                            (detector.hold_s - detector.window_s);
-        if (sigma > skip) continue;
-      } else if (sigma > skip_above) {
-        continue;
-      }
-      const double angle = std::abs(std::arg(z[k]));
-      const double w = angle > kOscillatoryArgTolerance ? angle / T : 0.0;
-      if (w == 0.0 && std::abs(radius - 1.0) <= kMarginalPoleTolerance) continue;  // free-position pole
-      // A growing mode fails outright; the score stays finite (and rises with the growth rate) so
-      // that the optimisers see a slope instead of an infinity.
-      const bool drift = w == 0.0 && radius <= 1.0 + kDriftPoleTolerance;  // scored like any real mode
-      const double score = sigma < 0.0 && !drift ? kUnstableModeScore + std::min(-sigma, 1e3)
-                                                 : detectorModeScore(sigma, w, mode_detector);
-      if (score > g.detector_score) {
-        g.detector_score = score;
-        g.detector_hz = w / (2.0 * std::numbers::pi);
-        g.detector_decay_per_s = sigma;
-        g.detector_model = static_cast<int>(i);
-      }
-    }
+  }
+  g.slowest.spectral_radius = g.spectral_radius;
+  return g;
+}
+
+CoupledGoal evaluateCoupledContact(const std::vector<PreparedJoint>& models, const JointGains& gains,
+                                   const VirtualWall& wall, const DetectorModel& contact_detector) {
+  CoupledGoal g;
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    const PreparedJoint& m = models[i];
+    scorePoles(closedLoopPoles(m, gains, wall), nullptr, m.setup.control_period_s, contact_detector, false,
+               static_cast<int>(i), g);
   }
   g.slowest.spectral_radius = g.spectral_radius;
   return g;

@@ -98,6 +98,10 @@ std::pair<double, const char*> worstHard(const GoalValues& v, const TuningGoals&
     consider(std::max(v.coupled_spectral_radius - kMarginalPoleTolerance, v.coupled_detector_score),
              "coupled stability and damping over the validated users");
   }
+  if (goals.contact_hard) {
+    consider(std::max(v.contact_spectral_radius - kMarginalPoleTolerance, v.contact_detector_score),
+             "contact stability and damping over the validated users");
+  }
   if (goals.passivity_hard) {
     consider(1.0 - v.min_real_impedance / goals.passivity_tolerance_nms_per_rad, "passivity Re Z >= 0");
   }
@@ -322,6 +326,19 @@ GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const JointGa
         worst.coupled_detector_score = c.detector_score;
         worst.coupled_mode_hz = c.detector_hz;
         worst.coupled_mode_decay_per_s = c.detector_decay_per_s;
+      }
+    }
+  }
+  if (goals.contact_hard) {
+    // The same users held against the target wall (Eq. C6): the contact hold's detector.
+    const VirtualWall wall{goals.wall_stiffness_nm_per_rad, goals.wall_damping_nms_per_rad};
+    for (const std::vector<PreparedJoint>* set : {&models, &coupled}) {
+      const CoupledGoal c = evaluateCoupledContact(*set, gains, wall, goals.contact_detector);
+      worst.contact_spectral_radius = std::max(worst.contact_spectral_radius, c.spectral_radius);
+      if (c.detector_score >= worst.contact_detector_score) {
+        worst.contact_detector_score = c.detector_score;
+        worst.contact_mode_hz = c.detector_hz;
+        worst.contact_mode_decay_per_s = c.detector_decay_per_s;
       }
     }
   }

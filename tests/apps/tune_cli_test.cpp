@@ -54,6 +54,30 @@ TEST(TuneCli, WritesLoadableGainsAndSummary) {
   EXPECT_EQ(met, r.output.find("VIOLATE the linear hard goal") == std::string::npos) << r.output;
 }
 
+// The contact goal (Eq. C6) of the written gains is reported whether or not it is hard; with
+// --contact-goal a linear stage that ends feasible wrote gains that meet it (the same models).
+TEST(TuneCli, ContactGoalIsReportedAndMetWhenMadeHard) {
+  for (const bool hard : {false, true}) {
+    const auto dir = tempDir(hard ? "eb_contact_hard" : "eb_contact_reported");
+    const Result r = runFullarm("tune --joints EB --global-evals 40 --local-evals 30 --rounds 1 --nonlinear-rounds 0" +
+                                std::string(hard ? " --contact-goal" : "") + " --out " + dir.string());
+    ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+    std::ifstream in(dir / "summary.json");
+    const nlohmann::json summary = nlohmann::json::parse(in);
+    const nlohmann::json& joint = summary["results"]["tune"]["joints"][0];
+    const nlohmann::json& contact = joint["contact_goal"];
+    ASSERT_TRUE(contact["value"].is_number()) << contact.dump();
+    EXPECT_GE(contact["value"].get<double>(), contact["spectral_radius"].get<double>() - 1e-7);
+    EXPECT_GE(contact["value"].get<double>(), contact["detector_score"].get<double>());
+    if (hard) {
+      EXPECT_EQ(joint["feasible"].get<bool>(), r.exit_code == 0);
+      if (joint["feasible"].get<bool>()) {
+        EXPECT_LE(contact["value"].get<double>(), 1.0) << contact.dump();
+      }
+    }
+  }
+}
+
 // Reproducibility: `fullarm tune` starts from the fixed config/dts_tune_start.yaml (not from the
 // gains file it writes) and seeds each joint by its place in the file, so tuning one joint with the
 // default budget writes exactly the gains the shipped config/dts_gains.yaml holds for it (that file

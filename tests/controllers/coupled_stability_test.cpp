@@ -23,6 +23,7 @@
 #include "fullarm/controllers/closed_loop.hpp"
 #include "fullarm/controllers/coupled_stability.hpp"
 #include "fullarm/controllers/joint_linearization.hpp"
+#include "fullarm/controllers/nonlinear_stage.hpp"
 #include "fullarm/controllers/tuner.hpp"
 #include "fullarm/controllers/validation.hpp"
 
@@ -371,6 +372,72 @@ TEST(CoupledStability, ANonFiniteLoopEndsWithTheBoundPathsErrorNotAHang) {
   EXPECT_THROW(static_cast<void>(evaluateCoupled(models, g, d)), std::runtime_error);
 }
 
+// Eq. C6: the contact goal against validate's nonlinear harness. SFE's linear optimum of the
+// default tune (2026-11-22; it meets every free-motion hard goal) fails the nonlinear stage's
+// stiff-user corners with contact oscillations: ring corner 4 (slow plant, K_h 75, B_h 0) with a
+// decaying but too slow 1.9 Hz contact ring, the stiff corner (fast plant, K_h 75, B_h 1.25,
+// 3 samples) with a growing one. The linear loop of the same model held against validate's wall
+// predicts both (score > 1: a contact mode slower than the detector's ln 2 / W, or growing),
+// while the free-motion coupled goal of the same models is met. The gains of the hard-feasible
+// attempt (more B_m, half the loop gain) pass both runs and meet the contact goal.
+TEST(CoupledStability, ContactGoalPredictsTheStiffUsersContactOscillationOfTheNonlinearHarness) {
+  const ValidationConfig vc = loadValidationConfig(defaultValidationConfigPath());
+  GainsConfig gc = test::dtsGains();
+  const auto slot = static_cast<std::size_t>(findGainsJoint(gc, "R_SFE"));
+  JointGains optimum = gc.joints[slot];
+  optimum.impedance = {0.0649259371806233, 0.4235982686290969, 10.564141801580064};
+  optimum.sliding_mode = {283.72288527322434, 5.0, 652.8580335909247};
+  JointGains attempt = gc.joints[slot];
+  attempt.impedance = {0.032540050846214655, 0.7111384754442875, 7.478839654064858};
+  attempt.sliding_mode = {300.0000000000001, 5.0, 1302.6230314486584};
+  const JointPlantModel jm = tuneModel("R_SFE", vc);
+  const double q = test::dtsModel().defaultPosture()[test::dtsModel().jointIndex("R_SFE")];
+  const MonteCarloSample ring = ringCorners(vc.ranges)[3];
+  const MonteCarloSample stiff = stressCorners(vc.ranges, 0.05)[2];
+  ASSERT_DOUBLE_EQ(ring.user_stiffness_nm_per_rad, vc.ranges.user_stiffness_nm_per_rad.max);
+  ASSERT_DOUBLE_EQ(stiff.user_stiffness_nm_per_rad, vc.ranges.user_stiffness_nm_per_rad.max);
+  for (const JointGains* g : {&optimum, &attempt}) {
+    gc.joints[slot] = *g;
+    const JointScenario nominal =
+        validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), gc, "SFE"), vc);
+    const DetectorModel contact = contactDetectorModelOf(nominal);
+    // V0: the peak speed of the contact move's minimum-jerk reference.
+    EXPECT_DOUBLE_EQ(contact.initial_speed_radps,
+                     1.875 * (nominal.timing.wall_gap_rad + nominal.timing.push_rad) / nominal.timing.contact_move_s);
+    EXPECT_DOUBLE_EQ(contact.hold_s, nominal.timing.contact_hold_s);
+    const VirtualWall wall{nominal.wall.stiffness_nm_per_rad, nominal.wall.damping_nms_per_rad};
+    for (const MonteCarloSample& sample : {ring, stiff}) {
+      const ClosedLoopResult r = simulateJoint(applySample(nominal, sample));
+      const PreparedJoint p = prepareVariation(jm, q, LoopSetup{}, sample);
+      const CoupledGoal c = evaluateCoupledContact({p}, *g, wall, contact);
+      DetectorModel free_detector = detectorModelOf(nominal);
+      free_detector.modal_amplitude = true;  // tune's default (Eq. C5)
+      const CoupledGoal free = evaluateCoupled({p}, *g, free_detector);
+      SCOPED_TRACE(std::string(g == &optimum ? "linear optimum" : "hard-feasible attempt") + ", K_h " +
+                   std::to_string(sample.user_stiffness_nm_per_rad) + ", B_h " +
+                   std::to_string(sample.user_damping_nms_per_rad));
+      EXPECT_LE(coupledGoalValue(free), 1.0);  // the free-motion goal is met either way
+      const ModeDecay mode = slowestOscillatoryMode(closedLoopPoles(p, *g, wall), nominal.dt_s);
+      if (g == &optimum) {
+        // Measured: ring 0.083 rad/s late (0.137 early), 1.9 Hz sigma 0.97 /s, score 1.27; stiff
+        // corner 0.32 rad/s, a growing 2.4 Hz mode.
+        EXPECT_FALSE(r.acceptable());
+        EXPECT_NE(r.failure.find("contact"), std::string::npos) << r.failure;
+        EXPECT_GT(r.contact_hold_speed_rms_radps, nominal.oscillation_speed_radps);
+        EXPECT_GT(c.detector_score, 1.0);
+        EXPECT_LT(mode.decay_rate_per_s, detectorDecayRate(nominal.timing.detect_window_s));
+        EXPECT_GT(mode.frequency_hz, 1.0);
+        EXPECT_LT(mode.frequency_hz, 3.0);
+      } else {
+        // Measured: 0.006 and 0.019 rad/s, scores 0.48 and 0.81.
+        EXPECT_TRUE(r.acceptable()) << r.failure;
+        EXPECT_LE(coupledGoalValue(c), 1.0);
+        EXPECT_GT(mode.decay_rate_per_s, detectorDecayRate(nominal.timing.detect_window_s));
+      }
+    }
+  }
+}
+
 // The tuner's hard goals: the coupled goal replaces passivity (which stays computed and can be
 // made hard again). Compared with evaluateCoupled() on the same models and with the raw min Re Z.
 TEST(CoupledStability, TunerHardGoalIsTheCoupledGoalAndPassivityIsReported) {
@@ -412,6 +479,28 @@ TEST(CoupledStability, TunerHardGoalIsTheCoupledGoalAndPassivityIsReported) {
   const GoalValues p = evaluateGoals(set, g, goals, grid);
   EXPECT_DOUBLE_EQ(p.hard, std::max(v.hard, passivity));
   EXPECT_NE(worstHardGoal(p, goals).second.find("passivity"), std::string::npos);
+  // The contact goal (Eq. C6): not evaluated unless asked; then the worst of both model lists held
+  // against the goal's wall, and hard.
+  EXPECT_EQ(v.contact_detector_score, 0.0);
+  goals.passivity_hard = false;
+  goals.contact_hard = true;
+  goals.wall_stiffness_nm_per_rad = 200.0;
+  goals.wall_damping_nms_per_rad = 1.0;
+  const GoalValues w = evaluateGoals(set, g, goals, grid);
+  const VirtualWall wall{200.0, 1.0};
+  const CoupledGoal ca = evaluateCoupledContact(set, g, wall, goals.contact_detector);
+  const CoupledGoal cb = evaluateCoupledContact(grid, g, wall, goals.contact_detector);
+  EXPECT_DOUBLE_EQ(w.contact_detector_score, std::max(ca.detector_score, cb.detector_score));
+  EXPECT_DOUBLE_EQ(w.contact_spectral_radius, std::max(ca.spectral_radius, cb.spectral_radius));
+  const double contact = std::max(w.contact_spectral_radius - kMarginalPoleTolerance, w.contact_detector_score);
+  EXPECT_GE(w.hard, contact);
+  if (worstHardGoal(w, goals).first == contact) {
+    EXPECT_NE(worstHardGoal(w, goals).second.find("contact"), std::string::npos);
+  }
+  // Nothing is left out as drift against the wall: the contact radius is the largest |z|.
+  double largest = 0.0;
+  for (const PreparedJoint& m : grid) largest = std::max(largest, closedLoopPoles(m, g, wall).cwiseAbs().maxCoeff());
+  EXPECT_DOUBLE_EQ(cb.spectral_radius, largest);
 }
 
 }  // namespace

@@ -107,6 +107,13 @@ struct DetectorModel {
 /// The detector model of a scenario's free hold (its timing, threshold and free move).
 [[nodiscard]] DetectorModel detectorModelOf(const JointScenario& scenario) noexcept;
 
+/// The detector model of a scenario's contact hold (Eq. C6): the contact hold's length, the same
+/// window, ratio and threshold, and V0 the peak speed of the contact move's reference,
+/// 15/8 (wall gap + push) / T_contact (0.94 rad/s by default): a bound on the speed the arrival at
+/// the wall can leave in a contact mode. modal_amplitude is false (the arrival is an impact, not
+/// the smooth drive of Eq. C5).
+[[nodiscard]] DetectorModel contactDetectorModelOf(const JointScenario& scenario) noexcept;
+
 /// The detector applied to the mode V0 e^{-sigma t} cos(w t + phi) over the hold, worst phase:
 /// max over phi of min(late / v_th, late / (r early)), late and early the speed deviations of the
 /// last two windows. <= 1: judged decaying for every phase; > 1: judged oscillating for some.
@@ -150,6 +157,15 @@ struct CoupledGoal {
 /// (their late window is below a thousandth of the threshold).
 [[nodiscard]] CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const JointGains& gains,
                                           const DetectorModel& detector);
+
+/// The contact goal of one gain set (Eq. C6): the closed loop of every model (its own user and
+/// delay) held against `wall`, each mode scored by `contact_detector` (contactDetectorModelOf())
+/// with its V0 bound. Nothing is left out as drift (the wall restores the position): the
+/// spectral radius is the plain one. Measured on SFE (docs/analysis.md, "Contact damping"): the
+/// stiff users' contact oscillations of the nonlinear runs are the 1.8-2.2 Hz contact modes of
+/// this loop whose decay rate is below the detector's ln 2 / W.
+[[nodiscard]] CoupledGoal evaluateCoupledContact(const std::vector<PreparedJoint>& models, const JointGains& gains,
+                                                 const VirtualWall& wall, const DetectorModel& contact_detector);
 
 /// Normalised coupled hard goal (<= 1: met): max(spectral radius, detector score), the
 /// free-position pole at z = 1 tolerated as in LinearChecks::stable.

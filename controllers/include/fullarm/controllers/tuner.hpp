@@ -17,7 +17,8 @@
 ///   a gain scale of kSectorScales fails it outright (LinearChecks::sector_ok);  coupled
 ///   stability and damping with the validated users (coupled_stability.hpp: spectral radius and
 ///   the detector score of every mode, over the model set and the coupled grid of the
-///   validation box). Passivity, 1 - min Re Z / passivity_tolerance, is computed and reported,
+///   validation box); with TuningGoals::contact_hard, the same in contact with the wall (Eq. C6).
+///   Passivity, 1 - min Re Z / passivity_tolerance, is computed and reported,
 ///   and is a hard goal only with TuningGoals::passivity_hard (docs/analysis.md).
 /// Soft goals (the objective is their maximum, worst model):
 ///   free-motion transparency: RMS user torque to follow the reference motion / target;
@@ -56,6 +57,13 @@ struct TuningGoals {
   /// of the model set is stable and each of its modes is judged decaying by this detector.
   bool coupled_hard = true;
   DetectorModel detector{};
+  /// Contact goal (Eq. C6, evaluateCoupledContact()): the same models held against the target
+  /// wall are stable and each contact mode is judged decaying by `contact_detector`. Off by
+  /// default (`fullarm tune --contact-goal`): measured on the default plant it removes the stiff
+  /// users' contact oscillations of the linear optimum but trades them for "too sluggish" on SFE
+  /// and SAA (docs/analysis.md, "Contact damping (Eq. C6)").
+  bool contact_hard = false;
+  DetectorModel contact_detector{.hold_s = 1.5, .initial_speed_radps = 0.9375};
   // Soft.
   std::vector<double> reference_hz = {0.25, 0.5, 1.0, 2.0};  ///< reference motion: sum of sines
   double reference_amplitude_rad = 0.1;                      ///< per sine
@@ -96,6 +104,10 @@ struct GoalValues {
   double coupled_detector_score = 0.0;    ///< worst detectorModeScore() (<= 1: judged decaying)
   double coupled_mode_hz = 0.0;           ///< frequency of the mode with that score
   double coupled_mode_decay_per_s = 0.0;  ///< and its decay rate
+  double contact_spectral_radius = 0.0;   ///< worst over the model set and the coupled grid against the wall
+  double contact_detector_score = 0.0;    ///< worst detectorModeScore() of a contact mode (<= 1: judged decaying)
+  double contact_mode_hz = 0.0;           ///< frequency of the contact mode with that score
+  double contact_mode_decay_per_s = 0.0;  ///< and its decay rate
   double hard = 0.0;                      ///< max normalised hard goal (<= 1: met)
   double soft = 0.0;                      ///< max normalised soft goal (objective)
   bool feasible() const noexcept { return hard <= 1.0; }
