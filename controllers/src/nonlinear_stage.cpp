@@ -251,20 +251,45 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& g
   return s;
 }
 
+namespace {
+
+// Throws std::invalid_argument naming the first option that is out of range, its value and the rule.
+void validateStageOptions(const NonlinearStageOptions& o) {
+  const auto require = [](bool ok, const char* name, double value, const char* rule) {
+    if (ok) return;
+    std::ostringstream msg;
+    msg << "nonlinear stage options: " << name << " = " << value << ", expected " << rule;
+    throw std::invalid_argument(msg.str());
+  };
+  require(o.samples >= 1, "samples", o.samples, ">= 1");
+  require(o.check_samples >= 0, "check_samples", o.check_samples, ">= 0");
+  require(o.rounds >= 1, "rounds", o.rounds, ">= 1");
+  require(o.max_evaluations >= 0, "max_evaluations", o.max_evaluations, ">= 0");
+  require(o.step_decades > 0.0, "step_decades", o.step_decades, "> 0");
+  require(o.min_step_decades > 0.0, "min_step_decades", o.min_step_decades, "> 0");
+  require(o.max_added_per_round >= 1, "max_added_per_round", o.max_added_per_round, ">= 1");
+  require(o.threads >= 1, "threads", o.threads, ">= 1");
+  require(o.corner_user_fraction >= 0.0 && o.corner_user_fraction <= 1.0, "corner_user_fraction",
+          o.corner_user_fraction, "in [0, 1]");
+  require(o.target_margin >= 0.0 && o.target_margin <= 1.0, "target_margin", o.target_margin, "in [0, 1]");
+  const auto box = [&](double lo, double hi, const char* lo_name, const char* hi_name) {
+    require(lo > 0.0 && std::isfinite(lo), lo_name, lo, "finite and > 0");
+    require(hi >= lo && std::isfinite(hi), hi_name, hi, "finite and >= its minimum");
+  };
+  box(o.min_damping_nms_per_rad, o.max_damping_nms_per_rad, "min_damping_nms_per_rad", "max_damping_nms_per_rad");
+  box(o.min_gain_v_s_per_rad, o.max_gain_v_s_per_rad, "min_gain_v_s_per_rad", "max_gain_v_s_per_rad");
+  box(o.min_lambda_per_s, o.max_lambda_per_s, "min_lambda_per_s", "max_lambda_per_s");
+  box(o.min_inertia_kgm2, o.max_inertia_kgm2, "min_inertia_kgm2", "max_inertia_kgm2");
+  box(o.min_stiffness_nm_per_rad, o.max_stiffness_nm_per_rad, "min_stiffness_nm_per_rad", "max_stiffness_nm_per_rad");
+}
+
+}  // namespace
+
 NonlinearStageResult refineNonlinear(const JointScenario& scenario, const JointGains& linear_optimum,
                                      const JointGains& start, const UncertaintyRanges& ranges,
                                      const LinearRequirements& req, const NonlinearStageOptions& o,
                                      const LinearHardGoals* hard_goals) {
-  if (o.samples < 1 || o.check_samples < 0 || o.rounds < 1 || o.max_evaluations < 0 || !(o.step_decades > 0.0) ||
-      !(o.min_step_decades > 0.0) || o.max_added_per_round < 1 || !(o.min_damping_nms_per_rad > 0.0) ||
-      !(o.max_damping_nms_per_rad >= o.min_damping_nms_per_rad) || !(o.min_gain_v_s_per_rad > 0.0) ||
-      !(o.max_gain_v_s_per_rad >= o.min_gain_v_s_per_rad) || !(o.min_lambda_per_s > 0.0) ||
-      !(o.max_lambda_per_s >= o.min_lambda_per_s) || !(o.corner_user_fraction >= 0.0) ||
-      !(o.corner_user_fraction <= 1.0) || o.threads < 1 || !(o.target_margin >= 0.0) || !(o.target_margin <= 1.0) ||
-      !(o.min_inertia_kgm2 > 0.0) || !(o.max_inertia_kgm2 >= o.min_inertia_kgm2) ||
-      !(o.min_stiffness_nm_per_rad > 0.0) || !(o.max_stiffness_nm_per_rad >= o.min_stiffness_nm_per_rad)) {
-    throw std::invalid_argument("nonlinear stage options: expected samples, rounds >= 1, steps > 0, 0 < min <= max");
-  }
+  validateStageOptions(o);
   const int max_delay = ranges.delay_max_samples;
   const std::array<double, 5> lo = {std::log10(o.min_damping_nms_per_rad), std::log10(o.min_gain_v_s_per_rad),
                                     std::log10(o.min_lambda_per_s), std::log10(o.min_inertia_kgm2),

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -158,6 +160,41 @@ TEST(NonlinearStage, RejectsAnOscillatingCandidateAndIsDeterministic) {
   const auto mc = runMonteCarlo({chosen, rejected}, check, 2);
   EXPECT_LT(mc[0].failures, mc[1].failures);
   EXPECT_GT(mc[1].failures, 0);
+}
+
+// Bad options are refused before anything runs, naming the option, its value and the rule; the
+// J_m, K_m and lambda boxes default to the tuner's TuningBounds.
+TEST(NonlinearStage, BadOptionsNameTheOptionAndItsValue) {
+  const ValidationConfig vc = defaultValidation();
+  const JointScenario sc = validationEb(handSized());
+  const auto message = [&](const NonlinearStageOptions& o) {
+    try {
+      (void)refineNonlinear(sc, sc.gains, sc.gains, vc.ranges, vc.linear, o);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  NonlinearStageOptions o;
+  o.rounds = 0;
+  EXPECT_NE(message(o).find("rounds = 0, expected >= 1"), std::string::npos) << message(o);
+  o = {};
+  o.target_margin = 1.5;
+  EXPECT_NE(message(o).find("target_margin = 1.5"), std::string::npos) << message(o);
+  o = {};
+  o.max_stiffness_nm_per_rad = 0.5;  // below the default minimum of 1
+  EXPECT_NE(message(o).find("max_stiffness_nm_per_rad = 0.5"), std::string::npos) << message(o);
+  o = {};
+  o.min_inertia_kgm2 = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(message(o).find("min_inertia_kgm2 = nan"), std::string::npos) << message(o);
+  const NonlinearStageOptions d;
+  const TuningBounds b;
+  EXPECT_EQ(d.min_inertia_kgm2, b.inertia_kgm2[0]);
+  EXPECT_EQ(d.max_inertia_kgm2, b.inertia_kgm2[1]);
+  EXPECT_EQ(d.min_stiffness_nm_per_rad, b.stiffness_nm_per_rad[0]);
+  EXPECT_EQ(d.max_stiffness_nm_per_rad, b.stiffness_nm_per_rad[1]);
+  EXPECT_EQ(d.min_lambda_per_s, b.lambda_per_s[0]);
+  EXPECT_EQ(d.max_lambda_per_s, b.lambda_per_s[1]);
 }
 
 // The stress corners sit on the box's faces (the linear stage's corners) with a lightly damped

@@ -65,8 +65,8 @@ struct NonlinearStageOptions {
   double max_damping_nms_per_rad = 60.0;
   double min_gain_v_s_per_rad = 1e-3;  ///< search box of B_o/eps
   double max_gain_v_s_per_rad = 1.0;
-  double min_lambda_per_s = 1.0;  ///< search box of lambda (TuningBounds' range)
-  double max_lambda_per_s = 300.0;
+  double min_lambda_per_s = TuningBounds{}.lambda_per_s[0];  ///< search box of lambda (TuningBounds' range)
+  double max_lambda_per_s = TuningBounds{}.lambda_per_s[1];
   bool stress_corners = true;  ///< start the sample set with stressCorners()
   /// Position of the corners' user (K_h, B_h) in its ranges, from the weak end (stressCorners()).
   double corner_user_fraction = 0.05;
@@ -89,10 +89,10 @@ struct NonlinearStageOptions {
   /// In a hard-feasible search, also poll log10 J_m and log10 K_m (each up and down, after the
   /// other directions), inside the box below (the tuner's TuningBounds by default).
   bool search_inertia_stiffness = true;
-  double min_inertia_kgm2 = 1e-3;  ///< search box of J_m
-  double max_inertia_kgm2 = 1.0;
-  double min_stiffness_nm_per_rad = 1.0;  ///< search box of K_m
-  double max_stiffness_nm_per_rad = 1e3;
+  double min_inertia_kgm2 = TuningBounds{}.inertia_kgm2[0];  ///< search box of J_m
+  double max_inertia_kgm2 = TuningBounds{}.inertia_kgm2[1];
+  double min_stiffness_nm_per_rad = TuningBounds{}.stiffness_nm_per_rad[0];  ///< search box of K_m
+  double max_stiffness_nm_per_rad = TuningBounds{}.stiffness_nm_per_rad[1];
   /// Worker threads for the runs of an evaluation and of a check batch. Runs are taken in set
   /// order in blocks of this size, so the result is identical for any count.
   int threads = 1;
