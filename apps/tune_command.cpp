@@ -142,10 +142,14 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
     }
     // The contact goal of the written gains (reported whether or not it was a hard goal).
     std::vector<controllers::PreparedJoint> contact_models = run.results[k].coupled_models;
-    controllers::LoopSetup goal_setup = setup;
-    goal_setup.grid_points = joint_options.grid_points;
-    for (const controllers::ModelVariation& v : run.results[k].model_set) {
-      contact_models.push_back(controllers::prepareVariation(models[k], q, goal_setup, v));
+    if (o.nonlinear_rounds > 0) {
+      contact_models.insert(contact_models.end(), hard[k].models.begin(), hard[k].models.end());
+    } else {
+      controllers::LoopSetup goal_setup = setup;
+      goal_setup.grid_points = joint_options.grid_points;
+      for (const controllers::ModelVariation& v : run.results[k].model_set) {
+        contact_models.push_back(controllers::prepareVariation(models[k], q, goal_setup, v));
+      }
     }
     run.contact[k] = controllers::evaluateCoupledContact(
         contact_models, o.nonlinear_rounds > 0 ? run.stages[k].gains : run.results[k].tuned,
@@ -183,6 +187,10 @@ nlohmann::json goalsJson(const controllers::GoalValues& v) {
           {"min_real_impedance_nms_per_rad", v.min_real_impedance},
           {"rms_user_torque_nm", v.rms_user_torque_nm},
           {"wall_stiffness_error", v.wall_error},
+          {"contact_spectral_radius", v.contact_spectral_radius},
+          {"contact_detector_score", v.contact_detector_score},
+          {"contact_mode_hz", v.contact_mode_hz},
+          {"contact_mode_decay_per_s", v.contact_mode_decay_per_s},
           {"hard", v.hard},
           {"soft", v.soft},
           {"feasible", v.feasible()}};
@@ -199,7 +207,8 @@ nlohmann::json contactJson(const controllers::CoupledGoal& c) {
 
 void addToReport(const TuneRun& run, reports::Report& report, const std::string& heading) {
   nlohmann::json joints = nlohmann::json::array();
-  for (const TuningResult& r : run.results) {
+  for (std::size_t k = 0; k < run.results.size(); ++k) {
+    const TuningResult& r = run.results[k];
     nlohmann::json models = nlohmann::json::array();
     for (const controllers::ModelVariation& v : r.model_set) {
       models.push_back({{"bulk_modulus_scale", v.bulk_modulus_scale},
@@ -220,7 +229,7 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
                       {"tuned_goals", goalsJson(r.tuned_goals)},
                       {"model_set", models},
                       {"nlopt_results", r.nlopt_results},
-                      {"contact_goal", contactJson(run.contact[joints.size()])}});
+                      {"contact_goal", contactJson(run.contact[k])}});
   }
   nlohmann::json stages = nlohmann::json::array();
   for (const controllers::NonlinearStageResult& st : run.stages) {

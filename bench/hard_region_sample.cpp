@@ -1,4 +1,5 @@
-// Diagnostic (issue 4, docs/analysis.md "SFE: the hard-feasible region, sampled"): is there a
+// Diagnostic (issue 4, docs/analysis.md "Contact damping (Eq. C6) and SFE's remaining conflict",
+// "The hard-feasible region, sampled"): is there a
 // point that meets every linear hard goal of `fullarm tune` and fails none of the nonlinear
 // stage's runs? A global, deterministic sample instead of the stage's local search.
 //
@@ -12,7 +13,9 @@
 // and scores those whose worst soft goal is at most X (default 80; the linear optimum's is about
 // 38, the shipped SFE gains' 67) on the stage's initial set (4 ring corners, 3 stress corners,
 // 16 draws of the stage's stream), stopping each at its first failed run. Prints one line per
-// scored point and a summary; exits 0.
+// scored point and a summary. Exit status 0; 2 for bad arguments; 1 when the configuration does
+// not load. A point whose goals cannot be evaluated (eigenvalues that do not converge) is counted
+// as unscorable, as the tuner treats it.
 
 #include <algorithm>
 #include <cmath>
@@ -20,6 +23,7 @@
 #include <cstdlib>
 #include <exception>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -145,7 +149,7 @@ int run(int argc, char** argv) {
       "B_o/eps [%g, %g], lambda [%g, %g]; %zu runs per point; contact goal %s\n",
       initial.name.c_str(), tr.feasible ? "feasible" : "infeasible", tr.tuned_goals.soft, lo[0], hi[0], lo[1], hi[1],
       lo[2], hi[2], lo[3], hi[3], lo[4], hi[4], set.size(), contact ? "hard" : "off");
-  long feasible = 0, scored = 0, passed = 0;
+  long feasible = 0, scored = 0, passed = 0, unscorable = 0;
   std::map<std::string, int> first_failures;
   for (long i = 1; i <= n_points; ++i) {
     double x[5];
@@ -156,7 +160,13 @@ int run(int argc, char** argv) {
     g.impedance = {x[0], x[1], x[2]};
     g.sliding_mode.lambda_per_s = x[4];
     g.sliding_mode.boundary_layer_radps = g.sliding_mode.valve_bound_v / x[3];
-    const fc::GoalValues v = fc::evaluateGoals(models, g, goals, tr.coupled_models);
+    fc::GoalValues v;
+    try {
+      v = fc::evaluateGoals(models, g, goals, tr.coupled_models);
+    } catch (const std::runtime_error&) {
+      ++unscorable;
+      continue;
+    }
     if (!v.feasible()) continue;
     ++feasible;
     if (v.soft > soft_max) continue;
@@ -173,8 +183,9 @@ int run(int argc, char** argv) {
                 x[0], x[1], x[2], x[3], x[4], v.peak_sensitivity, v.hard, v.soft,
                 ok ? "PASSES all runs" : "first failure: ", ok ? "" : why.c_str());
   }
-  std::printf("%ld points: %ld meet every hard goal, %ld of those with soft <= %g scored, %ld pass every run\n",
-              n_points, feasible, scored, soft_max, passed);
+  std::printf(
+      "%ld points: %ld meet every hard goal, %ld of those with soft <= %g scored, %ld pass every run; %ld unscorable\n",
+      n_points, feasible, scored, soft_max, passed, unscorable);
   for (const auto& [why, count] : first_failures) std::printf("  first failure %s: %d\n", why.c_str(), count);
   return 0;
 }

@@ -376,7 +376,8 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const Joint
   result.model_set = {nominal_variation};
   std::vector<PreparedJoint> models = {prepareVariation(nominal, q_rad, s, nominal_variation)};
   // The coupled grid of the validation box around the nominal plant (coupled_stability.hpp).
-  if (goals.coupled_hard) result.coupled_models = prepareCoupledGrid(nominal, q_rad, s, {nominal_variation}, ranges);
+  if (goals.coupled_hard || goals.contact_hard)
+    result.coupled_models = prepareCoupledGrid(nominal, q_rad, s, {nominal_variation}, ranges);
   const std::vector<PreparedJoint>& coupled = result.coupled_models;
 
   Search search;

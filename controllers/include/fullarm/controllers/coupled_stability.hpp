@@ -89,7 +89,7 @@ inline constexpr double kCoupledDampingFractions[] = {0.0, 1.0 / 16.0, 1.0};
 
 /// What the detector sees of a closed-loop mode over the free hold (closed_loop.hpp).
 struct DetectorModel {
-  double hold_s = 1.1;            ///< free-hold length (ScenarioTiming::free_hold_s)
+  double hold_s = 1.1;            ///< hold length (ScenarioTiming::free_hold_s; contact_hold_s for Eq. C6)
   double window_s = 0.5;          ///< detector window (ScenarioTiming::detect_window_s)
   double threshold_radps = 0.05;  ///< speed-deviation threshold
   double sustain_ratio = kOscillationSustainRatio;
@@ -144,7 +144,7 @@ struct ModalSpeed {
 /// The coupled goal of one gain set over a set of coupled models (free motion, each model's own
 /// user and delay).
 struct CoupledGoal {
-  double spectral_radius = 0.0;       ///< worst closed-loop spectral radius (free-position drift excluded)
+  double spectral_radius = 0.0;       ///< worst closed-loop spectral radius (drift excluded by evaluateCoupled only)
   ModeDecay slowest;                  ///< the slowest oscillatory mode over the set
   int worst_model = -1;               ///< index of the model with the slowest oscillatory mode
   double detector_score = 0.0;        ///< worst detectorModeScore() of any pole of any model
@@ -162,8 +162,8 @@ struct CoupledGoal {
 /// delay) held against `wall`, each mode scored by `contact_detector` (contactDetectorModelOf())
 /// with its V0 bound. Nothing is left out as drift (the wall restores the position): the
 /// spectral radius is the plain one. Measured on SFE (docs/analysis.md, "Contact damping"): the
-/// stiff users' contact oscillations of the nonlinear runs are the 1.8-2.2 Hz contact modes of
-/// this loop whose decay rate is below the detector's ln 2 / W.
+/// stiff users' contact oscillations of the nonlinear runs are the contact modes of
+/// this loop (1.9-2.4 Hz) whose decay rate is below the detector's ln 2 / W, or that grow.
 [[nodiscard]] CoupledGoal evaluateCoupledContact(const std::vector<PreparedJoint>& models, const JointGains& gains,
                                                  const VirtualWall& wall, const DetectorModel& contact_detector);
 
