@@ -3,12 +3,17 @@
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <thread>
+#include <utility>
 
 namespace fullarm::controllers {
 
-JobPool::JobPool(int threads) : threads_(threads) {
+JobPool::JobPool(int threads, ThreadStarter start_thread) : threads_(threads), start_thread_(std::move(start_thread)) {
   if (threads < 1) throw std::invalid_argument("JobPool: expected threads >= 1, got " + std::to_string(threads));
+  if (!start_thread_) {
+    start_thread_ = [](std::function<void()> body) { return std::thread(std::move(body)); };
+  }
 }
 
 int JobPool::available() const {
@@ -82,7 +87,13 @@ void JobPool::run(int jobs, const std::function<void(int)>& job) {
   // All threads start even with fewer jobs: the spare ones help with the jobs' fan-outs.
   const int extra = threads_ - 1;
   pool.reserve(static_cast<std::size_t>(extra));
-  for (int t = 0; t < extra; ++t) pool.emplace_back([this] { worker(); });
+  for (int t = 0; t < extra; ++t) {
+    try {
+      pool.push_back(start_thread_([this] { worker(); }));
+    } catch (const std::system_error&) {
+      break;  // the system refuses more threads: the workers started (and the caller) do all the work
+    }
+  }
   worker();
   for (std::thread& t : pool) t.join();
   std::exception_ptr error;

@@ -9,9 +9,14 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
+#include <mutex>
+#include <set>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace fullarm::controllers {
@@ -162,6 +167,39 @@ TEST(JobPool, TheLowestNumberedFailureIsReportedWhateverTheTiming) {
     }
   });
   EXPECT_EQ(message, "task 0");
+}
+
+// A system that refuses threads (std::system_error from the thread start, as std::thread throws
+// it): run() goes on with the workers it has, down to the caller alone, and every job and task
+// still runs exactly once, on no more threads than were started.
+TEST(JobPool, WhenTheSystemRefusesThreadsTheWorkersStartedDoAllTheWork) {
+  for (const int allowed : {0, 1}) {
+    int started = 0;
+    JobPool pool(4, [&](std::function<void()> body) {
+      if (started >= allowed) throw std::system_error(std::make_error_code(std::errc::resource_unavailable_try_again));
+      ++started;
+      return std::thread(std::move(body));
+    });
+    constexpr int kJobs = 6, kTasks = 5;
+    std::vector<std::atomic<int>> job_runs(kJobs), task_runs(kJobs * kTasks);
+    std::mutex ids_mutex;
+    std::set<std::thread::id> ids;
+    pool.run(kJobs, [&](int j) {
+      ++job_runs[static_cast<std::size_t>(j)];
+      pool.fanOut(kTasks, [&](int t) {
+        ++task_runs[static_cast<std::size_t>(j * kTasks + t)];
+        const std::lock_guard<std::mutex> lock(ids_mutex);
+        ids.insert(std::this_thread::get_id());
+      });
+    });
+    for (const auto& n : job_runs) EXPECT_EQ(n.load(), 1);
+    for (const auto& n : task_runs) EXPECT_EQ(n.load(), 1);
+    EXPECT_EQ(started, allowed);
+    EXPECT_LE(ids.size(), static_cast<std::size_t>(1 + allowed));
+    if (allowed == 0) {
+      EXPECT_EQ(*ids.begin(), std::this_thread::get_id());
+    }
+  }
 }
 
 }  // namespace

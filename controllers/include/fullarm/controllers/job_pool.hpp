@@ -13,6 +13,7 @@
 #include <exception>
 #include <functional>
 #include <mutex>
+#include <thread>
 #include <vector>
 
 namespace fullarm::controllers {
@@ -20,9 +21,15 @@ namespace fullarm::controllers {
 /// Worker threads for coarse jobs and the fine tasks they fan out.
 class JobPool {
  public:
+  /// Starts one worker thread running `body`; throws std::system_error when the system cannot
+  /// (std::thread's own contract). The default starts a std::thread.
+  using ThreadStarter = std::function<std::thread(std::function<void()> body)>;
+
   /// @param threads worker threads including the caller of run() (>= 1).
+  /// @param start_thread how run() starts its workers (empty: std::thread); a seam for the test of
+  ///        a system that refuses threads.
   /// @throws std::invalid_argument when threads < 1.
-  explicit JobPool(int threads);
+  explicit JobPool(int threads, ThreadStarter start_thread = {});
   JobPool(const JobPool&) = delete;
   JobPool& operator=(const JobPool&) = delete;
   ~JobPool() = default;
@@ -35,6 +42,8 @@ class JobPool {
   /// other jobs fan out. Returns when every job has returned; after all have ended, rethrows the
   /// exception of the lowest-numbered job that threw (not the first in time, so the error a caller
   /// sees does not depend on the thread count or timing). Not reentrant (call it from one thread, not from a job).
+  /// When the system refuses a thread (std::system_error), run() goes on with the workers it has
+  /// (at least the caller): the same results, later.
   void run(int jobs, const std::function<void(int)>& job);
 
   /// How many threads could run a fan-out now: 1 (the caller) + the workers waiting for work.
@@ -61,6 +70,7 @@ class JobPool {
   void runOneTask(Batch& b, std::unique_lock<std::mutex>& lock);
 
   int threads_ = 1;
+  ThreadStarter start_thread_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::vector<Batch*> open_;  // batches with unclaimed tasks, oldest first
