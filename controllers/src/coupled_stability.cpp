@@ -282,6 +282,17 @@ std::vector<ModalSpeed> modalHoldSpeeds(const PreparedJoint& m, const JointGains
 
 namespace {
 
+// Largest |z|; infinite when a pole is not finite (so that it cannot vanish in std::max).
+double largestModulus(const Eigen::VectorXcd& z) {
+  double largest = 0.0;
+  for (Eigen::Index k = 0; k < z.size(); ++k) {
+    const double r = std::abs(z[k]);
+    if (!std::isfinite(r)) return std::numeric_limits<double>::infinity();
+    largest = std::max(largest, r);
+  }
+  return largest;
+}
+
 // Scores the poles `z` of model `index` by the detector (each pole's own V0 from `amplitude`
 // when given, else detector.initial_speed_radps) into `g`: its spectral radius, slowest mode
 // and worst detector score. `drift_excluded`: a real pole within kDriftPoleTolerance of 1 is
@@ -297,12 +308,7 @@ void scorePoles(const Eigen::VectorXcd& z, const std::vector<double>* amplitude,
   // Spectral radius without the free-position drift (a real pole within kDriftPoleTolerance of
   // z = 1: with K_h = 0 the position has no restoring torque, and the residual slope of the
   // gravity compensation leaves it at |z| = 1 + 1e-7 or so, an e-folding time of hours).
-  double radius_max = 0.0;
-  for (Eigen::Index k = 0; k < z.size(); ++k) {
-    const double r = std::abs(z[k]);
-    radius_max = std::isfinite(r) ? std::max(radius_max, r) : std::numeric_limits<double>::infinity();
-  }
-  g.spectral_radius = std::max(g.spectral_radius, drift_excluded ? spectralRadiusWithoutDrift(z) : radius_max);
+  g.spectral_radius = std::max(g.spectral_radius, drift_excluded ? spectralRadiusWithoutDrift(z) : largestModulus(z));
   if (g.worst_model < 0 || d.decay_rate_per_s < g.slowest.decay_rate_per_s) {
     g.slowest = d;
     g.worst_model = index;
