@@ -196,6 +196,17 @@ nlohmann::json goalsJson(const controllers::GoalValues& v) {
           {"feasible", v.feasible()}};
 }
 
+// A sampled plant and user (a model of the set, or the sample of a failed run).
+nlohmann::json sampleJson(const controllers::MonteCarloSample& m) {
+  return {{"bulk_modulus_scale", m.bulk_modulus_scale},
+          {"valve_gain_scale", m.valve_gain_scale},
+          {"friction_scale", m.friction_scale},
+          {"inertia_scale", m.inertia_scale},
+          {"user_stiffness_nm_per_rad", m.user_stiffness_nm_per_rad},
+          {"user_damping_nms_per_rad", m.user_damping_nms_per_rad},
+          {"delay_samples", m.delay_samples}};
+}
+
 // The contact goal (Eq. C6) of the written gains: <= 1 met.
 nlohmann::json contactJson(const controllers::CoupledGoal& c) {
   return {{"value", controllers::coupledGoalValue(c)},
@@ -211,13 +222,7 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
     const TuningResult& r = run.results[k];
     nlohmann::json models = nlohmann::json::array();
     for (const controllers::ModelVariation& v : r.model_set) {
-      models.push_back({{"bulk_modulus_scale", v.bulk_modulus_scale},
-                        {"valve_gain_scale", v.valve_gain_scale},
-                        {"friction_scale", v.friction_scale},
-                        {"inertia_scale", v.inertia_scale},
-                        {"user_stiffness_nm_per_rad", v.user_stiffness_nm_per_rad},
-                        {"user_damping_nms_per_rad", v.user_damping_nms_per_rad},
-                        {"delay_samples", v.delay_samples}});
+      models.push_back(sampleJson(v));
     }
     joints.push_back({{"joint", r.joint},
                       {"feasible", r.feasible},
@@ -237,18 +242,9 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
       // Each failed run with its sample.
       nlohmann::json failed = nlohmann::json::array();
       for (const controllers::FailedRun& f : sc.failed_runs) {
-        const controllers::MonteCarloSample& m = f.sample;
-        const nlohmann::json entry = {{"set_index", f.set_index},
-                                      {"failure", f.failure},
-                                      {"sample",
-                                       {{"index", m.index},
-                                        {"bulk_modulus_scale", m.bulk_modulus_scale},
-                                        {"valve_gain_scale", m.valve_gain_scale},
-                                        {"friction_scale", m.friction_scale},
-                                        {"inertia_scale", m.inertia_scale},
-                                        {"user_stiffness_nm_per_rad", m.user_stiffness_nm_per_rad},
-                                        {"user_damping_nms_per_rad", m.user_damping_nms_per_rad},
-                                        {"delay_samples", m.delay_samples}}}};
+        nlohmann::json sample = sampleJson(f.sample);
+        sample["index"] = f.sample.index;
+        const nlohmann::json entry = {{"set_index", f.set_index}, {"failure", f.failure}, {"sample", sample}};
         failed.push_back(entry);
       }
       return nlohmann::json{{"failed_runs", failed},
