@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::app {
 
@@ -20,26 +20,26 @@ Eigen::VectorXd parseJointVector(std::string_view text, const arm::ArmModel& mod
     double v = 0.0;
     const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), v);
     if (ec != std::errc() || ptr != token.data() + token.size() || !std::isfinite(v)) {
-      throw arm::ConfigError({}, option,
-                             "element " + std::to_string(values.size()) + " is '" + std::string(token) +
-                                 "': expected a finite number in radians");
+      throw core::ConfigError({}, option,
+                              "element " + std::to_string(values.size()) + " is '" + std::string(token) +
+                                  "': expected a finite number in radians");
     }
     values.push_back(v);
     pos = end;
   }
   if (values.empty() || values.size() > static_cast<std::size_t>(model.numJoints())) {
-    throw arm::ConfigError({}, option,
-                           "expected 1 to " + std::to_string(model.numJoints()) + " joint angles in radians, got " +
-                               std::to_string(values.size()));
+    throw core::ConfigError({}, option,
+                            "expected 1 to " + std::to_string(model.numJoints()) + " joint angles in radians, got " +
+                                std::to_string(values.size()));
   }
   Eigen::VectorXd q = model.defaultPosture();
   for (std::size_t i = 0; i < values.size(); ++i) {
     const arm::Joint& j = model.joints[i];
     if (values[i] < j.limits.min_rad || values[i] > j.limits.max_rad) {
-      throw arm::ConfigError({}, option,
-                             "element " + std::to_string(i) + " (" + j.name + ") = " + std::to_string(values[i]) +
-                                 " rad is outside the joint range [" + std::to_string(j.limits.min_rad) + ", " +
-                                 std::to_string(j.limits.max_rad) + "] rad");
+      throw core::ConfigError({}, option,
+                              "element " + std::to_string(i) + " (" + j.name + ") = " + std::to_string(values[i]) +
+                                  " rad is outside the joint range [" + std::to_string(j.limits.min_rad) + ", " +
+                                  std::to_string(j.limits.max_rad) + "] rad");
     }
     q[static_cast<Eigen::Index>(i)] = values[i];
   }

@@ -14,6 +14,7 @@
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/core/data_paths.hpp"
 #include "fullarm/haptics/bullet_search.hpp"
 #include "fullarm/haptics/contact_forces.hpp"
 #include "fullarm/haptics/scene.hpp"
@@ -278,7 +279,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
 
 HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesystem::path& /*out_dir*/,
                                    reports::Report& report) {
-  const haptics::Scene scene = haptics::loadScene(haptics::defaultScenePath(kDemoScene));
+  const haptics::Scene scene = haptics::loadScene(core::defaultScenePath(kDemoScene));
   haptics::HapticsParams full_params = haptics::loadHapticsParams(haptics::defaultHapticsParamsPath());
   full_params.mode = haptics::RenderMode::kFullArm;
   haptics::HapticsParams hand_params = full_params;

@@ -28,7 +28,7 @@ CLI::App* addHapticsCommand(CLI::App& app, HapticsQueryOptions& options);
 /// Runs `fullarm haptics query`: prints the minima, the contact forces, the per-link contact
 /// records and the joint torques; with --out also summary.json and report.html.
 /// @return 0 (a query has no failing verdict), 1 if the contact computation flagged a fault.
-/// @throws arm::ConfigError / haptics::MeshError / std::runtime_error for bad input (exit 2).
+/// @throws core::ConfigError / haptics::MeshError / std::runtime_error for bad input (exit 2).
 int runHapticsQuery(const HapticsQueryOptions& options);
 
 /// Result of the demo's haptics step.
@@ -37,7 +37,7 @@ struct HapticsDemoStep {
   std::string detail;
 };
 
-/// The demo step: loads the shipped scene `valve_wall.yaml` (haptics::defaultScenePath), poses
+/// The demo step: loads the shipped scene `valve_wall.yaml` (core::defaultScenePath), poses
 /// `model` at the scene's `reach_valve` posture, runs the SNCH global search once and renders the
 /// minima in full-arm and in hand-only mode with the default haptics parameters; prints both,
 /// adds a section with the two modes side by side (minima and forces, joint torques, per-link
@@ -45,7 +45,7 @@ struct HapticsDemoStep {
 /// Passes when neither mode flags a contact fault, the search finds at least one minimum and
 /// every joint torque is finite. `out_dir` is unused (the step writes no file of its own) and
 /// kept for the runXDemoStep signature.
-/// @throws arm::ConfigError if the scene, its meshes or the haptics parameters are invalid.
+/// @throws core::ConfigError if the scene, its meshes or the haptics parameters are invalid.
 HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir,
                                    reports::Report& report);
 

@@ -10,8 +10,8 @@
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_scaling.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/controllers/gains.hpp"
+#include "fullarm/core/config_error.hpp"
 #include "fullarm/reports/report.hpp"
 #include "haptics_command.hpp"
 #include "plant_command.hpp"
@@ -207,7 +207,7 @@ int runMain(int argc, char** argv) {
     if (validate->parsed()) return app::runValidate(validate_options);
     if (tune->parsed()) return app::runTune(tune_options);
     if (haptics_query->parsed()) return app::runHapticsQuery(haptics_options);
-  } catch (const arm::ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     std::cerr << "fullarm: error: " << e.what() << "\n";
     return app::kExitBadInput;
   } catch (const std::exception& e) {

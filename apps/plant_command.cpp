@@ -13,7 +13,7 @@
 
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/plant_config.hpp"
 #include "fullarm/plant/signals.hpp"
@@ -224,7 +224,7 @@ int runPlantSimulate(const PlantSimulateOptions& o) {
     if (o.input_mode == "torque_loop") p.input_mode = plant::InputMode::kTorqueLoop;
   }
   if (o.stop_hz <= o.start_hz && (o.input == "chirp" || o.input == "multisine")) {
-    throw arm::ConfigError({}, "--stop-hz", "must be above --start-hz");
+    throw core::ConfigError({}, "--stop-hz", "must be above --start-hz");
   }
   // The command: a generated signal scaled per joint, or a CSV table.
   std::function<double(std::size_t, double)> command;

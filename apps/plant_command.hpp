@@ -34,7 +34,7 @@ CLI::App* addPlantCommand(CLI::App& app, PlantSimulateOptions& options);
 /// Runs `fullarm plant simulate`: CSV log(s), summary.json, report.html.
 /// @return 0 when the run passed (no solver failure, pressures within [return, supply] up to
 ///   the check-valve margin, stops not exceeded by more than 0.5 deg), 1 otherwise.
-/// @throws arm::ConfigError / std::runtime_error for bad input (exit code 2 in main).
+/// @throws core::ConfigError / std::runtime_error for bad input (exit code 2 in main).
 int runPlantSimulate(const PlantSimulateOptions& options);
 
 /// Result of the demo's plant step.

@@ -11,13 +11,13 @@
 
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/controllers/gains.hpp"
-#include "fullarm/controllers/job_pool.hpp"
 #include "fullarm/controllers/linear_analysis.hpp"
 #include "fullarm/controllers/nonlinear_stage.hpp"
 #include "fullarm/controllers/tuner.hpp"
 #include "fullarm/controllers/validation.hpp"
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/core/job_pool.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::app {
@@ -62,7 +62,7 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
                 const controllers::ValidationConfig& validation, std::vector<std::string> joints,
                 const TuneOptions& o) {
   if (gains.controller != controllers::ControllerKind::kAdmittance) {
-    throw arm::ConfigError(
+    throw core::ConfigError(
         gains.source, "controller",
         "fullarm tune tunes the admittance controller; got " + std::string(controllerKindName(gains.controller)));
   }
@@ -101,7 +101,7 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
   // of tune"). The stage takes its runs in set order, so its result is the sequential one.
   std::vector<controllers::JointScenario> scenarios(slots.size());
   std::vector<controllers::LinearHardGoals> hard(slots.size());
-  controllers::JobPool pool(o.threads);
+  core::JobPool pool(o.threads);
   pool.run(static_cast<int>(slots.size()), [&](int i) {
     const auto k = static_cast<std::size_t>(i);
     const JointGains& initial = gains.joints[static_cast<std::size_t>(slots[k])];

@@ -41,7 +41,7 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& options);
 /// Runs `fullarm tune`: gains.yaml (loadable by `validate`), summary.json, report.html.
 /// @return 0 when every tuned joint passed the nonlinear verification stage (or, with
 /// nonlinear_rounds = 0, met its linear hard goals), 1 otherwise.
-/// @throws arm::ConfigError / std::runtime_error for bad input (exit code 2 in main).
+/// @throws core::ConfigError / std::runtime_error for bad input (exit code 2 in main).
 int runTune(const TuneOptions& options);
 
 /// Result of the demo's tune step.

@@ -13,11 +13,11 @@
 
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/controllers/paper_claim.hpp"
 #include "fullarm/controllers/scenario_analysis.hpp"
 #include "fullarm/controllers/validation.hpp"
+#include "fullarm/core/config_error.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::app {

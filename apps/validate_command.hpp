@@ -32,7 +32,7 @@ CLI::App* addValidateCommand(CLI::App& app, ValidateOptions& options);
 /// Runs `fullarm validate`: per joint the linear checks, then the Monte-Carlo of nonlinear
 /// closed-loop simulations; summary.json and report.html in the output folder.
 /// @return 0 when every joint passes, 1 otherwise.
-/// @throws arm::ConfigError / std::runtime_error for bad input (exit code 2 in main).
+/// @throws core::ConfigError / std::runtime_error for bad input (exit code 2 in main).
 int runValidate(const ValidateOptions& options);
 
 /// Result of the demo's validate step.

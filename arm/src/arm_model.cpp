@@ -5,8 +5,8 @@
 #include <set>
 #include <sstream>
 
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/sensors.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::arm {
 namespace {
@@ -115,7 +115,7 @@ std::string checkInertia(double mass_kg, const Eigen::Matrix3d& I) {
 
 void validateArmModel(const ArmModel& model) {
   const auto fail = [&](const std::string& key, const std::string& message) {
-    throw ConfigError(model.source, key, message);
+    throw core::ConfigError(model.source, key, message);
   };
   const std::size_t n = model.joints.size();
   if (n == 0) fail("joints", "expected at least one joint");

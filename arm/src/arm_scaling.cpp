@@ -2,16 +2,16 @@
 
 #include <cmath>
 
-#include "fullarm/arm/config_error.hpp"
-#include "fullarm/arm/yaml_reader.hpp"
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/core/yaml_reader.hpp"
 
 namespace fullarm::arm {
 namespace {
 
 void requirePositive(const std::optional<double>& value, const char* field) {
   if (value && !(std::isfinite(*value) && *value > 0.0)) {
-    throw ConfigError({}, std::string("arm_size.") + field,
-                      "expected a finite value > 0, got " + std::to_string(*value));
+    throw core::ConfigError({}, std::string("arm_size.") + field,
+                            "expected a finite value > 0, got " + std::to_string(*value));
   }
 }
 
@@ -53,8 +53,8 @@ ArmModel scaleArm(const ArmModel& model, const ArmSize& size) {
                                const char* field) {
     if (!target) return;
     if (joint < 0 || !current || *current <= 0.0) {
-      throw ConfigError(model.source, std::string("arm_size.") + field,
-                        "the arm model declares no segment with a length to scale");
+      throw core::ConfigError(model.source, std::string("arm_size.") + field,
+                              "the arm model declares no segment with a length to scale");
     }
     scaleSegment(scaled, joint, *target / *current);
   };
@@ -63,7 +63,7 @@ ArmModel scaleArm(const ArmModel& model, const ArmSize& size) {
 
   if (size.hand_length_m) {
     if (!(*now.hand_length_m > 0.0)) {
-      throw ConfigError(model.source, "arm_size.hand_length_m", "the arm model's tool has zero length");
+      throw core::ConfigError(model.source, "arm_size.hand_length_m", "the arm model's tool has zero length");
     }
     const double s = *size.hand_length_m / *now.hand_length_m;
     scaled.X_LT.translation() *= s;
@@ -83,8 +83,8 @@ ArmModel scaleArm(const ArmModel& model, const ArmSize& size) {
 }
 
 ArmSize loadArmSize(const std::filesystem::path& file) {
-  const YamlMap root = YamlMap::load(file);
-  const YamlMap m = root.map("arm_size");
+  const core::YamlMap root = core::YamlMap::load(file);
+  const core::YamlMap m = root.map("arm_size");
   ArmSize size;
   size.upper_arm_length_m = m.optionalNumber("upper_arm_length_m", "metres");
   size.forearm_length_m = m.optionalNumber("forearm_length_m", "metres");

@@ -4,18 +4,9 @@
 #include <cstdlib>
 #include <numbers>
 
-#include "fullarm/arm/config_error.hpp"
-#include "fullarm/arm/yaml_reader.hpp"
-
-#ifndef FULLARM_SOURCE_CONFIG_DIR
-#error "FULLARM_SOURCE_CONFIG_DIR must be defined by the build"
-#endif
-#ifndef FULLARM_INSTALL_CONFIG_DIR
-#error "FULLARM_INSTALL_CONFIG_DIR must be defined by the build"
-#endif
-#ifndef FULLARM_INSTALL_PREFIX
-#error "FULLARM_INSTALL_PREFIX must be defined by the build"
-#endif
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/core/data_paths.hpp"
+#include "fullarm/core/yaml_reader.hpp"
 
 namespace fullarm::arm {
 namespace {
@@ -23,7 +14,7 @@ namespace {
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr int kSchemaVersion = 1;
 
-Eigen::Isometry3d readPose(const YamlMap& m) {
+Eigen::Isometry3d readPose(const core::YamlMap& m) {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.translation() = m.vector3("translation_m", "metres");
   const Eigen::Vector3d rpy = m.vector3("rpy_deg", "roll, pitch, yaw in degrees") * kDegToRad;
@@ -32,7 +23,7 @@ Eigen::Isometry3d readPose(const YamlMap& m) {
   return X;
 }
 
-LinkGeometry readGeometry(const YamlMap& m, const std::filesystem::path& file) {
+LinkGeometry readGeometry(const core::YamlMap& m, const std::filesystem::path& file) {
   LinkGeometry g;
   const std::string type = m.string("type");
   if (type == "none") {
@@ -57,11 +48,11 @@ LinkGeometry readGeometry(const YamlMap& m, const std::filesystem::path& file) {
   return g;
 }
 
-LinkInertial readInertial(const YamlMap& link) {
+LinkInertial readInertial(const core::YamlMap& link) {
   LinkInertial in;
   in.mass_kg = link.number("mass_kg", "kg");
   in.com_m = link.vector3("com_m", "metres, link frame");
-  const YamlMap I = link.map("inertia_kgm2");
+  const core::YamlMap I = link.map("inertia_kgm2");
   const double xx = I.number("xx", "kg m^2");
   const double yy = I.number("yy", "kg m^2");
   const double zz = I.number("zz", "kg m^2");
@@ -75,7 +66,7 @@ LinkInertial readInertial(const YamlMap& link) {
   return in;
 }
 
-ActuatorGeometry readActuator(const YamlMap& m) {
+ActuatorGeometry readActuator(const core::YamlMap& m) {
   ActuatorGeometry act;
   const std::string type = m.string("type");
   if (type == "rotary") {
@@ -93,8 +84,8 @@ ActuatorGeometry readActuator(const YamlMap& m) {
 }
 
 // The parts every joint has, arm or hand: limits, default, link, actuator, sensors.
-void readJointBody(const YamlMap& m, Joint& joint, const std::filesystem::path& file) {
-  const YamlMap lim = m.map("limits");
+void readJointBody(const core::YamlMap& m, Joint& joint, const std::filesystem::path& file) {
+  const core::YamlMap lim = m.map("limits");
   joint.limits.min_rad = lim.number("min_rad", "rad");
   joint.limits.max_rad = lim.number("max_rad", "rad");
   joint.limits.velocity_radps = lim.number("velocity_radps", "rad/s");
@@ -102,27 +93,27 @@ void readJointBody(const YamlMap& m, Joint& joint, const std::filesystem::path& 
   lim.finish();
   joint.default_rad = m.number("default_rad", "rad");
 
-  const YamlMap link = m.map("link");
+  const core::YamlMap link = m.map("link");
   joint.inertial = readInertial(link);
   joint.geometry = readGeometry(link.map("geometry"), file);
   link.finish();
 
   joint.actuator = readActuator(m.map("actuator"));
 
-  const YamlMap sensors = m.map("sensors");
-  const YamlMap pot = sensors.map("potentiometer");
+  const core::YamlMap sensors = m.map("sensors");
+  const core::YamlMap pot = sensors.map("potentiometer");
   joint.potentiometer.slope_rad_per_count = pot.number("slope_rad_per_count", "rad per count");
   joint.potentiometer.offset_counts = pot.number("offset_counts", "counts");
   joint.potentiometer.polarity = pot.integer("polarity");
   joint.potentiometer.joint_offset_rad = pot.number("joint_offset_rad", "rad");
   joint.potentiometer.bits = pot.integer("bits");
   pot.finish();
-  const YamlMap torque = sensors.map("torque");
+  const core::YamlMap torque = sensors.map("torque");
   joint.torque_sensor.slope_nm_per_count = torque.number("slope_nm_per_count", "N m per count");
   joint.torque_sensor.offset_counts = torque.number("offset_counts", "counts");
   joint.torque_sensor.bits = torque.integer("bits");
   torque.finish();
-  const YamlMap command = sensors.map("torque_command");
+  const core::YamlMap command = sensors.map("torque_command");
   joint.torque_command.slope_nm_per_count = command.number("slope_nm_per_count", "N m per count");
   joint.torque_command.offset_counts = command.number("offset_counts", "counts");
   joint.torque_command.bits = command.integer("bits");
@@ -130,14 +121,14 @@ void readJointBody(const YamlMap& m, Joint& joint, const std::filesystem::path& 
   sensors.finish();
 }
 
-int findJoint(const ArmModel& model, const YamlMap& m, std::string_view key) {
+int findJoint(const ArmModel& model, const core::YamlMap& m, std::string_view key) {
   const std::string name = m.string(key);
   const int index = model.jointIndex(name);
   if (index < 0) m.fail(key, "no joint named '" + name + "' (joints are listed before this key is used)");
   return index;
 }
 
-ArmModel buildModel(const YamlMap& root, const std::filesystem::path& source) {
+ArmModel buildModel(const core::YamlMap& root, const std::filesystem::path& source) {
   ArmModel model;
   model.source = source;
   const int version = root.integer("schema_version");
@@ -152,13 +143,13 @@ ArmModel buildModel(const YamlMap& root, const std::filesystem::path& source) {
   model.gravity_W_mps2 = root.vector3("gravity_mps2", "m/s^2, world frame");
   model.X_WB = readPose(root.map("base"));
 
-  const YamlList joints = root.list("joints");
+  const core::YamlList joints = root.list("joints");
   for (std::size_t i = 0; i < joints.size(); ++i) {
-    const YamlMap m = joints.map(i);
+    const core::YamlMap m = joints.map(i);
     Joint joint;
     joint.name = m.string("name");
     joint.parent = static_cast<int>(i) - 1;
-    const YamlMap dh = m.map("dh");
+    const core::YamlMap dh = m.map("dh");
     DhParameters p;
     p.alpha_rad = dh.number("alpha_deg", "degrees") * kDegToRad;
     p.a_m = dh.number("a_m", "metres");
@@ -174,7 +165,7 @@ ArmModel buildModel(const YamlMap& root, const std::filesystem::path& source) {
 
   if (const auto hand = root.optionalList("hand_joints")) {
     for (std::size_t i = 0; i < hand->size(); ++i) {
-      const YamlMap m = hand->map(i);
+      const core::YamlMap m = hand->map(i);
       Joint joint;
       joint.name = m.string("name");
       joint.is_hand = true;
@@ -186,14 +177,14 @@ ArmModel buildModel(const YamlMap& root, const std::filesystem::path& source) {
     }
   }
 
-  const YamlMap tool = root.map("tool");
+  const core::YamlMap tool = root.map("tool");
   model.tool_link = findJoint(model, tool, "link");
   model.X_LT.translation() = tool.vector3("translation_m", "metres");
   const Eigen::Vector3d rpy = tool.vector3("rpy_deg", "degrees") * kDegToRad;
   model.X_LT.linear() = rotationFromRpy(rpy.x(), rpy.y(), rpy.z());
   tool.finish();
 
-  const YamlMap segments = root.map("segments");
+  const core::YamlMap segments = root.map("segments");
   model.upper_arm_joint = findJoint(model, segments, "upper_arm_joint");
   model.forearm_joint = findJoint(model, segments, "forearm_joint");
   segments.finish();
@@ -205,13 +196,13 @@ ArmModel buildModel(const YamlMap& root, const std::filesystem::path& source) {
 
 namespace {
 
-ArmModel buildAndValidate(const YamlMap& root, const std::filesystem::path& source) {
+ArmModel buildAndValidate(const core::YamlMap& root, const std::filesystem::path& source) {
   ArmModel model = buildModel(root, source);
   try {
     validateArmModel(model);
-  } catch (const ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     // Semantic checks know the key path; find its line in the document.
-    throw ConfigError(e.file(), e.keyPath(), e.message(), lineOfKeyPath(root.node(), e.keyPath()));
+    throw core::ConfigError(e.file(), e.keyPath(), e.message(), core::lineOfKeyPath(root.node(), e.keyPath()));
   }
   return model;
 }
@@ -219,38 +210,27 @@ ArmModel buildAndValidate(const YamlMap& root, const std::filesystem::path& sour
 }  // namespace
 
 ArmModel parseArmModel(std::string_view yaml_text, const std::filesystem::path& source) {
-  return buildAndValidate(YamlMap::parse(yaml_text, source), source);
+  return buildAndValidate(core::YamlMap::parse(yaml_text, source), source);
 }
 
 ArmModel loadArmModel(const std::filesystem::path& file) {
-  return buildAndValidate(YamlMap::load(file), file);
+  return buildAndValidate(core::YamlMap::load(file), file);
 }
 
-std::filesystem::path defaultDataPath(std::string_view file_name, const char* env_var,
-                                      const std::filesystem::path& source_dir,
-                                      const std::filesystem::path& installed_dir) {
-  if (const char* dir = std::getenv(env_var); dir != nullptr && *dir != '\0') {
-    return std::filesystem::path(dir) / file_name;
+int findJointByName(const std::vector<std::string_view>& joint_names, std::string_view name,
+                    const std::filesystem::path& source) {
+  std::string known;
+  for (std::size_t i = 0; i < joint_names.size(); ++i) {
+    const std::string_view full = joint_names[i];
+    const std::string_view shortname = full.starts_with("R_") ? full.substr(2) : full;
+    if (name == full || name == shortname) return static_cast<int>(i);
+    known += (known.empty() ? "" : ", ") + std::string(shortname);
   }
-  const std::filesystem::path installed = installed_dir / file_name;
-  const std::filesystem::path source = source_dir / file_name;
-  // A program installed under the install prefix reads the installed file; anything else (the
-  // build tree's programs and tests) reads the source tree's, when that tree still exists.
-  std::error_code ec;
-  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  const std::string prefix = std::filesystem::path(FULLARM_INSTALL_PREFIX).lexically_normal().string() + "/";
-  const bool running_installed = !ec && exe.lexically_normal().string().rfind(prefix, 0) == 0;
-  if (!running_installed && std::filesystem::is_regular_file(source)) return source;
-  if (std::filesystem::is_regular_file(installed)) return installed;
-  return source;
-}
-
-std::filesystem::path defaultConfigPath(std::string_view file_name) {
-  return defaultDataPath(file_name, "FULLARM_CONFIG_DIR", FULLARM_SOURCE_CONFIG_DIR, FULLARM_INSTALL_CONFIG_DIR);
+  throw core::ConfigError(source, "joint", "unknown joint name '" + std::string(name) + "': expected one of " + known);
 }
 
 std::filesystem::path defaultArmModelPath() {
-  return defaultConfigPath("dts_master.yaml");
+  return core::defaultConfigPath("dts_master.yaml");
 }
 
 }  // namespace fullarm::arm

@@ -3,16 +3,16 @@
 #include <limits>
 #include <string>
 
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/dynamics.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::controllers {
 
 ArmControllerModel makeArmControllerModel(const GainsConfig& gains, const arm::ArmModel& model) {
   if (gains.joints.size() > static_cast<std::size_t>(kMaxControlledJoints)) {
-    throw arm::ConfigError(gains.source, "joints",
-                           "expected at most " + std::to_string(kMaxControlledJoints) + " joints, got " +
-                               std::to_string(gains.joints.size()));
+    throw core::ConfigError(gains.source, "joints",
+                            "expected at most " + std::to_string(kMaxControlledJoints) + " joints, got " +
+                                std::to_string(gains.joints.size()));
   }
   ArmControllerModel c;
   c.num_joints = static_cast<int>(gains.joints.size());
@@ -20,8 +20,8 @@ ArmControllerModel makeArmControllerModel(const GainsConfig& gains, const arm::A
     const JointGains& g = gains.joints[i];
     const int index = model.jointIndex(g.name);
     if (index < 0 || model.joints[static_cast<std::size_t>(index)].is_hand) {
-      throw arm::ConfigError(gains.source, "joints[" + std::to_string(i) + "].name",
-                             "'" + g.name + "' is not an arm joint of model " + model.name);
+      throw core::ConfigError(gains.source, "joints[" + std::to_string(i) + "].name",
+                              "'" + g.name + "' is not an arm joint of model " + model.name);
     }
     c.model_index[i] = index;
     c.joints[i] = makeJointControllerModel(g, gains.controller, gains.control_period_s);

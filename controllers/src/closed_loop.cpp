@@ -6,8 +6,8 @@
 #include <numbers>
 
 #include "fullarm/arm/arm_data.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/dynamics.hpp"
+#include "fullarm/core/config_error.hpp"
 #include "fullarm/plant/hydraulics.hpp"
 
 namespace fullarm::controllers {
@@ -143,7 +143,8 @@ JointScenario makeJointScenario(const arm::ArmModel& model, const plant::PlantCo
       plant_config.joints[static_cast<std::size_t>(plant::findPlantJoint(plant_config, name))];
   const JointGains& g = gains.joints[static_cast<std::size_t>(findGainsJoint(gains, joint.name))];
   const int index = model.jointIndex(joint.name);
-  if (index < 0) throw arm::ConfigError(plant_config.source, "joints", "joint " + joint.name + " not in the arm model");
+  if (index < 0)
+    throw core::ConfigError(plant_config.source, "joints", "joint " + joint.name + " not in the arm model");
   sc.joint_name = joint.name;
   sc.joint = joint;
   sc.solver = plant_config.solver;

@@ -7,13 +7,12 @@
 #include <vector>
 
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/config_error.hpp"
-#include "fullarm/arm/yaml_reader.hpp"
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/core/data_paths.hpp"
+#include "fullarm/core/yaml_reader.hpp"
 
 namespace fullarm::controllers {
 namespace {
-
-using arm::YamlMap;
 
 constexpr int kSchemaVersion = 1;
 constexpr double kMinPeriodS = 1.0e-5;
@@ -29,37 +28,37 @@ std::string joinKey(const std::string& prefix, const std::string& key) {
   return prefix.empty() ? key : prefix + "." + key;
 }
 
-bool readBool(const YamlMap& m, std::string_view key) {
+bool readBool(const core::YamlMap& m, std::string_view key) {
   const std::string v = m.string(key);
   if (v == "true") return true;
   if (v == "false") return false;
   m.fail(key, "'" + v + "': expected true or false");
 }
 
-JointGains readJoint(const YamlMap& m) {
+JointGains readJoint(const core::YamlMap& m) {
   JointGains g;
   g.name = m.string("name");
 
-  const YamlMap imp = m.map("impedance");
+  const core::YamlMap imp = m.map("impedance");
   g.impedance.inertia_kgm2 = imp.number("inertia_kgm2", "kg m^2");
   g.impedance.damping_nms_per_rad = imp.number("damping_nms_per_rad", "N m s/rad");
   g.impedance.stiffness_nm_per_rad = imp.number("stiffness_nm_per_rad", "N m/rad");
   imp.finish();
 
-  const YamlMap sm = m.map("sliding_mode");
+  const core::YamlMap sm = m.map("sliding_mode");
   g.sliding_mode.lambda_per_s = sm.number("lambda_per_s", "1/s");
   g.sliding_mode.valve_bound_v = sm.number("valve_bound_v", "V");
   g.sliding_mode.boundary_layer_radps = sm.number("boundary_layer_radps", "rad/s");
   sm.finish();
 
-  const YamlMap pid = m.map("torque_pid");
+  const core::YamlMap pid = m.map("torque_pid");
   g.torque_pid.kp_v_per_nm = pid.number("kp_v_per_nm", "V per N m");
   g.torque_pid.ki_v_per_nms = pid.number("ki_v_per_nms", "V per N m s");
   g.torque_pid.kd_vs_per_nm = pid.number("kd_vs_per_nm", "V s per N m");
   g.torque_pid.integral_limit_v = pid.number("integral_limit_v", "V");
   pid.finish();
 
-  const YamlMap po = m.map("passivity");
+  const core::YamlMap po = m.map("passivity");
   g.passivity.enabled = readBool(po, "enabled");
   g.passivity.max_damping_nms_per_rad = po.number("max_damping_nms_per_rad", "N m s/rad");
   g.passivity.velocity_threshold_radps = po.number("velocity_threshold_radps", "rad/s");
@@ -72,7 +71,7 @@ JointGains readJoint(const YamlMap& m) {
   return g;
 }
 
-GainsConfig build(const YamlMap& root, const std::filesystem::path& source, const arm::ArmModel& model) {
+GainsConfig build(const core::YamlMap& root, const std::filesystem::path& source, const arm::ArmModel& model) {
   GainsConfig config;
   config.source = source;
   if (root.integer("schema_version") != kSchemaVersion) root.fail("schema_version", "expected 1");
@@ -90,10 +89,10 @@ GainsConfig build(const YamlMap& root, const std::filesystem::path& source, cons
                                       show(kMinPeriodS) + ", " + show(kMaxPeriodS) + "] s");
   }
 
-  const arm::YamlList joints = root.list("joints");
+  const core::YamlList joints = root.list("joints");
   if (joints.size() == 0) root.fail("joints", "expected at least one joint");
   for (std::size_t i = 0; i < joints.size(); ++i) {
-    const YamlMap jm = joints.map(i);
+    const core::YamlMap jm = joints.map(i);
     JointGains g = readJoint(jm);
     const int index = model.jointIndex(g.name);
     if (index < 0) {
@@ -123,7 +122,7 @@ GainsConfig build(const YamlMap& root, const std::filesystem::path& source, cons
 void validateJointGains(const JointGains& g, double control_period_s, const std::string& file,
                         const std::string& key_path) {
   auto fail = [&](const std::string& key, const std::string& message) {
-    throw arm::ConfigError(file, joinKey(key_path, key), message);
+    throw core::ConfigError(file, joinKey(key_path, key), message);
   };
   auto positive = [&](const std::string& key, double v, const char* what) {
     if (!(std::isfinite(v) && v > 0.0)) fail(key, "value " + show(v) + ": expected " + what + " > 0");
@@ -164,13 +163,13 @@ void validateJointGains(const JointGains& g, double control_period_s, const std:
 
 GainsConfig parseGainsConfig(std::string_view yaml_text, const std::filesystem::path& source,
                              const arm::ArmModel& model) {
-  const YamlMap root = YamlMap::parse(yaml_text, source);
-  return arm::withKeyPathLines(root, [&] { return build(root, source, model); });
+  const core::YamlMap root = core::YamlMap::parse(yaml_text, source);
+  return core::withKeyPathLines(root, [&] { return build(root, source, model); });
 }
 
 GainsConfig loadGainsConfig(const std::filesystem::path& file, const arm::ArmModel& model) {
-  const YamlMap root = YamlMap::load(file);
-  return arm::withKeyPathLines(root, [&] { return build(root, file, model); });
+  const core::YamlMap root = core::YamlMap::load(file);
+  return core::withKeyPathLines(root, [&] { return build(root, file, model); });
 }
 
 std::string formatGainsYaml(const GainsConfig& config) {
@@ -203,11 +202,11 @@ std::string formatGainsYaml(const GainsConfig& config) {
 }
 
 std::filesystem::path defaultGainsConfigPath() {
-  return arm::defaultConfigPath("dts_gains.yaml");
+  return core::defaultConfigPath("dts_gains.yaml");
 }
 
 std::filesystem::path defaultTuneStartGainsPath() {
-  return arm::defaultConfigPath("dts_tune_start.yaml");
+  return core::defaultConfigPath("dts_tune_start.yaml");
 }
 
 int findGainsJoint(const GainsConfig& config, std::string_view name) {

@@ -5,7 +5,7 @@
 #include <numbers>
 #include <unsupported/Eigen/MatrixFunctions>
 
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::controllers {
 namespace {

@@ -8,9 +8,9 @@
 #include <string>
 
 #include "fullarm/arm/arm_data.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/core/config_error.hpp"
 #include "fullarm/plant/hydraulics.hpp"
 
 namespace fullarm::controllers {
@@ -186,10 +186,10 @@ double stribeckWorstSlope(const plant::FrictionParams& f) noexcept {
 JointLoad jointLoadFromArm(const arm::ArmModel& model, const plant::UserArmParams& user, int joint_index,
                            const Eigen::VectorXd& posture) {
   if (joint_index < 0 || joint_index >= model.numJoints()) {
-    throw arm::ConfigError(model.source, "joint", "joint index " + std::to_string(joint_index) + " out of range");
+    throw core::ConfigError(model.source, "joint", "joint index " + std::to_string(joint_index) + " out of range");
   }
   if (posture.size() != model.numJoints()) {
-    throw arm::ConfigError(model.source, "posture", "expected " + std::to_string(model.numJoints()) + " joint angles");
+    throw core::ConfigError(model.source, "posture", "expected " + std::to_string(model.numJoints()) + " joint angles");
   }
   const AxisLoad device = axisLoad(model, joint_index, posture);
   JointLoad load;

@@ -8,22 +8,14 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "fullarm/core/random.hpp"
+
 namespace fullarm::controllers {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Salt of the stage's sample stream: the tuner never sees the draws of `validate` (seed, joint).
 constexpr std::uint64_t kStageSalt = 0x74756e652d6e6c31ULL;  // "tune-nl1"
-
-// FNV-1a of the joint name (a slot of its own, independent of the other joints).
-int nameSlot(const std::string& name) noexcept {
-  std::uint32_t h = 2166136261u;
-  for (const char c : name) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 16777619u;
-  }
-  return static_cast<int>(h & 0x7fffffffu);
-}
 
 struct Point {
   double log_damping = 0.0;    // log10 B_m
@@ -104,7 +96,7 @@ constexpr int kCornerIndex = 1000000;
 // would otherwise idle).
 struct RunSpread {
   int threads = 1;
-  JobPool* pool = nullptr;
+  core::JobPool* pool = nullptr;
   [[nodiscard]] std::size_t blockSize() const {
     return static_cast<std::size_t>(pool != nullptr ? pool->available() : std::max(threads, 1));
   }
@@ -180,13 +172,14 @@ std::vector<MonteCarloSample> stageSamples(const UncertaintyRanges& ranges, std:
                                            const std::string& joint_name, int first, int count) {
   std::vector<MonteCarloSample> out;
   out.reserve(static_cast<std::size_t>(std::max(count, 0)));
-  for (int i = 0; i < count; ++i) out.push_back(drawSample(ranges, seed ^ kStageSalt, nameSlot(joint_name), first + i));
+  for (int i = 0; i < count; ++i)
+    out.push_back(drawSample(ranges, seed ^ kStageSalt, core::nameSlot(joint_name), first + i));
   return out;
 }
 
 NonlinearScore scoreNonlinear(const JointScenario& scenario, const JointGains& gains,
                               const std::vector<MonteCarloSample>& set, const LinearRequirements& req, int max_delay,
-                              int failure_cap, const LinearHardGoals* hard_goals, int threads, JobPool* pool,
+                              int failure_cap, const LinearHardGoals* hard_goals, int threads, core::JobPool* pool,
                               bool reject_hard_violation) {
   NonlinearScore s;
   JointScenario sc = scenario;

@@ -9,14 +9,14 @@
 #include <thread>
 
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/config_error.hpp"
-#include "fullarm/arm/yaml_reader.hpp"
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/core/data_paths.hpp"
+#include "fullarm/core/random.hpp"
+#include "fullarm/core/yaml_reader.hpp"
 #include "fullarm/plant/joint_params.hpp"
 
 namespace fullarm::controllers {
 namespace {
-
-using arm::YamlMap;
 
 constexpr int kSchemaVersion = 1;
 constexpr int kMaxSamples = 1000000;
@@ -29,8 +29,8 @@ std::string show(double v) {
 }
 
 // A {min, max} map with lo <= min <= max <= hi.
-UniformRange readRange(const YamlMap& parent, std::string_view key, double lo, double hi, std::string_view unit) {
-  const YamlMap m = parent.map(key);
+UniformRange readRange(const core::YamlMap& parent, std::string_view key, double lo, double hi, std::string_view unit) {
+  const core::YamlMap m = parent.map(key);
   UniformRange r{m.number("min", unit), m.number("max", unit)};
   m.finish();
   if (!(r.min >= lo && r.min <= hi)) {
@@ -42,14 +42,14 @@ UniformRange readRange(const YamlMap& parent, std::string_view key, double lo, d
   return r;
 }
 
-bool readBool(const YamlMap& m, std::string_view key) {
+bool readBool(const core::YamlMap& m, std::string_view key) {
   const std::string v = m.string(key);
   if (v == "true") return true;
   if (v == "false") return false;
   m.fail(key, "'" + v + "': expected true or false");
 }
 
-ValidationConfig build(const YamlMap& root, const std::filesystem::path& source) {
+ValidationConfig build(const core::YamlMap& root, const std::filesystem::path& source) {
   ValidationConfig c;
   c.source = source;
   if (root.integer("schema_version") != kSchemaVersion) root.fail("schema_version", "expected 1");
@@ -61,7 +61,7 @@ ValidationConfig build(const YamlMap& root, const std::filesystem::path& source)
   if (seed < 0) root.fail("seed", "expected a seed >= 0");
   c.seed = static_cast<std::uint64_t>(seed);
 
-  const YamlMap user = root.map("user");
+  const core::YamlMap user = root.map("user");
   c.user.stiffness_nm_per_rad = user.number("stiffness_nm_per_rad", "N m/rad");
   c.user.damping_nms_per_rad = user.number("damping_nms_per_rad", "N m s/rad");
   c.user.inertia_kgm2 = user.number("inertia_kgm2", "kg m^2");
@@ -72,7 +72,7 @@ ValidationConfig build(const YamlMap& root, const std::filesystem::path& source)
   }
   user.finish();
 
-  const YamlMap wall = root.map("wall");
+  const core::YamlMap wall = root.map("wall");
   c.wall.enabled = true;
   c.wall.stiffness_nm_per_rad = wall.number("stiffness_nm_per_rad", "N m/rad");
   c.wall.damping_nms_per_rad = wall.number("damping_nms_per_rad", "N m s/rad");
@@ -83,7 +83,7 @@ ValidationConfig build(const YamlMap& root, const std::filesystem::path& source)
   c.oscillation_speed_radps = root.number("oscillation_speed_radps", "rad/s");
   if (!(c.oscillation_speed_radps > 0.0)) root.fail("oscillation_speed_radps", "expected a threshold > 0");
 
-  const YamlMap lin = root.map("linear");
+  const core::YamlMap lin = root.map("linear");
   c.linear.max_peak_sensitivity = lin.number("max_peak_sensitivity");
   if (!(c.linear.max_peak_sensitivity > 1.0)) lin.fail("max_peak_sensitivity", "expected a bound > 1");
   c.linear.gate_peak_sensitivity = readBool(lin, "gate_peak_sensitivity");
@@ -91,7 +91,7 @@ ValidationConfig build(const YamlMap& root, const std::filesystem::path& source)
   c.linear.gate_passivity = readBool(lin, "gate_passivity");
   lin.finish();
 
-  const YamlMap u = root.map("uncertainty");
+  const core::YamlMap u = root.map("uncertainty");
   UncertaintyRanges& r = c.ranges;
   r.bulk_modulus_scale = readRange(u, "bulk_modulus_scale", 0.05, 20.0, "factor");
   r.valve_gain_scale = readRange(u, "valve_gain_scale", 0.05, 20.0, "factor");
@@ -99,7 +99,7 @@ ValidationConfig build(const YamlMap& root, const std::filesystem::path& source)
   r.inertia_scale = readRange(u, "inertia_scale", 0.05, 20.0, "factor");
   r.user_stiffness_nm_per_rad = readRange(u, "user_stiffness_nm_per_rad", 0.0, 1e5, "N m/rad");
   r.user_damping_nms_per_rad = readRange(u, "user_damping_nms_per_rad", 0.0, 1e4, "N m s/rad");
-  const YamlMap d = u.map("delay_samples");
+  const core::YamlMap d = u.map("delay_samples");
   r.delay_min_samples = d.integer("min");
   r.delay_max_samples = d.integer("max");
   d.finish();
@@ -114,67 +114,35 @@ ValidationConfig build(const YamlMap& root, const std::filesystem::path& source)
   return c;
 }
 
-ValidationConfig withLines(const YamlMap& root, const std::filesystem::path& source) {
-  return arm::withKeyPathLines(root, [&] { return build(root, source); });
-}
-
-// SplitMix64 (Steele, Lea & Flood 2014): a counter-based stream per (seed, joint, run).
-std::uint64_t splitMix(std::uint64_t& state) noexcept {
-  std::uint64_t z = (state += 0x9e3779b97f4a7c15ULL);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
-double uniform01(std::uint64_t& state) noexcept {
-  return static_cast<double>(splitMix(state) >> 11) * 0x1.0p-53;  // [0, 1)
-}
-
-double draw(std::uint64_t& state, const UniformRange& r) noexcept {
-  return r.min + (r.max - r.min) * uniform01(state);
-}
-
-// FNV-1a of the joint name: the joint's stream does not depend on which joints are validated.
-int jointSlot(const std::string& name) noexcept {
-  std::uint32_t h = 2166136261u;
-  for (const char c : name) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 16777619u;
-  }
-  return static_cast<int>(h & 0x7fffffffu);
+ValidationConfig withLines(const core::YamlMap& root, const std::filesystem::path& source) {
+  return core::withKeyPathLines(root, [&] { return build(root, source); });
 }
 
 }  // namespace
 
 ValidationConfig parseValidationConfig(std::string_view yaml_text, const std::filesystem::path& source) {
-  return withLines(YamlMap::parse(yaml_text, source), source);
+  return withLines(core::YamlMap::parse(yaml_text, source), source);
 }
 
 ValidationConfig loadValidationConfig(const std::filesystem::path& file) {
-  return withLines(YamlMap::load(file), file);
+  return withLines(core::YamlMap::load(file), file);
 }
 
 std::filesystem::path defaultValidationConfigPath() {
-  return arm::defaultConfigPath("dts_validation.yaml");
+  return core::defaultConfigPath("dts_validation.yaml");
 }
 
 MonteCarloSample drawSample(const UncertaintyRanges& r, std::uint64_t seed, int joint_slot, int index) noexcept {
-  std::uint64_t state = seed;
-  (void)splitMix(state);
-  state ^= 0x632be59bd9b4e019ULL * static_cast<std::uint64_t>(joint_slot + 1);
-  (void)splitMix(state);
-  state ^= 0x8cb92ba72f3d8dd7ULL * static_cast<std::uint64_t>(index + 1);
+  core::RandomStream stream(seed, static_cast<std::uint64_t>(joint_slot), static_cast<std::uint64_t>(index));
   MonteCarloSample s;
   s.index = index;
-  s.bulk_modulus_scale = draw(state, r.bulk_modulus_scale);
-  s.valve_gain_scale = draw(state, r.valve_gain_scale);
-  s.friction_scale = draw(state, r.friction_scale);
-  s.inertia_scale = draw(state, r.inertia_scale);
-  s.user_stiffness_nm_per_rad = draw(state, r.user_stiffness_nm_per_rad);
-  s.user_damping_nms_per_rad = draw(state, r.user_damping_nms_per_rad);
-  const int span = r.delay_max_samples - r.delay_min_samples + 1;
-  s.delay_samples = r.delay_min_samples + static_cast<int>(uniform01(state) * span);
-  if (s.delay_samples > r.delay_max_samples) s.delay_samples = r.delay_max_samples;
+  s.bulk_modulus_scale = stream.uniform(r.bulk_modulus_scale.min, r.bulk_modulus_scale.max);
+  s.valve_gain_scale = stream.uniform(r.valve_gain_scale.min, r.valve_gain_scale.max);
+  s.friction_scale = stream.uniform(r.friction_scale.min, r.friction_scale.max);
+  s.inertia_scale = stream.uniform(r.inertia_scale.min, r.inertia_scale.max);
+  s.user_stiffness_nm_per_rad = stream.uniform(r.user_stiffness_nm_per_rad.min, r.user_stiffness_nm_per_rad.max);
+  s.user_damping_nms_per_rad = stream.uniform(r.user_damping_nms_per_rad.min, r.user_damping_nms_per_rad.max);
+  s.delay_samples = stream.uniformInt(r.delay_min_samples, r.delay_max_samples);
   return s;
 }
 
@@ -248,7 +216,8 @@ std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nom
     const int j = job / per_joint;
     const int i = job % per_joint;
     MonteCarloRun& run = out[static_cast<std::size_t>(j)].runs[static_cast<std::size_t>(i)];
-    run.sample = drawSample(config.ranges, config.seed, jointSlot(bases[static_cast<std::size_t>(j)].joint_name), i);
+    run.sample =
+        drawSample(config.ranges, config.seed, core::nameSlot(bases[static_cast<std::size_t>(j)].joint_name), i);
     run.result = simulateJoint(applySample(bases[static_cast<std::size_t>(j)], run.sample));
     run.severity = runSeverity(run.result, config.oscillation_speed_radps);
   });

@@ -4,9 +4,10 @@
 #include <cmath>
 
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/dynamics.hpp"
-#include "fullarm/arm/yaml_reader.hpp"
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/core/data_paths.hpp"
+#include "fullarm/core/yaml_reader.hpp"
 
 namespace fullarm::haptics {
 
@@ -15,7 +16,7 @@ using Eigen::Vector3d;
 namespace {
 
 void require(bool ok, const std::filesystem::path& file, const char* key, const std::string& message) {
-  if (!ok) throw arm::ConfigError(file, key, message);
+  if (!ok) throw core::ConfigError(file, key, message);
 }
 
 }  // namespace
@@ -44,7 +45,7 @@ void validateHapticsParams(const HapticsParams& p, const std::filesystem::path& 
 
 namespace {
 
-HapticsParams readHapticsParams(const arm::YamlMap& root) {
+HapticsParams readHapticsParams(const core::YamlMap& root) {
   const std::filesystem::path& file = root.file();
   HapticsParams p;
   const std::string mode = root.string("mode");
@@ -55,7 +56,7 @@ HapticsParams readHapticsParams(const arm::YamlMap& root) {
   } else {
     root.fail("mode", "expected full_arm or hand_only, got '" + mode + "'");
   }
-  const arm::YamlMap c = root.map("contact");
+  const core::YamlMap c = root.map("contact");
   p.stiffness_npm = c.number("stiffness_npm", "N/m");
   p.damping_nspm = c.number("damping_nspm", "N s/m");
   p.force_threshold_m = c.number("force_threshold_m", "metres");
@@ -67,7 +68,7 @@ HapticsParams readHapticsParams(const arm::YamlMap& root) {
   p.patch_radius_m = c.number("patch_radius_m", "metres");
   p.max_force_per_minimum_n = c.number("max_force_per_minimum_n", "N");
   c.finish();
-  const arm::YamlMap d = root.map("local_descent");
+  const core::YamlMap d = root.map("local_descent");
   p.descent.max_iterations = d.integer("max_iterations");
   p.descent.min_decrease_m = d.number("min_decrease_m", "metres");
   if (const auto drop = d.optionalNumber("drop_beyond_m", "metres")) p.descent.drop_beyond_m = *drop;
@@ -80,15 +81,15 @@ HapticsParams readHapticsParams(const arm::YamlMap& root) {
 }  // namespace
 
 HapticsParams parseHapticsParams(std::string_view yaml_text, const std::filesystem::path& file) {
-  return readHapticsParams(arm::YamlMap::parse(yaml_text, file));
+  return readHapticsParams(core::YamlMap::parse(yaml_text, file));
 }
 
 std::filesystem::path defaultHapticsParamsPath() {
-  return arm::defaultConfigPath("haptics.yaml");
+  return core::defaultConfigPath("haptics.yaml");
 }
 
 HapticsParams loadHapticsParams(const std::filesystem::path& file) {
-  return readHapticsParams(arm::YamlMap::load(file));
+  return readHapticsParams(core::YamlMap::load(file));
 }
 
 ContactData::ContactData(const arm::ArmModel& model, int max_minima)

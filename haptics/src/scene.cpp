@@ -9,8 +9,8 @@
 #include <utility>
 
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/config_error.hpp"
-#include "fullarm/arm/yaml_reader.hpp"
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/core/yaml_reader.hpp"
 #include "fullarm/haptics/mesh_import.hpp"
 #include "fullarm/haptics/primitives.hpp"
 
@@ -21,7 +21,7 @@ constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr int kSchemaVersion = 1;
 
 // {translation_m: [x, y, z], rpy_deg: [roll, pitch, yaw]} (rpy optional, default zero).
-Eigen::Isometry3d readPose(const arm::YamlMap& m) {
+Eigen::Isometry3d readPose(const core::YamlMap& m) {
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.translation() = m.vector3("translation_m", "metres");
   if (m.has("rpy_deg")) {
@@ -54,7 +54,7 @@ class SceneReader {
  public:
   explicit SceneReader(std::filesystem::path file) : file_(std::move(file)) {}
 
-  Scene read(const arm::YamlMap& root) {
+  Scene read(const core::YamlMap& root) {
     Scene scene;
     scene.source = file_;
     const int version = root.integer("schema_version");
@@ -64,11 +64,11 @@ class SceneReader {
     scene.name = root.string("name");
     scene.description = root.optionalString("description").value_or("");
     readArm(root.map("arm"), scene);
-    const arm::YamlList objects = root.list("objects");
+    const core::YamlList objects = root.list("objects");
     if (objects.size() == 0) root.fail("objects", "expected at least one object");
     scene.objects.reserve(objects.size());
     for (std::size_t i = 0; i < objects.size(); ++i) {
-      const arm::YamlMap object = objects.map(i);
+      const core::YamlMap object = objects.map(i);
       scene.objects.push_back(readObject(object));
       if (scene.objectIndex(scene.objects.back().name) != static_cast<int>(scene.objects.size()) - 1) {
         object.fail("name", "duplicate object name '" + scene.objects.back().name + "' (names must be unique)");
@@ -79,12 +79,12 @@ class SceneReader {
   }
 
  private:
-  void readArm(const arm::YamlMap& m, Scene& scene) {
+  void readArm(const core::YamlMap& m, Scene& scene) {
     scene.shoulder_S_m = m.vector3("shoulder_m", "metres, scene frame");
     scene.heading_rad = m.optionalNumber("heading_deg", "degrees").value_or(0.0) * kDegToRad;
     if (const auto postures = m.optionalList("postures")) {
       for (std::size_t i = 0; i < postures->size(); ++i) {
-        const arm::YamlMap p = postures->map(i);
+        const core::YamlMap p = postures->map(i);
         ScenePosture posture;
         posture.name = p.string("name");
         (void)p.list("q_rad");  // marks the key read and checks that it is a list
@@ -106,7 +106,7 @@ class SceneReader {
     m.finish();
   }
 
-  SceneObject readObject(const arm::YamlMap& m) {
+  SceneObject readObject(const core::YamlMap& m) {
     SceneObject object;
     object.name = m.string("name");
     object.X_SO = readPose(m.map("pose"));
@@ -115,7 +115,7 @@ class SceneReader {
     return object;
   }
 
-  void readShape(const arm::YamlMap& m, SceneObject& object) {
+  void readShape(const core::YamlMap& m, SceneObject& object) {
     const std::string type = m.string("type");
     try {
       if (type == "mesh") {
@@ -173,7 +173,7 @@ class SceneReader {
     }
   }
 
-  void readMesh(const arm::YamlMap& m, SceneObject& object) {
+  void readMesh(const core::YamlMap& m, SceneObject& object) {
     const std::filesystem::path relative = m.string("file");
     MeshImportOptions options;
     options.scale = m.optionalNumber("scale", "metres per file unit").value_or(1.0);
@@ -234,11 +234,11 @@ long Scene::numTriangles() const noexcept {
 }
 
 Scene parseScene(std::string_view yaml_text, const std::filesystem::path& file) {
-  return SceneReader(file).read(arm::YamlMap::parse(yaml_text, file));
+  return SceneReader(file).read(core::YamlMap::parse(yaml_text, file));
 }
 
 Scene loadScene(const std::filesystem::path& file) {
-  return SceneReader(file).read(arm::YamlMap::load(file));
+  return SceneReader(file).read(core::YamlMap::load(file));
 }
 
 Eigen::Isometry3d armBasePose(const Scene& scene, const arm::ArmModel& model) {
@@ -266,14 +266,14 @@ Eigen::VectorXd scenePosture(const Scene& scene, std::string_view name, const ar
   if (posture == nullptr) {
     std::string names;
     for (const ScenePosture& p : scene.postures) names += (names.empty() ? "" : ", ") + p.name;
-    throw arm::ConfigError(scene.source, "arm.postures",
-                           "no posture named '" + std::string(name) +
-                               "' (the scene has: " + (names.empty() ? std::string("none") : names) + ")");
+    throw core::ConfigError(scene.source, "arm.postures",
+                            "no posture named '" + std::string(name) +
+                                "' (the scene has: " + (names.empty() ? std::string("none") : names) + ")");
   }
   if (posture->q_rad.size() > model.numJoints()) {
-    throw arm::ConfigError(scene.source, key,
-                           "has " + std::to_string(posture->q_rad.size()) + " values but the arm model '" + model.name +
-                               "' has " + std::to_string(model.numJoints()) + " joints");
+    throw core::ConfigError(scene.source, key,
+                            "has " + std::to_string(posture->q_rad.size()) + " values but the arm model '" +
+                                model.name + "' has " + std::to_string(model.numJoints()) + " joints");
   }
   Eigen::VectorXd q = model.defaultPosture();
   q.head(posture->q_rad.size()) = posture->q_rad;
@@ -283,14 +283,10 @@ Eigen::VectorXd scenePosture(const Scene& scene, std::string_view name, const ar
       std::ostringstream msg;
       msg << "element " << i << " (" << model.joints[static_cast<std::size_t>(i)].name << ") = " << q[i]
           << " rad is outside the joint range [" << lim.min_rad << ", " << lim.max_rad << "] rad";
-      throw arm::ConfigError(scene.source, key, msg.str());
+      throw core::ConfigError(scene.source, key, msg.str());
     }
   }
   return q;
-}
-
-std::filesystem::path defaultScenePath(std::string_view file_name) {
-  return arm::defaultDataPath(file_name, "FULLARM_SCENE_DIR", FULLARM_SOURCE_SCENE_DIR, FULLARM_INSTALL_SCENE_DIR);
 }
 
 }  // namespace fullarm::haptics

@@ -18,9 +18,9 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::plant {
 
@@ -330,23 +330,23 @@ void ArmPlant::configure(const arm::ArmModel& model, const std::vector<JointPara
                          const Eigen::VectorXd& posture, const UserArmParams& user, const SolverOptions& options,
                          std::uint64_t seed) {
   if (joints.empty() || static_cast<int>(joints.size()) > kMaxPlantJoints) {
-    throw arm::ConfigError(model.source, "joints", "expected 1 to " + std::to_string(kMaxPlantJoints) + " joints");
+    throw core::ConfigError(model.source, "joints", "expected 1 to " + std::to_string(kMaxPlantJoints) + " joints");
   }
   if (posture.size() != model.numJoints()) {
-    throw arm::ConfigError(model.source, "posture", "expected " + std::to_string(model.numJoints()) + " joint angles");
+    throw core::ConfigError(model.source, "posture", "expected " + std::to_string(model.numJoints()) + " joint angles");
   }
   std::vector<int> active;
   for (const JointParams& p : joints) {
     const int index = model.jointIndex(p.name);
-    if (index < 0) throw arm::ConfigError(model.source, "joints", "unknown joint name '" + p.name + "'");
+    if (index < 0) throw core::ConfigError(model.source, "joints", "unknown joint name '" + p.name + "'");
     if (std::find(active.begin(), active.end(), index) != active.end()) {
-      throw arm::ConfigError(model.source, "joints", "joint '" + p.name + "' listed twice");
+      throw core::ConfigError(model.source, "joints", "joint '" + p.name + "' listed twice");
     }
     validateJointParams(p, {}, p.name);
     active.push_back(index);
   }
   if (user.enabled && (user.link < 0 || user.link >= model.numJoints())) {
-    throw arm::ConfigError(model.source, "user_arm.link", "cuff link index out of range");
+    throw core::ConfigError(model.source, "user_arm.link", "cuff link index out of range");
   }
   params_ = joints;
   active_ = active;
@@ -392,7 +392,7 @@ void ArmPlant::configure(const JointParams& joint, const RigidLoad& load, const 
                          std::uint64_t seed) {
   validateJointParams(joint, {}, joint.name);
   if (!(load.inertia_kgm2 > 0.0) && joint.actuator.inertia_kgm2 <= 0.0) {
-    throw arm::ConfigError({}, "load.inertia_kgm2", "expected a positive inertia");
+    throw core::ConfigError({}, "load.inertia_kgm2", "expected a positive inertia");
   }
   params_ = {joint};
   active_ = {-1};

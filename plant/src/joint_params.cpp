@@ -4,7 +4,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 #include "fullarm/plant/hydraulics.hpp"
 
 namespace fullarm::plant {
@@ -18,7 +18,7 @@ class Checker {
     std::ostringstream s;
     s.precision(12);
     s << "value " << value << " is invalid: expected " << expected;
-    throw arm::ConfigError(file_, prefix_.empty() ? key : prefix_ + "." + key, s.str());
+    throw core::ConfigError(file_, prefix_.empty() ? key : prefix_ + "." + key, s.str());
   }
   void positive(const std::string& key, double v) const {
     if (!(std::isfinite(v) && v > 0.0)) fail(key, v, "a finite number > 0");

@@ -4,17 +4,16 @@
 #include <vector>
 
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/config_error.hpp"
-#include "fullarm/arm/yaml_reader.hpp"
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/core/data_paths.hpp"
+#include "fullarm/core/yaml_reader.hpp"
 
 namespace fullarm::plant {
 namespace {
 
-using arm::YamlMap;
-
 constexpr int kSchemaVersion = 1;
 
-JointParams readJoint(const YamlMap& m, const arm::ArmModel& model, const JointParams& shared, int& model_index) {
+JointParams readJoint(const core::YamlMap& m, const arm::ArmModel& model, const JointParams& shared, int& model_index) {
   JointParams p = shared;
   p.name = m.string("name");
   model_index = model.jointIndex(p.name);
@@ -34,7 +33,7 @@ JointParams readJoint(const YamlMap& m, const arm::ArmModel& model, const JointP
     m.fail("input_mode", "'" + mode + "' is not an input mode: expected valve_voltage or torque_loop");
   }
 
-  const YamlMap v = m.map("valve");
+  const core::YamlMap v = m.map("valve");
   p.valve.natural_frequency_hz = v.number("natural_frequency_hz", "Hz");
   p.valve.damping_ratio = v.number("damping_ratio");
   p.valve.amplifier_gain_per_v = v.number("amplifier_gain_per_v", "normalised opening per volt");
@@ -49,7 +48,7 @@ JointParams readJoint(const YamlMap& m, const arm::ArmModel& model, const JointP
   p.valve.linear_region_pa = v.number("linear_region_pa", "Pa");
   v.finish();
 
-  const YamlMap a = m.map("actuator");
+  const core::YamlMap a = m.map("actuator");
   const std::string type = a.string("type");
   p.actuator.inertia_kgm2 = a.number("inertia_kgm2", "kg m^2");
   if (type == "rotary_vane") {
@@ -71,7 +70,7 @@ JointParams readJoint(const YamlMap& m, const arm::ArmModel& model, const JointP
   }
   a.finish();
 
-  const YamlMap c = m.map("chambers");
+  const core::YamlMap c = m.map("chambers");
   p.chambers.dead_volume_a_m3 = c.number("dead_volume_a_m3", "m^3");
   p.chambers.dead_volume_b_m3 = c.number("dead_volume_b_m3", "m^3");
   p.chambers.internal_leakage_m3ps_per_pa = c.number("internal_leakage_m3ps_per_pa", "m^3/s/Pa");
@@ -79,7 +78,7 @@ JointParams readJoint(const YamlMap& m, const arm::ArmModel& model, const JointP
   p.chambers.check_valve_conductance_m3ps_per_pa = c.number("check_valve_conductance_m3ps_per_pa", "m^3/s/Pa");
   c.finish();
 
-  const YamlMap f = m.map("friction");
+  const core::YamlMap f = m.map("friction");
   p.friction.coulomb_nm = f.number("coulomb_nm", "N m");
   p.friction.static_nm = f.number("static_nm", "N m");
   p.friction.stribeck_velocity_radps = f.number("stribeck_velocity_radps", "rad/s");
@@ -87,16 +86,16 @@ JointParams readJoint(const YamlMap& m, const arm::ArmModel& model, const JointP
   p.friction.smoothing_velocity_radps = f.number("smoothing_velocity_radps", "rad/s");
   f.finish();
 
-  const YamlMap h = m.map("hard_stop");
+  const core::YamlMap h = m.map("hard_stop");
   p.hard_stop.stiffness_nm_per_rad = h.number("stiffness_nm_per_rad", "N m/rad");
   p.hard_stop.damping_s_per_rad = h.number("damping_s_per_rad", "s/rad");
   h.finish();
 
-  const YamlMap t = m.map("torque_loop");
+  const core::YamlMap t = m.map("torque_loop");
   p.torque_loop.gain_v_per_nm = t.number("gain_v_per_nm", "V per N m");
   t.finish();
 
-  const YamlMap s = m.map("sensors");
+  const core::YamlMap s = m.map("sensors");
   p.sensor_noise.angle_noise_rad = s.number("angle_noise_rad", "rad");
   p.sensor_noise.torque_noise_nm = s.number("torque_noise_nm", "N m");
   p.sensor_noise.torque_bias_nm = s.number("torque_bias_nm", "N m");
@@ -106,22 +105,22 @@ JointParams readJoint(const YamlMap& m, const arm::ArmModel& model, const JointP
   return p;
 }
 
-PlantConfig build(const YamlMap& root, const std::filesystem::path& source, const arm::ArmModel& model) {
+PlantConfig build(const core::YamlMap& root, const std::filesystem::path& source, const arm::ArmModel& model) {
   PlantConfig config;
   config.source = source;
   if (root.integer("schema_version") != kSchemaVersion) root.fail("schema_version", "expected 1");
   JointParams shared;
-  const YamlMap supply = root.map("supply");
+  const core::YamlMap supply = root.map("supply");
   shared.supply_pressure_pa = supply.number("supply_pressure_pa", "Pa");
   shared.return_pressure_pa = supply.number("return_pressure_pa", "Pa");
   supply.finish();
-  const YamlMap fluid = root.map("fluid");
+  const core::YamlMap fluid = root.map("fluid");
   shared.fluid.oil_bulk_modulus_pa = fluid.number("oil_bulk_modulus_pa", "Pa");
   shared.fluid.air_fraction = fluid.number("air_fraction", "volume fraction at atmospheric pressure");
   shared.fluid.polytropic_index = fluid.number("polytropic_index");
   shared.fluid.atmospheric_pressure_pa = fluid.number("atmospheric_pressure_pa", "Pa");
   fluid.finish();
-  auto check = [](const YamlMap& m, const char* key, double v, double lo, double hi) {
+  auto check = [](const core::YamlMap& m, const char* key, double v, double lo, double hi) {
     if (!(v >= lo && v <= hi)) {
       m.fail(key, "value " + std::to_string(v) + " is out of range: expected [" + std::to_string(lo) + ", " +
                       std::to_string(hi) + "]");
@@ -134,7 +133,7 @@ PlantConfig build(const YamlMap& root, const std::filesystem::path& source, cons
   check(fluid, "polytropic_index", shared.fluid.polytropic_index, 1.0, 1.67);
   check(fluid, "atmospheric_pressure_pa", shared.fluid.atmospheric_pressure_pa, 5e4, 2e5);
 
-  const YamlMap solver = root.map("solver");
+  const core::YamlMap solver = root.map("solver");
   SolverOptions& o = config.solver;
   o.rtol = solver.number("rtol");
   o.atol_spool = solver.number("atol_spool");
@@ -175,7 +174,7 @@ PlantConfig build(const YamlMap& root, const std::filesystem::path& source, cons
   if (!(o.reinit_command_jump > 0.0)) solver.fail("reinit_command_jump", "expected a positive fraction");
   solver.finish();
 
-  const YamlMap user = root.map("user_arm");
+  const core::YamlMap user = root.map("user_arm");
   UserArmParams& u = config.user_arm;
   const std::string enabled = user.string("enabled");
   if (enabled != "true" && enabled != "false") user.fail("enabled", "'" + enabled + "': expected true or false");
@@ -196,10 +195,10 @@ PlantConfig build(const YamlMap& root, const std::filesystem::path& source, cons
   if (seed < 0) root.fail("noise_seed", "expected a seed >= 0");
   config.seed = static_cast<std::uint64_t>(seed);
 
-  const arm::YamlList joints = root.list("joints");
+  const core::YamlList joints = root.list("joints");
   std::vector<int> indices;
   for (std::size_t i = 0; i < joints.size(); ++i) {
-    const YamlMap jm = joints.map(i);
+    const core::YamlMap jm = joints.map(i);
     int index = -1;
     JointParams p = readJoint(jm, model, shared, index);
     for (int seen : indices) {
@@ -223,17 +222,17 @@ PlantConfig build(const YamlMap& root, const std::filesystem::path& source, cons
 
 PlantConfig parsePlantConfig(std::string_view yaml_text, const std::filesystem::path& source,
                              const arm::ArmModel& model) {
-  const YamlMap root = YamlMap::parse(yaml_text, source);
-  return arm::withKeyPathLines(root, [&] { return build(root, source, model); });
+  const core::YamlMap root = core::YamlMap::parse(yaml_text, source);
+  return core::withKeyPathLines(root, [&] { return build(root, source, model); });
 }
 
 PlantConfig loadPlantConfig(const std::filesystem::path& file, const arm::ArmModel& model) {
-  const YamlMap root = YamlMap::load(file);
-  return arm::withKeyPathLines(root, [&] { return build(root, file, model); });
+  const core::YamlMap root = core::YamlMap::load(file);
+  return core::withKeyPathLines(root, [&] { return build(root, file, model); });
 }
 
 std::filesystem::path defaultPlantConfigPath() {
-  return arm::defaultConfigPath("dts_plant.yaml");
+  return core::defaultConfigPath("dts_plant.yaml");
 }
 
 int findPlantJoint(const PlantConfig& config, std::string_view name) {

@@ -10,7 +10,7 @@
 
 #include "arm_test_util.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 #include "scratch_dir.hpp"
 
 namespace fullarm::arm {
@@ -39,18 +39,18 @@ std::filesystem::path writeTemp(const std::string& name, const std::string& text
   return file;
 }
 
-// Loads `text` from a file and returns the ConfigError; fails the test if loading succeeds.
-ConfigError loadError(const std::string& name, const std::string& text) {
+// Loads `text` from a file and returns the core::ConfigError; fails the test if loading succeeds.
+core::ConfigError loadError(const std::string& name, const std::string& text) {
   const std::filesystem::path file = writeTemp(name, text);
   try {
     (void)loadArmModel(file);
-  } catch (const ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_EQ(e.file(), file);
     EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
     return e;
   }
   ADD_FAILURE() << "loading " << name << " succeeded";
-  return ConfigError(file, "", "no error");
+  return core::ConfigError(file, "", "no error");
 }
 
 TEST(ModelLoading, DefaultModelLoadsWithPublishedFigures) {
@@ -82,33 +82,33 @@ TEST(ModelLoading, ParseFromTextEqualsLoadFromFile) {
 }
 
 TEST(ModelLoading, MissingKeyIsNamed) {
-  const ConfigError e = loadError("missing.yaml", edited("    default_rad: -0.30\n", ""));
+  const core::ConfigError e = loadError("missing.yaml", edited("    default_rad: -0.30\n", ""));
   EXPECT_EQ(e.keyPath(), "joints[1].default_rad");
   EXPECT_NE(e.message().find("missing required key 'default_rad'"), std::string::npos) << e.what();
   EXPECT_GT(e.line(), 0);
 }
 
 TEST(ModelLoading, WrongTypeIsNamed) {
-  const ConfigError e = loadError("wrong_type.yaml", edited("mass_kg: 6.8", "mass_kg: heavy"));
+  const core::ConfigError e = loadError("wrong_type.yaml", edited("mass_kg: 6.8", "mass_kg: heavy"));
   EXPECT_EQ(e.keyPath(), "joints[2].link.mass_kg");
   EXPECT_NE(e.message().find("expected a finite number (kg), got 'heavy'"), std::string::npos) << e.what();
 }
 
 TEST(ModelLoading, WrongContainerTypeIsNamed) {
-  const ConfigError e = loadError("wrong_list.yaml", edited("com_m: [0.0, 0.0, -0.188]", "com_m: 0.188"));
+  const core::ConfigError e = loadError("wrong_list.yaml", edited("com_m: [0.0, 0.0, -0.188]", "com_m: 0.188"));
   EXPECT_EQ(e.keyPath(), "joints[2].link.com_m");
   EXPECT_NE(e.message().find("expected a list of 3 finite numbers"), std::string::npos) << e.what();
 }
 
 TEST(ModelLoading, NegativeMassIsRejected) {
-  const ConfigError e = loadError("negative_mass.yaml", edited("mass_kg: 3.36", "mass_kg: -3.36"));
+  const core::ConfigError e = loadError("negative_mass.yaml", edited("mass_kg: 3.36", "mass_kg: -3.36"));
   EXPECT_EQ(e.keyPath(), "joints[4].link.mass_kg");
   EXPECT_NE(e.message().find("expected a mass >= 0 kg"), std::string::npos) << e.what();
   EXPECT_GT(e.line(), 0);
 }
 
 TEST(ModelLoading, NonPositiveDefiniteInertiaIsRejected) {
-  const ConfigError e = loadError(
+  const core::ConfigError e = loadError(
       "not_pd.yaml", edited("{xx: 0.050926, yy: 0.050926, zz: 0.0085,", "{xx: 0.050926, yy: 0.050926, zz: -0.0085,"));
   EXPECT_EQ(e.keyPath(), "joints[2].link.inertia_kgm2");
   EXPECT_NE(e.message().find("positive definite"), std::string::npos) << e.what();
@@ -116,7 +116,7 @@ TEST(ModelLoading, NonPositiveDefiniteInertiaIsRejected) {
 
 // Positive definite, but one principal moment exceeds the sum of the other two: no rigid body.
 TEST(ModelLoading, TriangleInequalityViolationIsRejected) {
-  const ConfigError e =
+  const core::ConfigError e =
       loadError("triangle.yaml", edited("{xx: 0.022999, yy: 0.022999, zz: 0.002688, xy: 0.0, xz: 0.0, yz: 0.0}",
                                         "{xx: 0.001, yy: 0.001, zz: 0.003, xy: 0.0, xz: 0.0, yz: 0.0}"));
   EXPECT_EQ(e.keyPath(), "joints[4].link.inertia_kgm2");
@@ -126,7 +126,7 @@ TEST(ModelLoading, TriangleInequalityViolationIsRejected) {
 // The identified R_WR inertia of the SL set (reference section 4.4) is positive definite but
 // no rigid body has it: the loader must say so.
 TEST(ModelLoading, IdentifiedSlInertiaIsRejected) {
-  const ConfigError e =
+  const core::ConfigError e =
       loadError("sl_inertia.yaml",
                 edited("{xx: 0.022999, yy: 0.022999, zz: 0.002688, xy: 0.0, xz: 0.0, yz: 0.0}",
                        "{xx: 0.023417, yy: 0.000012, zz: 0.003393, xy: -0.000240, xz: 0.008912, yz: -0.000088}"));
@@ -137,27 +137,27 @@ TEST(ModelLoading, IdentifiedSlInertiaIsRejected) {
 }
 
 TEST(ModelLoading, ReversedLimitsAreRejected) {
-  const ConfigError e = loadError(
+  const core::ConfigError e = loadError(
       "reversed.yaml", edited("{min_rad: 0.586132, max_rad: 2.208897,", "{min_rad: 2.208897, max_rad: 0.586132,"));
   EXPECT_EQ(e.keyPath(), "joints[3].limits");
   EXPECT_NE(e.message().find("expected min_rad < max_rad"), std::string::npos) << e.what();
 }
 
 TEST(ModelLoading, UnknownKeyIsRejected) {
-  const ConfigError e =
+  const core::ConfigError e =
       loadError("unknown.yaml", edited("    default_rad: 1.57\n", "    default_rad: 1.57\n    dampng: 3\n"));
   EXPECT_EQ(e.keyPath(), "joints[3].dampng");
   EXPECT_NE(e.message().find("unknown key"), std::string::npos) << e.what();
 }
 
 TEST(ModelLoading, UnknownTopLevelKeyIsRejected) {
-  const ConfigError e = loadError("unknown_top.yaml", defaultText() + "\nextra_setting: 1\n");
+  const core::ConfigError e = loadError("unknown_top.yaml", defaultText() + "\nextra_setting: 1\n");
   EXPECT_EQ(e.keyPath(), "extra_setting");
 }
 
 TEST(ModelLoading, DuplicateKeyIsRejected) {
-  const ConfigError e = loadError("duplicate_key.yaml",
-                                  edited("    default_rad: 1.57\n", "    default_rad: 1.57\n    default_rad: 2.0\n"));
+  const core::ConfigError e = loadError(
+      "duplicate_key.yaml", edited("    default_rad: 1.57\n", "    default_rad: 1.57\n    default_rad: 2.0\n"));
   EXPECT_EQ(e.keyPath(), "joints[3].default_rad");
   EXPECT_NE(e.message().find("duplicate key"), std::string::npos) << e.what();
   EXPECT_GT(e.line(), 0);
@@ -166,19 +166,19 @@ TEST(ModelLoading, DuplicateKeyIsRejected) {
 TEST(ModelLoading, ArmJointWithoutDhIsRejected) {
   ArmModel model = test::defaultModel();
   model.joints[2].dh.reset();
-  EXPECT_THROW(validateArmModel(model), ConfigError);
+  EXPECT_THROW(validateArmModel(model), core::ConfigError);
   model = test::defaultModel();
   model.joints[2].X_PL0.translation().z() += 0.01;  // no longer the DH transform
   try {
     validateArmModel(model);
     FAIL() << "no error";
-  } catch (const ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_EQ(e.keyPath(), "joints[2].dh");
   }
 }
 
 TEST(ModelLoading, YamlSyntaxErrorHasALine) {
-  const ConfigError e = loadError("syntax.yaml", edited("name: sarcos_dts_master", "name: [unclosed"));
+  const core::ConfigError e = loadError("syntax.yaml", edited("name: sarcos_dts_master", "name: [unclosed"));
   EXPECT_NE(e.message().find("YAML syntax error"), std::string::npos) << e.what();
   EXPECT_GT(e.line(), 0);
 }
@@ -187,41 +187,41 @@ TEST(ModelLoading, MissingFileIsNamed) {
   try {
     (void)loadArmModel("/nonexistent/arm.yaml");
     FAIL() << "no error";
-  } catch (const ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/arm.yaml"), std::string::npos);
     EXPECT_NE(e.message().find("cannot open"), std::string::npos);
   }
 }
 
 TEST(ModelLoading, DefaultOutsideLimitsIsRejected) {
-  const ConfigError e = loadError("default.yaml", edited("default_rad: 1.57", "default_rad: 3.0"));
+  const core::ConfigError e = loadError("default.yaml", edited("default_rad: 1.57", "default_rad: 3.0"));
   EXPECT_EQ(e.keyPath(), "joints[3].default_rad");
 }
 
 TEST(ModelLoading, DuplicateJointNameIsRejected) {
-  const ConfigError e = loadError("duplicate.yaml", edited("- name: R_SAA ", "- name: R_SFE "));
+  const core::ConfigError e = loadError("duplicate.yaml", edited("- name: R_SAA ", "- name: R_SFE "));
   EXPECT_EQ(e.keyPath(), "joints[1].name");
 }
 
 TEST(ModelLoading, ImpossibleCylinderIsRejected) {
-  const ConfigError e = loadError("cylinder.yaml", edited("moment_arm_m: 0.03175, mount_distance_m: 0.1397",
-                                                          "moment_arm_m: 0.2, mount_distance_m: 0.1397"));
+  const core::ConfigError e = loadError("cylinder.yaml", edited("moment_arm_m: 0.03175, mount_distance_m: 0.1397",
+                                                                "moment_arm_m: 0.2, mount_distance_m: 0.1397"));
   EXPECT_EQ(e.keyPath(), "joints[3].actuator");
 }
 
 TEST(ModelLoading, RangeBeyondThePotentiometerIsRejected) {
-  const ConfigError e = loadError("pot.yaml", edited("max_rad: 1.370363", "max_rad: 1.6"));
+  const core::ConfigError e = loadError("pot.yaml", edited("max_rad: 1.370363", "max_rad: 1.6"));
   EXPECT_EQ(e.keyPath(), "joints[0].limits");
   EXPECT_NE(e.message().find("potentiometer"), std::string::npos) << e.what();
 }
 
 TEST(ModelLoading, UnknownParentIsRejected) {
-  const ConfigError e = loadError("parent.yaml", edited("parent: R_TL", "parent: R_NOPE"));
+  const core::ConfigError e = loadError("parent.yaml", edited("parent: R_TL", "parent: R_NOPE"));
   EXPECT_EQ(e.keyPath(), "hand_joints[1].parent");
 }
 
 TEST(ModelLoading, MissingMeshFileIsRejected) {
-  const ConfigError e =
+  const core::ConfigError e =
       loadError("mesh.yaml",
                 edited("geometry: {type: capsule, radius_m: 0.04, from_m: [0.0, 0.0, -0.2781], to_m: [0.0, 0.0, 0.0]}",
                        "geometry: {type: mesh, file: no_such_mesh.stl, scale: 1.0, pose: {translation_m: [0, 0, 0], "
@@ -230,7 +230,7 @@ TEST(ModelLoading, MissingMeshFileIsRejected) {
   EXPECT_NE(e.message().find("no_such_mesh.stl"), std::string::npos);
 }
 
-// Fuzz-style: random byte edits of the default file must either load or raise ConfigError with
+// Fuzz-style: random byte edits of the default file must either load or raise core::ConfigError with
 // a non-empty message; never crash, never another exception type.
 TEST(ModelLoading, RandomCorruptionsGiveConfigErrorsOnly) {
   const std::string base = defaultText();
@@ -260,7 +260,7 @@ TEST(ModelLoading, RandomCorruptionsGiveConfigErrorsOnly) {
     }
     try {
       (void)parseArmModel(text, "fuzz.yaml");
-    } catch (const ConfigError& e) {
+    } catch (const core::ConfigError& e) {
       ++rejected;
       EXPECT_FALSE(e.message().empty());
       EXPECT_NE(std::string(e.what()).find("fuzz.yaml"), std::string::npos);

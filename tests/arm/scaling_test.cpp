@@ -10,8 +10,8 @@
 #include <random>
 
 #include "arm_test_util.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/core/config_error.hpp"
 #include "scratch_dir.hpp"
 
 namespace fullarm::arm {
@@ -79,7 +79,7 @@ TEST(ArmScaling, NonPositiveLengthIsRejectedWithItsKey) {
   try {
     (void)scaleArm(test::defaultModel(), size);
     FAIL() << "no error";
-  } catch (const ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_EQ(e.keyPath(), "arm_size.forearm_length_m");
   }
 }
@@ -98,7 +98,7 @@ TEST(ArmScaling, LoadsSizeFileAndRejectsUnknownKeys) {
   try {
     (void)loadArmSize(bad);
     FAIL() << "no error";
-  } catch (const ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_EQ(e.keyPath(), "arm_size.upper_arm_lenght_m");
     EXPECT_EQ(e.file(), bad);
   }

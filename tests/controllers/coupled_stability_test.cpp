@@ -26,6 +26,7 @@
 #include "fullarm/controllers/nonlinear_stage.hpp"
 #include "fullarm/controllers/tuner.hpp"
 #include "fullarm/controllers/validation.hpp"
+#include "fullarm/core/random.hpp"
 
 namespace fullarm::controllers {
 namespace {
@@ -215,14 +216,6 @@ TEST(CoupledStability, DetectorScoreClosedFormEqualsTheDirectWindowSums) {
 }
 
 // validate's slot of a joint: FNV-1a of its name (validation.cpp), restated here.
-int slotOf(const std::string& name) {
-  std::uint32_t h = 2166136261u;
-  for (const char c : name) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 16777619u;
-  }
-  return static_cast<int>(h & 0x7fffffffu);
-}
 
 // The joint model as `fullarm tune` builds it: the link about its axis at the default posture,
 // the validation file's nominal user in joint space.
@@ -246,7 +239,7 @@ JointPlantModel tuneModel(const std::string& name, const ValidationConfig& vc) {
 // C3 rejects it, and ranks B_m 0.7, 1.44, 3 in the order of the harness's measured deviations.
 TEST(CoupledStability, PredictsTheHrRun33UserDeviceModeOfTheNonlinearHarness) {
   const ValidationConfig vc = loadValidationConfig(defaultValidationConfigPath());
-  const MonteCarloSample run33 = drawSample(vc.ranges, vc.seed, slotOf("R_HR"), 33);
+  const MonteCarloSample run33 = drawSample(vc.ranges, vc.seed, core::nameSlot("R_HR"), 33);
   ASSERT_NEAR(run33.user_stiffness_nm_per_rad, 4.1, 0.05);
   ASSERT_NEAR(run33.user_damping_nms_per_rad, 0.15, 0.01);
   JointGains hr = test::dtsGains().joints[static_cast<std::size_t>(findGainsJoint(test::dtsGains(), "R_HR"))];

@@ -10,7 +10,7 @@
 
 #include "config_text.hpp"
 #include "controllers_fixture.hpp"
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::controllers {
 namespace {
@@ -62,7 +62,7 @@ TEST(GainsConfig, DefaultFileLoads) {
   EXPECT_DOUBLE_EQ(g.control_period_s, 1e-3);
   EXPECT_EQ(g.joints[static_cast<std::size_t>(findGainsJoint(g, "EB"))].name, "R_EB");
   EXPECT_EQ(findGainsJoint(g, "R_EB"), findGainsJoint(g, "EB"));
-  EXPECT_THROW((void)findGainsJoint(g, "ELBOW"), arm::ConfigError);
+  EXPECT_THROW((void)findGainsJoint(g, "ELBOW"), core::ConfigError);
 }
 
 TEST(GainsConfig, NegativeInertiaIsAClearError) {
@@ -106,12 +106,12 @@ TEST(GainsConfig, OtherBadValuesNameTheirKey) {
 }
 
 TEST(GainsConfig, SyntaxAndFileErrors) {
-  EXPECT_THROW((void)parseGainsConfig("joints: [", "broken.yaml", test::dtsModel()), arm::ConfigError);
-  EXPECT_THROW((void)loadGainsConfig("/nonexistent/gains.yaml", test::dtsModel()), arm::ConfigError);
+  EXPECT_THROW((void)parseGainsConfig("joints: [", "broken.yaml", test::dtsModel()), core::ConfigError);
+  EXPECT_THROW((void)loadGainsConfig("/nonexistent/gains.yaml", test::dtsModel()), core::ConfigError);
   EXPECT_THROW(
       (void)parseGainsConfig("schema_version: 1\ncontroller: admittance\ncontrol_period_s: 0.001\njoints: []\n",
                              "empty.yaml", test::dtsModel()),
-      arm::ConfigError);
+      core::ConfigError);
 }
 
 TEST(GainsConfig, FormatRoundTripsExactly) {
@@ -130,7 +130,7 @@ TEST(GainsConfig, FormatRoundTripsExactly) {
 }
 
 // Fuzz-style: truncations and random byte mutations of the default file either parse to a
-// valid configuration or throw ConfigError; nothing else escapes.
+// valid configuration or throw core::ConfigError; nothing else escapes.
 TEST(GainsConfig, MutatedInputsGiveErrorsNotCrashes) {
   const std::string text = defaultText();
   std::mt19937 rng(11);
@@ -139,7 +139,7 @@ TEST(GainsConfig, MutatedInputsGiveErrorsNotCrashes) {
     try {
       const GainsConfig g = parseGainsConfig(t, "fuzz.yaml", test::dtsModel());
       for (const JointGains& j : g.joints) validateJointGains(j, g.control_period_s);
-    } catch (const arm::ConfigError&) {
+    } catch (const core::ConfigError&) {
       ++errors;
     }
   };

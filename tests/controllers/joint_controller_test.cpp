@@ -13,10 +13,10 @@
 #include "alloc_guard.hpp"
 #include "controllers_fixture.hpp"
 #include "fullarm/arm/arm_data.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/controllers/arm_controller.hpp"
 #include "fullarm/controllers/joint_controller.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::controllers {
 namespace {
@@ -349,9 +349,9 @@ TEST(JointControllerSafety, OutputNeverExceedsTheValveLimit) {
 TEST(JointController, InvalidGainsAreRejected) {
   JointGains g = baseGains();
   g.impedance.inertia_kgm2 = -1.0;
-  EXPECT_THROW((void)makeJointControllerModel(g, ControllerKind::kAdmittance, 1e-3), arm::ConfigError);
+  EXPECT_THROW((void)makeJointControllerModel(g, ControllerKind::kAdmittance, 1e-3), core::ConfigError);
   g = baseGains();
-  EXPECT_THROW((void)makeJointControllerModel(g, ControllerKind::kAdmittance, 0.0), arm::ConfigError);
+  EXPECT_THROW((void)makeJointControllerModel(g, ControllerKind::kAdmittance, 0.0), core::ConfigError);
 }
 
 TEST(ArmController, GravityFromTheArmModelCancelsAtRest) {

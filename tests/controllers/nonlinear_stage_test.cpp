@@ -16,12 +16,12 @@
 #include "controllers_fixture.hpp"
 #include "fullarm/controllers/closed_loop.hpp"
 #include "fullarm/controllers/coupled_stability.hpp"
-#include "fullarm/controllers/job_pool.hpp"
 #include "fullarm/controllers/joint_linearization.hpp"
 #include "fullarm/controllers/linear_analysis.hpp"
 #include "fullarm/controllers/nonlinear_stage.hpp"
 #include "fullarm/controllers/tuner.hpp"
 #include "fullarm/controllers/validation.hpp"
+#include "fullarm/core/job_pool.hpp"
 
 namespace fullarm::controllers {
 namespace {
@@ -612,7 +612,7 @@ TEST(NonlinearStage, OnASharedPoolTheStageGivesTheSequentialResult) {
   }
   EXPECT_EQ(sequential[0].evaluations, 3);  // the start and two capped evaluations of the search
   {
-    JobPool pool(3);
+    core::JobPool pool(3);
     std::vector<NonlinearStageResult> pooled(2);
     pool.run(2, [&](int k) {
       NonlinearStageOptions po = o;

@@ -13,8 +13,8 @@
 
 #include "config_text.hpp"
 #include "controllers_fixture.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/controllers/validation.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::controllers {
 namespace {
@@ -55,7 +55,7 @@ TEST(ValidationConfig, BadValuesNameTheirKey) {
   expectConfigError(
       replaced(text, "  friction_scale: {min: 0.5, max: 2.0}            # Coulomb, static and viscous together\n", ""),
       "uncertainty", "friction_scale");
-  EXPECT_THROW((void)loadValidationConfig("/nonexistent/validation.yaml"), arm::ConfigError);
+  EXPECT_THROW((void)loadValidationConfig("/nonexistent/validation.yaml"), core::ConfigError);
 }
 
 TEST(ValidationConfig, MutatedInputsGiveErrorsNotCrashes) {
@@ -66,7 +66,7 @@ TEST(ValidationConfig, MutatedInputsGiveErrorsNotCrashes) {
   for (std::size_t cut = 0; cut < text.size(); cut += 41) {
     try {
       (void)parseValidationConfig(text.substr(0, cut), "fuzz.yaml");
-    } catch (const arm::ConfigError&) {
+    } catch (const core::ConfigError&) {
       ++errors;
     }
   }
@@ -75,7 +75,7 @@ TEST(ValidationConfig, MutatedInputsGiveErrorsNotCrashes) {
     for (int e = 0; e < 3; ++e) t[rng() % t.size()] = alphabet[rng() % alphabet.size()];
     try {
       (void)parseValidationConfig(t, "fuzz.yaml");
-    } catch (const arm::ConfigError&) {
+    } catch (const core::ConfigError&) {
       ++errors;
     }
   }

@@ -4,7 +4,7 @@
 // - the spring law against its closed form, damping, saturation, hand-only mode and the per-link
 //   contact records, fault injection (non-finite minimum -> zero contact torque + fault);
 // - config/haptics.yaml: the shipped file loads; bad values and mutated/truncated text give
-//   ConfigError naming the key, never a crash;
+//   core::ConfigError naming the key, never a crash;
 // - allocation freedom of forces and torques.
 #include "fullarm/haptics/contact_forces.hpp"
 
@@ -15,9 +15,9 @@
 
 #include "alloc_guard.hpp"
 #include "arm_test_util.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::haptics {
 namespace {
@@ -224,8 +224,8 @@ TEST(HapticsParamsTest, BadValuesNameTheKey) {
     bad.replace(pos, from.size(), to);
     try {
       (void)parseHapticsParams(bad, "haptics.yaml");
-      FAIL() << "expected ConfigError for " << to;
-    } catch (const arm::ConfigError& e) {
+      FAIL() << "expected core::ConfigError for " << to;
+    } catch (const core::ConfigError& e) {
       EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find("haptics.yaml"), std::string::npos) << e.what();
     }
@@ -254,7 +254,7 @@ TEST(HapticsParamsTest, MutatedAndTruncatedTextGivesConfigError) {
     }
     try {
       (void)parseHapticsParams(bad, "mutated.yaml");
-    } catch (const arm::ConfigError& e) {
+    } catch (const core::ConfigError& e) {
       ++errors;
       EXPECT_NE(std::string(e.what()).find("mutated.yaml"), std::string::npos);
     }

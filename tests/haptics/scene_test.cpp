@@ -1,8 +1,9 @@
 // Scenes: scenes/valve_wall.yaml against the geometry it describes (meshes imported
 // independently, the opening checked by point-triangle distances, the shoulder placed where
 // the file says), strict YAML errors with key paths, and truncated/mutated scene files that
-// must give ConfigError, never a crash.
+// must give core::ConfigError, never a crash.
 #include "fullarm/haptics/scene.hpp"
+#include "fullarm/core/data_paths.hpp"
 
 #include <gtest/gtest.h>
 
@@ -14,8 +15,8 @@
 #include <string>
 
 #include "arm_test_util.hpp"
-#include "fullarm/arm/config_error.hpp"
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/core/config_error.hpp"
 #include "fullarm/haptics/geometry.hpp"
 #include "fullarm/haptics/mesh_import.hpp"
 #include "fullarm/haptics/primitives.hpp"
@@ -160,12 +161,12 @@ TEST(SceneTest, ReachPostureGoesThroughTheOpening) {
 TEST(SceneTest, PostureErrorsNameTheScene) {
   const arm::ArmModel& model = arm::test::defaultModel();
   Scene scene = valveWall();
-  EXPECT_THROW((void)scenePosture(scene, "fly", model), arm::ConfigError);
+  EXPECT_THROW((void)scenePosture(scene, "fly", model), core::ConfigError);
   scene.postures[0].q_rad = Eigen::VectorXd::Zero(model.numJoints() + 1);
   try {
     (void)scenePosture(scene, "reach_valve", model);
     FAIL();
-  } catch (const arm::ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_EQ(e.keyPath(), "arm.postures[0].q_rad");
     EXPECT_EQ(e.file(), valveWallFile());
   }
@@ -173,7 +174,7 @@ TEST(SceneTest, PostureErrorsNameTheScene) {
   try {
     (void)scenePosture(scene, "reach_valve", model);
     FAIL();
-  } catch (const arm::ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("R_SFE"), std::string::npos) << e.what();
   }
 }
@@ -228,7 +229,7 @@ std::string edited(const std::string& from, const std::string& to) {
 
 struct BadCase {
   std::string text;
-  std::string key_path;  // expected ConfigError::keyPath()
+  std::string key_path;  // expected core::ConfigError::keyPath()
   std::string message;   // expected part of the message
 };
 
@@ -272,7 +273,7 @@ TEST(SceneTest, StrictYamlErrorsNameTheKeyPath) {
     try {
       (void)parseScene(c.text, "bad_scene.yaml");
       ADD_FAILURE() << "no error; expected " << c.key_path;
-    } catch (const arm::ConfigError& e) {
+    } catch (const core::ConfigError& e) {
       EXPECT_EQ(e.keyPath(), c.key_path) << e.what();
       EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
       EXPECT_EQ(e.file(), fs::path("bad_scene.yaml"));
@@ -284,7 +285,7 @@ TEST(SceneTest, ErrorsCarryTheLineOfTheBadValue) {
   try {
     (void)parseScene(edited("segments: 12", "segments: 12.5"), "bad_scene.yaml");
     FAIL();
-  } catch (const arm::ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_EQ(e.line(), 15);  // the `post` object's shape line
   }
 }
@@ -297,7 +298,7 @@ TEST(SceneTest, MeshErrorsBecomeConfigErrorsWithTheMeshMessage) {
   try {
     (void)parseScene(text, dir / "scene.yaml");
     FAIL();
-  } catch (const arm::ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_EQ(e.keyPath(), "objects[0].shape.file");
     EXPECT_NE(std::string(e.what()).find((dir / "broken.obj").string()), std::string::npos) << e.what();
   }
@@ -365,14 +366,14 @@ TEST(SceneTest, DoubleSidedSolidsAreCollapsedUnlessTheSceneSaysOtherwise) {
   try {
     (void)parseScene(text, dir / "scene.yaml");
     ADD_FAILURE() << "no error for collapse_double_sided: maybe";
-  } catch (const arm::ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_EQ(e.keyPath(), "objects[1].shape.collapse_double_sided");
     EXPECT_NE(std::string(e.what()).find("expected true or false"), std::string::npos) << e.what();
   }
   fs::remove_all(dir);
 }
 
-// Truncated and byte-mutated scene texts: each must parse or throw ConfigError.
+// Truncated and byte-mutated scene texts: each must parse or throw core::ConfigError.
 TEST(SceneTest, TruncatedAndMutatedScenesGiveConfigErrorNeverACrash) {
   const std::string text = kSmallScene;
   int parsed = 0;
@@ -382,7 +383,7 @@ TEST(SceneTest, TruncatedAndMutatedScenesGiveConfigErrorNeverACrash) {
       const Scene scene = parseScene(candidate, "fuzz.yaml");
       EXPECT_FALSE(scene.objects.empty());
       ++parsed;
-    } catch (const arm::ConfigError&) {
+    } catch (const core::ConfigError&) {
       ++rejected;
     }
   };
@@ -406,20 +407,20 @@ TEST(SceneTest, TruncatedAndMutatedScenesGiveConfigErrorNeverACrash) {
 }
 
 TEST(SceneTest, MissingSceneFileIsAConfigError) {
-  EXPECT_THROW((void)loadScene("/nonexistent/scene.yaml"), arm::ConfigError);
+  EXPECT_THROW((void)loadScene("/nonexistent/scene.yaml"), core::ConfigError);
 }
 
 // The shipped-scene lookup used by `fullarm demo`: a test program runs from the build tree, so
 // it finds the source tree's scenes/; $FULLARM_SCENE_DIR overrides it.
 TEST(SceneTest, DefaultScenePathFindsTheSourceTreeAndHonoursTheEnvironment) {
   ASSERT_EQ(std::getenv("FULLARM_SCENE_DIR"), nullptr);
-  const fs::path found = defaultScenePath("valve_wall.yaml");
+  const fs::path found = core::defaultScenePath("valve_wall.yaml");
   EXPECT_TRUE(fs::equivalent(found, valveWallFile())) << found;
   EXPECT_EQ(loadScene(found).name, "valve_wall");
   ASSERT_EQ(setenv("FULLARM_SCENE_DIR", "/elsewhere/scenes", 1), 0);
-  EXPECT_EQ(defaultScenePath("valve_wall.yaml"), fs::path("/elsewhere/scenes/valve_wall.yaml"));
+  EXPECT_EQ(core::defaultScenePath("valve_wall.yaml"), fs::path("/elsewhere/scenes/valve_wall.yaml"));
   ASSERT_EQ(unsetenv("FULLARM_SCENE_DIR"), 0);
-  EXPECT_TRUE(fs::equivalent(defaultScenePath("valve_wall.yaml"), valveWallFile()));
+  EXPECT_TRUE(fs::equivalent(core::defaultScenePath("valve_wall.yaml"), valveWallFile()));
 }
 
 }  // namespace

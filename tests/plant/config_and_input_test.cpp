@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "config_text.hpp"
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 #include "fullarm/plant/signals.hpp"
 #include "plant_fixture.hpp"
 
@@ -26,7 +26,7 @@ std::string replaced(std::string text, const std::string& from, const std::strin
   return testing::replacedFirst(std::move(text), from, to);
 }
 
-// Expects a ConfigError whose key path and message contain the given fragments and which
+// Expects a core::ConfigError whose key path and message contain the given fragments and which
 // carries a line number.
 void expectConfigError(const std::string& text, const std::string& key_fragment, const std::string& message_fragment) {
   testing::expectConfigError([&] { (void)parsePlantConfig(text, "test_plant.yaml", test::dtsModel()); },
@@ -68,7 +68,7 @@ TEST(PlantConfig, UnknownJointNameIsAClearError) {
   try {
     (void)findPlantJoint(test::dtsPlant(), "ELBOW");
     FAIL() << "no error";
-  } catch (const arm::ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("unknown joint name 'ELBOW'"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("EB"), std::string::npos) << e.what();
   }
@@ -101,8 +101,8 @@ TEST(PlantConfig, BadYamlGivesFileLineAndKeyPath) {
 }
 
 TEST(PlantConfig, SyntaxErrorIsAConfigError) {
-  EXPECT_THROW((void)parsePlantConfig("joints: [", "broken.yaml", test::dtsModel()), arm::ConfigError);
-  EXPECT_THROW((void)loadPlantConfig("/nonexistent/plant.yaml", test::dtsModel()), arm::ConfigError);
+  EXPECT_THROW((void)parsePlantConfig("joints: [", "broken.yaml", test::dtsModel()), core::ConfigError);
+  EXPECT_THROW((void)loadPlantConfig("/nonexistent/plant.yaml", test::dtsModel()), core::ConfigError);
 }
 
 class CommandCsv : public ::testing::Test {

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// Helpers for configuration-file tests: read a shipped YAML file, mutate its text, and expect
-/// the clear error (arm::ConfigError naming file, line, key path and what was expected).
+/// the clear error (core::ConfigError naming file, line, key path and what was expected).
 /// Header-only; the test must link fullarm::arm (every config module does).
 
 #include <gtest/gtest.h>
@@ -12,7 +12,7 @@
 #include <string>
 #include <string_view>
 
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::testing {
 
@@ -34,7 +34,7 @@ inline std::string replacedFirst(std::string text, const std::string& from, cons
   return text;
 }
 
-/// Expects `parse()` to throw arm::ConfigError whose key path contains `key_fragment`, whose
+/// Expects `parse()` to throw core::ConfigError whose key path contains `key_fragment`, whose
 /// message contains `message_fragment`, which carries a line number, and whose text names
 /// `source_name` (the file name `parse` passed to the parser).
 template <typename Parse>
@@ -43,7 +43,7 @@ void expectConfigError(Parse&& parse, std::string_view source_name, const std::s
   try {
     parse();
     ADD_FAILURE() << "no error for " << key_fragment;
-  } catch (const arm::ConfigError& e) {
+  } catch (const core::ConfigError& e) {
     EXPECT_NE(e.keyPath().find(key_fragment), std::string::npos) << e.what();
     EXPECT_NE(e.message().find(message_fragment), std::string::npos) << e.what();
     EXPECT_GT(e.line(), 0) << e.what();

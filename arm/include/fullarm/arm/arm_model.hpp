@@ -140,7 +140,7 @@ struct ArmModel {
 
 /// Checks everything the loader checks (limits, physical consistency of every inertia,
 /// geometry, actuator and sensor calibration, tree order).
-/// @throws ConfigError naming `model.source` and the key path of the first problem.
+/// @throws core::ConfigError naming `model.source` and the key path of the first problem.
 void validateArmModel(const ArmModel& model);
 
 /// Checks that an inertia about the centre of mass is physically valid for `mass_kg`:

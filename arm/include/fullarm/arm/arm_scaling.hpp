@@ -27,13 +27,13 @@ struct ArmSize {
 /// along its z axis between -d and 0 in the modified-DH link frame); the hand scales the tool
 /// translation, the hand link's geometry and centre of mass and the hand joints' origins.
 /// Masses and inertias about the centre of mass are kept (the DTS itself does not change).
-/// @throws ConfigError (key path `arm_size.<field>`) for a non-positive or non-finite length,
+/// @throws core::ConfigError (key path `arm_size.<field>`) for a non-positive or non-finite length,
 ///         or a segment the model does not declare.
 [[nodiscard]] ArmModel scaleArm(const ArmModel& model, const ArmSize& size);
 
 /// Loads an arm-size file: keys upper_arm_length_m, forearm_length_m, hand_length_m,
 /// link_radius_scale (each optional) under a top-level `arm_size` map.
-/// @throws ConfigError
+/// @throws core::ConfigError
 [[nodiscard]] ArmSize loadArmSize(const std::filesystem::path& file);
 
 }  // namespace fullarm::arm

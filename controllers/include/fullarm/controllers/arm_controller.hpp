@@ -28,7 +28,7 @@ struct ArmControllerModel {
 };
 
 /// Builds the models of every joint of `gains` (in the file's order) for `model`.
-/// @throws arm::ConfigError for an unknown joint or invalid gains.
+/// @throws core::ConfigError for an unknown joint or invalid gains.
 [[nodiscard]] ArmControllerModel makeArmControllerModel(const GainsConfig& gains, const arm::ArmModel& model);
 
 /// State of every joint.

@@ -113,7 +113,7 @@ struct JointScenario {
 /// parameters from `plant_config`, gains and period from `gains`, inertia and gravity of the
 /// link about its axis from `model` at its default posture, motion toward the farther joint
 /// limit, sized to fit inside the limits.
-/// @throws arm::ConfigError for an unknown joint or a joint missing from a file.
+/// @throws core::ConfigError for an unknown joint or a joint missing from a file.
 [[nodiscard]] JointScenario makeJointScenario(const arm::ArmModel& model, const plant::PlantConfig& plant_config,
                                               const GainsConfig& gains, std::string_view name);
 

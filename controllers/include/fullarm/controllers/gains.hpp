@@ -82,16 +82,16 @@ struct GainsConfig {
 /// filter cutoffs >= 0 and below the Nyquist frequency of `control_period_s`, valve limit > 0
 /// and >= B_o, passivity cap > 0; every value finite.
 /// @param key_path prefix of key paths in the error, e.g. "joints[3]"
-/// @throws arm::ConfigError naming `file`, the key path, the value and what was expected.
+/// @throws core::ConfigError naming `file`, the key path, the value and what was expected.
 void validateJointGains(const JointGains& g, double control_period_s, const std::string& file = {},
                         const std::string& key_path = {});
 
 /// Loads and validates a gains file for `model` (strict: missing and unknown keys are errors;
 /// joint names must be arm joints of `model`, each at most once).
-/// @throws arm::ConfigError naming the file, line, key path and what was expected.
+/// @throws core::ConfigError naming the file, line, key path and what was expected.
 [[nodiscard]] GainsConfig loadGainsConfig(const std::filesystem::path& file, const arm::ArmModel& model);
 
-/// Parses gains YAML text; `source` names it in errors. @throws arm::ConfigError
+/// Parses gains YAML text; `source` names it in errors. @throws core::ConfigError
 [[nodiscard]] GainsConfig parseGainsConfig(std::string_view yaml_text, const std::filesystem::path& source,
                                            const arm::ArmModel& model);
 
@@ -109,7 +109,7 @@ void validateJointGains(const JointGains& g, double control_period_s, const std:
 [[nodiscard]] std::filesystem::path defaultTuneStartGainsPath();
 
 /// Index in config.joints of the joint called `name` (model name "R_EB" or short name "EB").
-/// @throws arm::ConfigError listing the known names when there is no such joint.
+/// @throws core::ConfigError listing the known names when there is no such joint.
 [[nodiscard]] int findGainsJoint(const GainsConfig& config, std::string_view name);
 
 /// "admittance" / "torque_pid".

@@ -109,7 +109,7 @@ struct JointControllerModel {
 
 /// Builds the model (validates `gains`, discretises Eq. 3 with the matrix exponential).
 /// @param dt_s control period [s] (> 0)
-/// @throws arm::ConfigError for invalid gains or period.
+/// @throws core::ConfigError for invalid gains or period.
 [[nodiscard]] JointControllerModel makeJointControllerModel(const JointGains& gains, ControllerKind kind, double dt_s);
 
 /// State and last outputs of one joint's controller (no heap).

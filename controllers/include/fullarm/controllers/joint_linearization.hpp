@@ -32,7 +32,7 @@ struct JointLoad {
 /// The joint's load from the arm model at `posture` (joint `joint_index` of the model), with
 /// the user's arm (`user`, as plant::ArmPlant merges it: point mass on its link, Cartesian
 /// spring and damper mapped through the cuff's point Jacobian) when the joint moves the cuff.
-/// @throws arm::ConfigError for an index or posture out of range.
+/// @throws core::ConfigError for an index or posture out of range.
 [[nodiscard]] JointLoad jointLoadFromArm(const arm::ArmModel& model, const plant::UserArmParams& user, int joint_index,
                                          const Eigen::VectorXd& posture);
 

@@ -60,7 +60,7 @@ struct DiscreteJointPlant {
 /// tau_env input, as a discrete system: inputs [q, tau_load_cell] (deviations), output the
 /// valve command u before the delay. Admittance states [theta_m, omega_m, q_prev, e_prev,
 /// (e'_f), (tau_f)]; torque PID states [integral, tau_prev, q_prev, (tau_f)].
-/// @throws arm::ConfigError for invalid gains (validateJointGains).
+/// @throws core::ConfigError for invalid gains (validateJointGains).
 [[nodiscard]] StateSpace controllerLinear(const JointGains& gains, ControllerKind kind, const VirtualWall& wall,
                                           double gravity_slope_nm_per_rad, const LoopSetup& setup);
 
@@ -104,7 +104,7 @@ inline constexpr double kMarginalPoleTolerance = 1e-7;
 
 /// The whole analysis of one joint: `model.include_user` decides whether the loop analysis
 /// couples the user's arm; the rendered impedance is always of the bare device.
-/// @throws arm::ConfigError for invalid gains; std::invalid_argument for a bad setup.
+/// @throws core::ConfigError for invalid gains; std::invalid_argument for a bad setup.
 [[nodiscard]] LinearChecks analyzeJoint(const JointPlantModel& model, const OperatingPoint& op, const JointGains& gains,
                                         const VirtualWall& wall, const LoopSetup& setup);
 

@@ -40,10 +40,10 @@
 
 #include "fullarm/controllers/closed_loop.hpp"
 #include "fullarm/controllers/gains.hpp"
-#include "fullarm/controllers/job_pool.hpp"
 #include "fullarm/controllers/scenario_analysis.hpp"
 #include "fullarm/controllers/tuner.hpp"
 #include "fullarm/controllers/validation.hpp"
+#include "fullarm/core/job_pool.hpp"
 
 namespace fullarm::controllers {
 
@@ -97,9 +97,9 @@ struct NonlinearStageOptions {
   /// order in blocks of this size, so the result is identical for any count.
   int threads = 1;
   /// When set, `threads` is ignored: the runs are simulated on the calling thread (a job of the
-  /// pool) and on the pool's workers that have no job left, in blocks of JobPool::available()
+  /// pool) and on the pool's workers that have no job left, in blocks of core::JobPool::available()
   /// taken in set order, so the result is the same as with any `threads`.
-  JobPool* pool = nullptr;
+  core::JobPool* pool = nullptr;
 };
 
 /// The linear stage's hard goals, checked on a candidate of the nonlinear stage.
@@ -217,7 +217,7 @@ inline constexpr double kRingStiffnessFractions[] = {0.25, 0.5, 0.75, 1.0};
                                             const std::vector<MonteCarloSample>& set, const LinearRequirements& req,
                                             int max_delay, int failure_cap = std::numeric_limits<int>::max(),
                                             const LinearHardGoals* hard_goals = nullptr, int threads = 1,
-                                            JobPool* pool = nullptr, bool reject_hard_violation = false);
+                                            core::JobPool* pool = nullptr, bool reject_hard_violation = false);
 
 /// Draws `count` samples of the stage's own stream (seed salted, so not validate's draws) for
 /// joint `joint_name`, indices [first, first + count).

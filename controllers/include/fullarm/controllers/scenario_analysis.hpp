@@ -47,7 +47,7 @@ struct ScenarioLinearResult {
 
 /// Analyses the scenario at its delay (margins, Ms, sector, passivity, gain limit), the
 /// stability for delays 1..`max_delay`, and the Z-width for `wall_dampings`.
-/// @throws std::runtime_error if no trim exists; arm::ConfigError for invalid gains.
+/// @throws std::runtime_error if no trim exists; core::ConfigError for invalid gains.
 [[nodiscard]] ScenarioLinearResult analyzeScenario(const JointScenario& scenario, const LinearRequirements& req,
                                                    int max_delay, const std::vector<double>& wall_dampings);
 

@@ -157,7 +157,7 @@ struct TuningResult {
 /// Tunes one joint. `nominal` carries the joint and its load (with the user's arm), `q_rad`
 /// the operating posture of the joint, `initial` the starting gains (B_o, filters and the
 /// non-tuned fields are kept). Deterministic for given inputs and options.
-/// @throws arm::ConfigError for invalid initial gains; std::invalid_argument for bad options.
+/// @throws core::ConfigError for invalid initial gains; std::invalid_argument for bad options.
 [[nodiscard]] TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const JointGains& initial,
                                      const LoopSetup& setup, const TuningGoals& goals, const TuningBounds& bounds,
                                      const UncertaintyRanges& ranges, const TunerOptions& options);

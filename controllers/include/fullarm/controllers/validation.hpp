@@ -51,9 +51,9 @@ struct ValidationConfig {
 
 /// Loads and validates a validation file (strict: missing and unknown keys are errors; every
 /// range needs min <= max within physical bounds).
-/// @throws arm::ConfigError naming the file, line, key path and what was expected.
+/// @throws core::ConfigError naming the file, line, key path and what was expected.
 [[nodiscard]] ValidationConfig loadValidationConfig(const std::filesystem::path& file);
-/// Parses validation YAML text; `source` names it in errors. @throws arm::ConfigError
+/// Parses validation YAML text; `source` names it in errors. @throws core::ConfigError
 [[nodiscard]] ValidationConfig parseValidationConfig(std::string_view yaml_text, const std::filesystem::path& source);
 /// $FULLARM_CONFIG_DIR/dts_validation.yaml if set, else the source-tree or installed config folder.
 [[nodiscard]] std::filesystem::path defaultValidationConfigPath();

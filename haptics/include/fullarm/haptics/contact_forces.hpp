@@ -39,13 +39,13 @@ struct HapticsParams {
 };
 
 /// Reads and validates a haptics YAML file (strict: unknown keys are errors).
-/// @throws arm::ConfigError naming the file, key path and expected value
+/// @throws core::ConfigError naming the file, key path and expected value
 [[nodiscard]] HapticsParams loadHapticsParams(const std::filesystem::path& file);
-/// arm::defaultConfigPath("haptics.yaml"): the shipped parameters (source tree or install).
+/// core::defaultConfigPath("haptics.yaml"): the shipped parameters (source tree or install).
 [[nodiscard]] std::filesystem::path defaultHapticsParamsPath();
 /// Same from text; `file` is only used in error messages.
 [[nodiscard]] HapticsParams parseHapticsParams(std::string_view yaml_text, const std::filesystem::path& file);
-/// @throws arm::ConfigError for non-positive stiffness, d_f >= L, negative damping, ...
+/// @throws core::ConfigError for non-positive stiffness, d_f >= L, negative damping, ...
 void validateHapticsParams(const HapticsParams& params, const std::filesystem::path& file);
 
 /// Contact statistics of one link (for the visual cue and the study statistics). "Contact"

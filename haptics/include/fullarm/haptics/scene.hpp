@@ -59,7 +59,7 @@ struct Scene {
 };
 
 /// Reads a scene file. Mesh files are resolved relative to the scene file's folder.
-/// @throws arm::ConfigError naming the file, the key path and what was expected, for YAML
+/// @throws core::ConfigError naming the file, the key path and what was expected, for YAML
 ///   errors, unknown or missing keys, bad values, duplicate object names, and meshes that
 ///   cannot be imported (the MeshError text is included).
 [[nodiscard]] Scene loadScene(const std::filesystem::path& file);
@@ -79,17 +79,9 @@ struct Scene {
 
 /// The full joint vector (size model.numJoints()) of the scene posture called `name`: its
 /// values, then the model's default posture for the joints it does not list.
-/// @throws arm::ConfigError (file = scene.source, key `arm.postures[i].q_rad`) if there is no
+/// @throws core::ConfigError (file = scene.source, key `arm.postures[i].q_rad`) if there is no
 ///   such posture, it has more values than the model has joints, or a value lies outside its
 ///   joint's range.
 [[nodiscard]] Eigen::VectorXd scenePosture(const Scene& scene, std::string_view name, const arm::ArmModel& model);
-
-/// Path of a shipped scene file `file_name` (e.g. "valve_wall.yaml"), found like the default
-/// configs (arm::defaultConfigPath): $FULLARM_SCENE_DIR/<file_name> if that variable is set;
-/// else, for a program installed under the install prefix, the installed
-/// `<datadir>/fullarm/scenes/`; else the source tree's `scenes/` (when the tree the library was
-/// built from still exists), else the installed one. The file is not opened here: loadScene()
-/// reports a missing file.
-[[nodiscard]] std::filesystem::path defaultScenePath(std::string_view file_name);
 
 }  // namespace fullarm::haptics

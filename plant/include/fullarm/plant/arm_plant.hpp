@@ -161,7 +161,7 @@ class ArmPlant {
 
   /// Whole arm: `joints` lists one JointParams per active joint (by name, in model order).
   /// @param posture initial posture of every model joint (locked joints stay there) [rad]
-  /// @throws arm::ConfigError for an unknown joint name or invalid parameters.
+  /// @throws core::ConfigError for an unknown joint name or invalid parameters.
   void configure(const arm::ArmModel& model, const std::vector<JointParams>& joints, const Eigen::VectorXd& posture,
                  const UserArmParams& user, const SolverOptions& options, std::uint64_t seed = 1);
   /// One joint with an explicit rigid load (no arm model).

@@ -131,7 +131,7 @@ struct JointParams {
 /// Checks ranges and consistency (positive volumes and gains, supply > return, cylinder lever
 /// monotonic over the joint range, ...).
 /// @param key_path prefix of the key paths in the error, e.g. "joints[3]"
-/// @throws arm::ConfigError naming `file`, the key path, the value and what was expected.
+/// @throws core::ConfigError naming `file`, the key path, the value and what was expected.
 void validateJointParams(const JointParams& p, const std::string& file = {}, const std::string& key_path = {});
 
 }  // namespace fullarm::plant

@@ -26,11 +26,11 @@ struct PlantConfig {
 };
 
 /// Loads and validates a plant file for `model` (strict: missing and unknown keys are errors).
-/// @throws arm::ConfigError naming the file, line, key path and what was expected.
+/// @throws core::ConfigError naming the file, line, key path and what was expected.
 [[nodiscard]] PlantConfig loadPlantConfig(const std::filesystem::path& file, const arm::ArmModel& model);
 
 /// Parses plant YAML text; `source` names it in errors.
-/// @throws arm::ConfigError
+/// @throws core::ConfigError
 [[nodiscard]] PlantConfig parsePlantConfig(std::string_view yaml_text, const std::filesystem::path& source,
                                            const arm::ArmModel& model);
 
@@ -39,7 +39,7 @@ struct PlantConfig {
 
 /// Index in config.joints of the joint called `name`; accepts the model name ("R_EB") or
 /// the short name ("EB").
-/// @throws arm::ConfigError listing the known names when there is no such joint.
+/// @throws core::ConfigError listing the known names when there is no such joint.
 [[nodiscard]] int findPlantJoint(const PlantConfig& config, std::string_view name);
 
 }  // namespace fullarm::plant

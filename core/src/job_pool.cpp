@@ -1,4 +1,4 @@
-#include "fullarm/controllers/job_pool.hpp"
+#include "fullarm/core/job_pool.hpp"
 
 #include <algorithm>
 #include <stdexcept>
@@ -7,7 +7,7 @@
 #include <thread>
 #include <utility>
 
-namespace fullarm::controllers {
+namespace fullarm::core {
 
 JobPool::JobPool(int threads, ThreadStarter start_thread) : threads_(threads), start_thread_(std::move(start_thread)) {
   if (threads < 1) throw std::invalid_argument("JobPool: expected threads >= 1, got " + std::to_string(threads));
@@ -127,4 +127,4 @@ void JobPool::fanOut(int tasks, const std::function<void(int)>& task) {
   if (b.error) std::rethrow_exception(b.error);
 }
 
-}  // namespace fullarm::controllers
+}  // namespace fullarm::core

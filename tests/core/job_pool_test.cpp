@@ -3,7 +3,7 @@
 // (two tasks that can only finish together), errors reach the caller (the lowest-numbered
 // failure's), and bad sizes are refused.
 
-#include "fullarm/controllers/job_pool.hpp"
+#include "fullarm/core/job_pool.hpp"
 
 #include <gtest/gtest.h>
 
@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-namespace fullarm::controllers {
+namespace fullarm::core {
 namespace {
 
 // Waits (bounded, so that a scheduling bug fails the test instead of hanging it) until `done()`.
@@ -36,7 +36,7 @@ bool waitFor(Done done) {
 TEST(JobPool, EveryJobAndEveryTaskRunsExactlyOnceForAnyThreadCount) {
   constexpr int kJobs = 9;
   for (const int threads : {1, 2, 3, 5}) {
-    JobPool pool(threads);
+    core::JobPool pool(threads);
     EXPECT_EQ(pool.threads(), threads);
     std::vector<std::atomic<int>> job_hits(kJobs);
     // Job j fans out 3 + j tasks twice (two blocks, as the nonlinear stage does).
@@ -66,7 +66,7 @@ TEST(JobPool, EveryJobAndEveryTaskRunsExactlyOnceForAnyThreadCount) {
 // thread is inside task 0, which waits for task 1 to start (a sequential fan-out would never end:
 // the bounded wait then fails the test).
 TEST(JobPool, AWorkerWithNoJobLeftRunsTheTasksOfAnother) {
-  JobPool pool(2);
+  core::JobPool pool(2);
   std::thread::id owner;
   std::thread::id helper;
   std::atomic<bool> task1_started{false};
@@ -91,7 +91,7 @@ TEST(JobPool, AWorkerWithNoJobLeftRunsTheTasksOfAnother) {
 }
 
 TEST(JobPool, AFanOutOutsideARunIsDoneByTheCaller) {
-  JobPool pool(3);
+  core::JobPool pool(3);
   EXPECT_EQ(pool.available(), 1);
   std::vector<std::thread::id> ran(6);
   pool.fanOut(6, [&](int i) { ran[static_cast<std::size_t>(i)] = std::this_thread::get_id(); });
@@ -99,7 +99,7 @@ TEST(JobPool, AFanOutOutsideARunIsDoneByTheCaller) {
 }
 
 TEST(JobPool, ErrorsOfJobsAndTasksReachTheCallerAfterTheOthersEnd) {
-  JobPool pool(2);
+  core::JobPool pool(2);
   std::atomic<int> finished{0};
   EXPECT_THROW(pool.run(6,
                         [&](int j) {
@@ -123,14 +123,14 @@ TEST(JobPool, ErrorsOfJobsAndTasksReachTheCallerAfterTheOthersEnd) {
   });
   EXPECT_TRUE(caught);
   EXPECT_EQ(tasks.load(), 5);
-  EXPECT_THROW(JobPool(0), std::invalid_argument);
+  EXPECT_THROW(core::JobPool(0), std::invalid_argument);
 }
 
 // The error a caller sees is the lowest-numbered failure's, not the first in time: job 1 (task 1)
 // fails and its thread goes idle (available() == 2, so its error is recorded) before job 0 (task
 // 0) fails. The old rule, first in time, reported job 1 and task 1.
 TEST(JobPool, TheLowestNumberedFailureIsReportedWhateverTheTiming) {
-  JobPool pool(2);
+  core::JobPool pool(2);
   std::atomic<bool> job1_failed{false};
   std::string message;
   try {
@@ -175,7 +175,7 @@ TEST(JobPool, TheLowestNumberedFailureIsReportedWhateverTheTiming) {
 TEST(JobPool, WhenTheSystemRefusesThreadsTheWorkersStartedDoAllTheWork) {
   for (const int allowed : {0, 1}) {
     int started = 0;
-    JobPool pool(4, [&](std::function<void()> body) {
+    core::JobPool pool(4, [&](std::function<void()> body) {
       if (started >= allowed) throw std::system_error(std::make_error_code(std::errc::resource_unavailable_try_again));
       ++started;
       return std::thread(std::move(body));
@@ -203,4 +203,4 @@ TEST(JobPool, WhenTheSystemRefusesThreadsTheWorkersStartedDoAllTheWork) {
 }
 
 }  // namespace
-}  // namespace fullarm::controllers
+}  // namespace fullarm::core

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace fullarm::arm {
+namespace fullarm::core {
 
 /// Thrown when a configuration file (YAML) or a configuration value is invalid.
 ///
@@ -33,4 +33,4 @@ class ConfigError : public std::runtime_error {
   int line_;
 };
 
-}  // namespace fullarm::arm
+}  // namespace fullarm::core

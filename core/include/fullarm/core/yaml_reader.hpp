@@ -16,9 +16,9 @@
 #include <type_traits>
 #include <vector>
 
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 
-namespace fullarm::arm {
+namespace fullarm::core {
 
 class YamlList;
 
@@ -99,11 +99,4 @@ template <typename Build>
   }
 }
 
-/// Index in `joint_names` (model names such as "R_EB") of the joint called `name`, given either
-/// as the model name or as the short name without the "R_" side prefix ("EB").
-/// @throws ConfigError (file `source`, key path `joint`) naming `name` and listing the short
-/// names it could have been.
-[[nodiscard]] int findJointByName(const std::vector<std::string_view>& joint_names, std::string_view name,
-                                  const std::filesystem::path& source);
-
-}  // namespace fullarm::arm
+}  // namespace fullarm::core

@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-namespace fullarm::controllers {
+namespace fullarm::core {
 
 /// Worker threads for coarse jobs and the fine tasks they fan out.
 class JobPool {
@@ -83,4 +83,4 @@ class JobPool {
   int job_error_index_ = 0;       // its index; jobs_ while none failed
 };
 
-}  // namespace fullarm::controllers
+}  // namespace fullarm::core

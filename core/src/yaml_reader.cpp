@@ -1,12 +1,12 @@
-#include "fullarm/arm/yaml_reader.hpp"
+#include "fullarm/core/yaml_reader.hpp"
 
 #include <cmath>
 #include <fstream>
 #include <sstream>
 
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 
-namespace fullarm::arm {
+namespace fullarm::core {
 namespace {
 
 int lineOf(const YAML::Node& node) {
@@ -223,16 +223,4 @@ int lineOfKeyPath(const YAML::Node& root, std::string_view key_path) {
   return lineOf(node);
 }
 
-int findJointByName(const std::vector<std::string_view>& joint_names, std::string_view name,
-                    const std::filesystem::path& source) {
-  std::string known;
-  for (std::size_t i = 0; i < joint_names.size(); ++i) {
-    const std::string_view full = joint_names[i];
-    const std::string_view shortname = full.starts_with("R_") ? full.substr(2) : full;
-    if (name == full || name == shortname) return static_cast<int>(i);
-    known += (known.empty() ? "" : ", ") + std::string(shortname);
-  }
-  throw ConfigError(source, "joint", "unknown joint name '" + std::string(name) + "': expected one of " + known);
-}
-
-}  // namespace fullarm::arm
+}  // namespace fullarm::core

@@ -1,8 +1,8 @@
-#include "fullarm/arm/config_error.hpp"
+#include "fullarm/core/config_error.hpp"
 
 #include <sstream>
 
-namespace fullarm::arm {
+namespace fullarm::core {
 namespace {
 
 std::string formatConfigError(const std::filesystem::path& file, const std::string& key_path,
@@ -25,4 +25,4 @@ ConfigError::ConfigError(std::filesystem::path file, std::string key_path, std::
       message_(std::move(message)),
       line_(line) {}
 
-}  // namespace fullarm::arm
+}  // namespace fullarm::core
