@@ -77,6 +77,8 @@ T* checkPtr(T* p, const char* call) {
 }
 
 constexpr int kMaxEventsPerPeriod = 64;
+// Length of the configuration-time CVODES call that sets up its linear solver interface [s].
+constexpr double kWarmUpTimeS = 1e-9;
 // Joint count of the whole DTS arm, for which the small dense loops below are compiled at fixed size.
 constexpr int kArmJoints = 7;
 // First Rodas3 step after a reset [s]; the controller adapts it from there.
@@ -459,6 +461,18 @@ void ArmPlant::allocate(const SolverOptions& options, std::uint64_t seed) {
   check(CVodeSetMaxNumSteps(mem, options.max_steps_per_period), "CVodeSetMaxNumSteps");
   check(CVodeRootInit(mem, 2 * n_, &SolverCallbacks::roots), "CVodeRootInit");
   check(CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
+  // The first CVode call after CVodeInit sets up the linear solver interface, which allocates a
+  // copy of the Jacobian matrix (cvLsInitialize clones it once). Make that call here, where
+  // allocation is allowed, so that step() never allocates: one internal step from the zero
+  // state, whose result is discarded. Every run starts with CVodeReInit (reset() requests it),
+  // which keeps the copy.
+  {
+    double t_reached = 0.0;
+    check(CVodeSetStopTime(mem, kWarmUpTimeS), "CVodeSetStopTime");
+    (void)CVode(mem, kWarmUpTimeS, s->y.get(), &t_reached, CV_ONE_STEP);
+    N_VConst(0.0, s->y.get());
+    error_[0] = '\0';
+  }
   solver_ = std::move(s);
   rodas_.reset();
   if (options.integrator == IntegratorKind::kRodas3 || options.integrator == IntegratorKind::kRodas4 ||
