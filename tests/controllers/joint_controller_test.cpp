@@ -385,7 +385,7 @@ TEST(ArmController, GravityFromTheArmModelCancelsAtRest) {
 }
 
 TEST(ControllersRealtime, StepsDoNotAllocate) {
-  ASSERT_TRUE(testing::mallocWrappersActive());
+  ASSERT_TRUE(testing::allocatorInterposed());
   for (ControllerKind kind : {ControllerKind::kAdmittance, ControllerKind::kTorquePid}) {
     JointGains g = baseGains();
     g.passivity.enabled = true;

@@ -13,7 +13,7 @@ namespace fullarm::plant {
 namespace {
 
 TEST(PlantRealtime, GuardIsActive) {
-  EXPECT_TRUE(fullarm::testing::mallocWrappersActive());
+  EXPECT_TRUE(fullarm::testing::allocatorInterposed());
 }
 
 class PlantRealtimeIntegrators : public ::testing::TestWithParam<IntegratorKind> {};

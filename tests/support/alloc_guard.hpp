@@ -2,11 +2,15 @@
 /// @file
 /// Heap-allocation guard for tests of @rt code.
 ///
-/// Counts every heap allocation made on the current thread while a guard is alive: operator
-/// new (all forms) is replaced, and malloc/calloc/realloc/aligned_alloc/posix_memalign/memalign
-/// are wrapped at link time (`-Wl,--wrap=...`, set by the fullarm_test_support target), which
-/// also catches Eigen's direct std::malloc calls. The wrapping forwards to the real functions,
-/// so it composes with AddressSanitizer.
+/// Counts every heap allocation the current thread makes while a guard is alive, from any code:
+/// the test program itself, the fullarm libraries, and the shared libraries they call (CVODES,
+/// yaml-cpp, libstdc++, ...). The test executable defines the C allocation functions (malloc,
+/// calloc, realloc, free, aligned_alloc, posix_memalign, memalign, valloc, pvalloc) and every
+/// form of operator new/delete; the dynamic linker resolves every library's calls to these
+/// definitions first, and they forward to the next definition in the lookup order, found with
+/// dlsym(RTLD_NEXT). Under AddressSanitizer or ThreadSanitizer, whose allocator already serves
+/// every library, the guard counts through the sanitizer's allocation hooks instead
+/// (__sanitizer_install_malloc_and_free_hooks).
 ///
 ///   fullarm::testing::AllocationGuard guard;
 ///   computeForwardKinematics(model, data, q);
@@ -38,9 +42,9 @@ class AllocationGuard {
   std::size_t start_bytes_;
 };
 
-/// True when the malloc-family wrappers are linked in (false would make the guard blind to
-/// Eigen's allocations; tests assert it).
-[[nodiscard]] bool mallocWrappersActive() noexcept;
+/// True when this program's allocation functions are the ones every library calls (false would
+/// make the guard blind to allocations in shared libraries; tests assert it).
+[[nodiscard]] bool allocatorInterposed() noexcept;
 
 }  // namespace fullarm::testing
 

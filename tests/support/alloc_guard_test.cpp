@@ -3,17 +3,64 @@
 #include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
+#include <yaml-cpp/yaml.h>
+
 #include <Eigen/Core>
 #include <cstdlib>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace fullarm::testing {
 namespace {
 
-TEST(AllocationGuard, MallocWrappersAreLinked) {
-  EXPECT_TRUE(mallocWrappersActive());
+extern "C" {
+void fullarmProbeMallocAndFree(std::size_t bytes);
+std::size_t fullarmProbeNewString(std::size_t length);
+}
+
+TEST(AllocationGuard, TheProgramsAllocatorIsTheOneLibrariesCall) {
+  EXPECT_TRUE(allocatorInterposed());
+}
+
+// malloc and operator new called from inside a shared library (not the test program) count.
+TEST(AllocationGuard, CountsAllocationsInsideASharedLibrary) {
+  AllocationGuard guard;
+  fullarmProbeMallocAndFree(48);
+  EXPECT_EQ(guard.allocations(), 1u);
+  EXPECT_EQ(guard.bytes(), 48u);
+  EXPECT_EQ(fullarmProbeNewString(200), 200u);
+  EXPECT_EQ(guard.allocations(), 3u);  // the std::string object and its buffer
+}
+
+TEST(AllocationGuard, MacroFailsWhenASharedLibraryAllocates) {
+  EXPECT_NONFATAL_FAILURE(EXPECT_NO_HEAP_ALLOCATION(fullarmProbeMallocAndFree(16)), "allocated 1 times");
+}
+
+// A real dependency: yaml-cpp's parser allocates inside libyaml-cpp.so.
+TEST(AllocationGuard, CountsAllocationsOfYamlCpp) {
+  AllocationGuard guard;
+  const YAML::Node node = YAML::Load("joint: R_EB\nlimits: [-0.5, 2.1]\n");
+  EXPECT_GE(guard.allocations(), 1u);
+  EXPECT_EQ(node["joint"].as<std::string>(), "R_EB");
+}
+
+// The guard is armed per thread: another thread's allocations do not count.
+TEST(AllocationGuard, CountsOnlyTheArmingThread) {
+  AllocationGuard guard;
+  std::thread other;
+  const std::size_t before = guard.allocations();  // starting a thread may allocate here
+  {
+    // Allocations made by the other thread while this one waits.
+    other = std::thread([] {
+      for (int i = 0; i < 10; ++i) fullarmProbeMallocAndFree(32);
+    });
+  }
+  const std::size_t after_start = guard.allocations();
+  other.join();
+  EXPECT_EQ(guard.allocations(), after_start);
+  EXPECT_GE(after_start, before);
 }
 
 TEST(AllocationGuard, CountsOperatorNew) {
