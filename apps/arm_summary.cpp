@@ -12,7 +12,7 @@ namespace fullarm::app {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-constexpr unsigned kReachSeed = 1;
+constexpr std::uint64_t kReachSeed = 1;
 // Half-thickness of the slab through the shoulder shown as the reach cross-section.
 constexpr double kSlabHalfThickness_m = 0.02;
 

@@ -4,6 +4,7 @@
 /// the joint ranges, and the largest shoulder-to-hand distance among them.
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "fullarm/arm/arm_model.hpp"
@@ -21,11 +22,12 @@ struct ReachSample {
 };
 
 /// Draws `samples` postures, each joint uniform on [min_rad, max_rad] of its limits, and records
-/// the hand point of each (forward kinematics). The same model, count and seed give the same
-/// postures in the same order.
+/// the hand point of each (forward kinematics). Posture k is drawn from
+/// core::RandomStream(seed, nameSlot("arm.reach"), k), so it depends on the seed and k alone:
+/// the same seed gives the same postures, and a shorter run the first postures of a longer one.
 /// @param samples number of postures (>= 0)
 /// @param seed    seed of the draws
 /// @throws std::invalid_argument if `samples` is negative
-[[nodiscard]] ReachSample sampleReach(const ArmModel& model, int samples, unsigned seed);
+[[nodiscard]] ReachSample sampleReach(const ArmModel& model, int samples, std::uint64_t seed);
 
 }  // namespace fullarm::arm
