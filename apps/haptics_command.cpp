@@ -17,16 +17,13 @@
 #include "fullarm/haptics/query.hpp"
 #include "fullarm/haptics/scene.hpp"
 #include "fullarm/reports/report.hpp"
+#include "result_tables.hpp"
 
 namespace fullarm::app {
 namespace {
 
 constexpr const char* kDemoScene = "valve_wall.yaml";
 constexpr const char* kDemoPosture = "reach_valve";
-
-nlohmann::json vectorJson(const Eigen::Vector3d& v) {
-  return nlohmann::json::array({v.x(), v.y(), v.z()});
-}
 
 nlohmann::json listJson(const Eigen::VectorXd& v) {
   return std::vector<double>(v.data(), v.data() + v.size());
@@ -56,50 +53,6 @@ std::string linksInContactText(const arm::ArmModel& model, const haptics::Contac
     any = true;
   }
   return any ? out.str() : "none";
-}
-
-// Per-link contact records of one rendering, with the summed force on each link [N] (scene frame).
-nlohmann::json linkRecordsJson(const arm::ArmModel& model, const Eigen::Matrix3d& R_SW,
-                               const haptics::ContactData& contact) {
-  const std::vector<Eigen::Vector3d>& f = contact.link_force_W;
-  nlohmann::json list = nlohmann::json::array();
-  for (int l = 0; l < model.numJoints(); ++l) {
-    const haptics::LinkContactRecord& r = contact.links[static_cast<std::size_t>(l)];
-    list.push_back({{"link", linkName(model, l)},
-                    {"hand_link", haptics::isHandLink(model, l)},
-                    {"min_distance_m",
-                     std::isfinite(r.min_distance_m) ? nlohmann::json(r.min_distance_m) : nlohmann::json(nullptr)},
-                    {"in_contact", r.in_contact},
-                    {"penetrating", r.penetrating},
-                    {"depth_m", r.depth_m},
-                    {"force_n", vectorJson(Eigen::Vector3d(R_SW * f[static_cast<std::size_t>(l)]))}});
-  }
-  return list;
-}
-
-// Per-link contact records (from the first rendering; they do not depend on the mode) with the
-// magnitude of the summed force on each link in each rendering.
-reports::Table linkRecordsTable(const arm::ArmModel& model,
-                                const std::vector<std::pair<std::string, const haptics::ContactData*>>& renderings,
-                                std::string caption) {
-  reports::Table table;
-  table.caption = std::move(caption);
-  table.columns = {"Link", "Hand link", "Min distance [mm]", "In contact", "Depth [mm]", "Penetrating"};
-  for (const auto& [label, contact] : renderings) table.columns.push_back(label);
-  for (int l = 0; l < model.numJoints(); ++l) {
-    const haptics::LinkContactRecord& rec = renderings.front().second->links[static_cast<std::size_t>(l)];
-    std::vector<reports::Cell> row = {
-        linkName(model, l),
-        haptics::isHandLink(model, l) ? "yes" : "no",
-        std::isfinite(rec.min_distance_m) ? reports::Cell(rec.min_distance_m * 1e3) : reports::Cell("beyond L"),
-        rec.in_contact ? "yes" : "no",
-        rec.depth_m * 1e3,
-        rec.penetrating ? "yes" : "no"};
-    for (const auto& [label, contact] : renderings)
-      row.emplace_back(contact->link_force_W[static_cast<std::size_t>(l)].norm());
-    table.rows.push_back(std::move(row));
-  }
-  return table;
 }
 
 }  // namespace
@@ -191,42 +144,15 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
     r["force_threshold_m"] = params.force_threshold_m;
     r["prune_radius_m"] = params.prune_radius_m;
     r["search_ms"] = search_ms;
-    nlohmann::json list = nlohmann::json::array();
-    reports::Table table;
-    table.caption = "Minima within the cutoff (scene frame)";
-    table.columns = {"Link", "Object", "Distance [mm]", "Force [N]", "Rendered", "x [m]", "y [m]", "z [m]"};
-    for (std::size_t i = 0; i < minima.size(); ++i) {
-      const haptics::LocalMinimum& m = minima[i];
-      const Eigen::Vector3d p_S = X_SW * query.X_WL[static_cast<std::size_t>(m.link)] * m.p_L;
-      const Eigen::Vector3d q_S = X_SW * world.object(m.object).X_WO * m.p_O;
-      list.push_back({{"link", model.joints[static_cast<std::size_t>(m.link)].name},
-                      {"object", scene.objects[static_cast<std::size_t>(m.object)].name},
-                      {"distance_m", m.distance_m},
-                      {"point_link_scene_m", vectorJson(p_S)},
-                      {"point_object_scene_m", vectorJson(q_S)},
-                      {"force_n", vectorJson(X_SW.linear() * contact.f_W[i])},
-                      {"rendered", contact.rendered[i] != 0}});
-      table.rows.push_back({model.joints[static_cast<std::size_t>(m.link)].name,
-                            scene.objects[static_cast<std::size_t>(m.object)].name, m.distance_m * 1e3,
-                            contact.f_W[i].norm(), contact.rendered[i] ? "yes" : "no", p_S.x(), p_S.y(), p_S.z()});
-    }
-    r["minima"] = list;
-    r["tau_contact_nm"] = listJson(rendering.tau_contact_nm);
-    r["tau_gravity_nm"] = listJson(query.tau_gravity_nm);
-    r["tau_total_nm"] = listJson(rendering.tau_total_nm);
     r["fault"] = contact.fault;
-    r["links"] = linkRecordsJson(model, X_SW.linear(), contact);
-    reports::Table torques;
-    torques.caption = "Joint torques";
-    torques.columns = {"Joint", "Contact [N·m]", "Gravity [N·m]", "Total [N·m]"};
-    for (int j = 0; j < model.numJoints(); ++j) {
-      torques.rows.push_back({model.joints[static_cast<std::size_t>(j)].name, rendering.tau_contact_nm[j],
-                              query.tau_gravity_nm[j], rendering.tau_total_nm[j]});
-    }
+    ResultTable minima_table = minimaTable(model, scene, world, query, "Minima within the cutoff (scene frame)");
+    ResultTable torques = jointTorquesTable(model, query, "Joint torques");
+    ResultTable links = linkRecordsTable(model, scene, query, "Per-link contact records");
     reports::Section& section = report.addSection("Minima, forces and torques");
-    section.addTable(std::move(table));
-    section.addTable(std::move(torques));
-    section.addTable(linkRecordsTable(model, {{"Force [N]", &contact}}, "Per-link contact records"));
+    for (ResultTable* t : {&minima_table, &torques, &links}) {
+      mergeJson(r, t->json);
+      section.addTable(std::move(t->table));
+    }
     report.write(o.out_dir);
     std::cout << "\nReport: " << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
   }
@@ -248,8 +174,6 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   const haptics::QueryRendering& full = query.renderings[0];
   const haptics::QueryRendering& hand = query.renderings[1];
   const double search_ms = query.search_ms;
-  const Eigen::Isometry3d X_SW = haptics::armBasePose(scene, model);
-  const Eigen::Matrix3d R_SW = X_SW.linear();
   const int n = model.numJoints();
 
   const bool no_fault = !full.contact.fault && !hand.contact.fault;
@@ -297,56 +221,21 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   r["force_threshold_m"] = params.force_threshold_m;
   r["prune_radius_m"] = params.prune_radius_m;
   r["num_minima"] = minima.size();
-  r["tau_gravity_nm"] = listJson(query.tau_gravity_nm);
-  nlohmann::json minima_json = nlohmann::json::array();
-  reports::Table minima_table;
-  minima_table.caption = "Minima within the cutoff at " + std::string(kDemoPosture) +
-                         " (one SNCH search; the mode decides which minima make forces)";
-  minima_table.columns = {"Link",  "Hand link", "Object", "Distance [mm]", "Force full-arm [N]", "Force hand-only [N]",
-                          "x [m]", "y [m]",     "z [m]"};
-  for (std::size_t i = 0; i < minima.size(); ++i) {
-    const haptics::LocalMinimum& m = minima[i];
-    const Eigen::Vector3d p_S = X_SW * query.X_WL[static_cast<std::size_t>(m.link)] * m.p_L;
-    const bool hand_link = haptics::isHandLink(model, m.link);
-    const std::string& object = scene.objects[static_cast<std::size_t>(m.object)].name;
-    minima_json.push_back({{"link", linkName(model, m.link)},
-                           {"hand_link", hand_link},
-                           {"object", object},
-                           {"distance_m", m.distance_m},
-                           {"point_link_scene_m", vectorJson(p_S)},
-                           {"force_full_arm_n", vectorJson(Eigen::Vector3d(R_SW * full.contact.f_W[i]))},
-                           {"force_hand_only_n", vectorJson(Eigen::Vector3d(R_SW * hand.contact.f_W[i]))},
-                           {"rendered_full_arm", full.contact.rendered[i] != 0},
-                           {"rendered_hand_only", hand.contact.rendered[i] != 0}});
-    minima_table.rows.push_back({linkName(model, m.link), hand_link ? "yes" : "no", object, m.distance_m * 1e3,
-                                 full.contact.f_W[i].norm(), hand.contact.f_W[i].norm(), p_S.x(), p_S.y(), p_S.z()});
+  ResultTable minima_table = minimaTable(model, scene, world, query,
+                                         "Minima within the cutoff at " + std::string(kDemoPosture) +
+                                             " (one SNCH search; the mode decides which minima make forces)");
+  for (const haptics::QueryRendering& x : query.renderings) {
+    nlohmann::json& mode = r[modeKey(x.mode)];
+    mode["fault"] = x.contact.fault;
+    mode["active_springs"] = x.contact.active_springs;
   }
-  r["minima"] = minima_json;
-  const auto modeJson = [&](const haptics::QueryRendering& x) {
-    nlohmann::json j;
-    j["fault"] = x.contact.fault;
-    j["active_springs"] = x.contact.active_springs;
-    j["tau_contact_nm"] = listJson(x.tau_contact_nm);
-    j["tau_total_nm"] = listJson(x.tau_total_nm);
-    j["links"] = linkRecordsJson(model, R_SW, x.contact);
-    return j;
-  };
-  r["full_arm"] = modeJson(full);
-  r["hand_only"] = modeJson(hand);
-
-  reports::Table torques;
-  torques.caption = "Joint torques at " + std::string(kDemoPosture) + ", full-arm vs hand-only";
-  torques.columns = {"Joint",         "Contact full-arm [N·m]", "Contact hand-only [N·m]",
-                     "Gravity [N·m]", "Total full-arm [N·m]",   "Total hand-only [N·m]"};
-  for (int j = 0; j < n; ++j) {
-    torques.rows.push_back({linkName(model, j), full.tau_contact_nm[j], hand.tau_contact_nm[j], query.tau_gravity_nm[j],
-                            full.tau_total_nm[j], hand.tau_total_nm[j]});
-  }
+  ResultTable torques =
+      jointTorquesTable(model, query, "Joint torques at " + std::string(kDemoPosture) + ", full-arm vs hand-only");
   std::ostringstream df_text;
   df_text << std::fixed << std::setprecision(1) << params.force_threshold_m * 1e3;
-  reports::Table links =
-      linkRecordsTable(model, {{"Force full-arm [N]", &full.contact}, {"Force hand-only [N]", &hand.contact}},
-                       "Per-link contact records (recorded in both modes; d_f = " + df_text.str() + " mm)");
+  ResultTable links = linkRecordsTable(
+      model, scene, query, "Per-link contact records (recorded in both modes; d_f = " + df_text.str() + " mm)");
+  for (const ResultTable* t : {&minima_table, &torques, &links}) mergeJson(r, t->json);
   report.addHeadlineNumber("haptics_minima", "Minima at the valve reach", static_cast<double>(minima.size()), "");
   report.addHeadlineNumber("haptics_tau_contact_full_arm_nm", "Contact torque norm, full-arm",
                            full.tau_contact_nm.norm(), "N·m");
@@ -356,9 +245,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
                        ". Full-arm mode renders a spring at every minimum "
                        "closer than d_f; hand-only mode (the paper's baseline) only at minima on the hand links, "
                        "while the contact records still cover every link.");
-  section.addTable(std::move(minima_table));
-  section.addTable(std::move(torques));
-  section.addTable(std::move(links));
+  for (ResultTable* t : {&minima_table, &torques, &links}) section.addTable(std::move(t->table));
   return step;
 }
 

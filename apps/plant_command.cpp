@@ -12,6 +12,7 @@
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/plant_config.hpp"
 #include "fullarm/plant/simulation.hpp"
+#include "result_tables.hpp"
 
 namespace fullarm::app {
 namespace {
@@ -52,32 +53,6 @@ void addTraceCharts(reports::Section& section, const plant::JointTrace& tr, cons
   torque.y_axis = {"Torque", "N·m"};
   torque.series.push_back(series("tau measured", tr.time_s, tr.tau_measured_nm));
   section.addLineChart(std::move(torque));
-}
-
-void addStatsTable(reports::Section& section, const plant::SimulationResult& r) {
-  reports::Table t;
-  t.caption = "CVODES statistics (BDF, dense direct solver, analytic Jacobian)";
-  t.columns = {"Quantity", "Value"};
-  t.rows = {
-      {"Simulated time [s]", r.simulated_s},           {"Wall time [s]", r.wall_s},
-      {"Real-time factor", r.realTimeFactor()},        {"Steps", r.stats.steps},
-      {"RHS evaluations", r.stats.rhs_evals},          {"Jacobian evaluations", r.stats.jac_evals},
-      {"Error-test failures", r.stats.err_test_fails}, {"Nonlinear convergence failures", r.stats.nonlin_conv_fails},
-      {"Re-initialisations", r.stats.reinits},         {"Hard-stop events", r.stats.root_events}};
-  section.addTable(std::move(t));
-}
-
-nlohmann::json statsJson(const plant::SimulationResult& r) {
-  return {{"simulated_s", r.simulated_s},
-          {"wall_s", r.wall_s},
-          {"real_time_factor", r.realTimeFactor()},
-          {"steps", r.stats.steps},
-          {"rhs_evals", r.stats.rhs_evals},
-          {"jac_evals", r.stats.jac_evals},
-          {"err_test_fails", r.stats.err_test_fails},
-          {"nonlin_conv_fails", r.stats.nonlin_conv_fails},
-          {"reinits", r.stats.reinits},
-          {"root_events", r.stats.root_events}};
 }
 
 }  // namespace
@@ -182,14 +157,15 @@ int runPlantSimulate(const PlantSimulateOptions& o) {
                            {"p_max_pa", tr.p_max_pa},
                            {"stop_overshoot_deg", tr.stop_overshoot_rad * kRadToDeg}});
   }
+  ResultTable stats = solverStatsTable(r);
   report.results()["plant"] = {{"input", o.input},         {"duration_s", o.duration_s}, {"dt_s", o.dt_s},
-                               {"whole_arm", o.whole_arm}, {"solver", statsJson(r)},     {"joints", joints_json},
-                               {"solver_ok", r.solver_ok}};
+                               {"whole_arm", o.whole_arm}, {"joints", joints_json},      {"solver_ok", r.solver_ok}};
+  mergeJson(report.results()["plant"], stats.json);
   reports::Section& section = report.addSection("Simulation");
   section.addParagraph("Plant: " + config.source.string() + ". Input: " + description +
                        ". CSV columns: time_s, command, q_rad, qd_rad_s, tau_measured_nm, p_a_pa, p_b_pa, spool "
                        "(state at time_s; command held over the following period).");
-  addStatsTable(section, r);
+  section.addTable(std::move(stats.table));
   const std::string unit = joints[0].input_mode == plant::InputMode::kValveVoltage ? "V" : "N·m";
   for (const plant::JointTrace& tr : r.traces) addTraceCharts(report.addSection("Joint " + tr.joint), tr, unit);
   report.write(o.out_dir);
@@ -220,12 +196,14 @@ PlantDemoStep runPlantDemoStep(const arm::ArmModel& model, const std::filesystem
   detail << "R_EB chirp 0.5-80 Hz, 5 s: real-time factor " << std::setprecision(3) << r.realTimeFactor() << ", "
          << r.stats.steps << " CVODES steps";
   step.detail = r.solver_ok ? detail.str() : "CVODES failed: " + r.solver_error;
-  report.results()["plant"] = {{"joint", joint.name}, {"input", "chirp"}, {"solver", statsJson(r)}};
+  ResultTable stats = solverStatsTable(r);
+  report.results()["plant"] = {{"joint", joint.name}, {"input", "chirp"}};
+  mergeJson(report.results()["plant"], stats.json);
   reports::Section& section = report.addSection("Plant: simulated chirp experiment on R_EB");
   section.addParagraph(
       "The hydraulic plant (config/dts_plant.yaml) driven by a 0.5-80 Hz linear chirp at 30 % of "
       "full valve opening, 1 kHz zero-order hold, as an identification experiment would record it.");
-  addStatsTable(section, r);
+  section.addTable(std::move(stats.table));
   addTraceCharts(section, r.traces[0], "V");
   return step;
 }
