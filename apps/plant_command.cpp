@@ -32,7 +32,8 @@ reports::Series series(const std::string& name, const std::vector<double>& x, co
   return s;
 }
 
-void addTraceCharts(reports::Section& section, const plant::JointTrace& tr, const std::string& command_unit) {
+void addTraceCharts(reports::Section& section, const plant::JointTrace& tr) {
+  const std::string command_unit = tr.command_unit == plant::CommandUnit::kVolt ? "V" : "N·m";
   reports::XyChart motion;
   motion.title = shortJointName(tr.joint) + ": command and angle";
   motion.x_axis = {"Time", "s"};
@@ -163,11 +164,10 @@ int runPlantSimulate(const PlantSimulateOptions& o) {
   mergeJson(report.results()["plant"], stats.json);
   reports::Section& section = report.addSection("Simulation");
   section.addParagraph("Plant: " + config.source.string() + ". Input: " + description +
-                       ". CSV columns: time_s, command, q_rad, qd_rad_s, tau_measured_nm, p_a_pa, p_b_pa, spool "
-                       "(state at time_s; command held over the following period).");
+                       ". CSV columns: time_s, command_v (command_nm in N·m), q_rad, qd_rad_s, tau_measured_nm, "
+                       "p_a_pa, p_b_pa, spool_fraction (state at time_s; command held over the following period).");
   section.addTable(std::move(stats.table));
-  const std::string unit = joints[0].input_mode == plant::InputMode::kValveVoltage ? "V" : "N·m";
-  for (const plant::JointTrace& tr : r.traces) addTraceCharts(report.addSection("Joint " + tr.joint), tr, unit);
+  for (const plant::JointTrace& tr : r.traces) addTraceCharts(report.addSection("Joint " + tr.joint), tr);
   report.write(o.out_dir);
   std::cout << headline << "\nReal-time factor " << r.realTimeFactor() << ", " << r.stats.steps << " CVODES steps, "
             << r.stats.jac_evals
@@ -204,7 +204,7 @@ PlantDemoStep runPlantDemoStep(const arm::ArmModel& model, const std::filesystem
       "The hydraulic plant (config/dts_plant.yaml) driven by a 0.5-80 Hz linear chirp at 30 % of "
       "full valve opening, 1 kHz zero-order hold, as an identification experiment would record it.");
   section.addTable(std::move(stats.table));
-  addTraceCharts(section, r.traces[0], "V");
+  addTraceCharts(section, r.traces[0]);
   return step;
 }
 

@@ -22,6 +22,13 @@ std::string shortName(const std::string& name) {
 
 }  // namespace
 
+CommandUnit commandUnit(const JointParams& joint) noexcept {
+  if (joint.actuator.kind == ActuatorKind::kIdealTorque || joint.input_mode == InputMode::kTorqueLoop) {
+    return CommandUnit::kNewtonMetre;
+  }
+  return CommandUnit::kVolt;
+}
+
 double SimulationResult::realTimeFactor() const noexcept {
   return simulated_s / std::max(wall_s, 1e-12);
 }
@@ -74,7 +81,10 @@ SimulationResult simulate(const arm::ArmModel& model, const PlantConfig& config,
   const auto periods = static_cast<long>(std::llround(duration_s / dt_s));
   SimulationResult r;
   r.traces.resize(static_cast<std::size_t>(n));
-  for (int k = 0; k < n; ++k) r.traces[static_cast<std::size_t>(k)].joint = plant.joint(k).name;
+  for (int k = 0; k < n; ++k) {
+    r.traces[static_cast<std::size_t>(k)].joint = plant.joint(k).name;
+    r.traces[static_cast<std::size_t>(k)].command_unit = commandUnit(plant.joint(k));
+  }
   PlantCommand cmd = PlantCommand::zero(n);
   const auto start = std::chrono::steady_clock::now();
   for (long i = 0; i <= periods; ++i) {
@@ -91,7 +101,7 @@ SimulationResult simulate(const arm::ArmModel& model, const PlantConfig& config,
       tr.tau_measured_nm.push_back(plant.measurement(k).tau_nm);
       tr.p_a_pa.push_back(s.p_a_pa);
       tr.p_b_pa.push_back(s.p_b_pa);
-      tr.spool.push_back(s.spool);
+      tr.spool_fraction.push_back(s.spool);
       tr.p_min_pa = std::min({tr.p_min_pa, s.p_a_pa, s.p_b_pa});
       tr.p_max_pa = std::max({tr.p_max_pa, s.p_a_pa, s.p_b_pa});
       tr.stop_overshoot_rad =
@@ -120,13 +130,14 @@ SimulationResult simulate(const arm::ArmModel& model, const PlantConfig& config,
 void writeTraceCsv(const JointTrace& trace, const std::filesystem::path& file) {
   std::ofstream out(file);
   if (!out) throw std::runtime_error(file.string() + ": cannot open for writing");
-  out << "time_s,command,q_rad,qd_rad_s,tau_measured_nm,p_a_pa,p_b_pa,spool\n";
+  out << "time_s," << (trace.command_unit == CommandUnit::kVolt ? "command_v" : "command_nm")
+      << ",q_rad,qd_rad_s,tau_measured_nm,p_a_pa,p_b_pa,spool_fraction\n";
   out << std::setprecision(10);
   for (std::size_t i = 0; i < trace.time_s.size(); ++i) {
     // "+ 0.0" turns a negative zero (e.g. a quantised torque of 0 counts) into 0.
     out << trace.time_s[i] << ',' << trace.command[i] + 0.0 << ',' << trace.q_rad[i] << ',' << trace.qd_radps[i] << ','
         << trace.tau_measured_nm[i] + 0.0 << ',' << trace.p_a_pa[i] << ',' << trace.p_b_pa[i] << ','
-        << trace.spool[i] + 0.0 << '\n';
+        << trace.spool_fraction[i] + 0.0 << '\n';
   }
   if (!out) throw std::runtime_error(file.string() + ": write failed");
 }

@@ -63,7 +63,7 @@ TEST(PlantSimulation, TraceHoldsOneSamplePerPeriodBoundaryOnTheControlTimeBase) 
   // t_0 = 0 to t_N = duration: N + 1 samples.
   ASSERT_EQ(tr.time_s.size(), 51u);
   for (const auto* column :
-       {&tr.command, &tr.q_rad, &tr.qd_radps, &tr.tau_measured_nm, &tr.p_a_pa, &tr.p_b_pa, &tr.spool}) {
+       {&tr.command, &tr.q_rad, &tr.qd_radps, &tr.tau_measured_nm, &tr.p_a_pa, &tr.p_b_pa, &tr.spool_fraction}) {
     EXPECT_EQ(column->size(), tr.time_s.size());
   }
   for (std::size_t i = 0; i < tr.time_s.size(); ++i) EXPECT_EQ(tr.time_s[i], static_cast<double>(i) * kDt_s);
@@ -72,6 +72,13 @@ TEST(PlantSimulation, TraceHoldsOneSamplePerPeriodBoundaryOnTheControlTimeBase) 
   EXPECT_TRUE(r.pressures_ok);
   EXPECT_TRUE(r.stops_held);
   EXPECT_TRUE(r.passed());
+  EXPECT_EQ(tr.command_unit, CommandUnit::kVolt);
+  // In torque-loop mode the command is a torque.
+  std::vector<JointParams> torque_joints = joints;
+  torque_joints[0].input_mode = InputMode::kTorqueLoop;
+  const SimulationResult t = simulate(dtsModel(), dtsPlant(), torque_joints,
+                                      makeCommand(chirp(1.0), dtsModel(), torque_joints, 0.01), 0.01, kDt_s);
+  EXPECT_EQ(t.traces[0].command_unit, CommandUnit::kNewtonMetre);
 }
 
 TEST(PlantSimulation, OutputsEqualAHandWrittenLoopOfArmPlantSteps) {
@@ -104,7 +111,7 @@ TEST(PlantSimulation, OutputsEqualAHandWrittenLoopOfArmPlantSteps) {
       EXPECT_EQ(tr.tau_measured_nm[s], plant.measurement(k).tau_nm) << k << " " << i;
       EXPECT_EQ(tr.p_a_pa[s], state.p_a_pa) << k << " " << i;
       EXPECT_EQ(tr.p_b_pa[s], state.p_b_pa) << k << " " << i;
-      EXPECT_EQ(tr.spool[s], state.spool) << k << " " << i;
+      EXPECT_EQ(tr.spool_fraction[s], state.spool) << k << " " << i;
     }
     if (i < periods) {
       ASSERT_EQ(plant.step(kDt_s, cmd), PlantStatus::kOk);
@@ -124,6 +131,11 @@ TEST(PlantSimulation, GeneratedCommandsFollowTheSignalFormulasWithFullScaleByDef
   JointParams eb_torque = eb;
   eb_torque.input_mode = InputMode::kTorqueLoop;
   const std::vector<JointParams> joints = {eb, eb_torque};
+  EXPECT_EQ(commandUnit(eb), CommandUnit::kVolt);
+  EXPECT_EQ(commandUnit(eb_torque), CommandUnit::kNewtonMetre);
+  JointParams ideal = eb;
+  ideal.actuator.kind = ActuatorKind::kIdealTorque;
+  EXPECT_EQ(commandUnit(ideal), CommandUnit::kNewtonMetre);
   // Full scale: 1 / amplifier gain volts in valve mode, the torque limit in torque-loop mode.
   EXPECT_EQ(fullScaleCommand(eb, model), 1.0 / eb.valve.amplifier_gain_per_v);
   EXPECT_EQ(fullScaleCommand(eb_torque, model),
@@ -191,7 +203,7 @@ TEST(PlantSimulation, CsvHasTheDocumentedHeaderAndReadsBackToTheTrace) {
   std::ifstream in(dir / "trace.csv");
   std::string line;
   ASSERT_TRUE(std::getline(in, line));
-  EXPECT_EQ(line, "time_s,command,q_rad,qd_rad_s,tau_measured_nm,p_a_pa,p_b_pa,spool");
+  EXPECT_EQ(line, "time_s,command_v,q_rad,qd_rad_s,tau_measured_nm,p_a_pa,p_b_pa,spool_fraction");
   std::size_t rows = 0;
   const auto near = [](double read, double written) {
     return std::abs(read - written) <= kCsvRelative * std::abs(written) + 1e-300;
@@ -200,9 +212,9 @@ TEST(PlantSimulation, CsvHasTheDocumentedHeaderAndReadsBackToTheTrace) {
     const std::vector<double> v = parseRow(line);
     ASSERT_EQ(v.size(), 8u) << line;
     ASSERT_LT(rows, tr.time_s.size());
-    const std::vector<double> expected = {
-        tr.time_s[rows],          tr.command[rows], tr.q_rad[rows],  tr.qd_radps[rows],
-        tr.tau_measured_nm[rows], tr.p_a_pa[rows],  tr.p_b_pa[rows], tr.spool[rows]};
+    const std::vector<double> expected = {tr.time_s[rows],   tr.command[rows],         tr.q_rad[rows],
+                                          tr.qd_radps[rows], tr.tau_measured_nm[rows], tr.p_a_pa[rows],
+                                          tr.p_b_pa[rows],   tr.spool_fraction[rows]};
     for (std::size_t c = 0; c < v.size(); ++c)
       EXPECT_PRED2(near, v[c], expected[c]) << "row " << rows << " column " << c;
     // No negative zero is written.
@@ -210,6 +222,13 @@ TEST(PlantSimulation, CsvHasTheDocumentedHeaderAndReadsBackToTheTrace) {
     ++rows;
   }
   EXPECT_EQ(rows, tr.time_s.size());
+  // A command in N m names its column so.
+  JointTrace torque = tr;
+  torque.command_unit = CommandUnit::kNewtonMetre;
+  writeTraceCsv(torque, dir / "torque.csv");
+  std::ifstream torque_in(dir / "torque.csv");
+  ASSERT_TRUE(std::getline(torque_in, line));
+  EXPECT_EQ(line, "time_s,command_nm,q_rad,qd_rad_s,tau_measured_nm,p_a_pa,p_b_pa,spool_fraction");
   EXPECT_THROW(writeTraceCsv(tr, dir / "missing" / "trace.csv"), std::runtime_error);
   std::filesystem::remove_all(dir);
 }

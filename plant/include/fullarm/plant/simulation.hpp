@@ -24,6 +24,15 @@ inline constexpr double kPressureMargin_pa = 0.5e6;
 /// How far a joint may pass its hard stop before a run fails [deg].
 inline constexpr double kStopOvershootLimit_deg = 0.5;
 
+/// Unit of a joint's command.
+enum class CommandUnit {
+  kVolt,         ///< valve voltage (valve-voltage input mode)
+  kNewtonMetre,  ///< desired torque (torque-loop input mode) or an ideal torque source's torque
+};
+
+/// The unit `joint` takes its command in.
+[[nodiscard]] CommandUnit commandUnit(const JointParams& joint) noexcept;
+
 /// A named command signal for a plant run.
 struct InputSignal {
   /// "chirp", "step", "sine", "multisine" (plant::SignalKind), or a command table: a CSV file
@@ -46,6 +55,7 @@ using CommandFunction = std::function<double(std::size_t joint, double t_s)>;
 /// failure ends at the last state reached.
 struct JointTrace {
   std::string joint;                                        ///< model name, e.g. "R_EB"
+  CommandUnit command_unit = CommandUnit::kVolt;            ///< unit of `command`
   std::vector<double> time_s;                               ///< t_i [s]
   std::vector<double> command;                              ///< command over [t_i, t_i + dt) (V or N m)
   std::vector<double> q_rad;                                ///< joint angle [rad]
@@ -53,7 +63,7 @@ struct JointTrace {
   std::vector<double> tau_measured_nm;                      ///< load-cell torque as read (filtered, quantised) [N m]
   std::vector<double> p_a_pa;                               ///< chamber A pressure [Pa]
   std::vector<double> p_b_pa;                               ///< chamber B pressure [Pa]
-  std::vector<double> spool;                                ///< spool position, normalised (1 = full opening)
+  std::vector<double> spool_fraction;                       ///< spool position, a fraction of full opening
   double p_min_pa = std::numeric_limits<double>::max();     ///< lowest chamber pressure [Pa]
   double p_max_pa = std::numeric_limits<double>::lowest();  ///< highest chamber pressure [Pa]
   double stop_overshoot_rad = 0.0;  ///< largest excursion beyond the joint's range (0: none) [rad]
@@ -101,8 +111,9 @@ struct SimulationResult {
                                         const std::vector<JointParams>& joints, const CommandFunction& command,
                                         double duration_s, double dt_s);
 
-/// Writes a trace as CSV: a header row `time_s,command,q_rad,qd_rad_s,tau_measured_nm,p_a_pa,
-/// p_b_pa,spool`, then one row per sample (10 significant digits).
+/// Writes a trace as CSV: a header row `time_s,command_v,q_rad,qd_rad_s,tau_measured_nm,p_a_pa,
+/// p_b_pa,spool_fraction` (`command_nm` for a command in N m), then one row per sample (10
+/// significant digits). The spool position is a fraction of full opening.
 /// @throws std::runtime_error naming the file when it cannot be written
 void writeTraceCsv(const JointTrace& trace, const std::filesystem::path& file);
 
