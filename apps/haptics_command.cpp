@@ -1,7 +1,5 @@
 #include "haptics_command.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
