@@ -4,17 +4,15 @@
 #include <cmath>
 #include <iomanip>
 #include <numbers>
-#include <random>
 
 #include "fullarm/arm/arm_scaling.hpp"
 #include "fullarm/arm/dynamics.hpp"
-#include "fullarm/arm/kinematics.hpp"
 
 namespace fullarm::app {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-constexpr unsigned kReachSeed = 1;
+constexpr std::uint64_t kReachSeed = 1;
 // Half-thickness of the slab through the shoulder shown as the reach cross-section.
 constexpr double kSlabHalfThickness_m = 0.02;
 
@@ -34,7 +32,6 @@ ArmSummary summarizeArm(const arm::ArmModel& model, const Eigen::VectorXd& q, in
   arm::ArmData data(model);
   arm::computeGravityTorques(model, data, q);
   s.X_WT = data.X_WT;
-  s.shoulder_W = data.o_W[0];
   s.tau_gravity = data.tau_gravity;
   for (int i = 0; i < model.numJoints(); ++i) {
     if (std::abs(s.tau_gravity[i]) > model.joints[static_cast<std::size_t>(i)].limits.torque_nm) s.holds_itself = false;
@@ -45,20 +42,7 @@ ArmSummary summarizeArm(const arm::ArmModel& model, const Eigen::VectorXd& q, in
   s.hand_m = size.hand_length_m.value_or(0.0);
   s.total_mass_kg = model.totalMass();
 
-  std::mt19937 rng(kReachSeed);
-  Eigen::VectorXd qs = q;
-  s.reach_samples = samples;
-  s.hand_samples_W.reserve(static_cast<std::size_t>(samples));
-  for (int k = 0; k < samples; ++k) {
-    for (int i = 0; i < model.numJoints(); ++i) {
-      const arm::JointLimits& lim = model.joints[static_cast<std::size_t>(i)].limits;
-      qs[i] = std::uniform_real_distribution<double>(lim.min_rad, lim.max_rad)(rng);
-    }
-    arm::computeForwardKinematics(model, data, qs);
-    const Eigen::Vector3d p = data.X_WT.translation();
-    s.hand_samples_W.push_back(p);
-    s.reach_m = std::max(s.reach_m, (p - s.shoulder_W).norm());
-  }
+  s.reach = arm::sampleReach(model, samples, kReachSeed);
   return s;
 }
 
@@ -93,8 +77,8 @@ void printArmSummary(const arm::ArmModel& model, const ArmSummary& s, std::ostre
   out << std::setprecision(4) << "\nLink lengths: upper arm " << s.upper_arm_m << " m, forearm " << s.forearm_m
       << " m, hand " << s.hand_m << " m\n";
   out << std::setprecision(2) << "Total mass: " << s.total_mass_kg << " kg\n";
-  out << std::setprecision(3) << "Reach (shoulder centre to hand point, largest of " << s.reach_samples
-      << " sampled postures): " << s.reach_m << " m\n";
+  out << std::setprecision(3) << "Reach (shoulder centre to hand point, largest of " << s.reach.numPostures()
+      << " sampled postures): " << s.reach.reach_m << " m\n";
   const Eigen::Vector3d p = s.X_WT.translation();
   out << std::setprecision(4) << "Hand point at q: p_W = (" << p.x() << ", " << p.y() << ", " << p.z()
       << ") m, rotation rows:\n";
@@ -107,7 +91,7 @@ void printArmSummary(const arm::ArmModel& model, const ArmSummary& s, std::ostre
 }
 
 void addArmToReport(const arm::ArmModel& model, const ArmSummary& s, reports::Report& report) {
-  report.addHeadlineNumber("reach_m", "Reach (sampled)", s.reach_m, "m");
+  report.addHeadlineNumber("reach_m", "Reach (sampled)", s.reach.reach_m, "m");
   report.addHeadlineNumber("total_mass_kg", "Total link mass", s.total_mass_kg, "kg");
   report.addHeadlineNumber("upper_arm_m", "Upper arm", s.upper_arm_m, "m");
   report.addHeadlineNumber("forearm_m", "Forearm", s.forearm_m, "m");
@@ -122,8 +106,8 @@ void addArmToReport(const arm::ArmModel& model, const ArmSummary& s, reports::Re
   arm["upper_arm_length_m"] = s.upper_arm_m;
   arm["forearm_length_m"] = s.forearm_m;
   arm["hand_length_m"] = s.hand_m;
-  arm["reach_m"] = s.reach_m;
-  arm["reach_samples"] = s.reach_samples;
+  arm["reach_m"] = s.reach.reach_m;
+  arm["reach_samples"] = s.reach.numPostures();
   arm["q_rad"] = toVector(s.q);
   arm["hand_position_m"] = {s.X_WT.translation().x(), s.X_WT.translation().y(), s.X_WT.translation().z()};
   arm["gravity_torque_nm"] = toVector(s.tau_gravity);
@@ -192,7 +176,7 @@ void addArmToReport(const arm::ArmModel& model, const ArmSummary& s, reports::Re
   chain.addTable(std::move(lengths));
 
   reports::Section& reach = report.addSection("Reach");
-  reach.addParagraph("Hand points of " + std::to_string(s.reach_samples) +
+  reach.addParagraph("Hand points of " + std::to_string(s.reach.numPostures()) +
                      " postures drawn uniformly within the joint ranges (seeded). The cross-section keeps the points "
                      "within ±2 cm of the horizontal plane through the shoulder centre.");
   reports::XyChart cross;
@@ -201,23 +185,23 @@ void addArmToReport(const arm::ArmModel& model, const ArmSummary& s, reports::Re
   cross.y_axis = {"y", "m", false};
   reports::Series slab;
   slab.name = "hand points";
-  for (const Eigen::Vector3d& p : s.hand_samples_W) {
-    if (std::abs(p.z() - s.shoulder_W.z()) <= kSlabHalfThickness_m) {
+  for (const Eigen::Vector3d& p : s.reach.hand_W) {
+    if (std::abs(p.z() - s.reach.shoulder_W.z()) <= kSlabHalfThickness_m) {
       slab.x.push_back(p.x());
       slab.y.push_back(p.y());
     }
   }
   reports::Series shoulder;
   shoulder.name = "shoulder centre";
-  shoulder.x = {s.shoulder_W.x()};
-  shoulder.y = {s.shoulder_W.y()};
+  shoulder.x = {s.reach.shoulder_W.x()};
+  shoulder.y = {s.reach.shoulder_W.y()};
   cross.series = {slab, shoulder};
   reach.addScatterChart(std::move(cross));
 
   // Density of hand points seen from the side (x-z), as a 2-D histogram.
   constexpr int kBins = 40;
   double x_lo = 1e9, x_hi = -1e9, z_lo = 1e9, z_hi = -1e9;
-  for (const Eigen::Vector3d& p : s.hand_samples_W) {
+  for (const Eigen::Vector3d& p : s.reach.hand_W) {
     x_lo = std::min(x_lo, p.x());
     x_hi = std::max(x_hi, p.x());
     z_lo = std::min(z_lo, p.z());
@@ -235,7 +219,7 @@ void addArmToReport(const arm::ArmModel& model, const ArmSummary& s, reports::Re
     density.y.push_back(z_lo + (b + 0.5) * dz);
   }
   density.z.assign(kBins, std::vector<double>(kBins, 0.0));
-  for (const Eigen::Vector3d& p : s.hand_samples_W) {
+  for (const Eigen::Vector3d& p : s.reach.hand_W) {
     const int bx = std::clamp(static_cast<int>((p.x() - x_lo) / dx), 0, kBins - 1);
     const int bz = std::clamp(static_cast<int>((p.z() - z_lo) / dz), 0, kBins - 1);
     density.z[static_cast<std::size_t>(bz)][static_cast<std::size_t>(bx)] += 1.0;

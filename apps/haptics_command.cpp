@@ -1,8 +1,5 @@
 #include "haptics_command.hpp"
 
-#include <algorithm>
-#include <chrono>
-#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -13,23 +10,18 @@
 
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/kinematics.hpp"
 #include "fullarm/core/data_paths.hpp"
-#include "fullarm/haptics/bullet_search.hpp"
 #include "fullarm/haptics/contact_forces.hpp"
+#include "fullarm/haptics/query.hpp"
 #include "fullarm/haptics/scene.hpp"
 #include "fullarm/reports/report.hpp"
+#include "result_tables.hpp"
 
 namespace fullarm::app {
 namespace {
 
-constexpr double kTickPeriod_s = 1e-3;  // durations of the contact records: one haptic tick
 constexpr const char* kDemoScene = "valve_wall.yaml";
 constexpr const char* kDemoPosture = "reach_valve";
-
-nlohmann::json vectorJson(const Eigen::Vector3d& v) {
-  return nlohmann::json::array({v.x(), v.y(), v.z()});
-}
 
 nlohmann::json listJson(const Eigen::VectorXd& v) {
   return std::vector<double>(v.data(), v.data() + v.size());
@@ -43,39 +35,8 @@ const std::string& linkName(const arm::ArmModel& model, int link) {
   return model.joints[static_cast<std::size_t>(link)].name;
 }
 
-// One rendering of the minima at a configuration: contact forces, torques and link records.
-struct Rendering {
-  haptics::ContactData contact;
-  Rendering(const arm::ArmModel& model, int num_minima) : contact(model, std::max(1, num_minima)) {}
-};
-
-// Contact forces and joint torques of `minima` under `params` (one tick from reset records).
-Rendering render(const haptics::HapticsParams& params, const arm::ArmModel& model, arm::ArmData& fk,
-                 const std::vector<haptics::LocalMinimum>& minima) {
-  Rendering r(model, static_cast<int>(minima.size()));
-  haptics::computeContactForces(params, model, fk, minima, kTickPeriod_s, r.contact);
-  haptics::computeContactTorques(model, fk, minima, r.contact);
-  return r;
-}
-
-// Global search at the configuration in `fk`; returns its wall time [ms].
-double searchMinima(haptics::GlobalSearch& search, const haptics::CollisionWorld& world, arm::ArmData& fk,
-                    const haptics::HapticsParams& params, std::vector<haptics::LocalMinimum>& minima) {
-  const auto start = std::chrono::steady_clock::now();
-  search.search(world, fk, params.cutoff_m, params.prune_radius_m, minima);
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
-
-// Summed force on each link [N], world frame.
-std::vector<Eigen::Vector3d> linkForces(const arm::ArmModel& model, const std::vector<haptics::LocalMinimum>& minima,
-                                        const haptics::ContactData& contact) {
-  std::vector<Eigen::Vector3d> f(static_cast<std::size_t>(model.numJoints()), Eigen::Vector3d::Zero());
-  for (std::size_t i = 0; i < minima.size(); ++i) f[static_cast<std::size_t>(minima[i].link)] += contact.f_W[i];
-  return f;
-}
-
-bool torquesFinite(const haptics::ContactData& c) {
-  return c.tau_contact.allFinite() && c.tau_gravity.allFinite() && c.tau_total.allFinite();
+bool torquesFinite(const haptics::QueryResult& query, const haptics::QueryRendering& x) {
+  return x.tau_contact_nm.allFinite() && query.tau_gravity_nm.allFinite() && x.tau_total_nm.allFinite();
 }
 
 std::string linksInContactText(const arm::ArmModel& model, const haptics::ContactData& contact) {
@@ -90,53 +51,6 @@ std::string linksInContactText(const arm::ArmModel& model, const haptics::Contac
     any = true;
   }
   return any ? out.str() : "none";
-}
-
-// Per-link contact records of one rendering, with the summed force on each link [N] (scene frame).
-nlohmann::json linkRecordsJson(const arm::ArmModel& model, const Eigen::Matrix3d& R_SW,
-                               const std::vector<haptics::LocalMinimum>& minima, const haptics::ContactData& contact) {
-  const std::vector<Eigen::Vector3d> f = linkForces(model, minima, contact);
-  nlohmann::json list = nlohmann::json::array();
-  for (int l = 0; l < model.numJoints(); ++l) {
-    const haptics::LinkContactRecord& r = contact.links[static_cast<std::size_t>(l)];
-    list.push_back({{"link", linkName(model, l)},
-                    {"hand_link", haptics::isHandLink(model, l)},
-                    {"min_distance_m",
-                     std::isfinite(r.min_distance_m) ? nlohmann::json(r.min_distance_m) : nlohmann::json(nullptr)},
-                    {"in_contact", r.in_contact},
-                    {"penetrating", r.penetrating},
-                    {"depth_m", r.depth_m},
-                    {"force_n", vectorJson(Eigen::Vector3d(R_SW * f[static_cast<std::size_t>(l)]))}});
-  }
-  return list;
-}
-
-// Per-link contact records (from the first rendering; they do not depend on the mode) with the
-// magnitude of the summed force on each link in each rendering.
-reports::Table linkRecordsTable(const arm::ArmModel& model, const std::vector<haptics::LocalMinimum>& minima,
-                                const std::vector<std::pair<std::string, const haptics::ContactData*>>& renderings,
-                                std::string caption) {
-  reports::Table table;
-  table.caption = std::move(caption);
-  table.columns = {"Link", "Hand link", "Min distance [mm]", "In contact", "Depth [mm]", "Penetrating"};
-  std::vector<std::vector<Eigen::Vector3d>> forces;
-  for (const auto& [label, contact] : renderings) {
-    table.columns.push_back(label);
-    forces.push_back(linkForces(model, minima, *contact));
-  }
-  for (int l = 0; l < model.numJoints(); ++l) {
-    const haptics::LinkContactRecord& rec = renderings.front().second->links[static_cast<std::size_t>(l)];
-    std::vector<reports::Cell> row = {
-        linkName(model, l),
-        haptics::isHandLink(model, l) ? "yes" : "no",
-        std::isfinite(rec.min_distance_m) ? reports::Cell(rec.min_distance_m * 1e3) : reports::Cell("beyond L"),
-        rec.in_contact ? "yes" : "no",
-        rec.depth_m * 1e3,
-        rec.penetrating ? "yes" : "no"};
-    for (const auto& f : forces) row.emplace_back(f[static_cast<std::size_t>(l)].norm());
-    table.rows.push_back(std::move(row));
-  }
-  return table;
 }
 
 }  // namespace
@@ -170,19 +84,14 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
   const Eigen::VectorXd q = parseJointVector(o.q_text, model, "--q");
   const haptics::Scene scene = haptics::loadScene(o.scene);
   const haptics::CollisionWorld world = haptics::makeCollisionWorld(scene, model);
-  std::unique_ptr<haptics::GlobalSearch> search;
-  if (o.search == "bullet") {
-    search = std::make_unique<haptics::BulletGlobalSearch>(world);
-  } else {
-    search = std::make_unique<haptics::SnchGlobalSearch>();
-  }
-
-  arm::ArmData fk(model);
-  arm::computeForwardKinematics(model, fk, q);
-  std::vector<haptics::LocalMinimum> minima;
-  const double search_ms = searchMinima(*search, world, fk, params, minima);
-  const Rendering rendering = render(params, model, fk, minima);
+  const std::unique_ptr<haptics::GlobalSearch> search = haptics::makeGlobalSearch(
+      o.search == "bullet" ? haptics::SearchKind::kBullet : haptics::SearchKind::kSnch, world);
+  const haptics::RenderMode modes[] = {params.mode};
+  const haptics::QueryResult query = haptics::renderQuery(model, world, *search, params, q, modes);
+  const std::vector<haptics::LocalMinimum>& minima = query.minima;
+  const haptics::QueryRendering& rendering = query.renderings.front();
   const haptics::ContactData& contact = rendering.contact;
+  const double search_ms = query.search_ms;
   const Eigen::Isometry3d X_SW = haptics::armBasePose(scene, model);
 
   // Console output.
@@ -196,7 +105,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
                "force [N]\n";
   for (std::size_t i = 0; i < minima.size(); ++i) {
     const haptics::LocalMinimum& m = minima[i];
-    const Eigen::Vector3d p_S = X_SW * fk.X_WL[static_cast<std::size_t>(m.link)] * m.p_L;
+    const Eigen::Vector3d p_S = X_SW * query.X_WL[static_cast<std::size_t>(m.link)] * m.p_L;
     const auto kind = featureName;
     std::cout << "  " << std::left << std::setw(9) << model.joints[static_cast<std::size_t>(m.link)].name << " "
               << std::setw(26) << scene.objects[static_cast<std::size_t>(m.object)].name << std::right << std::setw(8)
@@ -209,8 +118,8 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
   std::cout << "\nJoint torques [N m]:\n  joint     contact   gravity     total\n";
   for (int j = 0; j < model.numJoints(); ++j) {
     std::cout << "  " << std::left << std::setw(7) << model.joints[static_cast<std::size_t>(j)].name << std::right
-              << std::setw(10) << std::setprecision(3) << contact.tau_contact[j] << std::setw(10)
-              << contact.tau_gravity[j] << std::setw(10) << contact.tau_total[j] << "\n";
+              << std::setw(10) << std::setprecision(3) << rendering.tau_contact_nm[j] << std::setw(10)
+              << query.tau_gravity_nm[j] << std::setw(10) << rendering.tau_total_nm[j] << "\n";
   }
   std::cout << "\nLinks in contact (d < d_f): " << linksInContactText(model, contact) << "\n";
   if (contact.fault) std::cout << "FAULT: the contact computation rejected its input; contact torques are zero\n";
@@ -226,51 +135,22 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
     nlohmann::json& r = report.results()["haptics"];
     r["scene"] = scene.name;
     r["scene_file"] = std::filesystem::absolute(scene.source).string();
-    r["search"] = std::string(search->name());
+    r["search"] = query.search;
     r["mode"] = o.mode;
     r["q_rad"] = std::vector<double>(q.data(), q.data() + q.size());
     r["cutoff_m"] = params.cutoff_m;
     r["force_threshold_m"] = params.force_threshold_m;
     r["prune_radius_m"] = params.prune_radius_m;
     r["search_ms"] = search_ms;
-    nlohmann::json list = nlohmann::json::array();
-    reports::Table table;
-    table.caption = "Minima within the cutoff (scene frame)";
-    table.columns = {"Link", "Object", "Distance [mm]", "Force [N]", "Rendered", "x [m]", "y [m]", "z [m]"};
-    for (std::size_t i = 0; i < minima.size(); ++i) {
-      const haptics::LocalMinimum& m = minima[i];
-      const Eigen::Vector3d p_S = X_SW * fk.X_WL[static_cast<std::size_t>(m.link)] * m.p_L;
-      const Eigen::Vector3d q_S = X_SW * world.object(m.object).X_WO * m.p_O;
-      list.push_back({{"link", model.joints[static_cast<std::size_t>(m.link)].name},
-                      {"object", scene.objects[static_cast<std::size_t>(m.object)].name},
-                      {"distance_m", m.distance_m},
-                      {"point_link_scene_m", vectorJson(p_S)},
-                      {"point_object_scene_m", vectorJson(q_S)},
-                      {"force_n", vectorJson(X_SW.linear() * contact.f_W[i])},
-                      {"rendered", contact.rendered[i] != 0}});
-      table.rows.push_back({model.joints[static_cast<std::size_t>(m.link)].name,
-                            scene.objects[static_cast<std::size_t>(m.object)].name, m.distance_m * 1e3,
-                            contact.f_W[i].norm(), contact.rendered[i] ? "yes" : "no", p_S.x(), p_S.y(), p_S.z()});
-    }
-    r["minima"] = list;
-    r["tau_contact_nm"] =
-        std::vector<double>(contact.tau_contact.data(), contact.tau_contact.data() + model.numJoints());
-    r["tau_gravity_nm"] =
-        std::vector<double>(contact.tau_gravity.data(), contact.tau_gravity.data() + model.numJoints());
-    r["tau_total_nm"] = std::vector<double>(contact.tau_total.data(), contact.tau_total.data() + model.numJoints());
     r["fault"] = contact.fault;
-    r["links"] = linkRecordsJson(model, X_SW.linear(), minima, contact);
-    reports::Table torques;
-    torques.caption = "Joint torques";
-    torques.columns = {"Joint", "Contact [N·m]", "Gravity [N·m]", "Total [N·m]"};
-    for (int j = 0; j < model.numJoints(); ++j) {
-      torques.rows.push_back({model.joints[static_cast<std::size_t>(j)].name, contact.tau_contact[j],
-                              contact.tau_gravity[j], contact.tau_total[j]});
-    }
+    ResultTable minima_table = minimaTable(model, scene, world, query, "Minima within the cutoff (scene frame)");
+    ResultTable torques = jointTorquesTable(model, query, "Joint torques");
+    ResultTable links = linkRecordsTable(model, scene, query, "Per-link contact records");
     reports::Section& section = report.addSection("Minima, forces and torques");
-    section.addTable(std::move(table));
-    section.addTable(std::move(torques));
-    section.addTable(linkRecordsTable(model, minima, {{"Force [N]", &contact}}, "Per-link contact records"));
+    for (ResultTable* t : {&minima_table, &torques, &links}) {
+      mergeJson(r, t->json);
+      section.addTable(std::move(t->table));
+    }
     report.write(o.out_dir);
     std::cout << "\nReport: " << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
   }
@@ -280,35 +160,30 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
 HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesystem::path& /*out_dir*/,
                                    reports::Report& report) {
   const haptics::Scene scene = haptics::loadScene(core::defaultScenePath(kDemoScene));
-  haptics::HapticsParams full_params = haptics::loadHapticsParams(haptics::defaultHapticsParamsPath());
-  full_params.mode = haptics::RenderMode::kFullArm;
-  haptics::HapticsParams hand_params = full_params;
-  hand_params.mode = haptics::RenderMode::kHandOnly;
+  const haptics::HapticsParams params = haptics::loadHapticsParams(haptics::defaultHapticsParamsPath());
   const Eigen::VectorXd q = haptics::scenePosture(scene, kDemoPosture, model);
   const haptics::CollisionWorld world = haptics::makeCollisionWorld(scene, model);
-  haptics::SnchGlobalSearch search;
-  arm::ArmData fk(model);
-  arm::computeForwardKinematics(model, fk, q);
   // The global search does not depend on the rendering mode (it finds the minima of every link);
   // the mode decides which minima make forces. One search, two renderings.
-  std::vector<haptics::LocalMinimum> minima;
-  const double search_ms = searchMinima(search, world, fk, full_params, minima);
-  const Rendering full = render(full_params, model, fk, minima);
-  const Rendering hand = render(hand_params, model, fk, minima);
-  const Eigen::Isometry3d X_SW = haptics::armBasePose(scene, model);
-  const Eigen::Matrix3d R_SW = X_SW.linear();
+  haptics::SnchGlobalSearch search;
+  const haptics::RenderMode modes[] = {haptics::RenderMode::kFullArm, haptics::RenderMode::kHandOnly};
+  const haptics::QueryResult query = haptics::renderQuery(model, world, search, params, q, modes);
+  const std::vector<haptics::LocalMinimum>& minima = query.minima;
+  const haptics::QueryRendering& full = query.renderings[0];
+  const haptics::QueryRendering& hand = query.renderings[1];
+  const double search_ms = query.search_ms;
   const int n = model.numJoints();
 
   const bool no_fault = !full.contact.fault && !hand.contact.fault;
   const bool found = !minima.empty();
-  const bool finite = torquesFinite(full.contact) && torquesFinite(hand.contact);
+  const bool finite = torquesFinite(query, full) && torquesFinite(query, hand);
   HapticsDemoStep step;
   step.pass = no_fault && found && finite;
   std::ostringstream detail;
   detail << minima.size() << " minima at " << kDemoPosture << " in " << scene.name << "; active springs full-arm "
          << full.contact.active_springs << ", hand-only " << hand.contact.active_springs << "; |tau_contact| "
-         << std::fixed << std::setprecision(2) << full.contact.tau_contact.norm() << " vs "
-         << hand.contact.tau_contact.norm() << " N m";
+         << std::fixed << std::setprecision(2) << full.tau_contact_nm.norm() << " vs " << hand.tau_contact_nm.norm()
+         << " N m";
   if (!no_fault) detail << "; CONTACT FAULT";
   if (!found) detail << "; no minimum within the cutoff";
   if (!finite) detail << "; non-finite joint torque";
@@ -319,13 +194,13 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   const std::streamsize cout_precision = std::cout.precision();
   std::cout << "  scene " << scene.name << " (" << scene.objects.size() << " objects, " << scene.numTriangles()
             << " triangles), posture " << kDemoPosture << ", SNCH search " << std::fixed << std::setprecision(2)
-            << search_ms << " ms, " << minima.size() << " minima within L = " << full_params.cutoff_m * 1e3 << " mm\n";
+            << search_ms << " ms, " << minima.size() << " minima within L = " << params.cutoff_m * 1e3 << " mm\n";
   std::cout << "  joint     contact full-arm  contact hand-only   gravity  total full-arm  total hand-only [N m]\n";
   for (int j = 0; j < n; ++j) {
     std::cout << "  " << std::left << std::setw(7) << linkName(model, j) << std::right << std::setprecision(3)
-              << std::setw(18) << full.contact.tau_contact[j] << std::setw(19) << hand.contact.tau_contact[j]
-              << std::setw(10) << full.contact.tau_gravity[j] << std::setw(16) << full.contact.tau_total[j]
-              << std::setw(17) << hand.contact.tau_total[j] << "\n";
+              << std::setw(18) << full.tau_contact_nm[j] << std::setw(19) << hand.tau_contact_nm[j] << std::setw(10)
+              << query.tau_gravity_nm[j] << std::setw(16) << full.tau_total_nm[j] << std::setw(17)
+              << hand.tau_total_nm[j] << "\n";
   }
   std::cout << "  links in contact (d < d_f): " << linksInContactText(model, full.contact) << "\n";
   std::cout.flags(cout_flags);
@@ -338,74 +213,37 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   r["scene_file"] = std::filesystem::absolute(scene.source).string();
   r["posture"] = kDemoPosture;
   r["q_rad"] = listJson(q);
-  r["search"] = std::string(search.name());
+  r["search"] = query.search;
   r["search_ms"] = search_ms;
-  r["cutoff_m"] = full_params.cutoff_m;
-  r["force_threshold_m"] = full_params.force_threshold_m;
-  r["prune_radius_m"] = full_params.prune_radius_m;
+  r["cutoff_m"] = params.cutoff_m;
+  r["force_threshold_m"] = params.force_threshold_m;
+  r["prune_radius_m"] = params.prune_radius_m;
   r["num_minima"] = minima.size();
-  r["tau_gravity_nm"] = listJson(full.contact.tau_gravity);
-  nlohmann::json minima_json = nlohmann::json::array();
-  reports::Table minima_table;
-  minima_table.caption = "Minima within the cutoff at " + std::string(kDemoPosture) +
-                         " (one SNCH search; the mode decides which minima make forces)";
-  minima_table.columns = {"Link",  "Hand link", "Object", "Distance [mm]", "Force full-arm [N]", "Force hand-only [N]",
-                          "x [m]", "y [m]",     "z [m]"};
-  for (std::size_t i = 0; i < minima.size(); ++i) {
-    const haptics::LocalMinimum& m = minima[i];
-    const Eigen::Vector3d p_S = X_SW * fk.X_WL[static_cast<std::size_t>(m.link)] * m.p_L;
-    const bool hand_link = haptics::isHandLink(model, m.link);
-    const std::string& object = scene.objects[static_cast<std::size_t>(m.object)].name;
-    minima_json.push_back({{"link", linkName(model, m.link)},
-                           {"hand_link", hand_link},
-                           {"object", object},
-                           {"distance_m", m.distance_m},
-                           {"point_link_scene_m", vectorJson(p_S)},
-                           {"force_full_arm_n", vectorJson(Eigen::Vector3d(R_SW * full.contact.f_W[i]))},
-                           {"force_hand_only_n", vectorJson(Eigen::Vector3d(R_SW * hand.contact.f_W[i]))},
-                           {"rendered_full_arm", full.contact.rendered[i] != 0},
-                           {"rendered_hand_only", hand.contact.rendered[i] != 0}});
-    minima_table.rows.push_back({linkName(model, m.link), hand_link ? "yes" : "no", object, m.distance_m * 1e3,
-                                 full.contact.f_W[i].norm(), hand.contact.f_W[i].norm(), p_S.x(), p_S.y(), p_S.z()});
+  ResultTable minima_table = minimaTable(model, scene, world, query,
+                                         "Minima within the cutoff at " + std::string(kDemoPosture) +
+                                             " (one SNCH search; the mode decides which minima make forces)");
+  for (const haptics::QueryRendering& x : query.renderings) {
+    nlohmann::json& mode = r[modeKey(x.mode)];
+    mode["fault"] = x.contact.fault;
+    mode["active_springs"] = x.contact.active_springs;
   }
-  r["minima"] = minima_json;
-  const auto modeJson = [&](const Rendering& x) {
-    nlohmann::json j;
-    j["fault"] = x.contact.fault;
-    j["active_springs"] = x.contact.active_springs;
-    j["tau_contact_nm"] = listJson(x.contact.tau_contact);
-    j["tau_total_nm"] = listJson(x.contact.tau_total);
-    j["links"] = linkRecordsJson(model, R_SW, minima, x.contact);
-    return j;
-  };
-  r["full_arm"] = modeJson(full);
-  r["hand_only"] = modeJson(hand);
-
-  reports::Table torques;
-  torques.caption = "Joint torques at " + std::string(kDemoPosture) + ", full-arm vs hand-only";
-  torques.columns = {"Joint",         "Contact full-arm [N·m]", "Contact hand-only [N·m]",
-                     "Gravity [N·m]", "Total full-arm [N·m]",   "Total hand-only [N·m]"};
-  for (int j = 0; j < n; ++j) {
-    torques.rows.push_back({linkName(model, j), full.contact.tau_contact[j], hand.contact.tau_contact[j],
-                            full.contact.tau_gravity[j], full.contact.tau_total[j], hand.contact.tau_total[j]});
-  }
+  ResultTable torques =
+      jointTorquesTable(model, query, "Joint torques at " + std::string(kDemoPosture) + ", full-arm vs hand-only");
   std::ostringstream df_text;
-  df_text << std::fixed << std::setprecision(1) << full_params.force_threshold_m * 1e3;
-  reports::Table links =
-      linkRecordsTable(model, minima, {{"Force full-arm [N]", &full.contact}, {"Force hand-only [N]", &hand.contact}},
-                       "Per-link contact records (recorded in both modes; d_f = " + df_text.str() + " mm)");
+  df_text << std::fixed << std::setprecision(1) << params.force_threshold_m * 1e3;
+  ResultTable links = linkRecordsTable(
+      model, scene, query, "Per-link contact records (recorded in both modes; d_f = " + df_text.str() + " mm)");
+  for (const ResultTable* t : {&minima_table, &torques, &links}) mergeJson(r, t->json);
   report.addHeadlineNumber("haptics_minima", "Minima at the valve reach", static_cast<double>(minima.size()), "");
   report.addHeadlineNumber("haptics_tau_contact_full_arm_nm", "Contact torque norm, full-arm",
-                           full.contact.tau_contact.norm(), "N·m");
+                           full.tau_contact_nm.norm(), "N·m");
   reports::Section& section = report.addSection("Haptic rendering at the valve opening");
   section.addParagraph("The arm at the scene's " + std::string(kDemoPosture) + " posture in " + scene.name + " (" +
                        scene.description + "). " + step.detail +
                        ". Full-arm mode renders a spring at every minimum "
                        "closer than d_f; hand-only mode (the paper's baseline) only at minima on the hand links, "
                        "while the contact records still cover every link.");
-  section.addTable(std::move(minima_table));
-  section.addTable(std::move(torques));
-  section.addTable(std::move(links));
+  for (ResultTable* t : {&minima_table, &torques, &links}) section.addTable(std::move(t->table));
   return step;
 }
 
