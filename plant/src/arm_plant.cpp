@@ -361,10 +361,10 @@ void ArmPlant::configure(const arm::ArmModel& model, const std::vector<JointPara
   single_axis_cuff_ = false;
   // The per-step dynamics runs on the arm reduced to the active joints: every locked link
   // (the hand, and the arm joints a partial plant does not drive) merged into the body that
-  // carries it (reduced_dynamics.hpp; equal to fullarm::arm's Newton-Euler to 1e-12, tested).
-  reduced_ = std::make_unique<ReducedArmModel>(reduceArmModel(*model_, active_, posture));
-  reduced_data_ = std::make_unique<ReducedArmData>();
-  cuff_point_ = user.enabled ? reducePoint(*model_, active_, posture, user.link, user.point_L) : ReducedPoint{};
+  // carries it (arm/rigid_body_dynamics.hpp; equal to fullarm::arm's Newton-Euler to 1e-12, tested).
+  reduced_ = std::make_unique<arm::RigidBodyModel>(arm::reduceArmModel(*model_, active_, posture));
+  reduced_data_ = std::make_unique<arm::RigidBodyData>();
+  cuff_point_ = user.enabled ? arm::reducePoint(*model_, active_, posture, user.link, user.point_L) : arm::BodyPoint{};
   if (single_axis_) {
     // One joint turning with the rest of the arm locked: a rigid body about a fixed axis, so
     // the inertia is constant and gravity is a cos q + b sin q (exact; evaluated once here).
@@ -537,9 +537,9 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
       q_[k] = y[angleIndex(n_, k)];
       qd_[k] = 0.0;
     }
-    computeReducedKinematics(*reduced_, *reduced_data_, q_, qd_);
+    arm::computeRigidBodyKinematics(*reduced_, *reduced_data_, q_, qd_);
     cuff_anchor_W_ =
-        cuff_point_.body < 0 ? cuff_point_.p_B : reducedPointInWorld(*reduced_data_, cuff_point_.body, cuff_point_.p_B);
+        cuff_point_.body < 0 ? cuff_point_.p_B : arm::bodyPointInWorld(*reduced_data_, cuff_point_.body, cuff_point_.p_B);
   }
   noise_.reseed(seed_);
   for (JointSensorState& s : sensor_state_) s = {};
@@ -611,21 +611,21 @@ void ArmPlant::mechanics(const double* y) noexcept {
   // end, sampled by sampleOutputs() and then the next period's first Jacobian) it is reused.
   if (mechanics_valid_ && q_ == mechanics_q_ && qd_ == mechanics_qd_) return;
   // Newton-Euler on the reduced arm: h = C(q, qd) qd + g(q) (ID at qdd = 0), then M(q) by
-  // composite rigid bodies (reduced_dynamics.hpp, R1-R5).
-  ReducedArmData& d = *reduced_data_;
-  computeReducedKinematics(*reduced_, d, q_, qd_);
-  computeReducedInverseDynamics(*reduced_, d, zero_, h_);
-  computeReducedMassMatrix(*reduced_, d, mass_);
+  // composite rigid bodies (arm/rigid_body_dynamics.hpp, R1-R5).
+  arm::RigidBodyData& d = *reduced_data_;
+  arm::computeRigidBodyKinematics(*reduced_, d, q_, qd_);
+  arm::computeRigidBodyInverseDynamics(reduced_->tree, d, zero_, h_);
+  arm::computeRigidBodyMassMatrix(reduced_->tree, d, mass_);
   for (int a = 0; a < n; ++a) mass_(a, a) += params_[static_cast<std::size_t>(a)].actuator.inertia_kgm2;
   if (user_.enabled && cuff_point_.body >= 0) {
     // Cuff spring and damper through the point Jacobian: column k = z_k x (p - o_k) for the
     // joints that move the cuff's body.
     const auto body = static_cast<std::size_t>(cuff_point_.body);
-    const Eigen::Vector3d p = reducedPointInWorld(d, cuff_point_.body, cuff_point_.p_B);
+    const Eigen::Vector3d p = arm::bodyPointInWorld(d, cuff_point_.body, cuff_point_.p_B);
     for (int k = 0; k < n; ++k) {
       const auto kk = static_cast<std::size_t>(k);
       cuff_jac_.col(k) =
-          reduced_->supports[kk][body] ? Eigen::Vector3d(d.s[kk].top.cross(p - d.o_W[kk])) : Eigen::Vector3d::Zero();
+          reduced_->tree.supports[kk][body] ? Eigen::Vector3d(d.s[kk].top.cross(p - d.o_W[kk])) : Eigen::Vector3d::Zero();
     }
     const Eigen::Vector3d v = cuff_jac_ * qd_;
     const Eigen::Vector3d f = -user_.stiffness_n_per_m * (p - cuff_anchor_W_) - user_.damping_ns_per_m * v;
@@ -880,7 +880,7 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
 // The configuration and velocity gradients of the rigid-body dynamics that the analytic
 // Jacobian leaves out: M qdd = tau - h(q, qd) gives M d qdd/dq = d tau/dq - d ID/dq and
 // M d qdd/dqd = d tau/dqd - d ID/dqd, with ID(q, qd, a) = M(q) a + h(q, qd) taken at a = qdd,
-// from the analytic derivatives of the reduced Newton-Euler (reduced_dynamics.hpp, R6-R8; one
+// from the analytic derivatives of the reduced Newton-Euler (arm/rigid_body_dynamics.hpp, R6-R8; one
 // pass, exact). Subtracts M^-1 d ID into the qd rows of J (column-major, leading dimension
 // ld). Rodas3 needs them: without them a Rosenbrock method drops to order one on the arm's slow
 // mechanics and its error estimate no longer sees the error. Uses the kinematics, qdd_ and
@@ -888,7 +888,7 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
 void ArmPlant::rigidBodyGradients(const double* /*y*/, double* Jdata, int ld) noexcept {
   const int n = n_;
   if (rigid_derivatives_stale_ || !options_.rigid_derivatives_once_per_period) {
-    computeReducedInverseDynamicsDerivatives(*reduced_, *reduced_data_, qdd_, rigid_tau_, rigid_dq_, rigid_dqd_);
+    arm::computeRigidBodyInverseDynamicsDerivatives(reduced_->tree, *reduced_data_, qdd_, rigid_tau_, rigid_dq_, rigid_dqd_);
     rigid_derivatives_stale_ = false;
   }
   // J(qd rows, q and qd columns) -= M^-1 [d ID/dq, d ID/dqd] (plain loops: at n = 7 a general
@@ -905,7 +905,7 @@ void ArmPlant::subtractMinvTimesDerivatives(double* Jdata, int ld) const noexcep
   const int n = N > 0 ? N : n_;
   const double* minv = mass_inv_.data();  // column-major, leading dimension n
   for (int c = 0; c < 2 * n; ++c) {
-    const ReducedMatrix& d = c < n ? rigid_dq_ : rigid_dqd_;
+    const arm::BodyMatrix& d = c < n ? rigid_dq_ : rigid_dqd_;
     const int j = c < n ? c : c - n;
     double* out =
         Jdata + velocityIndex(n, 0) + static_cast<std::ptrdiff_t>(c < n ? angleIndex(n, c) : velocityIndex(n, j)) * ld;

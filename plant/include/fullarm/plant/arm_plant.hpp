@@ -26,7 +26,7 @@
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/plant/hydraulics.hpp"
 #include "fullarm/plant/joint_params.hpp"
-#include "fullarm/plant/reduced_dynamics.hpp"
+#include "fullarm/arm/rigid_body_dynamics.hpp"
 #include "fullarm/plant/rosenbrock.hpp"
 #include "fullarm/plant/sensor_model.hpp"
 
@@ -250,17 +250,17 @@ class ArmPlant {
   std::unique_ptr<arm::ArmData> data_;
   Eigen::VectorXd posture_;
   // The arm reduced to the active joints (locked links merged): the per-step rigid-body
-  // dynamics and its analytic derivatives (reduced_dynamics.hpp).
-  std::unique_ptr<ReducedArmModel> reduced_;
-  std::unique_ptr<ReducedArmData> reduced_data_;
-  ReducedPoint cuff_point_{};
+  // dynamics and its analytic derivatives (arm/rigid_body_dynamics.hpp).
+  std::unique_ptr<arm::RigidBodyModel> reduced_;
+  std::unique_ptr<arm::RigidBodyData> reduced_data_;
+  arm::BodyPoint cuff_point_{};
   JointVector q_, qd_, zero_;
   // (q, qd) of the last full mechanics() pass: its outputs are reused at the same state.
   JointVector mechanics_q_, mechanics_qd_;
   bool mechanics_valid_ = false;
   bool rigid_body_gradients_ = false;
   bool rigid_derivatives_stale_ = true;  // set by each step(): the next Jacobian recomputes them
-  ReducedMatrix rigid_dq_, rigid_dqd_;
+  arm::BodyMatrix rigid_dq_, rigid_dqd_;
   JointVector rigid_tau_;
   UserArmParams user_{};
   Eigen::Vector3d cuff_anchor_W_ = Eigen::Vector3d::Zero();
