@@ -1,6 +1,9 @@
 #include "fullarm/arm/dynamics.hpp"
 
 #include <cassert>
+#include <numbers>
+#include <stdexcept>
+#include <string>
 
 #include "fullarm/arm/kinematics.hpp"
 
@@ -72,8 +75,7 @@ void updateWorldInertias(const ArmModel& model, ArmData& data) noexcept {
 
 }  // namespace
 
-void computeGravityTorques(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
-  computeForwardKinematics(model, data, q);
+void computeGravityTorquesAtKinematics(const ArmModel& model, ArmData& data) noexcept {
   const int n = model.numJoints();
   // Subtree mass and first moment, leaves to root.
   for (int i = 0; i < n; ++i) {
@@ -96,6 +98,32 @@ void computeGravityTorques(const ArmModel& model, ArmData& data, const Eigen::Re
     const Eigen::Vector3d lever = data.mass_moment[k] - data.subtree_mass_kg[k] * data.o_W[k];
     data.tau_gravity[i] = -data.z_W[k].dot(lever.cross(model.gravity_W_mps2));
   }
+  ++data.gravity_passes;
+}
+
+void computeGravityTorques(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
+  computeForwardKinematics(model, data, q);
+  computeGravityTorquesAtKinematics(model, data);
+}
+
+SingleAxisLoad computeSingleAxisLoad(const ArmModel& model, int joint, const Eigen::VectorXd& posture) {
+  if (joint < 0 || joint >= model.numJoints())
+    throw std::invalid_argument("computeSingleAxisLoad: joint index " + std::to_string(joint) + " out of range");
+  if (posture.size() != model.numJoints())
+    throw std::invalid_argument("computeSingleAxisLoad: posture has " + std::to_string(posture.size()) +
+                                " angles, expected " + std::to_string(model.numJoints()));
+  ArmData data(model);
+  Eigen::VectorXd q = posture;
+  SingleAxisLoad load;
+  computeMassMatrix(model, data, q);
+  load.inertia_kgm2 = data.mass_matrix(joint, joint);
+  q[joint] = 0.0;
+  computeGravityTorques(model, data, q);
+  load.gravity_cos_nm = data.tau_gravity[joint];
+  q[joint] = std::numbers::pi / 2.0;
+  computeGravityTorques(model, data, q);
+  load.gravity_sin_nm = data.tau_gravity[joint];
+  return load;
 }
 
 void computeInverseDynamics(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q,

@@ -154,20 +154,15 @@ JointScenario makeJointScenario(const arm::ArmModel& model, const plant::PlantCo
   sc.dt_s = gains.control_period_s;
 
   // Link inertia and gravity about this joint's axis with the rest of the arm at its posture.
-  arm::ArmData data(model);
   Eigen::VectorXd q = model.defaultPosture();
   const double lo = joint.min_rad + kLimitMarginRad;
   const double hi = joint.max_rad - kLimitMarginRad;
   sc.start_rad = std::clamp(q[index], lo, hi);
   q[index] = sc.start_rad;
-  arm::computeMassMatrix(model, data, q);
-  sc.load.inertia_kgm2 = data.mass_matrix(index, index) + sc.user.inertia_kgm2;
-  q[index] = 0.0;
-  arm::computeGravityTorques(model, data, q);
-  sc.load.gravity_cos_nm = data.tau_gravity[index];
-  q[index] = 0.5 * std::numbers::pi;
-  arm::computeGravityTorques(model, data, q);
-  sc.load.gravity_sin_nm = data.tau_gravity[index];
+  const arm::SingleAxisLoad axis = arm::computeSingleAxisLoad(model, index, q);
+  sc.load.inertia_kgm2 = axis.inertia_kgm2 + sc.user.inertia_kgm2;
+  sc.load.gravity_cos_nm = axis.gravity_cos_nm;
+  sc.load.gravity_sin_nm = axis.gravity_sin_nm;
   sc.expected_gravity_cos_nm = sc.load.gravity_cos_nm;
   sc.expected_gravity_sin_nm = sc.load.gravity_sin_nm;
 

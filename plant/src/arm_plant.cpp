@@ -369,21 +369,19 @@ void ArmPlant::configure(const arm::ArmModel& model, const std::vector<JointPara
     // One joint turning with the rest of the arm locked: a rigid body about a fixed axis, so
     // the inertia is constant and gravity is a cos q + b sin q (exact; evaluated once here).
     const int i = active_[0];
+    const arm::SingleAxisLoad axis = arm::computeSingleAxisLoad(*model_, i, posture);
+    load_.inertia_kgm2 = axis.inertia_kgm2;
+    load_.gravity_cos_nm = axis.gravity_cos_nm;
+    load_.gravity_sin_nm = axis.gravity_sin_nm;
     Eigen::VectorXd q = posture;
-    arm::computeMassMatrix(*model_, *data_, q);
-    load_.inertia_kgm2 = data_->mass_matrix(i, i);
     q[i] = 0.0;
-    arm::computeGravityTorques(*model_, *data_, q);
-    load_.gravity_cos_nm = data_->tau_gravity[i];
+    arm::computeForwardKinematics(*model_, *data_, q);
     axis_W_ = data_->z_W[static_cast<std::size_t>(i)];
     origin_W_ = data_->o_W[static_cast<std::size_t>(i)];
     if (user.enabled && arm::jointMovesLink(*model_, i, user.link)) {
       single_axis_cuff_ = true;
       cuff0_W_ = arm::pointInWorld(*data_, user.link, user.point_L);
     }
-    q[i] = std::numbers::pi / 2.0;
-    arm::computeGravityTorques(*model_, *data_, q);
-    load_.gravity_sin_nm = data_->tau_gravity[i];
   }
   allocate(options, seed);
 }

@@ -185,6 +185,34 @@ TEST(Dynamics, GravityTorquesEqualStaticInverseDynamics) {
   }
 }
 
+// Gravity at the kinematics already in ArmData equals the convenience that runs them, and the
+// pass counters count exactly the passes each function makes.
+TEST(Dynamics, GravityAtKinematicsReusesTheKinematicsAndCountsPasses) {
+  const ArmModel& model = test::defaultModel();
+  ArmData data(model);
+  ArmData reference(model);
+  std::mt19937 rng(kSeed + 7);
+  const Eigen::VectorXd q = test::randomConfiguration(model, rng);
+  computeGravityTorques(model, reference, q);
+  EXPECT_EQ(reference.forward_kinematics_passes, 1u);
+  EXPECT_EQ(reference.gravity_passes, 1u);
+  computeForwardKinematics(model, data, q);
+  EXPECT_EQ(data.forward_kinematics_passes, 1u);
+  EXPECT_EQ(data.gravity_passes, 0u);
+  computeGravityTorquesAtKinematics(model, data);
+  EXPECT_EQ(data.forward_kinematics_passes, 1u);
+  EXPECT_EQ(data.gravity_passes, 1u);
+  EXPECT_EQ(data.tau_gravity, reference.tau_gravity);
+  // At other kinematics the result follows them, not a configuration of its own.
+  const Eigen::VectorXd q2 = test::randomConfiguration(model, rng);
+  computeForwardKinematics(model, data, q2);
+  computeGravityTorquesAtKinematics(model, data);
+  computeGravityTorques(model, reference, q2);
+  EXPECT_EQ(data.tau_gravity, reference.tau_gravity);
+  EXPECT_EQ(data.forward_kinematics_passes, 2u);
+  EXPECT_EQ(data.gravity_passes, 2u);
+}
+
 // A single point mass on a horizontal lever: tau = m g r by hand.
 TEST(Dynamics, SinglePendulumGravityMatchesHandCalculation) {
   ArmModel model;

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <vector>
 
 #include "fullarm/arm/arm_model.hpp"
@@ -24,8 +25,15 @@ struct ArmData {
   std::vector<Eigen::Vector3d> com_W;                      ///< link centres of mass in the world [m]
   Eigen::Isometry3d X_WT = Eigen::Isometry3d::Identity();  ///< hand point (tool) pose
 
-  // Gravity (computeGravityTorques).
+  // Gravity (computeGravityTorquesAtKinematics).
   Eigen::VectorXd tau_gravity;  ///< dV/dq: torque that holds the arm against gravity [N m]
+
+  // Pass counters: how often the configuration's kinematics and gravity were computed into
+  // this object (incremented by computeForwardKinematics and computeGravityTorquesAtKinematics,
+  // never reset by them). A tick that composes the arm's pieces checks with them that each is
+  // computed once.
+  std::uint64_t forward_kinematics_passes = 0;
+  std::uint64_t gravity_passes = 0;
 
   // Recursive Newton-Euler (dynamics.hpp).
   Eigen::VectorXd tau;           ///< inverse dynamics result [N m]

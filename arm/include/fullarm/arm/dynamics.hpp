@@ -11,8 +11,13 @@
 
 namespace fullarm::arm {
 
-/// Gravity torques g(q) = dV/dq (the torque that holds the arm still), into data.tau_gravity.
-/// Also runs computeForwardKinematics.
+/// Gravity torques g(q) = dV/dq (the torque that holds the arm still) at the kinematics already
+/// in `data` (the last computeForwardKinematics, at data.q), into data.tau_gravity; counts one
+/// data.gravity_passes. The 1 kHz tick computes the kinematics once and calls this.
+/// @rt
+void computeGravityTorquesAtKinematics(const ArmModel& model, ArmData& data) noexcept;
+
+/// Convenience: computeForwardKinematics at q, then computeGravityTorquesAtKinematics.
 /// @rt
 void computeGravityTorques(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q) noexcept;
 
@@ -42,5 +47,20 @@ void computeMassMatrix(const ArmModel& model, ArmData& data, const Eigen::Ref<co
 [[nodiscard]] double computeKineticEnergy(const ArmModel& model, ArmData& data,
                                           const Eigen::Ref<const Eigen::VectorXd>& q,
                                           const Eigen::Ref<const Eigen::VectorXd>& qd) noexcept;
+
+/// The load on one joint turning with the rest of the arm locked at a posture: a rigid body
+/// about a fixed axis, so its inertia M_ii does not depend on q_i and its gravity torque is
+/// g_i(q_i) = gravity_cos_nm cos q_i + gravity_sin_nm sin q_i exactly (the single-axis model of
+/// the plant's one-joint mode and of the offline controller design).
+struct SingleAxisLoad {
+  double inertia_kgm2 = 0.0;    ///< M_ii at the posture [kg m^2]
+  double gravity_cos_nm = 0.0;  ///< g_i at q_i = 0 [N m]
+  double gravity_sin_nm = 0.0;  ///< g_i at q_i = pi/2 [N m]
+};
+
+/// The single-axis load of `joint` with every other joint at `posture` (size model.numJoints();
+/// its entry for `joint` only sets where M_ii is evaluated). Allocates (configuration time).
+/// @throws std::invalid_argument for a bad joint index or posture size.
+[[nodiscard]] SingleAxisLoad computeSingleAxisLoad(const ArmModel& model, int joint, const Eigen::VectorXd& posture);
 
 }  // namespace fullarm::arm
