@@ -349,7 +349,7 @@ void ArmPlant::configure(const arm::ArmModel& model, const std::vector<JointPara
     throw core::ConfigError(model.source, "user_arm.link", "cuff link index out of range");
   }
   params_ = joints;
-  active_ = active;
+  selection_ = arm::JointSelection(model.numJoints(), active);
   n_ = static_cast<int>(joints.size());
   user_ = user;
   model_ = std::make_unique<arm::ArmModel>(model);
@@ -362,13 +362,13 @@ void ArmPlant::configure(const arm::ArmModel& model, const std::vector<JointPara
   // The per-step dynamics runs on the arm reduced to the active joints: every locked link
   // (the hand, and the arm joints a partial plant does not drive) merged into the body that
   // carries it (arm/rigid_body_dynamics.hpp; equal to fullarm::arm's Newton-Euler to 1e-12, tested).
-  reduced_ = std::make_unique<arm::RigidBodyModel>(arm::reduceArmModel(*model_, active_, posture));
+  reduced_ = std::make_unique<arm::RigidBodyModel>(arm::reduceArmModel(*model_, active, posture));
   reduced_data_ = std::make_unique<arm::RigidBodyData>();
-  cuff_point_ = user.enabled ? arm::reducePoint(*model_, active_, posture, user.link, user.point_L) : arm::BodyPoint{};
+  cuff_point_ = user.enabled ? arm::reducePoint(*model_, active, posture, user.link, user.point_L) : arm::BodyPoint{};
   if (single_axis_) {
     // One joint turning with the rest of the arm locked: a rigid body about a fixed axis, so
     // the inertia is constant and gravity is a cos q + b sin q (exact; evaluated once here).
-    const int i = active_[0];
+    const int i = selection_.modelIndex(0);
     const arm::SingleAxisLoad axis = arm::computeSingleAxisLoad(*model_, i, posture);
     load_.inertia_kgm2 = axis.inertia_kgm2;
     load_.gravity_cos_nm = axis.gravity_cos_nm;
@@ -393,7 +393,7 @@ void ArmPlant::configure(const JointParams& joint, const RigidLoad& load, const 
     throw core::ConfigError({}, "load.inertia_kgm2", "expected a positive inertia");
   }
   params_ = {joint};
-  active_ = {-1};
+  selection_ = {};
   n_ = 1;
   user_ = {};
   model_.reset();
@@ -496,8 +496,7 @@ void ArmPlant::reset() {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
     JointState& s = initial[static_cast<std::size_t>(k)];
     s.p_a_pa = s.p_b_pa = 0.5 * (p.supply_pressure_pa + p.return_pressure_pa);
-    s.q_rad = active_[static_cast<std::size_t>(k)] >= 0 ? posture_[active_[static_cast<std::size_t>(k)]]
-                                                        : std::clamp(0.0, p.min_rad, p.max_rad);
+    s.q_rad = modelIndex(k) >= 0 ? posture_[modelIndex(k)] : std::clamp(0.0, p.min_rad, p.max_rad);
   }
   reset(initial);
 }

@@ -23,6 +23,7 @@
 
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/arm/joint_selection.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/plant/hydraulics.hpp"
 #include "fullarm/plant/joint_params.hpp"
@@ -182,8 +183,12 @@ class ArmPlant {
   [[nodiscard]] int numStates() const noexcept { return 6 * n_; }
   [[nodiscard]] double time() const noexcept { return t_; }
   [[nodiscard]] const JointParams& joint(int k) const noexcept { return params_[static_cast<std::size_t>(k)]; }
+  /// The active joints in the arm model: subset position k (the index of every per-joint
+  /// input, state and output of the plant) <-> model joint (arm/joint_selection.hpp). Empty with
+  /// an explicit load (no arm model).
+  [[nodiscard]] const arm::JointSelection& selection() const noexcept { return selection_; }
   /// Index in the arm model of active joint k (-1 with an explicit load).
-  [[nodiscard]] int modelIndex(int k) const noexcept { return active_[static_cast<std::size_t>(k)]; }
+  [[nodiscard]] int modelIndex(int k) const noexcept { return selection_.size() > 0 ? selection_.modelIndex(k) : -1; }
   [[nodiscard]] JointState state(int k) const noexcept;
   /// Sensor readings of the last step.
   [[nodiscard]] const JointMeasurement& measurement(int k) const noexcept {
@@ -232,7 +237,7 @@ class ArmPlant {
 
   int n_ = 0;
   std::vector<JointParams> params_;
-  std::vector<int> active_;
+  arm::JointSelection selection_;
   double t_ = 0.0;
   SolverOptions options_{};
   PlantCommand cmd_{};
