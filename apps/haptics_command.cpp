@@ -13,6 +13,7 @@
 
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/core/data_paths.hpp"
 #include "fullarm/haptics/bullet_search.hpp"
@@ -43,18 +44,25 @@ const std::string& linkName(const arm::ArmModel& model, int link) {
   return model.joints[static_cast<std::size_t>(link)].name;
 }
 
-// One rendering of the minima at a configuration: contact forces, torques and link records.
+// One rendering of the minima at a configuration: contact forces, torques and link records,
+// with the gravity torques and their sum with the contact torques.
 struct Rendering {
   haptics::ContactData contact;
+  Eigen::VectorXd tau_gravity;  // g(q) [N m]
+  Eigen::VectorXd tau_total;    // contact + gravity [N m]
   Rendering(const arm::ArmModel& model, int num_minima) : contact(model, std::max(1, num_minima)) {}
 };
 
-// Contact forces and joint torques of `minima` under `params` (one tick from reset records).
+// Contact forces and joint torques of `minima` under `params` (one tick from reset records), and
+// gravity at the same kinematics.
 Rendering render(const haptics::HapticsParams& params, const arm::ArmModel& model, arm::ArmData& fk,
                  const std::vector<haptics::LocalMinimum>& minima) {
   Rendering r(model, static_cast<int>(minima.size()));
   haptics::computeContactForces(params, model, fk, minima, kTickPeriod_s, r.contact);
   haptics::computeContactTorques(model, fk, minima, r.contact);
+  arm::computeGravityTorquesAtKinematics(model, fk);
+  r.tau_gravity = fk.tau_gravity;
+  r.tau_total = r.contact.tau_contact + r.tau_gravity;
   return r;
 }
 
@@ -74,8 +82,8 @@ std::vector<Eigen::Vector3d> linkForces(const arm::ArmModel& model, const std::v
   return f;
 }
 
-bool torquesFinite(const haptics::ContactData& c) {
-  return c.tau_contact.allFinite() && c.tau_gravity.allFinite() && c.tau_total.allFinite();
+bool torquesFinite(const Rendering& r) {
+  return r.contact.tau_contact.allFinite() && r.tau_gravity.allFinite() && r.tau_total.allFinite();
 }
 
 std::string linksInContactText(const arm::ArmModel& model, const haptics::ContactData& contact) {
@@ -210,7 +218,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
   for (int j = 0; j < model.numJoints(); ++j) {
     std::cout << "  " << std::left << std::setw(7) << model.joints[static_cast<std::size_t>(j)].name << std::right
               << std::setw(10) << std::setprecision(3) << contact.tau_contact[j] << std::setw(10)
-              << contact.tau_gravity[j] << std::setw(10) << contact.tau_total[j] << "\n";
+              << rendering.tau_gravity[j] << std::setw(10) << rendering.tau_total[j] << "\n";
   }
   std::cout << "\nLinks in contact (d < d_f): " << linksInContactText(model, contact) << "\n";
   if (contact.fault) std::cout << "FAULT: the contact computation rejected its input; contact torques are zero\n";
@@ -256,8 +264,9 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
     r["tau_contact_nm"] =
         std::vector<double>(contact.tau_contact.data(), contact.tau_contact.data() + model.numJoints());
     r["tau_gravity_nm"] =
-        std::vector<double>(contact.tau_gravity.data(), contact.tau_gravity.data() + model.numJoints());
-    r["tau_total_nm"] = std::vector<double>(contact.tau_total.data(), contact.tau_total.data() + model.numJoints());
+        std::vector<double>(rendering.tau_gravity.data(), rendering.tau_gravity.data() + model.numJoints());
+    r["tau_total_nm"] =
+        std::vector<double>(rendering.tau_total.data(), rendering.tau_total.data() + model.numJoints());
     r["fault"] = contact.fault;
     r["links"] = linkRecordsJson(model, X_SW.linear(), minima, contact);
     reports::Table torques;
@@ -265,7 +274,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
     torques.columns = {"Joint", "Contact [N·m]", "Gravity [N·m]", "Total [N·m]"};
     for (int j = 0; j < model.numJoints(); ++j) {
       torques.rows.push_back({model.joints[static_cast<std::size_t>(j)].name, contact.tau_contact[j],
-                              contact.tau_gravity[j], contact.tau_total[j]});
+                              rendering.tau_gravity[j], rendering.tau_total[j]});
     }
     reports::Section& section = report.addSection("Minima, forces and torques");
     section.addTable(std::move(table));
@@ -301,7 +310,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
 
   const bool no_fault = !full.contact.fault && !hand.contact.fault;
   const bool found = !minima.empty();
-  const bool finite = torquesFinite(full.contact) && torquesFinite(hand.contact);
+  const bool finite = torquesFinite(full) && torquesFinite(hand);
   HapticsDemoStep step;
   step.pass = no_fault && found && finite;
   std::ostringstream detail;
@@ -324,8 +333,8 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   for (int j = 0; j < n; ++j) {
     std::cout << "  " << std::left << std::setw(7) << linkName(model, j) << std::right << std::setprecision(3)
               << std::setw(18) << full.contact.tau_contact[j] << std::setw(19) << hand.contact.tau_contact[j]
-              << std::setw(10) << full.contact.tau_gravity[j] << std::setw(16) << full.contact.tau_total[j]
-              << std::setw(17) << hand.contact.tau_total[j] << "\n";
+              << std::setw(10) << full.tau_gravity[j] << std::setw(16) << full.tau_total[j]
+              << std::setw(17) << hand.tau_total[j] << "\n";
   }
   std::cout << "  links in contact (d < d_f): " << linksInContactText(model, full.contact) << "\n";
   std::cout.flags(cout_flags);
@@ -344,7 +353,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   r["force_threshold_m"] = full_params.force_threshold_m;
   r["prune_radius_m"] = full_params.prune_radius_m;
   r["num_minima"] = minima.size();
-  r["tau_gravity_nm"] = listJson(full.contact.tau_gravity);
+  r["tau_gravity_nm"] = listJson(full.tau_gravity);
   nlohmann::json minima_json = nlohmann::json::array();
   reports::Table minima_table;
   minima_table.caption = "Minima within the cutoff at " + std::string(kDemoPosture) +
@@ -374,7 +383,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
     j["fault"] = x.contact.fault;
     j["active_springs"] = x.contact.active_springs;
     j["tau_contact_nm"] = listJson(x.contact.tau_contact);
-    j["tau_total_nm"] = listJson(x.contact.tau_total);
+    j["tau_total_nm"] = listJson(x.tau_total);
     j["links"] = linkRecordsJson(model, R_SW, minima, x.contact);
     return j;
   };
@@ -387,7 +396,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
                      "Gravity [N·m]", "Total full-arm [N·m]",   "Total hand-only [N·m]"};
   for (int j = 0; j < n; ++j) {
     torques.rows.push_back({linkName(model, j), full.contact.tau_contact[j], hand.contact.tau_contact[j],
-                            full.contact.tau_gravity[j], full.contact.tau_total[j], hand.contact.tau_total[j]});
+                            full.tau_gravity[j], full.tau_total[j], hand.tau_total[j]});
   }
   std::ostringstream df_text;
   df_text << std::fixed << std::setprecision(1) << full_params.force_threshold_m * 1e3;

@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/dynamics.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/core/data_paths.hpp"
 #include "fullarm/core/yaml_reader.hpp"
@@ -101,8 +100,6 @@ ContactData::ContactData(const arm::ArmModel& model, int max_minima)
       patch_root(static_cast<std::size_t>(max_minima), 0),
       patch_weight(static_cast<std::size_t>(max_minima), 0.0),
       tau_contact(Eigen::VectorXd::Zero(model.numJoints())),
-      tau_gravity(Eigen::VectorXd::Zero(model.numJoints())),
-      tau_total(Eigen::VectorXd::Zero(model.numJoints())),
       links(static_cast<std::size_t>(model.numJoints())),
       link_force_W(static_cast<std::size_t>(model.numJoints()), Vector3d::Zero()),
       link_moment_W(static_cast<std::size_t>(model.numJoints()), Vector3d::Zero()) {}
@@ -243,7 +240,7 @@ void addTailoredJacobianWrench(const arm::ArmModel& model, const arm::ArmData& f
   }
 }
 
-void computeContactTorques(const arm::ArmModel& model, arm::ArmData& fk, std::span<const LocalMinimum> minima,
+void computeContactTorques(const arm::ArmModel& model, const arm::ArmData& fk, std::span<const LocalMinimum> minima,
                            ContactData& data) noexcept {
   data.tau_contact.setZero();
   if (!data.fault) {
@@ -263,9 +260,6 @@ void computeContactTorques(const arm::ArmModel& model, arm::ArmData& fk, std::sp
       addTailoredJacobianWrench(model, fk, n, data.link_force_W[k], data.link_moment_W[k], data.tau_contact);
     }
   }
-  arm::computeGravityTorques(model, fk, fk.q);
-  data.tau_gravity = fk.tau_gravity;
-  data.tau_total = data.tau_contact + data.tau_gravity;
 }
 
 }  // namespace fullarm::haptics

@@ -88,8 +88,11 @@ TEST_F(ContactForcesTest, SpringLawPushesAwayBelowThresholdOnly) {
   EXPECT_NEAR(data_.links[4].depth_m, 0.006, 1e-15);
   EXPECT_TRUE(data_.links[2].penetrating);
   EXPECT_FALSE(data_.links[6].in_contact);
-  // Torques: sum over minima of the tailored Jacobian, plus gravity.
+  // Torques: sum over minima of the tailored Jacobian (contact only: no gravity, no kinematics).
+  const std::uint64_t fk_passes = fk_.forward_kinematics_passes;
   computeContactTorques(model_, fk_, minima, data_);
+  EXPECT_EQ(fk_.forward_kinematics_passes, fk_passes);
+  EXPECT_EQ(fk_.gravity_passes, 0u);
   Eigen::VectorXd expected = Eigen::VectorXd::Zero(model_.numJoints());
   arm::PointJacobian J;
   for (int i : {0, 2}) {
@@ -99,10 +102,6 @@ TEST_F(ContactForcesTest, SpringLawPushesAwayBelowThresholdOnly) {
     expected += J.topRows<3>().transpose() * data_.f_W[static_cast<std::size_t>(i)];
   }
   EXPECT_LE((data_.tau_contact - expected).norm(), 1e-12 * expected.norm());
-  arm::ArmData g(model_);
-  arm::computeGravityTorques(model_, g, model_.defaultPosture());
-  EXPECT_LE((data_.tau_gravity - g.tau_gravity).norm(), 1e-12 * g.tau_gravity.norm());
-  EXPECT_LE((data_.tau_total - (expected + g.tau_gravity)).norm(), 1e-12 * data_.tau_total.norm());
 }
 
 TEST_F(ContactForcesTest, DampingSaturationAndPatchNormalisation) {
@@ -179,7 +178,6 @@ TEST_F(ContactForcesTest, FaultInjectionGivesZeroContactTorque) {
   computeContactTorques(model_, fk_, minima, data_);
   EXPECT_TRUE(data_.fault);
   EXPECT_EQ(data_.tau_contact.norm(), 0.0);
-  EXPECT_TRUE(data_.tau_total.allFinite());
   // Bad link index and more minima than capacity are faults too.
   minima[1] = minimum(99, 0.003, {0, 0, 1});
   computeContactForces(params_, model_, fk_, minima, 1e-3, data_);

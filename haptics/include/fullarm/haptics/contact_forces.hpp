@@ -1,8 +1,10 @@
 #pragma once
 /// @file
 /// Contact springs on the tracked minima, joint torques by the DTS paper's tailored force
-/// Jacobians (Eq. (1)-(2)), the arm's gravity torques, the hand-only baseline with per-link
-/// contact records, and the YAML parameters (config/haptics.yaml).
+/// Jacobians (Eq. (1)-(2)), the hand-only baseline with per-link contact records, and the YAML
+/// parameters (config/haptics.yaml). Every function here reads the forward kinematics the
+/// caller has already computed (`const arm::ArmData&`) and computes contact only: the tick
+/// computes the kinematics and the gravity torques once, in fullarm::arm.
 
 #include <Eigen/Core>
 #include <filesystem>
@@ -76,8 +78,6 @@ struct ContactData {
   std::vector<int> patch_root;                 ///< scratch: patch (union-find) of each minimum
   std::vector<double> patch_weight;            ///< scratch: sum of (d_f - d) per patch root [m]
   Eigen::VectorXd tau_contact;                 ///< sum of the tailored-Jacobian torques [N m], size n
-  Eigen::VectorXd tau_gravity;                 ///< arm gravity torques g(q) [N m]
-  Eigen::VectorXd tau_total;                   ///< tau_contact + tau_gravity [N m]
   std::vector<LinkContactRecord> links;        ///< one per link
   std::vector<Eigen::Vector3d> link_force_W;   ///< scratch: summed force per link [N]
   std::vector<Eigen::Vector3d> link_moment_W;  ///< scratch: summed moment about o_n per link [N m]
@@ -118,12 +118,11 @@ void addTailoredJacobianTorques(const arm::ArmModel& model, const arm::ArmData& 
 void addTailoredJacobianWrench(const arm::ArmModel& model, const arm::ArmData& fk, int link, const Eigen::Vector3d& f_W,
                                const Eigen::Vector3d& eta_c, Eigen::Ref<Eigen::VectorXd> tau) noexcept;
 
-/// tau_contact = sum of addTailoredJacobianTorques over the forces of computeContactForces,
-/// tau_gravity = g(q) of the arm model (fk.q), tau_total = their sum. Runs the arm's gravity
-/// algorithm on `fk` (which recomputes its forward kinematics at fk.q). Zero contact torque
-/// when data.fault is set.
+/// tau_contact = sum of addTailoredJacobianTorques over the forces of computeContactForces, at
+/// the kinematics in `fk` (computed once per tick by the caller; not recomputed here). Zero
+/// contact torque when data.fault is set.
 /// @rt
-void computeContactTorques(const arm::ArmModel& model, arm::ArmData& fk, std::span<const LocalMinimum> minima,
+void computeContactTorques(const arm::ArmModel& model, const arm::ArmData& fk, std::span<const LocalMinimum> minima,
                            ContactData& data) noexcept;
 
 /// Clears the accumulated statistics of every link record.
