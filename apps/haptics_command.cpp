@@ -221,11 +221,11 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
               << rendering.tau_gravity[j] << std::setw(10) << rendering.tau_total[j] << "\n";
   }
   std::cout << "\nLinks in contact (d < d_f): " << linksInContactText(model, contact) << "\n";
-  if (contact.fault) std::cout << "FAULT: the contact computation rejected its input; contact torques are zero\n";
+  if (!contact.status.ok()) std::cout << "FAULT: the contact computation rejected its input; contact torques are zero\n";
 
   if (!o.out_dir.empty()) {
     reports::Report report("haptics query", "Haptic query: " + scene.name);
-    report.setVerdict(!contact.fault, contact.fault ? "The contact computation flagged a fault"
+    report.setVerdict(contact.status.ok(), !contact.status.ok() ? "The contact computation flagged a fault"
                                                     : std::to_string(minima.size()) + " minima, " +
                                                           std::to_string(contact.active_springs) + " active springs");
     report.addHeadlineNumber("minima", "Minima within L", static_cast<double>(minima.size()), "");
@@ -267,7 +267,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
         std::vector<double>(rendering.tau_gravity.data(), rendering.tau_gravity.data() + model.numJoints());
     r["tau_total_nm"] =
         std::vector<double>(rendering.tau_total.data(), rendering.tau_total.data() + model.numJoints());
-    r["fault"] = contact.fault;
+    r["fault"] = !contact.status.ok();
     r["links"] = linkRecordsJson(model, X_SW.linear(), minima, contact);
     reports::Table torques;
     torques.caption = "Joint torques";
@@ -283,7 +283,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
     report.write(o.out_dir);
     std::cout << "\nReport: " << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
   }
-  return contact.fault ? 1 : 0;
+  return contact.status.ok() ? 0 : 1;
 }
 
 HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesystem::path& /*out_dir*/,
@@ -308,7 +308,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   const Eigen::Matrix3d R_SW = X_SW.linear();
   const int n = model.numJoints();
 
-  const bool no_fault = !full.contact.fault && !hand.contact.fault;
+  const bool no_fault = full.contact.status.ok() && hand.contact.status.ok();
   const bool found = !minima.empty();
   const bool finite = torquesFinite(full) && torquesFinite(hand);
   HapticsDemoStep step;
@@ -380,7 +380,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   r["minima"] = minima_json;
   const auto modeJson = [&](const Rendering& x) {
     nlohmann::json j;
-    j["fault"] = x.contact.fault;
+    j["fault"] = !x.contact.status.ok();
     j["active_springs"] = x.contact.active_springs;
     j["tau_contact_nm"] = listJson(x.contact.tau_contact);
     j["tau_total_nm"] = listJson(x.tau_total);

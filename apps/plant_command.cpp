@@ -83,7 +83,7 @@ RunResult simulate(const arm::ArmModel& model, const plant::PlantConfig& config,
           std::max({tr.overshoot_rad, s.q_rad - plant.joint(k).max_rad, plant.joint(k).min_rad - s.q_rad});
     }
     if (i == periods) break;
-    if (plant.step(dt_s, cmd) != plant::PlantStatus::kOk) {
+    if (!plant.step(dt_s, cmd).ok()) {
       r.solver_ok = false;
       r.solver_error = plant.lastError();
       break;

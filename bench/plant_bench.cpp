@@ -73,7 +73,7 @@ void runPlant(benchmark::State& state, bool whole_arm, bool chirp, IntegratorKin
     for (int k = 0; k < periods; ++k) {
       const double u = signalValue(sig, k * kDt);
       for (int j = 0; j < n; ++j) cmd.command[j] = u;
-      if (plant.step(kDt, cmd) != PlantStatus::kOk) {
+      if (!plant.step(kDt, cmd).ok()) {
         state.SkipWithError(plant.lastError());
         return;
       }

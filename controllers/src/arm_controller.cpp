@@ -36,11 +36,12 @@ ArmControllerModel makeArmControllerModel(const GainsConfig& gains, const arm::A
 
 void resetArmController(const ArmControllerModel& controller, ArmControllerData& data,
                         const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
-  data.faults = kFaultNone;
+  data.status.clear();
   for (int i = 0; i < controller.numJoints(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     resetJointController(controller.joints[k], data.joints[k], q[controller.selection.modelIndex(i)]);
-    data.faults |= data.joints[k].faults;
+    const core::RtStatus& s = data.joints[k].status;
+    if (!s.ok()) data.status.raise(s.code, s.faults, s.message);
   }
 }
 
@@ -50,7 +51,7 @@ void stepArmController(const ArmControllerModel& controller, ArmControllerData& 
                        const Eigen::Ref<const Eigen::VectorXd>& tau_env_nm,
                        const Eigen::Ref<const Eigen::VectorXd>& tau_load_cell_nm,
                        Eigen::Ref<Eigen::VectorXd> valve_command_v) noexcept {
-  std::uint32_t faults = kFaultNone;
+  core::RtStatus status;
   for (int i = 0; i < controller.numJoints(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     const int m = controller.selection.modelIndex(i);
@@ -60,11 +61,12 @@ void stepArmController(const ArmControllerModel& controller, ArmControllerData& 
     in.tau_env_nm = tau_env_nm[m];
     in.tau_gravity_nm = tau_gravity_nm[m];  // Eq. (4)'s tau_ge, computed once by the caller
     valve_command_v[i] = stepJointController(controller.joints[k], data.joints[k], in);
-    faults |= data.joints[k].faults;
+    const core::RtStatus& s = data.joints[k].status;
+    if (!s.ok()) status.raise(s.code, s.faults, s.message);
   }
-  data.faults = faults;
+  data.status = status;
   // One faulted joint stops the arm: every valve to null.
-  if (faults != kFaultNone) {
+  if (!status.ok()) {
     for (int i = 0; i < controller.numJoints(); ++i) valve_command_v[i] = 0.0;
   }
 }

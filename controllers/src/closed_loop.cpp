@@ -285,7 +285,7 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
       contact_user.add(std::abs(tau_user));
     }
 
-    if (plant.step(T, cmd) != plant::PlantStatus::kOk) {
+    if (!plant.step(T, cmd).ok()) {
       r.solver_ok = false;
       r.failure = std::string("plant solver failure: ") + plant.lastError();
       break;
@@ -298,7 +298,7 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
     }
   }
 
-  r.controller_faults = cd.faults;
+  r.controller_faults = cd.status.faults;
   r.free_rms_user_torque_nm = free_torque.rms();
   const HoldVerdict free_v = examineHold(qd_true, free_hold_end, window, sc.oscillation_speed_radps);
   const HoldVerdict contact_v = examineHold(qd_true, contact_hold_end, window, sc.oscillation_speed_radps);

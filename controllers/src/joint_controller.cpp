@@ -59,17 +59,18 @@ void resetJointController(const JointControllerModel& /*model*/, JointController
   data = JointControllerData{};
   data.theta_m_rad = q_rad;
   data.q_prev_rad = q_rad;
-  data.faults = finite(q_rad) ? kFaultNone : kFaultNonFiniteInput;
+  data.status.clear();
+  if (!finite(q_rad)) data.status.raise(core::RtCode::kBadInput, kFaultNonFiniteInput, "non-finite joint angle at reset");
 }
 
 double stepJointController(const JointControllerModel& model, JointControllerData& data,
                            const JointInput& in) noexcept {
   // Safe output first: a latched fault keeps the valve at null.
-  if (data.faults == kFaultNone &&
+  if (data.status.ok() &&
       !(finite(in.q_rad) && finite(in.tau_load_cell_nm) && finite(in.tau_env_nm) && finite(in.tau_gravity_nm))) {
-    data.faults |= kFaultNonFiniteInput;
+    data.status.raise(core::RtCode::kBadInput, kFaultNonFiniteInput, "non-finite controller input");
   }
-  if (data.faults != kFaultNone) {
+  if (!data.status.ok()) {
     data.command_unsaturated_v = 0.0;
     data.valve_command_v = 0.0;
     data.saturated = false;
@@ -145,7 +146,7 @@ double stepJointController(const JointControllerModel& model, JointControllerDat
 
   if (!(finite(u) && finite(data.theta_m_rad) && finite(data.omega_m_radps) && finite(data.error_rate_radps) &&
         finite(data.pid_integral_v) && finite(data.tau_filtered_nm) && finite(data.po_energy_j))) {
-    data.faults |= kFaultNonFiniteState;
+    data.status.raise(core::RtCode::kBadState, kFaultNonFiniteState, "non-finite controller state");
     data.command_unsaturated_v = 0.0;
     data.valve_command_v = 0.0;
     data.saturated = false;

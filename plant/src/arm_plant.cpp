@@ -946,8 +946,10 @@ void ArmPlant::reinitSolver() noexcept {
   need_reinit_ = false;
 }
 
-PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
-  if (!solver_) return PlantStatus::kNotConfigured;
+core::RtStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
+  if (!solver_) {
+    return core::RtStatus::fault(core::RtCode::kNotConfigured, core::kFaultNotConfigured, "plant not configured");
+  }
   cmd_ = command;
   for (int k = 0; k < n_; ++k) {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
@@ -967,7 +969,7 @@ PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
   const double t_end = t_ + dt_s;
   void* mem = solver_->mem.get();
   N_Vector y = solver_->y.get();
-  PlantStatus status = PlantStatus::kOk;
+  core::RtStatus status;
   for (int event = 0;; ++event) {
     if (need_reinit_) reinitSolver();
     // One-shot stop time, set before every call (SUNDIALS 6.4.1 pitfall, research/plant.md 3.2).
@@ -982,7 +984,7 @@ PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
       continue;
     }
     if (flag < 0) {
-      status = PlantStatus::kSolverFailure;
+      status.raise(core::RtCode::kSolverFailure, core::kFaultSolver, "CVODES failed");
       need_reinit_ = true;
     }
     break;
@@ -993,21 +995,16 @@ PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
   return status;
 }
 
-PlantStatus ArmPlant::stepRodas3(double dt_s) noexcept {
+core::RtStatus ArmPlant::stepRodas3(double dt_s) noexcept {
   rigid_derivatives_stale_ = true;  // one exact set of rigid-body derivatives per period
   double* y = N_VGetArrayPointer(solver_->y.get());
-  const RosenbrockStatus result = rodas_->advance(y, dt_s);
-  PlantStatus status = PlantStatus::kOk;
-  if (result != RosenbrockStatus::kOk) {
-    status = PlantStatus::kSolverFailure;
+  const core::RtStatus status = rodas_->advance(y, dt_s);
+  if (!status.ok()) {
     std::snprintf(error_, sizeof(error_), "%s at t = %.6f s: %s",
                   rodas_->method() == RosenbrockMethod::kRodas4     ? "Rodas4"
                   : rodas_->method() == RosenbrockMethod::kRos34pw2 ? "ROS34PW2"
                                                                     : "Rodas3",
-                  t_,
-                  result == RosenbrockStatus::kTooManySteps   ? "too many steps in one period"
-                  : result == RosenbrockStatus::kStepTooSmall ? "step size underflow"
-                                                              : "non-finite right-hand side");
+                  t_, status.message);
   }
   t_ += dt_s;
   const RosenbrockStats& r = rodas_->stats();

@@ -301,12 +301,12 @@ TEST(JointControllerSafety, NonFiniteInputsGiveSafeOutput) {
         double* fields[] = {&in.q_rad, &in.tau_load_cell_nm, &in.tau_env_nm, &in.tau_gravity_nm};
         *fields[field] = bad;
         EXPECT_EQ(stepJointController(m, d, in), 0.0);
-        EXPECT_TRUE(d.faults & kFaultNonFiniteInput);
+        EXPECT_TRUE(d.status.has(kFaultNonFiniteInput));
         // Latched: good inputs do not restart the valve.
         EXPECT_EQ(stepJointController(m, d, userTorque(0.0, 30.0)), 0.0);
         EXPECT_EQ(d.valve_command_v, 0.0);
         resetJointController(m, d, 0.0);
-        EXPECT_EQ(d.faults, kFaultNone);
+        EXPECT_TRUE(d.status.ok());
         EXPECT_NE(stepJointController(m, d, userTorque(0.0, 30.0)), 0.0);
       }
     }
@@ -315,7 +315,7 @@ TEST(JointControllerSafety, NonFiniteInputsGiveSafeOutput) {
   const JointControllerModel m = makeJointControllerModel(baseGains(), ControllerKind::kAdmittance, 1e-3);
   JointControllerData fresh;
   EXPECT_EQ(stepJointController(m, fresh, userTorque(0.0, 30.0)), 0.0);
-  EXPECT_TRUE(fresh.faults & kFaultNotConfigured);
+  EXPECT_TRUE(fresh.status.has(kFaultNotConfigured));
 }
 
 TEST(JointControllerSafety, OverflowingStateGivesSafeOutput) {
@@ -327,7 +327,7 @@ TEST(JointControllerSafety, OverflowingStateGivesSafeOutput) {
   resetJointController(m, d, 0.0);
   (void)stepJointController(m, d, userTorque(0.0, 1e300));
   EXPECT_EQ(stepJointController(m, d, userTorque(0.0, -1e300)), 0.0);
-  EXPECT_TRUE(d.faults & kFaultNonFiniteState);
+  EXPECT_TRUE(d.status.has(kFaultNonFiniteState));
 }
 
 TEST(JointControllerSafety, OutputNeverExceedsTheValveLimit) {
@@ -382,7 +382,7 @@ TEST(ArmController, GravityFromTheArmModelCancelsAtRest) {
   bad[4] = std::numeric_limits<double>::quiet_NaN();
   stepArmController(c, d, q, arm_data.tau_gravity, env, bad, v);
   EXPECT_EQ(v.cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_TRUE(d.faults & kFaultNonFiniteInput);
+  EXPECT_TRUE(d.status.has(kFaultNonFiniteInput));
 }
 
 // The configuration vectors are read at the controlled joints' model indices and the subset

@@ -78,7 +78,7 @@ TEST_F(ContactForcesTest, SpringLawPushesAwayBelowThresholdOnly) {
   const Vector3d u(0.0, 0.6, -0.8);
   std::vector<LocalMinimum> minima{minimum(4, 0.004, u), minimum(4, 0.012, u), minimum(2, 0.0, u)};
   computeContactForces(params_, model_, fk_, minima, 1e-3, data_);
-  EXPECT_FALSE(data_.fault);
+  EXPECT_TRUE(data_.status.ok());
   EXPECT_EQ(data_.active_springs, 2);
   // f = k (d_f - d) along -u.
   EXPECT_NEAR((data_.f_W[0] - (-params_.stiffness_npm * (0.01 - 0.004) * u)).norm(), 0.0, 1e-12);
@@ -176,17 +176,24 @@ TEST_F(ContactForcesTest, FaultInjectionGivesZeroContactTorque) {
   minima[1].distance_m = std::numeric_limits<double>::quiet_NaN();
   computeContactForces(params_, model_, fk_, minima, 1e-3, data_);
   computeContactTorques(model_, fk_, minima, data_);
-  EXPECT_TRUE(data_.fault);
+  EXPECT_EQ(data_.status.code, core::RtCode::kBadInput);
+  EXPECT_EQ(data_.status.faults, core::kFaultNonFiniteInput);
   EXPECT_EQ(data_.tau_contact.norm(), 0.0);
   // Bad link index and more minima than capacity are faults too.
   minima[1] = minimum(99, 0.003, {0, 0, 1});
   computeContactForces(params_, model_, fk_, minima, 1e-3, data_);
-  EXPECT_TRUE(data_.fault);
+  EXPECT_EQ(data_.status.faults, core::kFaultBadIndex);
+  computeContactTorques(model_, fk_, minima, data_);
+  EXPECT_EQ(data_.tau_contact.norm(), 0.0);
   std::vector<LocalMinimum> too_many(65, minimum(4, 0.002, {0, 0, 1}));
   computeContactForces(params_, model_, fk_, too_many, 1e-3, data_);
-  EXPECT_TRUE(data_.fault);
+  EXPECT_EQ(data_.status.faults, core::kFaultCapacity);
   computeContactForces(params_, model_, fk_, minima, 0.0, data_);  // bad tick period
-  EXPECT_TRUE(data_.fault);
+  EXPECT_EQ(data_.status.faults, core::kFaultOutOfRange);
+  // A good tick clears the status.
+  minima[1] = minimum(4, 0.003, {0, 0, 1});
+  computeContactForces(params_, model_, fk_, minima, 1e-3, data_);
+  EXPECT_TRUE(data_.status.ok());
 }
 
 TEST_F(ContactForcesTest, ForcesAndTorquesDoNotAllocate) {

@@ -44,7 +44,10 @@ struct ArmControllerModel {
 /// State of every joint.
 struct ArmControllerData {
   std::array<JointControllerData, kMaxControlledJoints> joints{};
-  std::uint32_t faults = kFaultNotConfigured;  ///< OR of the joints' fault bits
+  /// The arm's status: the first joint's fault (in the selection's order) and the OR of every
+  /// joint's fault bits.
+  core::RtStatus status =
+      core::RtStatus::fault(core::RtCode::kNotConfigured, kFaultNotConfigured, "controller not reset");
 };
 
 /// Resets every joint at rest at `q` (full model configuration, size model.numJoints()). @rt

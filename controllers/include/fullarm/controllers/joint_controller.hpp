@@ -47,23 +47,22 @@
 /// In the linear region step 3 is Eq. (8): u = (B_o/eps)(s + lambda) theta_error.
 ///
 /// ## Faults
-/// A non-finite input (angle, load cell, environment or gravity torque) or a non-finite
-/// internal state sets a fault bit, makes the command exactly 0 V (the valve at null: the
-/// joint holds still) and latches until resetJointController().
-
-#include <cstdint>
+/// The controller's status is a core::RtStatus (JointControllerData::status). A non-finite input
+/// (angle, load cell, environment or gravity torque) raises kFaultNonFiniteInput, a non-finite
+/// internal state kFaultNonFiniteState, a step before resetJointController() is
+/// kFaultNotConfigured; any of them makes the command exactly 0 V (the valve at null: the joint
+/// holds still) and latches until resetJointController().
 
 #include "fullarm/controllers/gains.hpp"
+#include "fullarm/core/rt_status.hpp"
 
 namespace fullarm::controllers {
 
-/// Fault bits of JointControllerData::faults.
-enum JointFault : std::uint32_t {
-  kFaultNone = 0,
-  kFaultNonFiniteInput = 1u << 0,  ///< an input was NaN or infinite
-  kFaultNonFiniteState = 1u << 1,  ///< the internal state became NaN or infinite
-  kFaultNotConfigured = 1u << 2,   ///< step before makeJointControllerModel / reset
-};
+// The fault bits the controllers raise (core/rt_status.hpp), by their names in this namespace.
+using core::kFaultNone;
+using core::kFaultNonFiniteInput;
+using core::kFaultNonFiniteState;
+using core::kFaultNotConfigured;
 
 /// Inputs of one control period for one joint (conventions in the file comment).
 struct JointInput {
@@ -124,7 +123,9 @@ struct JointControllerData {
   double pid_integral_v = 0.0;    ///< ki T sum tau (clamped)
   double tau_prev_nm = 0.0;       ///< tau[k-1] for the PID derivative
   bool initialised = false;
-  std::uint32_t faults = kFaultNotConfigured;
+  /// ok, or the first fault and every fault bit since the last reset (latched).
+  core::RtStatus status =
+      core::RtStatus::fault(core::RtCode::kNotConfigured, kFaultNotConfigured, "controller not reset");
 
   // Outputs of the last step (telemetry).
   double tau_model_nm = 0.0;           ///< Eq. (4) torque fed to the model / the PID

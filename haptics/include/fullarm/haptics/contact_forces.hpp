@@ -14,6 +14,7 @@
 
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/core/rt_status.hpp"
 #include "fullarm/haptics/local_descent.hpp"
 #include "fullarm/haptics/minima.hpp"
 
@@ -82,9 +83,11 @@ struct ContactData {
   std::vector<Eigen::Vector3d> link_force_W;   ///< scratch: summed force per link [N]
   std::vector<Eigen::Vector3d> link_moment_W;  ///< scratch: summed moment about o_n per link [N m]
   int active_springs = 0;
-  /// Set when an input was unusable (non-finite minimum, too many minima, bad link index):
-  /// the contact torques are then zero (safe output) and the caller must report it.
-  bool fault = false;
+  /// Status of the last computeContactForces: not ok when an input was unusable (a non-finite
+  /// minimum: kFaultNonFiniteInput; more minima than the capacity: kFaultCapacity; a bad link
+  /// index: kFaultBadIndex; a non-positive tick period: kFaultOutOfRange). The contact torques
+  /// are then zero (safe output) and the caller must report it.
+  core::RtStatus status;
 };
 
 /// True for the tool link and the hand joints' links.
@@ -120,7 +123,7 @@ void addTailoredJacobianWrench(const arm::ArmModel& model, const arm::ArmData& f
 
 /// tau_contact = sum of addTailoredJacobianTorques over the forces of computeContactForces, at
 /// the kinematics in `fk` (computed once per tick by the caller; not recomputed here). Zero
-/// contact torque when data.fault is set.
+/// contact torque when data.status is not ok.
 /// @rt
 void computeContactTorques(const arm::ArmModel& model, const arm::ArmData& fk, std::span<const LocalMinimum> minima,
                            ContactData& data) noexcept;

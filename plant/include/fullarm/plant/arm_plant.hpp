@@ -148,9 +148,6 @@ struct SolverStats {
   long reinits = 0;
 };
 
-/// Outcome of step().
-enum class PlantStatus { kOk, kSolverFailure, kNotConfigured };
-
 /// The plant. Configure once (allocates), reset, then step() at the control rate (no
 /// allocation). Not copyable or movable (CVODES holds a pointer to it).
 class ArmPlant {
@@ -176,8 +173,13 @@ class ArmPlant {
 
   /// Advances exactly one control period of `dt_s` with the command held (stop time at the
   /// boundary), re-initialising CVODES only at hard-stop events or large command jumps, then
-  /// samples the sensors. @rt
-  PlantStatus step(double dt_s, const PlantCommand& command) noexcept;
+  /// samples the sensors. Returns ok; kNotConfigured before configure(); kSolverFailure (CVODES:
+  /// kFaultSolver; Rosenbrock: kFaultTooManySteps or kFaultStepTooSmall) or kBadState
+  /// (kFaultNonFiniteState) when the integrator gave up, with the solver's own text in
+  /// lastError().
+  /// Allocation-free, unbounded time (core/rt_status.hpp): the adaptive integrators take as many
+  /// steps as the solution needs, up to SolverOptions::max_steps_per_period.
+  core::RtStatus step(double dt_s, const PlantCommand& command) noexcept;
 
   [[nodiscard]] int numJoints() const noexcept { return n_; }
   [[nodiscard]] int numStates() const noexcept { return 6 * n_; }
@@ -201,7 +203,8 @@ class ArmPlant {
   /// Joint accelerations at the end of the last step [rad/s^2].
   [[nodiscard]] const JointVector& accelerations() const noexcept { return qdd_; }
   [[nodiscard]] const SolverStats& stats() const noexcept { return stats_; }
-  /// Last CVODES error message (empty if none).
+  /// The solver's own text of the last failure, for a log (CVODES' message, or the Rosenbrock
+  /// method, the time and the reason); empty if none. step()'s status carries the cause.
   [[nodiscard]] const char* lastError() const noexcept { return error_; }
 
   // Verification interface (tests): the right-hand side and the analytic Jacobian at (t, y)
@@ -300,7 +303,7 @@ class ArmPlant {
   std::unique_ptr<Solver> solver_;
   std::unique_ptr<RosenbrockIntegrator> rodas_;  // set when options_.integrator == kRodas3
   std::vector<signed char> stop_side_;           // -1 below min, 0 inside, 1 above max (Rodas3 event count)
-  PlantStatus stepRodas3(double dt_s) noexcept;
+  core::RtStatus stepRodas3(double dt_s) noexcept;
   void sampleOutputs(double dt_s) noexcept;
 };
 
