@@ -253,6 +253,24 @@ void computeRigidBodyInverseDynamics(const RigidBodyTree& tree, RigidBodyData& d
   newtonEulerPass(tree, data, qdd, tau);
 }
 
+void computeRigidBodyGravity(const RigidBodyTree& tree, const RigidBodyData& data, BodyVector& tau) noexcept {
+  tau.resize(tree.n);  // within the fixed capacity: no allocation
+  // Body force at rest: I (0, a) = (h x a, m a) with a = -g, the ground's acceleration.
+  const Eigen::Vector3d& a = data.ground_accel.bottom;
+  std::array<SpatialVector, kMaxBodies> f{};
+  for (int b = 0; b < tree.n; ++b) {
+    const auto k = static_cast<std::size_t>(b);
+    f[k] = {data.first_moment_kgm[k].cross(a), data.mass_kg[k] * a};
+  }
+  for (int o = tree.n - 1; o >= 0; --o) {
+    const int b = tree.order[static_cast<std::size_t>(o)];
+    const auto k = static_cast<std::size_t>(b);
+    tau[b] = dot(data.s[k], f[k]);
+    const int p = tree.parent[k];
+    if (p >= 0) f[static_cast<std::size_t>(p)] += f[k];
+  }
+}
+
 void computeRigidBodyMassMatrix(const RigidBodyTree& tree, const RigidBodyData& data, BodyMatrix& mass) noexcept {
   const int n = tree.n;
   mass.setZero(n, n);

@@ -1,6 +1,6 @@
-// The reduced rigid-body dynamics (locked links merged into the active bodies) against the
-// unreduced world-frame Newton-Euler of arm/dynamics.hpp, and their analytic derivatives against central finite
-// differences of fullarm::arm's inverse dynamics.
+// The spatial rigid-body dynamics on reduced arms (locked links merged into the active bodies)
+// against the unreduced world-frame Newton-Euler oracle of world_frame_dynamics.hpp, and its
+// analytic derivatives against central finite differences of that oracle.
 
 #include <gtest/gtest.h>
 
@@ -10,6 +10,7 @@
 
 #include "alloc_guard.hpp"
 #include "arm_test_util.hpp"
+#include "world_frame_dynamics.hpp"
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/kinematics.hpp"
@@ -36,7 +37,7 @@ Sample randomSample(int n, std::mt19937& rng) {
   return s;
 }
 
-// fullarm::arm inverse dynamics of the whole model (locked joints at the posture, at rest),
+// World-frame inverse dynamics of the whole model (locked joints at the posture, at rest),
 // read at the active joints.
 BodyVector armInverseDynamics(const ArmModel& model, ArmData& data, const std::vector<int>& active,
                                  const Eigen::VectorXd& posture, const BodyVector& q, const BodyVector& qd,
@@ -49,9 +50,9 @@ BodyVector armInverseDynamics(const ArmModel& model, ArmData& data, const std::v
     qd_full[active[k]] = qd[static_cast<Eigen::Index>(k)];
     qdd_full[active[k]] = qdd[static_cast<Eigen::Index>(k)];
   }
-  computeInverseDynamics(model, data, q_full, qd_full, qdd_full);
+  const Eigen::VectorXd tau_full = test::worldFrameInverseDynamics(model, q_full, qd_full, qdd_full);
   BodyVector tau(static_cast<Eigen::Index>(active.size()));
-  for (std::size_t k = 0; k < active.size(); ++k) tau[static_cast<Eigen::Index>(k)] = data.tau[active[k]];
+  for (std::size_t k = 0; k < active.size(); ++k) tau[static_cast<Eigen::Index>(k)] = tau_full[active[k]];
   return tau;
 }
 
@@ -94,17 +95,17 @@ TEST(RigidBodyDynamics, InverseDynamicsAndMassMatrixMatchUnreducedArm) {
           << "n = " << n << "\n"
           << tau.transpose() << "\n"
           << expected.transpose();
-      // Mass matrix: the active sub-block of fullarm::arm's M (locked joints do not move).
+      // Mass matrix: the active sub-block of the unreduced arm's M (locked joints do not move).
       BodyMatrix mass;
       computeRigidBodyMassMatrix(reduced.tree, data, mass);
       Eigen::VectorXd q_full = posture;
       for (int k = 0; k < n; ++k) q_full[active[static_cast<std::size_t>(k)]] = s.q[k];
-      computeMassMatrix(model, arm_data, q_full);
+      const Eigen::MatrixXd full_mass = test::worldFrameMassMatrix(model, q_full);
       double worst = 0.0;
       for (int a = 0; a < n; ++a) {
         for (int b = 0; b < n; ++b) {
-          worst = std::max(worst, std::abs(mass(a, b) - arm_data.mass_matrix(active[static_cast<std::size_t>(a)],
-                                                                             active[static_cast<std::size_t>(b)])));
+          worst = std::max(worst, std::abs(mass(a, b) - full_mass(active[static_cast<std::size_t>(a)],
+                                                                  active[static_cast<std::size_t>(b)])));
         }
       }
       EXPECT_LE(worst, 1e-12 * mass.cwiseAbs().maxCoeff()) << "n = " << n;
@@ -120,7 +121,7 @@ TEST(RigidBodyDynamics, InverseDynamicsAndMassMatrixMatchUnreducedArm) {
   }
 }
 
-// d ID / d(q, qd) = central differences of fullarm::arm's inverse dynamics (step 1e-6: truncation
+// d ID / d(q, qd) = central differences of the world-frame inverse dynamics (step 1e-6: truncation
 // ~1e-12, rounding ~1e-10 relative).
 TEST(RigidBodyDynamics, AnalyticDerivativesMatchCentralDifferencesOfArmInverseDynamics) {
   const ArmModel& model = test::defaultModel();

@@ -1,8 +1,9 @@
 #pragma once
 /// @file
 /// Rigid-body dynamics of the arm tree: M(q) qdd + C(q, qd) qd + g(q) = tau.
-/// Recursive Newton-Euler in the world frame (Craig, Introduction to Robotics, 3rd ed.,
-/// section 6.5, outward/inward iterations), generalised to the hand tree. No allocation.
+/// Every function here runs the one rigid-body algorithm of the arm, the spatial Newton-Euler
+/// and composite rigid bodies of rigid_body_dynamics.hpp, on the unreduced arm (every joint a
+/// body, ArmData::tree), from the frames of computeForwardKinematics. No allocation.
 
 #include <Eigen/Core>
 
@@ -33,7 +34,7 @@ void computeCoriolisTorques(const ArmModel& model, ArmData& data, const Eigen::R
                             const Eigen::Ref<const Eigen::VectorXd>& qd) noexcept;
 
 /// Joint-space mass matrix M(q), into data.mass_matrix (symmetric positive definite for a
-/// physically valid model). Built column by column from Newton-Euler (O(n^2)).
+/// physically valid model), by composite rigid bodies (R5).
 /// @rt
 void computeMassMatrix(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q) noexcept;
 
@@ -42,7 +43,8 @@ void computeMassMatrix(const ArmModel& model, ArmData& data, const Eigen::Ref<co
 [[nodiscard]] double computePotentialEnergy(const ArmModel& model, ArmData& data,
                                             const Eigen::Ref<const Eigen::VectorXd>& q) noexcept;
 
-/// Kinetic energy 0.5 qd^T M(q) qd [J]. Runs computeMassMatrix.
+/// Kinetic energy 0.5 qd^T M(q) qd = 0.5 sum_b V_b . (I_b V_b) [J] (body velocities and spatial
+/// inertias of the spatial algorithm).
 /// @rt
 [[nodiscard]] double computeKineticEnergy(const ArmModel& model, ArmData& data,
                                           const Eigen::Ref<const Eigen::VectorXd>& q,

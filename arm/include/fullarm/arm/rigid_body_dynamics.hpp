@@ -121,6 +121,11 @@ void computeRigidBodyKinematics(const RigidBodyModel& model, RigidBodyData& data
 void computeRigidBodyInverseDynamics(const RigidBodyTree& tree, RigidBodyData& data, const BodyVector& qdd,
                                      BodyVector& tau) noexcept;
 
+/// Gravity torques g(q) = ID(q, 0, 0): Newton-Euler at rest (R3-R4 with V = 0 and every body
+/// accelerating with the ground), which needs only the masses, first moments and joint axes of
+/// the last kinematics: F_b = (h_b x (-g), -m_b g), tau_b = s_b . sum_{k in subtree(b)} F_k. @rt
+void computeRigidBodyGravity(const RigidBodyTree& tree, const RigidBodyData& data, BodyVector& tau) noexcept;
+
 /// Joint-space inertia M(q) (n x n) at the last kinematics, by composite rigid bodies:
 /// M_ij = s_i . (I^C_j s_j) for i an ancestor of (or equal to) j (R5). @rt
 void computeRigidBodyMassMatrix(const RigidBodyTree& tree, const RigidBodyData& data, BodyMatrix& mass) noexcept;
