@@ -62,7 +62,7 @@ Rendering render(const haptics::HapticsParams& params, const arm::ArmModel& mode
   haptics::computeContactTorques(model, fk, minima, r.contact);
   arm::computeGravityTorquesAtKinematics(model, fk);
   r.tau_gravity = fk.tau_gravity;
-  r.tau_total = r.contact.tau_contact + r.tau_gravity;
+  r.tau_total = r.contact.tau_contact_nm + r.tau_gravity;
   return r;
 }
 
@@ -83,7 +83,7 @@ std::vector<Eigen::Vector3d> linkForces(const arm::ArmModel& model, const std::v
 }
 
 bool torquesFinite(const Rendering& r) {
-  return r.contact.tau_contact.allFinite() && r.tau_gravity.allFinite() && r.tau_total.allFinite();
+  return r.contact.tau_contact_nm.allFinite() && r.tau_gravity.allFinite() && r.tau_total.allFinite();
 }
 
 std::string linksInContactText(const arm::ArmModel& model, const haptics::ContactData& contact) {
@@ -217,7 +217,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
   std::cout << "\nJoint torques [N m]:\n  joint     contact   gravity     total\n";
   for (int j = 0; j < model.numJoints(); ++j) {
     std::cout << "  " << std::left << std::setw(7) << model.joints[static_cast<std::size_t>(j)].name << std::right
-              << std::setw(10) << std::setprecision(3) << contact.tau_contact[j] << std::setw(10)
+              << std::setw(10) << std::setprecision(3) << contact.tau_contact_nm[j] << std::setw(10)
               << rendering.tau_gravity[j] << std::setw(10) << rendering.tau_total[j] << "\n";
   }
   std::cout << "\nLinks in contact (d < d_f): " << linksInContactText(model, contact) << "\n";
@@ -262,7 +262,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
     }
     r["minima"] = list;
     r["tau_contact_nm"] =
-        std::vector<double>(contact.tau_contact.data(), contact.tau_contact.data() + model.numJoints());
+        std::vector<double>(contact.tau_contact_nm.data(), contact.tau_contact_nm.data() + model.numJoints());
     r["tau_gravity_nm"] =
         std::vector<double>(rendering.tau_gravity.data(), rendering.tau_gravity.data() + model.numJoints());
     r["tau_total_nm"] =
@@ -273,7 +273,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
     torques.caption = "Joint torques";
     torques.columns = {"Joint", "Contact [N·m]", "Gravity [N·m]", "Total [N·m]"};
     for (int j = 0; j < model.numJoints(); ++j) {
-      torques.rows.push_back({model.joints[static_cast<std::size_t>(j)].name, contact.tau_contact[j],
+      torques.rows.push_back({model.joints[static_cast<std::size_t>(j)].name, contact.tau_contact_nm[j],
                               rendering.tau_gravity[j], rendering.tau_total[j]});
     }
     reports::Section& section = report.addSection("Minima, forces and torques");
@@ -316,8 +316,8 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   std::ostringstream detail;
   detail << minima.size() << " minima at " << kDemoPosture << " in " << scene.name << "; active springs full-arm "
          << full.contact.active_springs << ", hand-only " << hand.contact.active_springs << "; |tau_contact| "
-         << std::fixed << std::setprecision(2) << full.contact.tau_contact.norm() << " vs "
-         << hand.contact.tau_contact.norm() << " N m";
+         << std::fixed << std::setprecision(2) << full.contact.tau_contact_nm.norm() << " vs "
+         << hand.contact.tau_contact_nm.norm() << " N m";
   if (!no_fault) detail << "; CONTACT FAULT";
   if (!found) detail << "; no minimum within the cutoff";
   if (!finite) detail << "; non-finite joint torque";
@@ -332,7 +332,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   std::cout << "  joint     contact full-arm  contact hand-only   gravity  total full-arm  total hand-only [N m]\n";
   for (int j = 0; j < n; ++j) {
     std::cout << "  " << std::left << std::setw(7) << linkName(model, j) << std::right << std::setprecision(3)
-              << std::setw(18) << full.contact.tau_contact[j] << std::setw(19) << hand.contact.tau_contact[j]
+              << std::setw(18) << full.contact.tau_contact_nm[j] << std::setw(19) << hand.contact.tau_contact_nm[j]
               << std::setw(10) << full.tau_gravity[j] << std::setw(16) << full.tau_total[j]
               << std::setw(17) << hand.tau_total[j] << "\n";
   }
@@ -382,7 +382,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
     nlohmann::json j;
     j["fault"] = !x.contact.status.ok();
     j["active_springs"] = x.contact.active_springs;
-    j["tau_contact_nm"] = listJson(x.contact.tau_contact);
+    j["tau_contact_nm"] = listJson(x.contact.tau_contact_nm);
     j["tau_total_nm"] = listJson(x.tau_total);
     j["links"] = linkRecordsJson(model, R_SW, minima, x.contact);
     return j;
@@ -395,7 +395,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   torques.columns = {"Joint",         "Contact full-arm [N·m]", "Contact hand-only [N·m]",
                      "Gravity [N·m]", "Total full-arm [N·m]",   "Total hand-only [N·m]"};
   for (int j = 0; j < n; ++j) {
-    torques.rows.push_back({linkName(model, j), full.contact.tau_contact[j], hand.contact.tau_contact[j],
+    torques.rows.push_back({linkName(model, j), full.contact.tau_contact_nm[j], hand.contact.tau_contact_nm[j],
                             full.tau_gravity[j], full.tau_total[j], hand.tau_total[j]});
   }
   std::ostringstream df_text;
@@ -405,7 +405,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
                        "Per-link contact records (recorded in both modes; d_f = " + df_text.str() + " mm)");
   report.addHeadlineNumber("haptics_minima", "Minima at the valve reach", static_cast<double>(minima.size()), "");
   report.addHeadlineNumber("haptics_tau_contact_full_arm_nm", "Contact torque norm, full-arm",
-                           full.contact.tau_contact.norm(), "N·m");
+                           full.contact.tau_contact_nm.norm(), "N·m");
   reports::Section& section = report.addSection("Haptic rendering at the valve opening");
   section.addParagraph("The arm at the scene's " + std::string(kDemoPosture) + " posture in " + scene.name + " (" +
                        scene.description + "). " + step.detail +

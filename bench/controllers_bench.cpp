@@ -33,7 +33,7 @@ struct Fixture {
         in.q_rad = 0.3 * std::sin(0.05 * s + j);
         in.tau_gravity_nm = 5.0 * std::cos(0.03 * s + j);
         in.tau_load_cell_nm = in.tau_gravity_nm - 3.0 * std::sin(0.11 * s + 2 * j);
-        in.tau_env_nm = s % 64 < 20 ? -2.0 : 0.0;
+        in.tau_contact_nm = s % 64 < 20 ? -2.0 : 0.0;
       }
     }
   }

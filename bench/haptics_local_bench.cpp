@@ -144,7 +144,7 @@ void localTick64(benchmark::State& state, const LocalDescentParams& descent) {
     computeContactTorques(s.model, fk, live, data);
     arm::computeGravityTorquesAtKinematics(s.model, fk);
     const auto t1 = std::chrono::steady_clock::now();
-    benchmark::DoNotOptimize(data.tau_contact.data());
+    benchmark::DoNotOptimize(data.tau_contact_nm.data());
     benchmark::DoNotOptimize(fk.tau_gravity.data());
     if (us.size() < us.capacity()) us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
   }

@@ -48,7 +48,7 @@ void resetArmController(const ArmControllerModel& controller, ArmControllerData&
 void stepArmController(const ArmControllerModel& controller, ArmControllerData& data,
                        const Eigen::Ref<const Eigen::VectorXd>& q,
                        const Eigen::Ref<const Eigen::VectorXd>& tau_gravity_nm,
-                       const Eigen::Ref<const Eigen::VectorXd>& tau_env_nm,
+                       const Eigen::Ref<const Eigen::VectorXd>& tau_contact_nm,
                        const Eigen::Ref<const Eigen::VectorXd>& tau_load_cell_nm,
                        Eigen::Ref<Eigen::VectorXd> valve_command_v) noexcept {
   core::RtStatus status;
@@ -58,7 +58,7 @@ void stepArmController(const ArmControllerModel& controller, ArmControllerData& 
     JointInput in;
     in.q_rad = q[m];
     in.tau_load_cell_nm = tau_load_cell_nm[i];
-    in.tau_env_nm = tau_env_nm[m];
+    in.tau_contact_nm = tau_contact_nm[m];
     in.tau_gravity_nm = tau_gravity_nm[m];  // Eq. (4)'s tau_ge, computed once by the caller
     valve_command_v[i] = stepJointController(controller.joints[k], data.joints[k], in);
     const core::RtStatus& s = data.joints[k].status;

@@ -245,7 +245,7 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
     if (sc.inject_nan_torque_at_s >= 0.0 && t >= sc.inject_nan_torque_at_s) {
       in.tau_load_cell_nm = std::numeric_limits<double>::quiet_NaN();
     }
-    in.tau_env_nm = tau_env;
+    in.tau_contact_nm = tau_env;
     in.tau_gravity_nm = sc.expected_gravity_cos_nm * std::cos(m.q_rad) + sc.expected_gravity_sin_nm * std::sin(m.q_rad);
     const double v = stepJointController(cm, cd, in);
     min_energy = std::min(min_energy, cd.po_energy_j);

@@ -27,7 +27,7 @@ bool finite(double x) noexcept {
 
 PaperTorques paperTorques(const JointInput& in) noexcept {
   // Sign conventions: joint_controller.hpp file comment.
-  return PaperTorques{-in.tau_load_cell_nm, -in.tau_env_nm, -in.tau_gravity_nm};
+  return PaperTorques{-in.tau_load_cell_nm, -in.tau_contact_nm, -in.tau_gravity_nm};
 }
 
 JointControllerModel makeJointControllerModel(const JointGains& gains, ControllerKind kind, double dt_s) {
@@ -67,7 +67,7 @@ double stepJointController(const JointControllerModel& model, JointControllerDat
                            const JointInput& in) noexcept {
   // Safe output first: a latched fault keeps the valve at null.
   if (data.status.ok() &&
-      !(finite(in.q_rad) && finite(in.tau_load_cell_nm) && finite(in.tau_env_nm) && finite(in.tau_gravity_nm))) {
+      !(finite(in.q_rad) && finite(in.tau_load_cell_nm) && finite(in.tau_contact_nm) && finite(in.tau_gravity_nm))) {
     data.status.raise(core::RtCode::kBadInput, kFaultNonFiniteInput, "non-finite controller input");
   }
   if (!data.status.ok()) {
@@ -88,7 +88,7 @@ double stepJointController(const JointControllerModel& model, JointControllerDat
   data.tau_filtered_nm = a * data.tau_filtered_nm + (1.0 - a) * paper.tau_measured_nm;
 
   // Step 2: Eq. (4) of the DTS paper.
-  double tau = assembleModelTorque(data.tau_filtered_nm, paper.tau_contact_nm, paper.tau_gravity_expected_nm);
+  double tau = assembleModelTorque(data.tau_filtered_nm, paper.tau_c_nm, paper.tau_gravity_expected_nm);
 
   // Passivity observer / controller (Hannaford & Ryu 2002) on the user's port.
   const double qdot = first ? 0.0 : (in.q_rad - data.q_prev_rad) / T;

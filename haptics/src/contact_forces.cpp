@@ -99,7 +99,7 @@ ContactData::ContactData(const arm::ArmModel& model, int max_minima)
       magnitude_n(static_cast<std::size_t>(max_minima), 0.0),
       patch_root(static_cast<std::size_t>(max_minima), 0),
       patch_weight(static_cast<std::size_t>(max_minima), 0.0),
-      tau_contact(Eigen::VectorXd::Zero(model.numJoints())),
+      tau_contact_nm(Eigen::VectorXd::Zero(model.numJoints())),
       links(static_cast<std::size_t>(model.numJoints())),
       link_force_W(static_cast<std::size_t>(model.numJoints()), Vector3d::Zero()),
       link_moment_W(static_cast<std::size_t>(model.numJoints()), Vector3d::Zero()) {}
@@ -249,7 +249,7 @@ void addTailoredJacobianWrench(const arm::ArmModel& model, const arm::ArmData& f
 
 void computeContactTorques(const arm::ArmModel& model, const arm::ArmData& fk, std::span<const LocalMinimum> minima,
                            ContactData& data) noexcept {
-  data.tau_contact.setZero();
+  data.tau_contact_nm.setZero();
   if (data.status.ok()) {
     // Eq. (1)-(2) are linear in (f_c, eta_c): the minima of one link are summed into one force
     // at that link's joint origin and one moment about it, then mapped once per link.
@@ -264,7 +264,7 @@ void computeContactTorques(const arm::ArmModel& model, const arm::ArmData& fk, s
     for (int n = 0; n < model.numJoints(); ++n) {
       const auto k = static_cast<std::size_t>(n);
       if (data.link_force_W[k].squaredNorm() == 0.0 && data.link_moment_W[k].squaredNorm() == 0.0) continue;
-      addTailoredJacobianWrench(model, fk, n, data.link_force_W[k], data.link_moment_W[k], data.tau_contact);
+      addTailoredJacobianWrench(model, fk, n, data.link_force_W[k], data.link_moment_W[k], data.tau_contact_nm);
     }
   }
 }

@@ -167,14 +167,14 @@ TEST(TorqueAssembly, SignConventions) {
   const double g = 7.0, tau_user = 2.0, tau_env = -0.5;
   JointInput in;
   in.tau_gravity_nm = g;
-  in.tau_env_nm = tau_env;
+  in.tau_contact_nm = tau_env;
   in.tau_load_cell_nm = g - tau_user;  // a link at rest: load cell = g - tau_user (plant convention)
   const PaperTorques p = paperTorques(in);
   EXPECT_DOUBLE_EQ(p.tau_measured_nm, tau_user - g);  // tau_u + tau_ga, gravity pulls toward -g
   EXPECT_DOUBLE_EQ(p.tau_gravity_expected_nm, -g);
-  EXPECT_DOUBLE_EQ(p.tau_contact_nm, -tau_env);  // the arm pushes into the wall
+  EXPECT_DOUBLE_EQ(p.tau_c_nm, -tau_env);  // the arm pushes into the wall
   // Gravity cancels; the model feels the user and the environment.
-  EXPECT_DOUBLE_EQ(assembleModelTorque(p.tau_measured_nm, p.tau_contact_nm, p.tau_gravity_expected_nm),
+  EXPECT_DOUBLE_EQ(assembleModelTorque(p.tau_measured_nm, p.tau_c_nm, p.tau_gravity_expected_nm),
                    tau_user + tau_env);
   // The controller: a user pushing toward +q gives a command toward +q, a wall pushing back
   // more than the user reverses it, for both control laws.
@@ -298,7 +298,7 @@ TEST(JointControllerSafety, NonFiniteInputsGiveSafeOutput) {
         for (int k = 0; k < 20; ++k) (void)stepJointController(m, d, userTorque(0.0, 30.0));
         ASSERT_NE(d.valve_command_v, 0.0);
         JointInput in = userTorque(0.0, 30.0);
-        double* fields[] = {&in.q_rad, &in.tau_load_cell_nm, &in.tau_env_nm, &in.tau_gravity_nm};
+        double* fields[] = {&in.q_rad, &in.tau_load_cell_nm, &in.tau_contact_nm, &in.tau_gravity_nm};
         *fields[field] = bad;
         EXPECT_EQ(stepJointController(m, d, in), 0.0);
         EXPECT_TRUE(d.status.has(kFaultNonFiniteInput));
@@ -416,7 +416,7 @@ TEST(ArmController, ReadsConfigurationVectorsThroughItsSelection) {
     JointInput in;
     in.q_rad = q[m];
     in.tau_gravity_nm = gravity[m];
-    in.tau_env_nm = env[m];
+    in.tau_contact_nm = env[m];
     in.tau_load_cell_nm = cells[k];
     EXPECT_EQ(stepJointController(jm, reference, in), v[k]) << gains.joints[static_cast<std::size_t>(k)].name;
     EXPECT_EQ(reference.tau_model_nm, d.joints[static_cast<std::size_t>(k)].tau_model_nm);

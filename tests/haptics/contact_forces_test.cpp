@@ -101,7 +101,7 @@ TEST_F(ContactForcesTest, SpringLawPushesAwayBelowThresholdOnly) {
     arm::computePointJacobian(model_, fk_, m.link, p, J);
     expected += J.topRows<3>().transpose() * data_.f_W[static_cast<std::size_t>(i)];
   }
-  EXPECT_LE((data_.tau_contact - expected).norm(), 1e-12 * expected.norm());
+  EXPECT_LE((data_.tau_contact_nm - expected).norm(), 1e-12 * expected.norm());
 }
 
 TEST_F(ContactForcesTest, DampingSaturationAndPatchNormalisation) {
@@ -162,7 +162,7 @@ TEST_F(ContactForcesTest, HandOnlyRendersHandAndRecordsTheRest) {
   const Vector3d p = fk_.X_WL[static_cast<std::size_t>(model_.tool_link)] * minima[1].p_L;
   arm::computePointJacobian(model_, fk_, model_.tool_link, p, J);
   const Eigen::VectorXd ref = J.topRows<3>().transpose() * data_.f_W[1];
-  EXPECT_LE((data_.tau_contact - ref).norm(), 1e-12 * ref.norm());
+  EXPECT_LE((data_.tau_contact_nm - ref).norm(), 1e-12 * ref.norm());
   // Contact ends: duration resets, totals stay.
   minima[0].distance_m = 0.05;
   computeContactForces(params_, model_, fk_, minima, 1e-3, data_);
@@ -178,13 +178,13 @@ TEST_F(ContactForcesTest, FaultInjectionGivesZeroContactTorque) {
   computeContactTorques(model_, fk_, minima, data_);
   EXPECT_EQ(data_.status.code, core::RtCode::kBadInput);
   EXPECT_EQ(data_.status.faults, core::kFaultNonFiniteInput);
-  EXPECT_EQ(data_.tau_contact.norm(), 0.0);
+  EXPECT_EQ(data_.tau_contact_nm.norm(), 0.0);
   // Bad link index and more minima than capacity are faults too.
   minima[1] = minimum(99, 0.003, {0, 0, 1});
   computeContactForces(params_, model_, fk_, minima, 1e-3, data_);
   EXPECT_EQ(data_.status.faults, core::kFaultBadIndex);
   computeContactTorques(model_, fk_, minima, data_);
-  EXPECT_EQ(data_.tau_contact.norm(), 0.0);
+  EXPECT_EQ(data_.tau_contact_nm.norm(), 0.0);
   std::vector<LocalMinimum> too_many(65, minimum(4, 0.002, {0, 0, 1}));
   computeContactForces(params_, model_, fk_, too_many, 1e-3, data_);
   EXPECT_EQ(data_.status.faults, core::kFaultCapacity);

@@ -64,8 +64,8 @@ TEST(TickComposition, OneKinematicsPassAndOneGravityPassPerTick) {
     computeContactTorques(model, fk, live, contact);
     arm::computeGravityTorquesAtKinematics(model, fk);
     // The load cells of a user at rest read g(q) minus the contact torque the arm holds.
-    controller.selection.gather(fk.tau_gravity - contact.tau_contact, cells);
-    controllers::stepArmController(controller, control, q, fk.tau_gravity, contact.tau_contact, cells, valve_v);
+    controller.selection.gather(fk.tau_gravity - contact.tau_contact_nm, cells);
+    controllers::stepArmController(controller, control, q, fk.tau_gravity, contact.tau_contact_nm, cells, valve_v);
 
     EXPECT_EQ(fk.forward_kinematics_passes - fk_before, 1u) << "tick " << tick;
     EXPECT_EQ(fk.gravity_passes - gravity_before, 1u) << "tick " << tick;
@@ -79,7 +79,7 @@ TEST(TickComposition, OneKinematicsPassAndOneGravityPassPerTick) {
     EXPECT_TRUE(valve_v.allFinite());
   }
   EXPECT_GT(contact.active_springs, 0);  // the arm touches the wall at this posture
-  EXPECT_GT(contact.tau_contact.norm(), 0.0);
+  EXPECT_GT(contact.tau_contact_nm.norm(), 0.0);
 }
 
 }  // namespace

@@ -7,7 +7,7 @@
 /// (arm/joint_selection.hpp). stepArmController takes what the arm and haptics layers compute
 /// over the whole configuration as configuration vectors in arm-model order (hand joints
 /// included): the joint angles q, the gravity torques g(q) (tau_ge of Eq. 4, computed once per
-/// tick by the caller) and the contact torques. What exists only per controlled joint is a
+/// tick by the caller) and the contact torques (fullarm::haptics' ContactData::tau_contact_nm). What exists only per controlled joint is a
 /// subset vector in the controller's order: the load-cell readings in, the valve commands out.
 /// The controller reads its joints' entries of the configuration vectors through its selection.
 
@@ -58,7 +58,7 @@ void resetArmController(const ArmControllerModel& controller, ArmControllerData&
 /// entries of the configuration vectors (boundary rule in the file comment).
 /// @param q                configuration [rad], model order, size model.numJoints()
 /// @param tau_gravity_nm   g(q) at q [N m], model order (arm::computeGravityTorquesAtKinematics)
-/// @param tau_env_nm       environment torques on the links [N m], model order
+/// @param tau_contact_nm   contact torques (the environment's torques on the links) [N m], model order
 /// @param tau_load_cell_nm load-cell readings [N m], controller order, size controller.numJoints()
 /// @param valve_command_v  output [V], controller order, size controller.numJoints(); all zero if
 ///                         any joint faults
@@ -66,7 +66,7 @@ void resetArmController(const ArmControllerModel& controller, ArmControllerData&
 void stepArmController(const ArmControllerModel& controller, ArmControllerData& data,
                        const Eigen::Ref<const Eigen::VectorXd>& q,
                        const Eigen::Ref<const Eigen::VectorXd>& tau_gravity_nm,
-                       const Eigen::Ref<const Eigen::VectorXd>& tau_env_nm,
+                       const Eigen::Ref<const Eigen::VectorXd>& tau_contact_nm,
                        const Eigen::Ref<const Eigen::VectorXd>& tau_load_cell_nm,
                        Eigen::Ref<Eigen::VectorXd> valve_command_v) noexcept;
 

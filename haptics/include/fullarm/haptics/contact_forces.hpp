@@ -78,7 +78,10 @@ struct ContactData {
   std::vector<double> magnitude_n;             ///< scratch: spring magnitude before saturation [N]
   std::vector<int> patch_root;                 ///< scratch: patch (union-find) of each minimum
   std::vector<double> patch_weight;            ///< scratch: sum of (d_f - d) per patch root [m]
-  Eigen::VectorXd tau_contact;                 ///< sum of the tailored-Jacobian torques [N m], size n
+  /// Contact torque [N m], a configuration vector (size n, model order): the torque the
+  /// environment applies to the links, positive toward +q, the sum of the tailored-Jacobian
+  /// torques. What the plant and the arm controller receive as tau_contact_nm.
+  Eigen::VectorXd tau_contact_nm;
   std::vector<LinkContactRecord> links;        ///< one per link
   std::vector<Eigen::Vector3d> link_force_W;   ///< scratch: summed force per link [N]
   std::vector<Eigen::Vector3d> link_moment_W;  ///< scratch: summed moment about o_n per link [N m]
@@ -121,7 +124,7 @@ void addTailoredJacobianTorques(const arm::ArmModel& model, const arm::ArmData& 
 void addTailoredJacobianWrench(const arm::ArmModel& model, const arm::ArmData& fk, int link, const Eigen::Vector3d& f_W,
                                const Eigen::Vector3d& eta_c, Eigen::Ref<Eigen::VectorXd> tau) noexcept;
 
-/// tau_contact = sum of addTailoredJacobianTorques over the forces of computeContactForces, at
+/// tau_contact_nm = sum of addTailoredJacobianTorques over the forces of computeContactForces, at
 /// the kinematics in `fk` (computed once per tick by the caller; not recomputed here). Zero
 /// contact torque when data.status is not ok.
 /// @rt

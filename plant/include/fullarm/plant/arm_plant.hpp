@@ -117,11 +117,16 @@ struct RigidLoad {
   double gravity_sin_nm = 0.0;
 };
 
-/// Inputs of one control period (held constant over it), indexed by active joint.
+/// Inputs of one control period (held constant over it): subset vectors, indexed by active
+/// joint in ArmPlant::selection() order (arm/joint_selection.hpp). All torques about the joint
+/// axis, positive toward +q.
 struct PlantCommand {
   JointVector command;         ///< valve voltage [V], desired torque [N m] or ideal torque [N m]
-  JointVector tau_user_nm;     ///< torque the user applies at each joint
-  JointVector tau_contact_nm;  ///< torque from contact with the (virtual) environment
+  JointVector tau_user_nm;     ///< torque the user applies at each joint [N m]
+  /// Contact torque [N m]: the torque the environment applies to the link, positive toward +q
+  /// (the same quantity and sign as fullarm::haptics' ContactData::tau_contact_nm, gathered at
+  /// the active joints).
+  JointVector tau_contact_nm;
   /// All zero for `n` joints.
   static PlantCommand zero(int n);
 };
