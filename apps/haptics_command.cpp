@@ -122,11 +122,11 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
               << query.tau_gravity_nm[j] << std::setw(10) << rendering.tau_total_nm[j] << "\n";
   }
   std::cout << "\nLinks in contact (d < d_f): " << linksInContactText(model, contact) << "\n";
-  if (contact.fault) std::cout << "FAULT: the contact computation rejected its input; contact torques are zero\n";
+  if (!contact.status.ok()) std::cout << "FAULT: the contact computation rejected its input; contact torques are zero\n";
 
   if (!o.out_dir.empty()) {
     reports::Report report("haptics query", "Haptic query: " + scene.name);
-    report.setVerdict(!contact.fault, contact.fault ? "The contact computation flagged a fault"
+    report.setVerdict(contact.status.ok(), !contact.status.ok() ? "The contact computation flagged a fault"
                                                     : std::to_string(minima.size()) + " minima, " +
                                                           std::to_string(contact.active_springs) + " active springs");
     report.addHeadlineNumber("minima", "Minima within L", static_cast<double>(minima.size()), "");
@@ -142,7 +142,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
     r["force_threshold_m"] = params.force_threshold_m;
     r["prune_radius_m"] = params.prune_radius_m;
     r["search_ms"] = search_ms;
-    r["fault"] = contact.fault;
+    r["fault"] = !contact.status.ok();
     ResultTable minima_table = minimaTable(model, scene, world, query, "Minima within the cutoff (scene frame)");
     ResultTable torques = jointTorquesTable(model, query, "Joint torques");
     ResultTable links = linkRecordsTable(model, scene, query, "Per-link contact records");
@@ -154,7 +154,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
     report.write(o.out_dir);
     std::cout << "\nReport: " << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
   }
-  return contact.fault ? 1 : 0;
+  return contact.status.ok() ? 0 : 1;
 }
 
 HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesystem::path& /*out_dir*/,
@@ -174,7 +174,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
   const double search_ms = query.search_ms;
   const int n = model.numJoints();
 
-  const bool no_fault = !full.contact.fault && !hand.contact.fault;
+  const bool no_fault = full.contact.status.ok() && hand.contact.status.ok();
   const bool found = !minima.empty();
   const bool finite = torquesFinite(query, full) && torquesFinite(query, hand);
   HapticsDemoStep step;
@@ -224,7 +224,7 @@ HapticsDemoStep runHapticsDemoStep(const arm::ArmModel& model, const std::filesy
                                              " (one SNCH search; the mode decides which minima make forces)");
   for (const haptics::QueryRendering& x : query.renderings) {
     nlohmann::json& mode = r[modeKey(x.mode)];
-    mode["fault"] = x.contact.fault;
+    mode["fault"] = !x.contact.status.ok();
     mode["active_springs"] = x.contact.active_springs;
   }
   ResultTable torques =

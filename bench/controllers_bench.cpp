@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "fullarm/arm/arm_data.hpp"
+#include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/arm_controller.hpp"
 #include "fullarm/controllers/gains.hpp"
@@ -32,7 +33,7 @@ struct Fixture {
         in.q_rad = 0.3 * std::sin(0.05 * s + j);
         in.tau_gravity_nm = 5.0 * std::cos(0.03 * s + j);
         in.tau_load_cell_nm = in.tau_gravity_nm - 3.0 * std::sin(0.11 * s + 2 * j);
-        in.tau_env_nm = s % 64 < 20 ? -2.0 : 0.0;
+        in.tau_contact_nm = s % 64 < 20 ? -2.0 : 0.0;
       }
     }
   }
@@ -71,7 +72,8 @@ void BM_TorquePidStep7Joints(benchmark::State& state) {
   jointSteps(state, controllers::ControllerKind::kTorquePid);
 }
 
-// The whole arm step: gravity g(q) by Newton-Euler, then the 7 admittance controllers.
+// The whole arm step: gravity g(q) (forward kinematics and the gravity pass), then the 7
+// admittance controllers.
 void BM_ArmAdmittanceStepWithGravity(benchmark::State& state) {
   const Fixture& f = fixture();
   const controllers::ArmControllerModel c = controllers::makeArmControllerModel(f.gains, f.model);
@@ -79,7 +81,7 @@ void BM_ArmAdmittanceStepWithGravity(benchmark::State& state) {
   controllers::ArmControllerData d;
   Eigen::VectorXd q = f.model.defaultPosture();
   controllers::resetArmController(c, d, q);
-  Eigen::VectorXd cells(kJoints), env = Eigen::VectorXd::Zero(kJoints), v(kJoints);
+  Eigen::VectorXd cells(kJoints), env = Eigen::VectorXd::Zero(f.model.numJoints()), v(kJoints);
   std::size_t s = 0;
   for (auto _ : state) {
     const auto& set = f.inputs[s];
@@ -87,7 +89,8 @@ void BM_ArmAdmittanceStepWithGravity(benchmark::State& state) {
       q[j] = set[static_cast<std::size_t>(j)].q_rad;
       cells[j] = set[static_cast<std::size_t>(j)].tau_load_cell_nm;
     }
-    controllers::stepArmController(f.model, arm_data, c, d, q, cells, env, v);
+    arm::computeGravityTorques(f.model, arm_data, q);
+    controllers::stepArmController(c, d, q, arm_data.tau_gravity, env, cells, v);
     benchmark::DoNotOptimize(v.data());
     s = (s + 1) % kInputSets;
   }

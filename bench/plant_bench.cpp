@@ -11,9 +11,9 @@
 #include <numbers>
 
 #include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/arm/rigid_body_dynamics.hpp"
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/plant_config.hpp"
-#include "fullarm/plant/reduced_dynamics.hpp"
 #include "fullarm/plant/signals.hpp"
 
 namespace {
@@ -73,7 +73,7 @@ void runPlant(benchmark::State& state, bool whole_arm, bool chirp, IntegratorKin
     for (int k = 0; k < periods; ++k) {
       const double u = signalValue(sig, k * kDt);
       for (int j = 0; j < n; ++j) cmd.command[j] = u;
-      if (plant.step(kDt, cmd) != PlantStatus::kOk) {
+      if (!plant.step(kDt, cmd).ok()) {
         state.SkipWithError(plant.lastError());
         return;
       }
@@ -213,21 +213,21 @@ BENCHMARK(BM_Peer_Rk4_Joint_Chirp)->Unit(benchmark::kMillisecond);
 void runRigidDerivatives(benchmark::State& state, bool composite) {
   std::vector<int> active;
   for (const JointParams& j : config().joints) active.push_back(model().jointIndex(j.name));
-  const ReducedArmModel reduced = reduceArmModel(model(), active, model().defaultPosture());
-  const int n = reduced.n;
-  ReducedArmData data;
-  ReducedVector q = ReducedVector::LinSpaced(n, -0.4, 0.5);
-  const ReducedVector qd = ReducedVector::LinSpaced(n, 1.0, -0.8);
-  const ReducedVector qdd = ReducedVector::LinSpaced(n, -3.0, 2.0);
-  ReducedVector tau(n);
-  ReducedMatrix dq(n, n);
-  ReducedMatrix dqd(n, n);
-  computeReducedKinematics(reduced, data, q, qd);
+  const arm::RigidBodyModel reduced = arm::reduceArmModel(model(), active, model().defaultPosture());
+  const int n = reduced.tree.n;
+  arm::RigidBodyData data;
+  arm::BodyVector q = arm::BodyVector::LinSpaced(n, -0.4, 0.5);
+  const arm::BodyVector qd = arm::BodyVector::LinSpaced(n, 1.0, -0.8);
+  const arm::BodyVector qdd = arm::BodyVector::LinSpaced(n, -3.0, 2.0);
+  arm::BodyVector tau(n);
+  arm::BodyMatrix dq(n, n);
+  arm::BodyMatrix dqd(n, n);
+  arm::computeRigidBodyKinematics(reduced, data, q, qd);
   for (auto _ : state) {
     if (composite) {
-      computeReducedInverseDynamicsDerivatives(reduced, data, qdd, tau, dq, dqd);
+      arm::computeRigidBodyInverseDynamicsDerivatives(reduced.tree, data, qdd, tau, dq, dqd);
     } else {
-      computeReducedInverseDynamicsDerivativesPerBody(reduced, data, qdd, tau, dq, dqd);
+      arm::computeRigidBodyInverseDynamicsDerivativesPerBody(reduced.tree, data, qdd, tau, dq, dqd);
     }
     benchmark::DoNotOptimize(dq.data());
     benchmark::DoNotOptimize(dqd.data());

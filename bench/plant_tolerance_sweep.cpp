@@ -78,7 +78,7 @@ Trace runChirp(const std::vector<JointParams>& joints, const SolverOptions& opti
   const double t0 = cpuSeconds();
   for (int k = 0; k < periods; ++k) {
     for (int j = 0; j < n; ++j) cmd.command[j] = signalValue(s, k * 1e-3);
-    if (plant.step(1e-3, cmd) != PlantStatus::kOk) {
+    if (!plant.step(1e-3, cmd).ok()) {
       std::fprintf(stderr, "solver failure: %s\n", plant.lastError());
       std::exit(1);
     }

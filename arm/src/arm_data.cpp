@@ -1,8 +1,17 @@
 #include "fullarm/arm/arm_data.hpp"
 
+#include <stdexcept>
+#include <string>
+
+#include "fullarm/arm/kinematics.hpp"
+
 namespace fullarm::arm {
 
 ArmData::ArmData(const ArmModel& model) {
+  if (model.numJoints() > kMaxBodies) {
+    throw std::invalid_argument("ArmData: model " + model.name + " has " + std::to_string(model.numJoints()) +
+                                " joints, at most " + std::to_string(kMaxBodies) + " are supported");
+  }
   const auto n = static_cast<std::size_t>(model.numJoints());
   const auto ni = static_cast<Eigen::Index>(n);
   q = Eigen::VectorXd::Zero(ni);
@@ -14,15 +23,16 @@ ArmData::ArmData(const ArmModel& model) {
   tau = Eigen::VectorXd::Zero(ni);
   tau_coriolis = Eigen::VectorXd::Zero(ni);
   mass_matrix = Eigen::MatrixXd::Zero(ni, ni);
-  qdd_unit = Eigen::VectorXd::Zero(ni);
-  omega.assign(n, Eigen::Vector3d::Zero());
-  omega_dot.assign(n, Eigen::Vector3d::Zero());
-  accel_origin.assign(n, Eigen::Vector3d::Zero());
-  force.assign(n, Eigen::Vector3d::Zero());
-  moment.assign(n, Eigen::Vector3d::Zero());
-  mass_moment.assign(n, Eigen::Vector3d::Zero());
-  subtree_mass_kg.assign(n, 0.0);
-  inertia_W.assign(n, Eigen::Matrix3d::Zero());
+  body_vector = BodyVector::Zero(ni);
+  body_matrix = BodyMatrix::Zero(ni, ni);
+  // The tree of the unreduced arm: every joint a body, model order (parents precede children).
+  tree.n = static_cast<int>(n);
+  for (int i = 0; i < tree.n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    tree.parent[k] = model.joints[k].parent;
+    tree.order[k] = i;
+    for (int b = 0; b < tree.n; ++b) tree.supports[k][static_cast<std::size_t>(b)] = jointMovesLink(model, i, b);
+  }
 }
 
 }  // namespace fullarm::arm

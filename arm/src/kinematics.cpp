@@ -21,6 +21,7 @@ void computeForwardKinematics(const ArmModel& model, ArmData& data,
     data.com_W[k] = data.X_WL[k] * joint.inertial.com_m;
   }
   data.X_WT = data.X_WL[static_cast<std::size_t>(model.tool_link)] * model.X_LT;
+  ++data.forward_kinematics_passes;
 }
 
 bool jointMovesLink(const ArmModel& model, int joint, int link) noexcept {

@@ -1,9 +1,9 @@
 #include "fullarm/controllers/arm_controller.hpp"
 
-#include <limits>
+#include <algorithm>
 #include <string>
+#include <vector>
 
-#include "fullarm/arm/dynamics.hpp"
 #include "fullarm/core/config_error.hpp"
 
 namespace fullarm::controllers {
@@ -15,7 +15,7 @@ ArmControllerModel makeArmControllerModel(const GainsConfig& gains, const arm::A
                                 std::to_string(gains.joints.size()));
   }
   ArmControllerModel c;
-  c.num_joints = static_cast<int>(gains.joints.size());
+  std::vector<int> indices;
   for (std::size_t i = 0; i < gains.joints.size(); ++i) {
     const JointGains& g = gains.joints[i];
     const int index = model.jointIndex(g.name);
@@ -23,47 +23,51 @@ ArmControllerModel makeArmControllerModel(const GainsConfig& gains, const arm::A
       throw core::ConfigError(gains.source, "joints[" + std::to_string(i) + "].name",
                               "'" + g.name + "' is not an arm joint of model " + model.name);
     }
-    c.model_index[i] = index;
+    if (std::find(indices.begin(), indices.end(), index) != indices.end()) {
+      throw core::ConfigError(gains.source, "joints[" + std::to_string(i) + "].name",
+                              "'" + g.name + "' is listed twice");
+    }
+    indices.push_back(index);
     c.joints[i] = makeJointControllerModel(g, gains.controller, gains.control_period_s);
   }
+  c.selection = arm::JointSelection(model.numJoints(), indices);
   return c;
 }
 
 void resetArmController(const ArmControllerModel& controller, ArmControllerData& data,
                         const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
-  data.faults = kFaultNone;
-  for (int i = 0; i < controller.num_joints; ++i) {
+  data.status.clear();
+  for (int i = 0; i < controller.numJoints(); ++i) {
     const auto k = static_cast<std::size_t>(i);
-    resetJointController(controller.joints[k], data.joints[k], q[controller.model_index[k]]);
-    data.faults |= data.joints[k].faults;
+    resetJointController(controller.joints[k], data.joints[k], q[controller.selection.modelIndex(i)]);
+    const core::RtStatus& s = data.joints[k].status;
+    if (!s.ok()) data.status.raise(s.code, s.faults, s.message);
   }
 }
 
-void stepArmController(const arm::ArmModel& model, arm::ArmData& arm_data, const ArmControllerModel& controller,
-                       ArmControllerData& data, const Eigen::Ref<const Eigen::VectorXd>& q,
+void stepArmController(const ArmControllerModel& controller, ArmControllerData& data,
+                       const Eigen::Ref<const Eigen::VectorXd>& q,
+                       const Eigen::Ref<const Eigen::VectorXd>& tau_gravity_nm,
+                       const Eigen::Ref<const Eigen::VectorXd>& tau_contact_nm,
                        const Eigen::Ref<const Eigen::VectorXd>& tau_load_cell_nm,
-                       const Eigen::Ref<const Eigen::VectorXd>& tau_env_nm,
                        Eigen::Ref<Eigen::VectorXd> valve_command_v) noexcept {
-  // Gravity needs a finite configuration; a non-finite one is caught per joint below.
-  const bool q_finite = q.allFinite();
-  if (q_finite) arm::computeGravityTorques(model, arm_data, q);
-  std::uint32_t faults = kFaultNone;
-  for (int i = 0; i < controller.num_joints; ++i) {
+  core::RtStatus status;
+  for (int i = 0; i < controller.numJoints(); ++i) {
     const auto k = static_cast<std::size_t>(i);
-    const int m = controller.model_index[k];
+    const int m = controller.selection.modelIndex(i);
     JointInput in;
     in.q_rad = q[m];
     in.tau_load_cell_nm = tau_load_cell_nm[i];
-    in.tau_env_nm = tau_env_nm[i];
-    // Eq. (4)'s tau_ge from fullarm::arm (NaN when the configuration is not finite).
-    in.tau_gravity_nm = q_finite ? arm_data.tau_gravity[m] : std::numeric_limits<double>::quiet_NaN();
+    in.tau_contact_nm = tau_contact_nm[m];
+    in.tau_gravity_nm = tau_gravity_nm[m];  // Eq. (4)'s tau_ge, computed once by the caller
     valve_command_v[i] = stepJointController(controller.joints[k], data.joints[k], in);
-    faults |= data.joints[k].faults;
+    const core::RtStatus& s = data.joints[k].status;
+    if (!s.ok()) status.raise(s.code, s.faults, s.message);
   }
-  data.faults = faults;
+  data.status = status;
   // One faulted joint stops the arm: every valve to null.
-  if (faults != kFaultNone) {
-    for (int i = 0; i < controller.num_joints; ++i) valve_command_v[i] = 0.0;
+  if (!status.ok()) {
+    for (int i = 0; i < controller.numJoints(); ++i) valve_command_v[i] = 0.0;
   }
 }
 

@@ -154,20 +154,15 @@ JointScenario makeJointScenario(const arm::ArmModel& model, const plant::PlantCo
   sc.dt_s = gains.control_period_s;
 
   // Link inertia and gravity about this joint's axis with the rest of the arm at its posture.
-  arm::ArmData data(model);
   Eigen::VectorXd q = model.defaultPosture();
   const double lo = joint.min_rad + kLimitMarginRad;
   const double hi = joint.max_rad - kLimitMarginRad;
   sc.start_rad = std::clamp(q[index], lo, hi);
   q[index] = sc.start_rad;
-  arm::computeMassMatrix(model, data, q);
-  sc.load.inertia_kgm2 = data.mass_matrix(index, index) + sc.user.inertia_kgm2;
-  q[index] = 0.0;
-  arm::computeGravityTorques(model, data, q);
-  sc.load.gravity_cos_nm = data.tau_gravity[index];
-  q[index] = 0.5 * std::numbers::pi;
-  arm::computeGravityTorques(model, data, q);
-  sc.load.gravity_sin_nm = data.tau_gravity[index];
+  const arm::SingleAxisLoad axis = arm::computeSingleAxisLoad(model, index, q);
+  sc.load.inertia_kgm2 = axis.inertia_kgm2 + sc.user.inertia_kgm2;
+  sc.load.gravity_cos_nm = axis.gravity_cos_nm;
+  sc.load.gravity_sin_nm = axis.gravity_sin_nm;
   sc.expected_gravity_cos_nm = sc.load.gravity_cos_nm;
   sc.expected_gravity_sin_nm = sc.load.gravity_sin_nm;
 
@@ -250,7 +245,7 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
     if (sc.inject_nan_torque_at_s >= 0.0 && t >= sc.inject_nan_torque_at_s) {
       in.tau_load_cell_nm = std::numeric_limits<double>::quiet_NaN();
     }
-    in.tau_env_nm = tau_env;
+    in.tau_contact_nm = tau_env;
     in.tau_gravity_nm = sc.expected_gravity_cos_nm * std::cos(m.q_rad) + sc.expected_gravity_sin_nm * std::sin(m.q_rad);
     const double v = stepJointController(cm, cd, in);
     min_energy = std::min(min_energy, cd.po_energy_j);
@@ -290,7 +285,7 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
       contact_user.add(std::abs(tau_user));
     }
 
-    if (plant.step(T, cmd) != plant::PlantStatus::kOk) {
+    if (!plant.step(T, cmd).ok()) {
       r.solver_ok = false;
       r.failure = std::string("plant solver failure: ") + plant.lastError();
       break;
@@ -303,7 +298,7 @@ ClosedLoopResult simulateJoint(const JointScenario& sc, ClosedLoopTrace* trace) 
     }
   }
 
-  r.controller_faults = cd.faults;
+  r.controller_faults = cd.status.faults;
   r.free_rms_user_torque_nm = free_torque.rms();
   const HoldVerdict free_v = examineHold(qd_true, free_hold_end, window, sc.oscillation_speed_radps);
   const HoldVerdict contact_v = examineHold(qd_true, contact_hold_end, window, sc.oscillation_speed_radps);

@@ -27,7 +27,7 @@ bool finite(double x) noexcept {
 
 PaperTorques paperTorques(const JointInput& in) noexcept {
   // Sign conventions: joint_controller.hpp file comment.
-  return PaperTorques{-in.tau_load_cell_nm, -in.tau_env_nm, -in.tau_gravity_nm};
+  return PaperTorques{-in.tau_load_cell_nm, -in.tau_contact_nm, -in.tau_gravity_nm};
 }
 
 JointControllerModel makeJointControllerModel(const JointGains& gains, ControllerKind kind, double dt_s) {
@@ -59,17 +59,18 @@ void resetJointController(const JointControllerModel& /*model*/, JointController
   data = JointControllerData{};
   data.theta_m_rad = q_rad;
   data.q_prev_rad = q_rad;
-  data.faults = finite(q_rad) ? kFaultNone : kFaultNonFiniteInput;
+  data.status.clear();
+  if (!finite(q_rad)) data.status.raise(core::RtCode::kBadInput, kFaultNonFiniteInput, "non-finite joint angle at reset");
 }
 
 double stepJointController(const JointControllerModel& model, JointControllerData& data,
                            const JointInput& in) noexcept {
   // Safe output first: a latched fault keeps the valve at null.
-  if (data.faults == kFaultNone &&
-      !(finite(in.q_rad) && finite(in.tau_load_cell_nm) && finite(in.tau_env_nm) && finite(in.tau_gravity_nm))) {
-    data.faults |= kFaultNonFiniteInput;
+  if (data.status.ok() &&
+      !(finite(in.q_rad) && finite(in.tau_load_cell_nm) && finite(in.tau_contact_nm) && finite(in.tau_gravity_nm))) {
+    data.status.raise(core::RtCode::kBadInput, kFaultNonFiniteInput, "non-finite controller input");
   }
-  if (data.faults != kFaultNone) {
+  if (!data.status.ok()) {
     data.command_unsaturated_v = 0.0;
     data.valve_command_v = 0.0;
     data.saturated = false;
@@ -87,7 +88,7 @@ double stepJointController(const JointControllerModel& model, JointControllerDat
   data.tau_filtered_nm = a * data.tau_filtered_nm + (1.0 - a) * paper.tau_measured_nm;
 
   // Step 2: Eq. (4) of the DTS paper.
-  double tau = assembleModelTorque(data.tau_filtered_nm, paper.tau_contact_nm, paper.tau_gravity_expected_nm);
+  double tau = assembleModelTorque(data.tau_filtered_nm, paper.tau_c_nm, paper.tau_gravity_expected_nm);
 
   // Passivity observer / controller (Hannaford & Ryu 2002) on the user's port.
   const double qdot = first ? 0.0 : (in.q_rad - data.q_prev_rad) / T;
@@ -145,7 +146,7 @@ double stepJointController(const JointControllerModel& model, JointControllerDat
 
   if (!(finite(u) && finite(data.theta_m_rad) && finite(data.omega_m_radps) && finite(data.error_rate_radps) &&
         finite(data.pid_integral_v) && finite(data.tau_filtered_nm) && finite(data.po_energy_j))) {
-    data.faults |= kFaultNonFiniteState;
+    data.status.raise(core::RtCode::kBadState, kFaultNonFiniteState, "non-finite controller state");
     data.command_unsaturated_v = 0.0;
     data.valve_command_v = 0.0;
     data.saturated = false;

@@ -28,18 +28,8 @@ struct AxisLoad {
 };
 
 AxisLoad axisLoad(const arm::ArmModel& model, int i, const Eigen::VectorXd& posture) {
-  arm::ArmData data(model);
-  Eigen::VectorXd q = posture;
-  arm::computeMassMatrix(model, data, q);
-  AxisLoad load;
-  load.inertia = data.mass_matrix(i, i);
-  q[i] = 0.0;
-  arm::computeGravityTorques(model, data, q);
-  load.a = data.tau_gravity[i];
-  q[i] = std::numbers::pi / 2.0;
-  arm::computeGravityTorques(model, data, q);
-  load.b = data.tau_gravity[i];
-  return load;
+  const arm::SingleAxisLoad axis = arm::computeSingleAxisLoad(model, i, posture);
+  return {axis.inertia_kgm2, axis.gravity_cos_nm, axis.gravity_sin_nm};
 }
 
 // Point mass merged into a link, keeping the inertia about the new centre of mass (parallel

@@ -6,12 +6,12 @@ namespace fullarm::haptics {
 
 CollisionWorld::CollisionWorld(const arm::ArmModel& model) : CollisionWorld(model, Options{}) {}
 
-CollisionWorld::CollisionWorld(const arm::ArmModel& model, const Options& options) : model_(model) {
-  links_.resize(static_cast<std::size_t>(model_.numJoints()));
-  for (int l = 0; l < model_.numJoints(); ++l) {
-    if (model_.joints[static_cast<std::size_t>(l)].geometry.type != arm::LinkGeometry::Type::kCapsule) continue;
+CollisionWorld::CollisionWorld(const arm::ArmModel& model, const Options& options) : model_(&model) {
+  links_.resize(static_cast<std::size_t>(model.numJoints()));
+  for (int l = 0; l < model.numJoints(); ++l) {
+    if (model.joints[static_cast<std::size_t>(l)].geometry.type != arm::LinkGeometry::Type::kCapsule) continue;
     auto lm = std::make_shared<LinkMesh>();
-    lm->mesh = makeLinkCapsuleMesh(model_, l, options.capsule_segments, options.capsule_rings);
+    lm->mesh = makeLinkCapsuleMesh(model, l, options.capsule_segments, options.capsule_rings);
     lm->tree = buildSnchTree(lm->mesh);
     lm->cones = computeNeighbourCones(lm->mesh);
     links_[static_cast<std::size_t>(l)] = std::move(lm);

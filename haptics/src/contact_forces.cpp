@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/arm/dynamics.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/core/data_paths.hpp"
 #include "fullarm/core/yaml_reader.hpp"
@@ -100,9 +99,7 @@ ContactData::ContactData(const arm::ArmModel& model, int max_minima)
       magnitude_n(static_cast<std::size_t>(max_minima), 0.0),
       patch_root(static_cast<std::size_t>(max_minima), 0),
       patch_weight(static_cast<std::size_t>(max_minima), 0.0),
-      tau_contact(Eigen::VectorXd::Zero(model.numJoints())),
-      tau_gravity(Eigen::VectorXd::Zero(model.numJoints())),
-      tau_total(Eigen::VectorXd::Zero(model.numJoints())),
+      tau_contact_nm(Eigen::VectorXd::Zero(model.numJoints())),
       links(static_cast<std::size_t>(model.numJoints())),
       link_force_W(static_cast<std::size_t>(model.numJoints()), Vector3d::Zero()),
       link_moment_W(static_cast<std::size_t>(model.numJoints()), Vector3d::Zero()) {}
@@ -118,11 +115,15 @@ void resetContactRecords(ContactData& data) noexcept {
 void computeContactForces(const HapticsParams& params, const arm::ArmModel& model, const arm::ArmData& fk,
                           std::span<const LocalMinimum> minima, double dt_s, ContactData& data) noexcept {
   const std::size_t m = minima.size();
-  data.fault = false;
+  data.status.clear();
   data.active_springs = 0;
   const int n_links = model.numJoints();
-  if (m > data.f_W.size() || !(dt_s > 0.0)) {
-    data.fault = true;
+  if (m > data.f_W.size()) {
+    data.status.raise(core::RtCode::kBadInput, core::kFaultCapacity, "more minima than the contact capacity");
+    return;
+  }
+  if (!(dt_s > 0.0)) {
+    data.status.raise(core::RtCode::kBadInput, core::kFaultOutOfRange, "non-positive tick period");
     return;
   }
   // Per-link tick state.
@@ -136,9 +137,12 @@ void computeContactForces(const HapticsParams& params, const arm::ArmModel& mode
     data.f_W[i].setZero();
     data.rendered[i] = 0;
     data.stiffness_npm[i] = 0.0;
-    if (mi.link < 0 || mi.link >= n_links || !std::isfinite(mi.distance_m) || !mi.p_L.allFinite() ||
-        !mi.u_W.allFinite()) {
-      data.fault = true;
+    if (mi.link < 0 || mi.link >= n_links) {
+      data.status.raise(core::RtCode::kBadInput, core::kFaultBadIndex, "minimum on a link index out of range");
+      continue;
+    }
+    if (!std::isfinite(mi.distance_m) || !mi.p_L.allFinite() || !mi.u_W.allFinite()) {
+      data.status.raise(core::RtCode::kBadInput, core::kFaultNonFiniteInput, "non-finite minimum");
       continue;
     }
     data.p_W[i] = fk.X_WL[static_cast<std::size_t>(mi.link)] * mi.p_L;
@@ -243,10 +247,10 @@ void addTailoredJacobianWrench(const arm::ArmModel& model, const arm::ArmData& f
   }
 }
 
-void computeContactTorques(const arm::ArmModel& model, arm::ArmData& fk, std::span<const LocalMinimum> minima,
+void computeContactTorques(const arm::ArmModel& model, const arm::ArmData& fk, std::span<const LocalMinimum> minima,
                            ContactData& data) noexcept {
-  data.tau_contact.setZero();
-  if (!data.fault) {
+  data.tau_contact_nm.setZero();
+  if (data.status.ok()) {
     // Eq. (1)-(2) are linear in (f_c, eta_c): the minima of one link are summed into one force
     // at that link's joint origin and one moment about it, then mapped once per link.
     for (auto& f : data.link_force_W) f.setZero();
@@ -260,12 +264,9 @@ void computeContactTorques(const arm::ArmModel& model, arm::ArmData& fk, std::sp
     for (int n = 0; n < model.numJoints(); ++n) {
       const auto k = static_cast<std::size_t>(n);
       if (data.link_force_W[k].squaredNorm() == 0.0 && data.link_moment_W[k].squaredNorm() == 0.0) continue;
-      addTailoredJacobianWrench(model, fk, n, data.link_force_W[k], data.link_moment_W[k], data.tau_contact);
+      addTailoredJacobianWrench(model, fk, n, data.link_force_W[k], data.link_moment_W[k], data.tau_contact_nm);
     }
   }
-  arm::computeGravityTorques(model, fk, fk.q);
-  data.tau_gravity = fk.tau_gravity;
-  data.tau_total = data.tau_contact + data.tau_gravity;
 }
 
 }  // namespace fullarm::haptics

@@ -23,7 +23,7 @@ QueryRendering::QueryRendering(const arm::ArmModel& model, RenderMode render_mod
       tau_total_nm(Eigen::VectorXd::Zero(model.numJoints())) {}
 
 bool QueryResult::fault() const noexcept {
-  return std::any_of(renderings.begin(), renderings.end(), [](const QueryRendering& r) { return r.contact.fault; });
+  return std::any_of(renderings.begin(), renderings.end(), [](const QueryRendering& r) { return !r.contact.status.ok(); });
 }
 
 QueryResult renderQuery(const arm::ArmModel& model, const CollisionWorld& world, GlobalSearch& search,
@@ -44,7 +44,7 @@ QueryResult renderQuery(const arm::ArmModel& model, const CollisionWorld& world,
   search.search(world, fk, params.cutoff_m, params.prune_radius_m, r.minima);
   r.search_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
-  arm::computeGravityTorques(model, fk, q);
+  arm::computeGravityTorquesAtKinematics(model, fk);
   r.tau_gravity_nm = fk.tau_gravity;
 
   r.renderings.reserve(modes.size());
@@ -54,7 +54,7 @@ QueryResult renderQuery(const arm::ArmModel& model, const CollisionWorld& world,
     QueryRendering& x = r.renderings.emplace_back(model, mode, static_cast<int>(r.minima.size()));
     computeContactForces(mode_params, model, fk, r.minima, kQueryTick_s, x.contact);
     computeContactTorques(model, fk, r.minima, x.contact);
-    x.tau_contact_nm = x.contact.tau_contact;
+    x.tau_contact_nm = x.contact.tau_contact_nm;
     x.tau_total_nm = x.tau_contact_nm + r.tau_gravity_nm;
   }
   return r;

@@ -351,7 +351,7 @@ void ArmPlant::configure(const arm::ArmModel& model, const std::vector<JointPara
     throw core::ConfigError(model.source, "user_arm.link", "cuff link index out of range");
   }
   params_ = joints;
-  active_ = active;
+  selection_ = arm::JointSelection(model.numJoints(), active);
   n_ = static_cast<int>(joints.size());
   user_ = user;
   model_ = std::make_unique<arm::ArmModel>(model);
@@ -363,29 +363,27 @@ void ArmPlant::configure(const arm::ArmModel& model, const std::vector<JointPara
   single_axis_cuff_ = false;
   // The per-step dynamics runs on the arm reduced to the active joints: every locked link
   // (the hand, and the arm joints a partial plant does not drive) merged into the body that
-  // carries it (reduced_dynamics.hpp; equal to fullarm::arm's Newton-Euler to 1e-12, tested).
-  reduced_ = std::make_unique<ReducedArmModel>(reduceArmModel(*model_, active_, posture));
-  reduced_data_ = std::make_unique<ReducedArmData>();
-  cuff_point_ = user.enabled ? reducePoint(*model_, active_, posture, user.link, user.point_L) : ReducedPoint{};
+  // carries it (arm/rigid_body_dynamics.hpp; equal to fullarm::arm's Newton-Euler to 1e-12, tested).
+  reduced_ = std::make_unique<arm::RigidBodyModel>(arm::reduceArmModel(*model_, active, posture));
+  reduced_data_ = std::make_unique<arm::RigidBodyData>();
+  cuff_point_ = user.enabled ? arm::reducePoint(*model_, active, posture, user.link, user.point_L) : arm::BodyPoint{};
   if (single_axis_) {
     // One joint turning with the rest of the arm locked: a rigid body about a fixed axis, so
     // the inertia is constant and gravity is a cos q + b sin q (exact; evaluated once here).
-    const int i = active_[0];
+    const int i = selection_.modelIndex(0);
+    const arm::SingleAxisLoad axis = arm::computeSingleAxisLoad(*model_, i, posture);
+    load_.inertia_kgm2 = axis.inertia_kgm2;
+    load_.gravity_cos_nm = axis.gravity_cos_nm;
+    load_.gravity_sin_nm = axis.gravity_sin_nm;
     Eigen::VectorXd q = posture;
-    arm::computeMassMatrix(*model_, *data_, q);
-    load_.inertia_kgm2 = data_->mass_matrix(i, i);
     q[i] = 0.0;
-    arm::computeGravityTorques(*model_, *data_, q);
-    load_.gravity_cos_nm = data_->tau_gravity[i];
+    arm::computeForwardKinematics(*model_, *data_, q);
     axis_W_ = data_->z_W[static_cast<std::size_t>(i)];
     origin_W_ = data_->o_W[static_cast<std::size_t>(i)];
     if (user.enabled && arm::jointMovesLink(*model_, i, user.link)) {
       single_axis_cuff_ = true;
       cuff0_W_ = arm::pointInWorld(*data_, user.link, user.point_L);
     }
-    q[i] = std::numbers::pi / 2.0;
-    arm::computeGravityTorques(*model_, *data_, q);
-    load_.gravity_sin_nm = data_->tau_gravity[i];
   }
   allocate(options, seed);
 }
@@ -397,7 +395,7 @@ void ArmPlant::configure(const JointParams& joint, const RigidLoad& load, const 
     throw core::ConfigError({}, "load.inertia_kgm2", "expected a positive inertia");
   }
   params_ = {joint};
-  active_ = {-1};
+  selection_ = {};
   n_ = 1;
   user_ = {};
   model_.reset();
@@ -512,8 +510,7 @@ void ArmPlant::reset() {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
     JointState& s = initial[static_cast<std::size_t>(k)];
     s.p_a_pa = s.p_b_pa = 0.5 * (p.supply_pressure_pa + p.return_pressure_pa);
-    s.q_rad = active_[static_cast<std::size_t>(k)] >= 0 ? posture_[active_[static_cast<std::size_t>(k)]]
-                                                        : std::clamp(0.0, p.min_rad, p.max_rad);
+    s.q_rad = modelIndex(k) >= 0 ? posture_[modelIndex(k)] : std::clamp(0.0, p.min_rad, p.max_rad);
   }
   reset(initial);
 }
@@ -551,9 +548,9 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
       q_[k] = y[angleIndex(n_, k)];
       qd_[k] = 0.0;
     }
-    computeReducedKinematics(*reduced_, *reduced_data_, q_, qd_);
+    arm::computeRigidBodyKinematics(*reduced_, *reduced_data_, q_, qd_);
     cuff_anchor_W_ =
-        cuff_point_.body < 0 ? cuff_point_.p_B : reducedPointInWorld(*reduced_data_, cuff_point_.body, cuff_point_.p_B);
+        cuff_point_.body < 0 ? cuff_point_.p_B : arm::bodyPointInWorld(*reduced_data_, cuff_point_.body, cuff_point_.p_B);
   }
   noise_.reseed(seed_);
   for (JointSensorState& s : sensor_state_) s = {};
@@ -625,21 +622,21 @@ void ArmPlant::mechanics(const double* y) noexcept {
   // end, sampled by sampleOutputs() and then the next period's first Jacobian) it is reused.
   if (mechanics_valid_ && q_ == mechanics_q_ && qd_ == mechanics_qd_) return;
   // Newton-Euler on the reduced arm: h = C(q, qd) qd + g(q) (ID at qdd = 0), then M(q) by
-  // composite rigid bodies (reduced_dynamics.hpp, R1-R5).
-  ReducedArmData& d = *reduced_data_;
-  computeReducedKinematics(*reduced_, d, q_, qd_);
-  computeReducedInverseDynamics(*reduced_, d, zero_, h_);
-  computeReducedMassMatrix(*reduced_, d, mass_);
+  // composite rigid bodies (arm/rigid_body_dynamics.hpp, R1-R5).
+  arm::RigidBodyData& d = *reduced_data_;
+  arm::computeRigidBodyKinematics(*reduced_, d, q_, qd_);
+  arm::computeRigidBodyInverseDynamics(reduced_->tree, d, zero_, h_);
+  arm::computeRigidBodyMassMatrix(reduced_->tree, d, mass_);
   for (int a = 0; a < n; ++a) mass_(a, a) += params_[static_cast<std::size_t>(a)].actuator.inertia_kgm2;
   if (user_.enabled && cuff_point_.body >= 0) {
     // Cuff spring and damper through the point Jacobian: column k = z_k x (p - o_k) for the
     // joints that move the cuff's body.
     const auto body = static_cast<std::size_t>(cuff_point_.body);
-    const Eigen::Vector3d p = reducedPointInWorld(d, cuff_point_.body, cuff_point_.p_B);
+    const Eigen::Vector3d p = arm::bodyPointInWorld(d, cuff_point_.body, cuff_point_.p_B);
     for (int k = 0; k < n; ++k) {
       const auto kk = static_cast<std::size_t>(k);
       cuff_jac_.col(k) =
-          reduced_->supports[kk][body] ? Eigen::Vector3d(d.s[kk].top.cross(p - d.o_W[kk])) : Eigen::Vector3d::Zero();
+          reduced_->tree.supports[kk][body] ? Eigen::Vector3d(d.s[kk].top.cross(p - d.o_W[kk])) : Eigen::Vector3d::Zero();
     }
     const Eigen::Vector3d v = cuff_jac_ * qd_;
     const Eigen::Vector3d f = -user_.stiffness_n_per_m * (p - cuff_anchor_W_) - user_.damping_ns_per_m * v;
@@ -894,7 +891,7 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
 // The configuration and velocity gradients of the rigid-body dynamics that the analytic
 // Jacobian leaves out: M qdd = tau - h(q, qd) gives M d qdd/dq = d tau/dq - d ID/dq and
 // M d qdd/dqd = d tau/dqd - d ID/dqd, with ID(q, qd, a) = M(q) a + h(q, qd) taken at a = qdd,
-// from the analytic derivatives of the reduced Newton-Euler (reduced_dynamics.hpp, R6-R8; one
+// from the analytic derivatives of the reduced Newton-Euler (arm/rigid_body_dynamics.hpp, R6-R8; one
 // pass, exact). Subtracts M^-1 d ID into the qd rows of J (column-major, leading dimension
 // ld). Rodas3 needs them: without them a Rosenbrock method drops to order one on the arm's slow
 // mechanics and its error estimate no longer sees the error. Uses the kinematics, qdd_ and
@@ -902,7 +899,7 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
 void ArmPlant::rigidBodyGradients(const double* /*y*/, double* Jdata, int ld) noexcept {
   const int n = n_;
   if (rigid_derivatives_stale_ || !options_.rigid_derivatives_once_per_period) {
-    computeReducedInverseDynamicsDerivatives(*reduced_, *reduced_data_, qdd_, rigid_tau_, rigid_dq_, rigid_dqd_);
+    arm::computeRigidBodyInverseDynamicsDerivatives(reduced_->tree, *reduced_data_, qdd_, rigid_tau_, rigid_dq_, rigid_dqd_);
     rigid_derivatives_stale_ = false;
   }
   // J(qd rows, q and qd columns) -= M^-1 [d ID/dq, d ID/dqd] (plain loops: at n = 7 a general
@@ -919,7 +916,7 @@ void ArmPlant::subtractMinvTimesDerivatives(double* Jdata, int ld) const noexcep
   const int n = N > 0 ? N : n_;
   const double* minv = mass_inv_.data();  // column-major, leading dimension n
   for (int c = 0; c < 2 * n; ++c) {
-    const ReducedMatrix& d = c < n ? rigid_dq_ : rigid_dqd_;
+    const arm::BodyMatrix& d = c < n ? rigid_dq_ : rigid_dqd_;
     const int j = c < n ? c : c - n;
     double* out =
         Jdata + velocityIndex(n, 0) + static_cast<std::ptrdiff_t>(c < n ? angleIndex(n, c) : velocityIndex(n, j)) * ld;
@@ -963,8 +960,10 @@ void ArmPlant::reinitSolver() noexcept {
   need_reinit_ = false;
 }
 
-PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
-  if (!solver_) return PlantStatus::kNotConfigured;
+core::RtStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
+  if (!solver_) {
+    return core::RtStatus::fault(core::RtCode::kNotConfigured, core::kFaultNotConfigured, "plant not configured");
+  }
   cmd_ = command;
   for (int k = 0; k < n_; ++k) {
     const JointParams& p = params_[static_cast<std::size_t>(k)];
@@ -984,7 +983,7 @@ PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
   const double t_end = t_ + dt_s;
   void* mem = solver_->mem.get();
   N_Vector y = solver_->y.get();
-  PlantStatus status = PlantStatus::kOk;
+  core::RtStatus status;
   for (int event = 0;; ++event) {
     if (need_reinit_) reinitSolver();
     // One-shot stop time, set before every call (SUNDIALS 6.4.1 pitfall, research/plant.md 3.2).
@@ -999,7 +998,7 @@ PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
       continue;
     }
     if (flag < 0) {
-      status = PlantStatus::kSolverFailure;
+      status.raise(core::RtCode::kSolverFailure, core::kFaultSolver, "CVODES failed");
       need_reinit_ = true;
     }
     break;
@@ -1010,21 +1009,16 @@ PlantStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept {
   return status;
 }
 
-PlantStatus ArmPlant::stepRodas3(double dt_s) noexcept {
+core::RtStatus ArmPlant::stepRodas3(double dt_s) noexcept {
   rigid_derivatives_stale_ = true;  // one exact set of rigid-body derivatives per period
   double* y = N_VGetArrayPointer(solver_->y.get());
-  const RosenbrockStatus result = rodas_->advance(y, dt_s);
-  PlantStatus status = PlantStatus::kOk;
-  if (result != RosenbrockStatus::kOk) {
-    status = PlantStatus::kSolverFailure;
+  const core::RtStatus status = rodas_->advance(y, dt_s);
+  if (!status.ok()) {
     std::snprintf(error_, sizeof(error_), "%s at t = %.6f s: %s",
                   rodas_->method() == RosenbrockMethod::kRodas4     ? "Rodas4"
                   : rodas_->method() == RosenbrockMethod::kRos34pw2 ? "ROS34PW2"
                                                                     : "Rodas3",
-                  t_,
-                  result == RosenbrockStatus::kTooManySteps   ? "too many steps in one period"
-                  : result == RosenbrockStatus::kStepTooSmall ? "step size underflow"
-                                                              : "non-finite right-hand side");
+                  t_, status.message);
   }
   t_ += dt_s;
   const RosenbrockStats& r = rodas_->stats();

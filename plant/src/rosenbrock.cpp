@@ -610,7 +610,18 @@ double RosenbrockIntegrator::errorNorm(const Vector& estimate) const noexcept {
   return std::isfinite(err) ? err : std::numeric_limits<double>::infinity();
 }
 
-RosenbrockStatus RosenbrockIntegrator::advance(double* y, double duration_s) noexcept {
+namespace {
+
+constexpr core::RtStatus kNonFiniteRhs =
+    core::RtStatus::fault(core::RtCode::kBadState, core::kFaultNonFiniteState, "non-finite right-hand side");
+constexpr core::RtStatus kTooManySteps =
+    core::RtStatus::fault(core::RtCode::kSolverFailure, core::kFaultTooManySteps, "too many steps in one period");
+constexpr core::RtStatus kStepTooSmall =
+    core::RtStatus::fault(core::RtCode::kSolverFailure, core::kFaultStepTooSmall, "step size underflow");
+
+}  // namespace
+
+core::RtStatus RosenbrockIntegrator::advance(double* y, double duration_s) noexcept {
   Eigen::Map<Vector> state(y, n_);
   y0_ = state;
   double t = 0.0;
@@ -634,14 +645,14 @@ RosenbrockStatus RosenbrockIntegrator::advance(double* y, double duration_s) noe
       need_jacobian = false;
       need_f0 = false;
       factor_valid_ = false;
-      if (!f0_.allFinite()) return RosenbrockStatus::kNonFinite;
+      if (!f0_.allFinite()) return kNonFiniteRhs;
     } else if (need_f0) {
       sys_.rhs(sys_.user, y0_.data(), f0_.data());
       ++stats_.rhs_evals;
       need_f0 = false;
-      if (!f0_.allFinite()) return RosenbrockStatus::kNonFinite;
+      if (!f0_.allFinite()) return kNonFiniteRhs;
     }
-    if (++attempts > max_steps_) return RosenbrockStatus::kTooManySteps;
+    if (++attempts > max_steps_) return kTooManySteps;
     const double err = attempt(h);
     // Elementary controller h_new = h (0.9 / err)^(1/3), within [0.2, 5] (no growth right
     // after a rejection).
@@ -666,11 +677,11 @@ RosenbrockStatus RosenbrockIntegrator::advance(double* y, double duration_s) noe
         rejections_in_a_row = 0;
       }
       h_ = h * (std::isfinite(err) ? std::clamp(factor, kMinFactor, 1.0) : 0.25);
-      if (h_ < kSmallestStep_s) return RosenbrockStatus::kStepTooSmall;
+      if (h_ < kSmallestStep_s) return kStepTooSmall;
     }
   }
   state = y0_;
-  return RosenbrockStatus::kOk;
+  return {};
 }
 
 }  // namespace fullarm::plant

@@ -108,7 +108,7 @@ SimulationResult simulate(const arm::ArmModel& model, const PlantConfig& config,
           std::max({tr.stop_overshoot_rad, s.q_rad - plant.joint(k).max_rad, plant.joint(k).min_rad - s.q_rad});
     }
     if (i == periods) break;
-    if (plant.step(dt_s, cmd) != PlantStatus::kOk) {
+    if (!plant.step(dt_s, cmd).ok()) {
       r.solver_ok = false;
       r.solver_error = plant.lastError();
       break;

@@ -1,6 +1,6 @@
 // Rigid-body dynamics against orocos-kdl (an independent Newton-Euler and composite-inertia
-// implementation), finite differences of the potential energy, and the structure of
-// M qdd + C qd + g = tau.
+// implementation), the world-frame Newton-Euler oracle of world_frame_dynamics.hpp, finite
+// differences of the potential energy, and the structure of M qdd + C qd + g = tau.
 
 #include "fullarm/arm/dynamics.hpp"
 
@@ -16,6 +16,7 @@
 #include "fullarm/arm/kdl_conversion.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "matrix_compare.hpp"
+#include "world_frame_dynamics.hpp"
 
 namespace fullarm::arm {
 namespace {
@@ -91,6 +92,36 @@ TEST(Dynamics, MassCoriolisGravityMatchKdlChainDynParam) {
     computeGravityTorques(model, data, q);
     ASSERT_MATRIX_NEAR(data.tau_gravity, G.data, Tolerance::kExact);
   }
+}
+
+// The library's spatial algorithm against the world-frame Newton-Euler of Craig (a second,
+// independent implementation kept in the tests), on the whole tree with the hand.
+TEST(Dynamics, SpatialAlgorithmMatchesWorldFrameNewtonEuler) {
+  const ArmModel& model = test::defaultModel();
+  ArmData data(model);
+  std::mt19937 rng(kSeed + 8);
+  double worst_tau = 0.0, worst_mass = 0.0, worst_c = 0.0, worst_g = 0.0;
+  for (int trial = 0; trial < kRandomStates; ++trial) {
+    const Eigen::VectorXd q = test::randomConfiguration(model, rng);
+    const Eigen::VectorXd qd = test::randomVector(model.numJoints(), kVelocityScale_radps, rng);
+    const Eigen::VectorXd qdd = test::randomVector(model.numJoints(), kAccelScale_radps2, rng);
+    const Eigen::VectorXd tau = test::worldFrameInverseDynamics(model, q, qd, qdd);
+    computeInverseDynamics(model, data, q, qd, qdd);
+    worst_tau = std::max(worst_tau, (data.tau - tau).cwiseAbs().maxCoeff() / tau.cwiseAbs().maxCoeff());
+    const Eigen::MatrixXd mass = test::worldFrameMassMatrix(model, q);
+    computeMassMatrix(model, data, q);
+    worst_mass = std::max(worst_mass, (data.mass_matrix - mass).cwiseAbs().maxCoeff() / mass.cwiseAbs().maxCoeff());
+    const Eigen::VectorXd c = test::worldFrameCoriolisTorques(model, q, qd);
+    computeCoriolisTorques(model, data, q, qd);
+    worst_c = std::max(worst_c, (data.tau_coriolis - c).cwiseAbs().maxCoeff() / c.cwiseAbs().maxCoeff());
+    const Eigen::VectorXd g = test::worldFrameGravityTorques(model, q);
+    computeGravityTorques(model, data, q);
+    worst_g = std::max(worst_g, (data.tau_gravity - g).cwiseAbs().maxCoeff() / g.cwiseAbs().maxCoeff());
+  }
+  EXPECT_LE(worst_tau, 1e-12);
+  EXPECT_LE(worst_mass, 1e-12);
+  EXPECT_LE(worst_c, 1e-12);
+  EXPECT_LE(worst_g, 1e-12);
 }
 
 TEST(Dynamics, MassMatrixIsSymmetricPositiveDefinite) {
@@ -183,6 +214,34 @@ TEST(Dynamics, GravityTorquesEqualStaticInverseDynamics) {
     computeGravityTorques(model, data, q);
     ASSERT_MATRIX_NEAR(data.tau, data.tau_gravity, Tolerance::kExact);
   }
+}
+
+// Gravity at the kinematics already in ArmData equals the convenience that runs them, and the
+// pass counters count exactly the passes each function makes.
+TEST(Dynamics, GravityAtKinematicsReusesTheKinematicsAndCountsPasses) {
+  const ArmModel& model = test::defaultModel();
+  ArmData data(model);
+  ArmData reference(model);
+  std::mt19937 rng(kSeed + 7);
+  const Eigen::VectorXd q = test::randomConfiguration(model, rng);
+  computeGravityTorques(model, reference, q);
+  EXPECT_EQ(reference.forward_kinematics_passes, 1u);
+  EXPECT_EQ(reference.gravity_passes, 1u);
+  computeForwardKinematics(model, data, q);
+  EXPECT_EQ(data.forward_kinematics_passes, 1u);
+  EXPECT_EQ(data.gravity_passes, 0u);
+  computeGravityTorquesAtKinematics(model, data);
+  EXPECT_EQ(data.forward_kinematics_passes, 1u);
+  EXPECT_EQ(data.gravity_passes, 1u);
+  EXPECT_EQ(data.tau_gravity, reference.tau_gravity);
+  // At other kinematics the result follows them, not a configuration of its own.
+  const Eigen::VectorXd q2 = test::randomConfiguration(model, rng);
+  computeForwardKinematics(model, data, q2);
+  computeGravityTorquesAtKinematics(model, data);
+  computeGravityTorques(model, reference, q2);
+  EXPECT_EQ(data.tau_gravity, reference.tau_gravity);
+  EXPECT_EQ(data.forward_kinematics_passes, 2u);
+  EXPECT_EQ(data.gravity_passes, 2u);
 }
 
 // A single point mass on a horizontal lever: tau = m g r by hand.

@@ -39,6 +39,8 @@ TEST_F(RealtimeAllocation, PointJacobianOnEveryLink) {
 
 TEST_F(RealtimeAllocation, GravityTorques) {
   EXPECT_NO_HEAP_ALLOCATION(computeGravityTorques(model_, data_, q_));
+  computeForwardKinematics(model_, data_, q_);
+  EXPECT_NO_HEAP_ALLOCATION(computeGravityTorquesAtKinematics(model_, data_));
 }
 
 TEST_F(RealtimeAllocation, InverseDynamics) {

@@ -167,14 +167,14 @@ TEST(TorqueAssembly, SignConventions) {
   const double g = 7.0, tau_user = 2.0, tau_env = -0.5;
   JointInput in;
   in.tau_gravity_nm = g;
-  in.tau_env_nm = tau_env;
+  in.tau_contact_nm = tau_env;
   in.tau_load_cell_nm = g - tau_user;  // a link at rest: load cell = g - tau_user (plant convention)
   const PaperTorques p = paperTorques(in);
   EXPECT_DOUBLE_EQ(p.tau_measured_nm, tau_user - g);  // tau_u + tau_ga, gravity pulls toward -g
   EXPECT_DOUBLE_EQ(p.tau_gravity_expected_nm, -g);
-  EXPECT_DOUBLE_EQ(p.tau_contact_nm, -tau_env);  // the arm pushes into the wall
+  EXPECT_DOUBLE_EQ(p.tau_c_nm, -tau_env);  // the arm pushes into the wall
   // Gravity cancels; the model feels the user and the environment.
-  EXPECT_DOUBLE_EQ(assembleModelTorque(p.tau_measured_nm, p.tau_contact_nm, p.tau_gravity_expected_nm),
+  EXPECT_DOUBLE_EQ(assembleModelTorque(p.tau_measured_nm, p.tau_c_nm, p.tau_gravity_expected_nm),
                    tau_user + tau_env);
   // The controller: a user pushing toward +q gives a command toward +q, a wall pushing back
   // more than the user reverses it, for both control laws.
@@ -298,15 +298,15 @@ TEST(JointControllerSafety, NonFiniteInputsGiveSafeOutput) {
         for (int k = 0; k < 20; ++k) (void)stepJointController(m, d, userTorque(0.0, 30.0));
         ASSERT_NE(d.valve_command_v, 0.0);
         JointInput in = userTorque(0.0, 30.0);
-        double* fields[] = {&in.q_rad, &in.tau_load_cell_nm, &in.tau_env_nm, &in.tau_gravity_nm};
+        double* fields[] = {&in.q_rad, &in.tau_load_cell_nm, &in.tau_contact_nm, &in.tau_gravity_nm};
         *fields[field] = bad;
         EXPECT_EQ(stepJointController(m, d, in), 0.0);
-        EXPECT_TRUE(d.faults & kFaultNonFiniteInput);
+        EXPECT_TRUE(d.status.has(kFaultNonFiniteInput));
         // Latched: good inputs do not restart the valve.
         EXPECT_EQ(stepJointController(m, d, userTorque(0.0, 30.0)), 0.0);
         EXPECT_EQ(d.valve_command_v, 0.0);
         resetJointController(m, d, 0.0);
-        EXPECT_EQ(d.faults, kFaultNone);
+        EXPECT_TRUE(d.status.ok());
         EXPECT_NE(stepJointController(m, d, userTorque(0.0, 30.0)), 0.0);
       }
     }
@@ -315,7 +315,7 @@ TEST(JointControllerSafety, NonFiniteInputsGiveSafeOutput) {
   const JointControllerModel m = makeJointControllerModel(baseGains(), ControllerKind::kAdmittance, 1e-3);
   JointControllerData fresh;
   EXPECT_EQ(stepJointController(m, fresh, userTorque(0.0, 30.0)), 0.0);
-  EXPECT_TRUE(fresh.faults & kFaultNotConfigured);
+  EXPECT_TRUE(fresh.status.has(kFaultNotConfigured));
 }
 
 TEST(JointControllerSafety, OverflowingStateGivesSafeOutput) {
@@ -327,7 +327,7 @@ TEST(JointControllerSafety, OverflowingStateGivesSafeOutput) {
   resetJointController(m, d, 0.0);
   (void)stepJointController(m, d, userTorque(0.0, 1e300));
   EXPECT_EQ(stepJointController(m, d, userTorque(0.0, -1e300)), 0.0);
-  EXPECT_TRUE(d.faults & kFaultNonFiniteState);
+  EXPECT_TRUE(d.status.has(kFaultNonFiniteState));
 }
 
 TEST(JointControllerSafety, OutputNeverExceedsTheValveLimit) {
@@ -357,7 +357,7 @@ TEST(JointController, InvalidGainsAreRejected) {
 TEST(ArmController, GravityFromTheArmModelCancelsAtRest) {
   const arm::ArmModel& model = test::dtsModel();
   const ArmControllerModel c = makeArmControllerModel(test::dtsGains(), model);
-  ASSERT_EQ(c.num_joints, 7);
+  ASSERT_EQ(c.numJoints(), 7);
   arm::ArmData arm_data(model);
   ArmControllerData d;
   Eigen::VectorXd q = model.defaultPosture();
@@ -366,22 +366,61 @@ TEST(ArmController, GravityFromTheArmModelCancelsAtRest) {
   resetArmController(c, d, q);
   // The load cells read exactly g(q): the user does nothing, so every model torque is 0.
   arm::computeGravityTorques(model, arm_data, q);
-  const Eigen::VectorXd cells = arm_data.tau_gravity.head(7);
-  const Eigen::VectorXd env = Eigen::VectorXd::Zero(7);
+  Eigen::VectorXd cells(7);
+  c.selection.gather(arm_data.tau_gravity, cells);
+  const Eigen::VectorXd env = Eigen::VectorXd::Zero(model.numJoints());
   Eigen::VectorXd v(7);
-  stepArmController(model, arm_data, c, d, q, cells, env, v);
+  stepArmController(c, d, q, arm_data.tau_gravity, env, cells, v);
   ASSERT_GT(cells.cwiseAbs().maxCoeff(), 1.0);  // gravity is not trivially zero here
   for (int i = 0; i < 7; ++i) EXPECT_NEAR(d.joints[static_cast<std::size_t>(i)].tau_model_nm, 0.0, 1e-12) << i;
   EXPECT_NEAR(v.cwiseAbs().maxCoeff(), 0.0, 1e-12);
   // One bad load cell stops every valve.
   for (int k = 0; k < 10; ++k)
-    stepArmController(model, arm_data, c, d, q, cells + Eigen::VectorXd::Constant(7, -5.0), env, v);
+    stepArmController(c, d, q, arm_data.tau_gravity, env, cells + Eigen::VectorXd::Constant(7, -5.0), v);
   ASSERT_GT(v.cwiseAbs().minCoeff(), 0.0);
   Eigen::VectorXd bad = cells;
   bad[4] = std::numeric_limits<double>::quiet_NaN();
-  stepArmController(model, arm_data, c, d, q, bad, env, v);
+  stepArmController(c, d, q, arm_data.tau_gravity, env, bad, v);
   EXPECT_EQ(v.cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_TRUE(d.faults & kFaultNonFiniteInput);
+  EXPECT_TRUE(d.status.has(kFaultNonFiniteInput));
+}
+
+// The configuration vectors are read at the controlled joints' model indices and the subset
+// vectors in the gains file's order: a gains file listing the joints out of model order maps
+// each joint's gravity, contact torque and load cell to the right controller.
+TEST(ArmController, ReadsConfigurationVectorsThroughItsSelection) {
+  const arm::ArmModel& model = test::dtsModel();
+  GainsConfig gains = test::dtsGains();
+  std::reverse(gains.joints.begin(), gains.joints.end());
+  const ArmControllerModel c = makeArmControllerModel(gains, model);
+  const int n = c.numJoints();
+  ArmControllerData d;
+  const Eigen::VectorXd q = model.defaultPosture();
+  resetArmController(c, d, q);
+  Eigen::VectorXd gravity = Eigen::VectorXd::Zero(model.numJoints());
+  Eigen::VectorXd env = Eigen::VectorXd::Zero(model.numJoints());
+  Eigen::VectorXd cells = Eigen::VectorXd::Zero(n);
+  for (int m = 0; m < model.numJoints(); ++m) {
+    gravity[m] = 1.0 + m;
+    env[m] = 0.25 * m;
+  }
+  for (int k = 0; k < n; ++k) cells[k] = 0.1 * k;
+  Eigen::VectorXd v(n);
+  stepArmController(c, d, q, gravity, env, cells, v);
+  for (int k = 0; k < n; ++k) {
+    const int m = model.jointIndex(gains.joints[static_cast<std::size_t>(k)].name);
+    // Eq. (4) before the filter's first step: tau = g + tau_env - load cell, filtered from zero.
+    JointControllerData reference;
+    const JointControllerModel jm = c.joints[static_cast<std::size_t>(k)];
+    resetJointController(jm, reference, q[m]);
+    JointInput in;
+    in.q_rad = q[m];
+    in.tau_gravity_nm = gravity[m];
+    in.tau_contact_nm = env[m];
+    in.tau_load_cell_nm = cells[k];
+    EXPECT_EQ(stepJointController(jm, reference, in), v[k]) << gains.joints[static_cast<std::size_t>(k)].name;
+    EXPECT_EQ(reference.tau_model_nm, d.joints[static_cast<std::size_t>(k)].tau_model_nm);
+  }
 }
 
 TEST(ControllersRealtime, StepsDoNotAllocate) {
@@ -406,11 +445,13 @@ TEST(ControllersRealtime, StepsDoNotAllocate) {
   arm::ArmData arm_data(model);
   ArmControllerData d;
   const Eigen::VectorXd q = model.defaultPosture();
+  arm::computeGravityTorques(model, arm_data, q);
   const Eigen::VectorXd cells = Eigen::VectorXd::Constant(7, 0.5);
-  const Eigen::VectorXd env = Eigen::VectorXd::Zero(7);
+  const Eigen::VectorXd env = Eigen::VectorXd::Zero(model.numJoints());
   Eigen::VectorXd v(7);
   EXPECT_NO_HEAP_ALLOCATION(resetArmController(c, d, q));
-  EXPECT_NO_HEAP_ALLOCATION(for (int k = 0; k < 50; ++k) stepArmController(model, arm_data, c, d, q, cells, env, v));
+  EXPECT_NO_HEAP_ALLOCATION(
+      for (int k = 0; k < 50; ++k) stepArmController(c, d, q, arm_data.tau_gravity, env, cells, v));
 }
 
 }  // namespace

@@ -133,7 +133,7 @@ inline Ring nonlinearRing(const JointScenario& nominal, const JointPlantModel& j
     cmd.tau_user_nm[0] = sc.user.stiffness_nm_per_rad * (q0 - st.q_rad) - sc.user.damping_nms_per_rad * st.qd_radps;
     r.qd.push_back(st.qd_radps);
     r.spool.push_back(st.spool);
-    if (plant.step(sc.dt_s, cmd) != plant::PlantStatus::kOk) {
+    if (!plant.step(sc.dt_s, cmd).ok()) {
       r.solver_ok = false;
       break;
     }

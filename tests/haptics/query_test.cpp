@@ -63,7 +63,7 @@ TEST(HapticQuery, ContactTorquesEqualPointJacobianTransposeOfTheMinimaForces) {
     arm::computeForwardKinematics(model, fk, q);
     arm::PointJacobian J;
     for (const QueryRendering& x : query.renderings) {
-      ASSERT_FALSE(x.contact.fault);
+      ASSERT_TRUE(x.contact.status.ok());
       Eigen::VectorXd tau = Eigen::VectorXd::Zero(model.numJoints());
       for (std::size_t i = 0; i < query.minima.size(); ++i) {
         const LocalMinimum& m = query.minima[i];

@@ -107,7 +107,7 @@ TEST(ArmPlant, IdealTorqueFreeMotionConservesArmEnergy) {
   double ke_scale = 0.0;
   const PlantCommand cmd = PlantCommand::zero(7);
   for (int k = 0; k < 300; ++k) {
-    ASSERT_EQ(plant.step(1e-3, cmd), PlantStatus::kOk) << plant.lastError();
+    ASSERT_TRUE(plant.step(1e-3, cmd).ok()) << plant.lastError();
     ke_scale = std::max(ke_scale, std::abs(energy() - e0));
   }
   Eigen::VectorXd q0 = model.defaultPosture();
@@ -169,7 +169,7 @@ TEST(ArmPlant, StatisticsAccumulateAcrossReinit) {
   long previous_steps = 0;
   for (int k = 0; k < 50; ++k) {
     cmd.command[0] = (k / 10) % 2 == 0 ? 3.0 : -3.0;  // jumps of 60 % of full scale: re-init
-    ASSERT_EQ(plant.step(1e-3, cmd), PlantStatus::kOk) << plant.lastError();
+    ASSERT_TRUE(plant.step(1e-3, cmd).ok()) << plant.lastError();
     EXPECT_GE(plant.stats().steps, previous_steps);
     previous_steps = plant.stats().steps;
   }
@@ -191,7 +191,7 @@ TEST(ArmPlant, StatisticsRestartAtReset) {
     PlantCommand cmd = PlantCommand::zero(1);
     for (int k = 0; k < 200; ++k) {
       cmd.command[0] = 0.5 * std::sin(2.0 * std::numbers::pi * 2.0 * k * 1e-3);  // no re-init
-      EXPECT_EQ(plant.step(1e-3, cmd), PlantStatus::kOk) << plant.lastError();
+      EXPECT_TRUE(plant.step(1e-3, cmd).ok()) << plant.lastError();
     }
     return plant.stats();
   };
@@ -216,7 +216,7 @@ TEST(ArmPlant, Rodas3FollowsTightCvodesOnIdealTorqueFreeMotion) {
     plant.configure(model, idealJoints(model), model.defaultPosture(), UserArmParams{}, o);
     plant.reset(swingingStart(model));
     const PlantCommand cmd = PlantCommand::zero(7);
-    for (int k = 0; k < 1000; ++k) EXPECT_EQ(plant.step(1e-3, cmd), PlantStatus::kOk) << plant.lastError();
+    for (int k = 0; k < 1000; ++k) EXPECT_TRUE(plant.step(1e-3, cmd).ok()) << plant.lastError();
     Eigen::VectorXd q(7);
     for (int k = 0; k < 7; ++k) q[k] = plant.state(k).q_rad;
     return q;
@@ -264,7 +264,7 @@ TEST(ArmPlant, PublicJacobianStaysExactWithRigidDerivativesOncePerPeriod) {
   const int n = reusing.numJoints();
   PlantCommand cmd = PlantCommand::zero(n);
   for (int j = 0; j < n; ++j) cmd.command[j] = 3.0 * std::sin(j + 1.0);
-  for (int k = 0; k < 50; ++k) ASSERT_EQ(reusing.step(1e-3, cmd), PlantStatus::kOk);
+  for (int k = 0; k < 50; ++k) ASSERT_TRUE(reusing.step(1e-3, cmd).ok());
   EXPECT_GT(reusing.stats().steps, 50);  // several Jacobians per period: the reuse was exercised
   exact.setCommand(cmd);
   const Eigen::VectorXd y = reusing.stateVector();

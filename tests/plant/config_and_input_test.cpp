@@ -12,6 +12,7 @@
 
 #include "config_text.hpp"
 #include "fullarm/core/config_error.hpp"
+#include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/signals.hpp"
 #include "plant_fixture.hpp"
 
@@ -98,6 +99,13 @@ TEST(PlantConfig, BadYamlGivesFileLineAndKeyPath) {
   expectConfigError(bad_valve, "joints[3].valve.damping_ratio", "expected");
   // Missing key.
   expectConfigError(replaced(text, "  atol_spool: 1.0e-4\n", ""), "solver", "atol_spool");
+}
+
+TEST(PlantConfig, StepBeforeConfigureIsNotConfigured) {
+  ArmPlant plant;
+  const core::RtStatus status = plant.step(1e-3, PlantCommand::zero(1));
+  EXPECT_EQ(status.code, core::RtCode::kNotConfigured);
+  EXPECT_EQ(status.faults, core::kFaultNotConfigured);
 }
 
 TEST(PlantConfig, SyntaxErrorIsAConfigError) {

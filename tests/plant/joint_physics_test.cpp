@@ -104,7 +104,7 @@ TEST_P(JointPhysics, BlockedSpoolImpulseRingsAtHydraulicNaturalFrequency) {
   std::vector<double> crossings;
   double q_prev = plant.state(0).q_rad;
   for (int k = 0; k < 20000; ++k) {
-    ASSERT_EQ(plant.step(dt, cmd), PlantStatus::kOk) << plant.lastError();
+    ASSERT_TRUE(plant.step(dt, cmd).ok()) << plant.lastError();
     const double q = plant.state(0).q_rad;
     if (q_prev > 0.0 && q <= 0.0) crossings.push_back(plant.time() - dt * q / (q - q_prev));
     q_prev = q;
@@ -129,7 +129,7 @@ TEST_P(JointPhysics, BlockedLoadPressureBuildUpRate) {
   PlantCommand cmd = PlantCommand::zero(1);
   cmd.command[0] = x / p.valve.amplifier_gain_per_v;
   const double dt = 2e-5;
-  ASSERT_EQ(plant.step(dt, cmd), PlantStatus::kOk) << plant.lastError();
+  ASSERT_TRUE(plant.step(dt, cmd).ok()) << plant.lastError();
   const JointState s = plant.state(0);
   const double rate = ((s.p_a_pa - s.p_b_pa) - 0.0) / dt;
   const double kv = p.valve.rated_flow_m3ps / std::sqrt(p.valve.rated_pressure_drop_pa);
@@ -157,7 +157,7 @@ TEST_P(JointPhysics, NoLoadSteadyVelocityAtThreeOpenings) {
     double q_start = 0.0;
     const int steps = 800;
     for (int k = 0; k < steps; ++k) {
-      ASSERT_EQ(plant.step(1e-3, cmd), PlantStatus::kOk) << plant.lastError();
+      ASSERT_TRUE(plant.step(1e-3, cmd).ok()) << plant.lastError();
       if (k == steps - 201) q_start = plant.state(0).q_rad;
     }
     const double v = (plant.state(0).q_rad - q_start) / 0.2;  // mean over the last 0.2 s
@@ -199,7 +199,7 @@ TEST_P(JointPhysics, ClosedValveIsPassive) {
     double worst_rise = 0.0;
     const PlantCommand cmd = PlantCommand::zero(1);
     for (int k = 0; k < 5000; ++k) {
-      ASSERT_EQ(plant.step(1e-3, cmd), PlantStatus::kOk) << plant.lastError();
+      ASSERT_TRUE(plant.step(1e-3, cmd).ok()) << plant.lastError();
       const double e = energy();
       worst_rise = std::max(worst_rise, e - e_prev);
       e_prev = e;

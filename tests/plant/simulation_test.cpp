@@ -114,7 +114,7 @@ TEST(PlantSimulation, OutputsEqualAHandWrittenLoopOfArmPlantSteps) {
       EXPECT_EQ(tr.spool_fraction[s], state.spool) << k << " " << i;
     }
     if (i < periods) {
-      ASSERT_EQ(plant.step(kDt_s, cmd), PlantStatus::kOk);
+      ASSERT_TRUE(plant.step(kDt_s, cmd).ok());
     }
   }
   for (const JointTrace& tr : r.traces) EXPECT_EQ(tr.time_s.size(), static_cast<std::size_t>(periods + 1));

@@ -18,7 +18,8 @@ using PointJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 
 /// blocks of them: passing an expression such as `q + dq` makes Eigen evaluate it into a heap
 /// temporary before the call.
 ///
-/// Link frames, joint axes z_i and origins o_i, link centres of mass and the hand pose.
+/// Link frames, joint axes z_i and origins o_i, link centres of mass and the hand pose, at q
+/// (kept in data.q); counts one data.forward_kinematics_passes.
 /// World frame W is the arm's root frame (the SL base, z up).
 /// @param q joint angles [rad], size model.numJoints()
 /// @rt

@@ -1,14 +1,22 @@
 #pragma once
 /// @file
-/// The joint controllers of joint_controller.hpp for every controlled joint of the arm, with
-/// the expected gravity torques (tau_ge of Eq. 4) from fullarm::arm's Newton-Euler gravity.
+/// The joint controllers of joint_controller.hpp for every controlled joint of the arm.
+///
+/// ## What crosses the boundary
+/// The controlled joints are the gains file's joints, in its order: an arm::JointSelection
+/// (arm/joint_selection.hpp). stepArmController takes what the arm and haptics layers compute
+/// over the whole configuration as configuration vectors in arm-model order (hand joints
+/// included): the joint angles q, the gravity torques g(q) (tau_ge of Eq. 4, computed once per
+/// tick by the caller) and the contact torques (fullarm::haptics' ContactData::tau_contact_nm). What exists only per controlled joint is a
+/// subset vector in the controller's order: the load-cell readings in, the valve commands out.
+/// The controller reads its joints' entries of the configuration vectors through its selection.
 
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
 
-#include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/arm/joint_selection.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/controllers/joint_controller.hpp"
 
@@ -22,9 +30,11 @@ using ControlVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxControlled
 
 /// One JointControllerModel per joint of a gains file, and where each joint sits in the arm.
 struct ArmControllerModel {
-  int num_joints = 0;
-  std::array<JointControllerModel, kMaxControlledJoints> joints{};
-  std::array<int, kMaxControlledJoints> model_index{};  ///< index in ArmModel::joints
+  /// The controlled joints: subset position k (the gains file's k-th joint) <-> model joint.
+  arm::JointSelection selection;
+  std::array<JointControllerModel, kMaxControlledJoints> joints{};  ///< in the selection's order
+  /// Number of controlled joints (length of the subset vectors). @rt
+  [[nodiscard]] int numJoints() const noexcept { return selection.size(); }
 };
 
 /// Builds the models of every joint of `gains` (in the file's order) for `model`.
@@ -34,24 +44,30 @@ struct ArmControllerModel {
 /// State of every joint.
 struct ArmControllerData {
   std::array<JointControllerData, kMaxControlledJoints> joints{};
-  std::uint32_t faults = kFaultNotConfigured;  ///< OR of the joints' fault bits
+  /// The arm's status: the first joint's fault (in the selection's order) and the OR of every
+  /// joint's fault bits.
+  core::RtStatus status =
+      core::RtStatus::fault(core::RtCode::kNotConfigured, kFaultNotConfigured, "controller not reset");
 };
 
 /// Resets every joint at rest at `q` (full model configuration, size model.numJoints()). @rt
 void resetArmController(const ArmControllerModel& controller, ArmControllerData& data,
                         const Eigen::Ref<const Eigen::VectorXd>& q) noexcept;
 
-/// One control period for every controlled joint: gravity g(q) from fullarm::arm (into
-/// arm_data.tau_gravity), then stepJointController per joint.
-/// @param q                full configuration [rad], size model.numJoints() (hand joints included)
-/// @param tau_load_cell_nm load-cell readings, size controller.num_joints (controller order)
-/// @param tau_env_nm       environment torques on the links, size controller.num_joints
-/// @param valve_command_v  output [V], size controller.num_joints; all zero if any joint faults
+/// One control period for every controlled joint: stepJointController per joint, with its
+/// entries of the configuration vectors (boundary rule in the file comment).
+/// @param q                configuration [rad], model order, size model.numJoints()
+/// @param tau_gravity_nm   g(q) at q [N m], model order (arm::computeGravityTorquesAtKinematics)
+/// @param tau_contact_nm   contact torques (the environment's torques on the links) [N m], model order
+/// @param tau_load_cell_nm load-cell readings [N m], controller order, size controller.numJoints()
+/// @param valve_command_v  output [V], controller order, size controller.numJoints(); all zero if
+///                         any joint faults
 /// @rt
-void stepArmController(const arm::ArmModel& model, arm::ArmData& arm_data, const ArmControllerModel& controller,
-                       ArmControllerData& data, const Eigen::Ref<const Eigen::VectorXd>& q,
+void stepArmController(const ArmControllerModel& controller, ArmControllerData& data,
+                       const Eigen::Ref<const Eigen::VectorXd>& q,
+                       const Eigen::Ref<const Eigen::VectorXd>& tau_gravity_nm,
+                       const Eigen::Ref<const Eigen::VectorXd>& tau_contact_nm,
                        const Eigen::Ref<const Eigen::VectorXd>& tau_load_cell_nm,
-                       const Eigen::Ref<const Eigen::VectorXd>& tau_env_nm,
                        Eigen::Ref<Eigen::VectorXd> valve_command_v) noexcept;
 
 }  // namespace fullarm::controllers

@@ -12,15 +12,18 @@
 /// The inputs use the conventions of fullarm::plant, fullarm::arm and fullarm::haptics:
 ///  - `tau_load_cell_nm`: the load-cell reading, the torque the actuator transmits to the link
 ///    (positive drives the link toward +q). A joint at rest reads g(q) - tau_user - tau_env.
-///  - `tau_env_nm`: torque of the virtual environment on the link (a wall on the +q side pushes
-///    with a negative torque).
+///  - `tau_contact_nm`: the contact torque, the torque the (virtual) environment applies to the
+///    link, positive toward +q (a wall on the +q side pushes with a negative torque). The same
+///    quantity, under the same name and sign, as fullarm::haptics' ContactData::tau_contact_nm
+///    and fullarm::plant's PlantCommand::tau_contact_nm.
 ///  - `tau_gravity_nm`: fullarm::arm's g(q) = dV/dq, the torque that holds the link still.
 /// The paper's quantities of Eq. (4), tau = (tau_u + tau_ga) - (tau_c + tau_ge), are then
 ///  - tau_u + tau_ga = -tau_load_cell_nm  (what the user and gravity push on the actuator),
-///  - tau_c          = -tau_env_nm        (what the virtual arm pushes on the environment),
+///  - tau_c          = -tau_contact_nm    (what the virtual arm pushes on the environment; named
+///    tau_c_nm, and used only where Eq. (4) is assembled),
 ///  - tau_ge         = -tau_gravity_nm    (the expected gravity load, in the same sense),
-/// so tau = tau_gravity_nm + tau_env_nm - tau_load_cell_nm, which for a link at rest equals
-/// tau_user + tau_env (gravity cancels when the model is exact).
+/// so tau = tau_gravity_nm + tau_contact_nm - tau_load_cell_nm, which for a link at rest equals
+/// tau_user + tau_contact (gravity cancels when the model is exact).
 ///  - Output: the valve command [V], positive opens the valve to move the joint toward +q (the
 ///    sense of fullarm::plant's valve_voltage input).
 ///
@@ -47,36 +50,35 @@
 /// In the linear region step 3 is Eq. (8): u = (B_o/eps)(s + lambda) theta_error.
 ///
 /// ## Faults
-/// A non-finite input (angle, load cell, environment or gravity torque) or a non-finite
-/// internal state sets a fault bit, makes the command exactly 0 V (the valve at null: the
-/// joint holds still) and latches until resetJointController().
-
-#include <cstdint>
+/// The controller's status is a core::RtStatus (JointControllerData::status). A non-finite input
+/// (angle, load cell, environment or gravity torque) raises kFaultNonFiniteInput, a non-finite
+/// internal state kFaultNonFiniteState, a step before resetJointController() is
+/// kFaultNotConfigured; any of them makes the command exactly 0 V (the valve at null: the joint
+/// holds still) and latches until resetJointController().
 
 #include "fullarm/controllers/gains.hpp"
+#include "fullarm/core/rt_status.hpp"
 
 namespace fullarm::controllers {
 
-/// Fault bits of JointControllerData::faults.
-enum JointFault : std::uint32_t {
-  kFaultNone = 0,
-  kFaultNonFiniteInput = 1u << 0,  ///< an input was NaN or infinite
-  kFaultNonFiniteState = 1u << 1,  ///< the internal state became NaN or infinite
-  kFaultNotConfigured = 1u << 2,   ///< step before makeJointControllerModel / reset
-};
+// The fault bits the controllers raise (core/rt_status.hpp), by their names in this namespace.
+using core::kFaultNone;
+using core::kFaultNonFiniteInput;
+using core::kFaultNonFiniteState;
+using core::kFaultNotConfigured;
 
 /// Inputs of one control period for one joint (conventions in the file comment).
 struct JointInput {
   double q_rad = 0.0;             ///< measured joint angle
   double tau_load_cell_nm = 0.0;  ///< measured load-cell torque
-  double tau_env_nm = 0.0;        ///< virtual-environment torque on the link
+  double tau_contact_nm = 0.0;    ///< contact torque: the environment's torque on the link
   double tau_gravity_nm = 0.0;    ///< expected gravity holding torque g(q)
 };
 
 /// The paper's torques of Eq. (4) from the plant/arm/haptics conventions (file comment).
 struct PaperTorques {
   double tau_measured_nm = 0.0;          ///< tau_u + tau_ga
-  double tau_contact_nm = 0.0;           ///< tau_c
+  double tau_c_nm = 0.0;                 ///< tau_c = -tau_contact_nm: what the arm pushes on the environment
   double tau_gravity_expected_nm = 0.0;  ///< tau_ge
 };
 
@@ -84,9 +86,9 @@ struct PaperTorques {
 [[nodiscard]] PaperTorques paperTorques(const JointInput& in) noexcept;
 
 /// Eq. (4) of the DTS paper: tau = (tau_u + tau_ga) - (tau_c + tau_ge). @rt
-[[nodiscard]] constexpr double assembleModelTorque(double tau_measured_nm, double tau_contact_nm,
+[[nodiscard]] constexpr double assembleModelTorque(double tau_measured_nm, double tau_c_nm,
                                                    double tau_gravity_expected_nm) noexcept {
-  return tau_measured_nm - (tau_contact_nm + tau_gravity_expected_nm);
+  return tau_measured_nm - (tau_c_nm + tau_gravity_expected_nm);
 }
 
 /// sat(x) = clamp(x, -1, 1), the saturation that replaces sign() in Eq. (7). @rt
@@ -124,7 +126,9 @@ struct JointControllerData {
   double pid_integral_v = 0.0;    ///< ki T sum tau (clamped)
   double tau_prev_nm = 0.0;       ///< tau[k-1] for the PID derivative
   bool initialised = false;
-  std::uint32_t faults = kFaultNotConfigured;
+  /// ok, or the first fault and every fault bit since the last reset (latched).
+  core::RtStatus status =
+      core::RtStatus::fault(core::RtCode::kNotConfigured, kFaultNotConfigured, "controller not reset");
 
   // Outputs of the last step (telemetry).
   double tau_model_nm = 0.0;           ///< Eq. (4) torque fed to the model / the PID

@@ -3,6 +3,15 @@
 /// The one status type of the real-time path: what an @rt function that can fail returns or
 /// records in its data object. A code (the first cause), the fault bits seen since the last
 /// clear (latched), and a message with static storage, so recording a fault never allocates.
+///
+/// Two contracts of the real-time path, as the headers state them:
+///  - `@rt`: noexcept, allocates nothing, takes no lock, does no I/O or system call, and has a
+///    bounded run time (DESIGN.md section 4). Only such a function belongs on the 1 kHz tick.
+///  - "Allocation-free, unbounded time": noexcept, allocates nothing, takes no lock, does no I/O
+///    or system call, but its run time depends on the solution (an adaptive integrator's step:
+///    ArmPlant::step, RosenbrockIntegrator::advance, CVODES), bounded only by a step budget that
+///    fails the call when spent. Fit for a simulation loop and for the simulated hardware of a
+///    lockstep run, not for the hard-real-time tick. Its allocation tests stay.
 
 #include <cstdint>
 
@@ -28,6 +37,7 @@ enum RtFault : std::uint32_t {
   kFaultTooManySteps = 1u << 5,    ///< an integrator hit its step budget
   kFaultStepTooSmall = 1u << 6,    ///< an integrator's step fell below its minimum
   kFaultSolver = 1u << 7,          ///< another solver failure (CVODES, a linear solve)
+  kFaultOutOfRange = 1u << 8,      ///< a finite input outside its valid range (a non-positive period)
 };
 
 /// Status of a real-time computation. Trivially copyable; the message is a string literal.

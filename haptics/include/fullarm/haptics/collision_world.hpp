@@ -32,6 +32,9 @@ struct CollisionObject {
 /// link frame (so X_WL from forward kinematics places them); object meshes in their object
 /// frame. Not thread-safe for mutation; const queries may run concurrently with separate
 /// scratch.
+///
+/// Lifetime: a CollisionWorld refers to the arm model it was built for (model()) and keeps no
+/// copy of it; that model must outlive the world and every copy of it.
 class CollisionWorld {
  public:
   struct Options {
@@ -40,7 +43,7 @@ class CollisionWorld {
   };
 
   /// Builds a mesh for every link whose geometry is a capsule (other links have none until
-  /// setLinkMesh). Keeps a copy of the model.
+  /// setLinkMesh). Refers to `model`, which must outlive the world (see the class comment).
   explicit CollisionWorld(const arm::ArmModel& model);
   CollisionWorld(const arm::ArmModel& model, const Options& options);
 
@@ -52,7 +55,8 @@ class CollisionWorld {
   int addObject(std::string name, TriMesh mesh, const Eigen::Isometry3d& X_WO);
   void setObjectPose(int object, const Eigen::Isometry3d& X_WO);
 
-  [[nodiscard]] const arm::ArmModel& model() const noexcept { return model_; }
+  /// The model the world was built for.
+  [[nodiscard]] const arm::ArmModel& model() const noexcept { return *model_; }
   [[nodiscard]] int numLinks() const noexcept { return static_cast<int>(links_.size()); }
   [[nodiscard]] bool hasLinkMesh(int link) const noexcept { return links_[static_cast<std::size_t>(link)] != nullptr; }
   /// Precondition: hasLinkMesh(link).
@@ -82,7 +86,7 @@ class CollisionWorld {
     SnchTree tree;
     NeighbourCones cones;
   };
-  arm::ArmModel model_;
+  const arm::ArmModel* model_;  // not owned: outlives the world
   std::vector<std::shared_ptr<const LinkMesh>> links_;
   std::vector<CollisionObject> objects_;
 };

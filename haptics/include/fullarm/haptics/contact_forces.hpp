@@ -1,8 +1,10 @@
 #pragma once
 /// @file
 /// Contact springs on the tracked minima, joint torques by the DTS paper's tailored force
-/// Jacobians (Eq. (1)-(2)), the arm's gravity torques, the hand-only baseline with per-link
-/// contact records, and the YAML parameters (config/haptics.yaml).
+/// Jacobians (Eq. (1)-(2)), the hand-only baseline with per-link contact records, and the YAML
+/// parameters (config/haptics.yaml). Every function here reads the forward kinematics the
+/// caller has already computed (`const arm::ArmData&`) and computes contact only: the tick
+/// computes the kinematics and the gravity torques once, in fullarm::arm.
 
 #include <Eigen/Core>
 #include <filesystem>
@@ -12,6 +14,7 @@
 
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/core/rt_status.hpp"
 #include "fullarm/haptics/local_descent.hpp"
 #include "fullarm/haptics/minima.hpp"
 
@@ -75,16 +78,19 @@ struct ContactData {
   std::vector<double> magnitude_n;             ///< scratch: spring magnitude before saturation [N]
   std::vector<int> patch_root;                 ///< scratch: patch (union-find) of each minimum
   std::vector<double> patch_weight;            ///< scratch: sum of (d_f - d) per patch root [m]
-  Eigen::VectorXd tau_contact;                 ///< sum of the tailored-Jacobian torques [N m], size n
-  Eigen::VectorXd tau_gravity;                 ///< arm gravity torques g(q) [N m]
-  Eigen::VectorXd tau_total;                   ///< tau_contact + tau_gravity [N m]
+  /// Contact torque [N m], a configuration vector (size n, model order): the torque the
+  /// environment applies to the links, positive toward +q, the sum of the tailored-Jacobian
+  /// torques. What the plant and the arm controller receive as tau_contact_nm.
+  Eigen::VectorXd tau_contact_nm;
   std::vector<LinkContactRecord> links;        ///< one per link
   std::vector<Eigen::Vector3d> link_force_W;   ///< scratch: summed force per link [N]
   std::vector<Eigen::Vector3d> link_moment_W;  ///< scratch: summed moment about o_n per link [N m]
   int active_springs = 0;
-  /// Set when an input was unusable (non-finite minimum, too many minima, bad link index):
-  /// the contact torques are then zero (safe output) and the caller must report it.
-  bool fault = false;
+  /// Status of the last computeContactForces: not ok when an input was unusable (a non-finite
+  /// minimum: kFaultNonFiniteInput; more minima than the capacity: kFaultCapacity; a bad link
+  /// index: kFaultBadIndex; a non-positive tick period: kFaultOutOfRange). The contact torques
+  /// are then zero (safe output) and the caller must report it.
+  core::RtStatus status;
 };
 
 /// True for the tool link and the hand joints' links.
@@ -118,12 +124,11 @@ void addTailoredJacobianTorques(const arm::ArmModel& model, const arm::ArmData& 
 void addTailoredJacobianWrench(const arm::ArmModel& model, const arm::ArmData& fk, int link, const Eigen::Vector3d& f_W,
                                const Eigen::Vector3d& eta_c, Eigen::Ref<Eigen::VectorXd> tau) noexcept;
 
-/// tau_contact = sum of addTailoredJacobianTorques over the forces of computeContactForces,
-/// tau_gravity = g(q) of the arm model (fk.q), tau_total = their sum. Runs the arm's gravity
-/// algorithm on `fk` (which recomputes its forward kinematics at fk.q). Zero contact torque
-/// when data.fault is set.
+/// tau_contact_nm = sum of addTailoredJacobianTorques over the forces of computeContactForces, at
+/// the kinematics in `fk` (computed once per tick by the caller; not recomputed here). Zero
+/// contact torque when data.status is not ok.
 /// @rt
-void computeContactTorques(const arm::ArmModel& model, arm::ArmData& fk, std::span<const LocalMinimum> minima,
+void computeContactTorques(const arm::ArmModel& model, const arm::ArmData& fk, std::span<const LocalMinimum> minima,
                            ContactData& data) noexcept;
 
 /// Clears the accumulated statistics of every link record.

@@ -23,10 +23,11 @@
 
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/arm/joint_selection.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/plant/hydraulics.hpp"
 #include "fullarm/plant/joint_params.hpp"
-#include "fullarm/plant/reduced_dynamics.hpp"
+#include "fullarm/arm/rigid_body_dynamics.hpp"
 #include "fullarm/plant/rosenbrock.hpp"
 #include "fullarm/plant/sensor_model.hpp"
 
@@ -116,11 +117,16 @@ struct RigidLoad {
   double gravity_sin_nm = 0.0;
 };
 
-/// Inputs of one control period (held constant over it), indexed by active joint.
+/// Inputs of one control period (held constant over it): subset vectors, indexed by active
+/// joint in ArmPlant::selection() order (arm/joint_selection.hpp). All torques about the joint
+/// axis, positive toward +q.
 struct PlantCommand {
   JointVector command;         ///< valve voltage [V], desired torque [N m] or ideal torque [N m]
-  JointVector tau_user_nm;     ///< torque the user applies at each joint
-  JointVector tau_contact_nm;  ///< torque from contact with the (virtual) environment
+  JointVector tau_user_nm;     ///< torque the user applies at each joint [N m]
+  /// Contact torque [N m]: the torque the environment applies to the link, positive toward +q
+  /// (the same quantity and sign as fullarm::haptics' ContactData::tau_contact_nm, gathered at
+  /// the active joints).
+  JointVector tau_contact_nm;
   /// All zero for `n` joints.
   static PlantCommand zero(int n);
 };
@@ -147,9 +153,6 @@ struct SolverStats {
   long reinits = 0;
 };
 
-/// Outcome of step().
-enum class PlantStatus { kOk, kSolverFailure, kNotConfigured };
-
 /// The plant. Configure once (allocates), reset, then step() at the control rate (no
 /// allocation). Not copyable or movable (CVODES holds a pointer to it).
 class ArmPlant {
@@ -175,15 +178,24 @@ class ArmPlant {
 
   /// Advances exactly one control period of `dt_s` with the command held (stop time at the
   /// boundary), re-initialising CVODES only at hard-stop events or large command jumps, then
-  /// samples the sensors. @rt
-  PlantStatus step(double dt_s, const PlantCommand& command) noexcept;
+  /// samples the sensors. Returns ok; kNotConfigured before configure(); kSolverFailure (CVODES:
+  /// kFaultSolver; Rosenbrock: kFaultTooManySteps or kFaultStepTooSmall) or kBadState
+  /// (kFaultNonFiniteState) when the integrator gave up, with the solver's own text in
+  /// lastError().
+  /// Allocation-free, unbounded time (core/rt_status.hpp): the adaptive integrators take as many
+  /// steps as the solution needs, up to SolverOptions::max_steps_per_period.
+  core::RtStatus step(double dt_s, const PlantCommand& command) noexcept;
 
   [[nodiscard]] int numJoints() const noexcept { return n_; }
   [[nodiscard]] int numStates() const noexcept { return 6 * n_; }
   [[nodiscard]] double time() const noexcept { return t_; }
   [[nodiscard]] const JointParams& joint(int k) const noexcept { return params_[static_cast<std::size_t>(k)]; }
+  /// The active joints in the arm model: subset position k (the index of every per-joint
+  /// input, state and output of the plant) <-> model joint (arm/joint_selection.hpp). Empty with
+  /// an explicit load (no arm model).
+  [[nodiscard]] const arm::JointSelection& selection() const noexcept { return selection_; }
   /// Index in the arm model of active joint k (-1 with an explicit load).
-  [[nodiscard]] int modelIndex(int k) const noexcept { return active_[static_cast<std::size_t>(k)]; }
+  [[nodiscard]] int modelIndex(int k) const noexcept { return selection_.size() > 0 ? selection_.modelIndex(k) : -1; }
   [[nodiscard]] JointState state(int k) const noexcept;
   /// Sensor readings of the last step.
   [[nodiscard]] const JointMeasurement& measurement(int k) const noexcept {
@@ -196,7 +208,8 @@ class ArmPlant {
   /// Joint accelerations at the end of the last step [rad/s^2].
   [[nodiscard]] const JointVector& accelerations() const noexcept { return qdd_; }
   [[nodiscard]] const SolverStats& stats() const noexcept { return stats_; }
-  /// Last CVODES error message (empty if none).
+  /// The solver's own text of the last failure, for a log (CVODES' message, or the Rosenbrock
+  /// method, the time and the reason); empty if none. step()'s status carries the cause.
   [[nodiscard]] const char* lastError() const noexcept { return error_; }
 
   // Verification interface (tests): the right-hand side and the analytic Jacobian at (t, y)
@@ -232,7 +245,7 @@ class ArmPlant {
 
   int n_ = 0;
   std::vector<JointParams> params_;
-  std::vector<int> active_;
+  arm::JointSelection selection_;
   double t_ = 0.0;
   SolverOptions options_{};
   PlantCommand cmd_{};
@@ -250,17 +263,17 @@ class ArmPlant {
   std::unique_ptr<arm::ArmData> data_;
   Eigen::VectorXd posture_;
   // The arm reduced to the active joints (locked links merged): the per-step rigid-body
-  // dynamics and its analytic derivatives (reduced_dynamics.hpp).
-  std::unique_ptr<ReducedArmModel> reduced_;
-  std::unique_ptr<ReducedArmData> reduced_data_;
-  ReducedPoint cuff_point_{};
+  // dynamics and its analytic derivatives (arm/rigid_body_dynamics.hpp).
+  std::unique_ptr<arm::RigidBodyModel> reduced_;
+  std::unique_ptr<arm::RigidBodyData> reduced_data_;
+  arm::BodyPoint cuff_point_{};
   JointVector q_, qd_, zero_;
   // (q, qd) of the last full mechanics() pass: its outputs are reused at the same state.
   JointVector mechanics_q_, mechanics_qd_;
   bool mechanics_valid_ = false;
   bool rigid_body_gradients_ = false;
   bool rigid_derivatives_stale_ = true;  // set by each step(): the next Jacobian recomputes them
-  ReducedMatrix rigid_dq_, rigid_dqd_;
+  arm::BodyMatrix rigid_dq_, rigid_dqd_;
   JointVector rigid_tau_;
   UserArmParams user_{};
   Eigen::Vector3d cuff_anchor_W_ = Eigen::Vector3d::Zero();
@@ -295,7 +308,7 @@ class ArmPlant {
   std::unique_ptr<Solver> solver_;
   std::unique_ptr<RosenbrockIntegrator> rodas_;  // set when options_.integrator == kRodas3
   std::vector<signed char> stop_side_;           // -1 below min, 0 inside, 1 above max (Rodas3 event count)
-  PlantStatus stepRodas3(double dt_s) noexcept;
+  core::RtStatus stepRodas3(double dt_s) noexcept;
   void sampleOutputs(double dt_s) noexcept;
 };
 

@@ -31,6 +31,8 @@
 /// itself at the later steps, and refactorises G only when h changes (equation R12).
 
 #include <Eigen/Core>
+
+#include "fullarm/core/rt_status.hpp"
 #include <array>
 
 namespace fullarm::plant {
@@ -65,8 +67,6 @@ enum class RosenbrockMethod {
   return method == RosenbrockMethod::kRos34pw2;
 }
 
-/// Outcome of RosenbrockIntegrator::advance().
-enum class RosenbrockStatus { kOk, kTooManySteps, kStepTooSmall, kNonFinite };
 
 /// The right-hand side and its Jacobian, supplied by the caller.
 struct RosenbrockSystem {
@@ -91,8 +91,12 @@ class RosenbrockIntegrator {
 
   /// Integrates y (size n, in place) over `duration_s` > 0, carrying the step size proposed by
   /// the previous call; the steps of one call are equal-length subdivisions so the last step
-  /// lands on the end exactly. @rt
-  RosenbrockStatus advance(double* y, double duration_s) noexcept;
+  /// lands on the end exactly. Returns ok, or kSolverFailure with kFaultTooManySteps (the
+  /// attempted-step budget is spent) or kFaultStepTooSmall (the step fell below its minimum), or
+  /// kBadState with kFaultNonFiniteState (a non-finite right-hand side).
+  /// Allocation-free, unbounded time (core/rt_status.hpp): the step count adapts to the solution,
+  /// up to max_steps_per_call attempts.
+  core::RtStatus advance(double* y, double duration_s) noexcept;
 
   /// Declares that the first `blocks` * kRosenbrockBlock states form independent blocks of
   /// kRosenbrockBlock states (J has no entries between two different leading blocks), coupled

@@ -1,6 +1,6 @@
-// The reduced rigid-body dynamics (locked links merged into the active bodies) against the
-// unreduced Newton-Euler of fullarm::arm, and their analytic derivatives against central finite
-// differences of fullarm::arm's inverse dynamics.
+// The spatial rigid-body dynamics on reduced arms (locked links merged into the active bodies)
+// against the unreduced world-frame Newton-Euler oracle of world_frame_dynamics.hpp, and its
+// analytic derivatives against central finite differences of that oracle.
 
 #include <gtest/gtest.h>
 
@@ -9,16 +9,18 @@
 #include <vector>
 
 #include "alloc_guard.hpp"
+#include "arm_test_util.hpp"
+#include "world_frame_dynamics.hpp"
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/dynamics.hpp"
-#include "fullarm/plant/reduced_dynamics.hpp"
-#include "plant_fixture.hpp"
+#include "fullarm/arm/kinematics.hpp"
+#include "fullarm/arm/rigid_body_dynamics.hpp"
 
-namespace fullarm::plant {
+namespace fullarm::arm {
 namespace {
 
 struct Sample {
-  ReducedVector q, qd, qdd;
+  BodyVector q, qd, qdd;
 };
 
 Sample randomSample(int n, std::mt19937& rng) {
@@ -35,11 +37,11 @@ Sample randomSample(int n, std::mt19937& rng) {
   return s;
 }
 
-// fullarm::arm inverse dynamics of the whole model (locked joints at the posture, at rest),
+// World-frame inverse dynamics of the whole model (locked joints at the posture, at rest),
 // read at the active joints.
-ReducedVector armInverseDynamics(const arm::ArmModel& model, arm::ArmData& data, const std::vector<int>& active,
-                                 const Eigen::VectorXd& posture, const ReducedVector& q, const ReducedVector& qd,
-                                 const ReducedVector& qdd) {
+BodyVector armInverseDynamics(const ArmModel& model, ArmData& data, const std::vector<int>& active,
+                                 const Eigen::VectorXd& posture, const BodyVector& q, const BodyVector& qd,
+                                 const BodyVector& qdd) {
   Eigen::VectorXd q_full = posture;
   Eigen::VectorXd qd_full = Eigen::VectorXd::Zero(model.numJoints());
   Eigen::VectorXd qdd_full = Eigen::VectorXd::Zero(model.numJoints());
@@ -48,22 +50,22 @@ ReducedVector armInverseDynamics(const arm::ArmModel& model, arm::ArmData& data,
     qd_full[active[k]] = qd[static_cast<Eigen::Index>(k)];
     qdd_full[active[k]] = qdd[static_cast<Eigen::Index>(k)];
   }
-  arm::computeInverseDynamics(model, data, q_full, qd_full, qdd_full);
-  ReducedVector tau(static_cast<Eigen::Index>(active.size()));
-  for (std::size_t k = 0; k < active.size(); ++k) tau[static_cast<Eigen::Index>(k)] = data.tau[active[k]];
+  const Eigen::VectorXd tau_full = test::worldFrameInverseDynamics(model, q_full, qd_full, qdd_full);
+  BodyVector tau(static_cast<Eigen::Index>(active.size()));
+  for (std::size_t k = 0; k < active.size(); ++k) tau[static_cast<Eigen::Index>(k)] = tau_full[active[k]];
   return tau;
 }
 
 // Active sets: the seven arm joints (hand locked and merged into the wrist), a partial arm
 // with locked arm joints between active ones, listed out of tree order, and one joint.
-std::vector<std::vector<int>> activeSets(const arm::ArmModel& model) {
+std::vector<std::vector<int>> activeSets(const ArmModel& model) {
   std::vector<int> arm7;
   for (int i = 0; i < model.numArmJoints(); ++i) arm7.push_back(i);
   return {arm7, {5, 0, 3}, {3}};
 }
 
 // Posture: the default, with the hand joints moved off zero so their merge is not trivial.
-Eigen::VectorXd testPosture(const arm::ArmModel& model) {
+Eigen::VectorXd testPosture(const ArmModel& model) {
   Eigen::VectorXd posture = model.defaultPosture();
   for (int i = model.numArmJoints(); i < model.numJoints(); ++i)
     posture[i] = 0.5 * (model.joints[static_cast<std::size_t>(i)].limits.min_rad +
@@ -72,73 +74,73 @@ Eigen::VectorXd testPosture(const arm::ArmModel& model) {
   return posture;
 }
 
-TEST(ReducedDynamics, InverseDynamicsAndMassMatrixMatchUnreducedArm) {
-  const arm::ArmModel& model = test::dtsModel();
+TEST(RigidBodyDynamics, InverseDynamicsAndMassMatrixMatchUnreducedArm) {
+  const ArmModel& model = test::defaultModel();
   ASSERT_GT(model.numJoints(), model.numArmJoints());  // the hand links exist and get merged
   const Eigen::VectorXd posture = testPosture(model);
-  arm::ArmData arm_data(model);
+  ArmData arm_data(model);
   std::mt19937 rng(11);
   for (const std::vector<int>& active : activeSets(model)) {
-    const ReducedArmModel reduced = reduceArmModel(model, active, posture);
-    const int n = reduced.n;
+    const RigidBodyModel reduced = reduceArmModel(model, active, posture);
+    const int n = reduced.tree.n;
     ASSERT_EQ(n, static_cast<int>(active.size()));
-    ReducedArmData data;
+    RigidBodyData data;
     for (int trial = 0; trial < 10; ++trial) {
       const Sample s = randomSample(n, rng);
-      computeReducedKinematics(reduced, data, s.q, s.qd);
-      ReducedVector tau;
-      computeReducedInverseDynamics(reduced, data, s.qdd, tau);
-      const ReducedVector expected = armInverseDynamics(model, arm_data, active, posture, s.q, s.qd, s.qdd);
+      computeRigidBodyKinematics(reduced, data, s.q, s.qd);
+      BodyVector tau;
+      computeRigidBodyInverseDynamics(reduced.tree, data, s.qdd, tau);
+      const BodyVector expected = armInverseDynamics(model, arm_data, active, posture, s.q, s.qd, s.qdd);
       EXPECT_LE((tau - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff())
           << "n = " << n << "\n"
           << tau.transpose() << "\n"
           << expected.transpose();
-      // Mass matrix: the active sub-block of fullarm::arm's M (locked joints do not move).
-      ReducedMatrix mass;
-      computeReducedMassMatrix(reduced, data, mass);
+      // Mass matrix: the active sub-block of the unreduced arm's M (locked joints do not move).
+      BodyMatrix mass;
+      computeRigidBodyMassMatrix(reduced.tree, data, mass);
       Eigen::VectorXd q_full = posture;
       for (int k = 0; k < n; ++k) q_full[active[static_cast<std::size_t>(k)]] = s.q[k];
-      arm::computeMassMatrix(model, arm_data, q_full);
+      const Eigen::MatrixXd full_mass = test::worldFrameMassMatrix(model, q_full);
       double worst = 0.0;
       for (int a = 0; a < n; ++a) {
         for (int b = 0; b < n; ++b) {
-          worst = std::max(worst, std::abs(mass(a, b) - arm_data.mass_matrix(active[static_cast<std::size_t>(a)],
-                                                                             active[static_cast<std::size_t>(b)])));
+          worst = std::max(worst, std::abs(mass(a, b) - full_mass(active[static_cast<std::size_t>(a)],
+                                                                  active[static_cast<std::size_t>(b)])));
         }
       }
       EXPECT_LE(worst, 1e-12 * mass.cwiseAbs().maxCoeff()) << "n = " << n;
       // Body points: a hand-link point carried by the wrist body is where fullarm::arm puts it.
       const int hand_link = model.numJoints() - 1;
-      const ReducedPoint point = reducePoint(model, active, posture, hand_link, Eigen::Vector3d(0.01, 0.02, 0.03));
-      arm::computeForwardKinematics(model, arm_data, q_full);
-      const Eigen::Vector3d expected_p = arm::pointInWorld(arm_data, hand_link, Eigen::Vector3d(0.01, 0.02, 0.03));
+      const BodyPoint point = reducePoint(model, active, posture, hand_link, Eigen::Vector3d(0.01, 0.02, 0.03));
+      computeForwardKinematics(model, arm_data, q_full);
+      const Eigen::Vector3d expected_p = pointInWorld(arm_data, hand_link, Eigen::Vector3d(0.01, 0.02, 0.03));
       const Eigen::Vector3d p =
-          point.body < 0 ? point.p_B : Eigen::Vector3d(reducedPointInWorld(data, point.body, point.p_B));
+          point.body < 0 ? point.p_B : Eigen::Vector3d(bodyPointInWorld(data, point.body, point.p_B));
       EXPECT_LE((p - expected_p).norm(), 1e-14) << "n = " << n;
     }
   }
 }
 
-// d ID / d(q, qd) = central differences of fullarm::arm's inverse dynamics (step 1e-6: truncation
+// d ID / d(q, qd) = central differences of the world-frame inverse dynamics (step 1e-6: truncation
 // ~1e-12, rounding ~1e-10 relative).
-TEST(ReducedDynamics, AnalyticDerivativesMatchCentralDifferencesOfArmInverseDynamics) {
-  const arm::ArmModel& model = test::dtsModel();
+TEST(RigidBodyDynamics, AnalyticDerivativesMatchCentralDifferencesOfArmInverseDynamics) {
+  const ArmModel& model = test::defaultModel();
   const Eigen::VectorXd posture = testPosture(model);
-  arm::ArmData arm_data(model);
+  ArmData arm_data(model);
   std::mt19937 rng(5);
   for (const std::vector<int>& active : activeSets(model)) {
-    const ReducedArmModel reduced = reduceArmModel(model, active, posture);
-    const int n = reduced.n;
-    ReducedArmData data;
+    const RigidBodyModel reduced = reduceArmModel(model, active, posture);
+    const int n = reduced.tree.n;
+    RigidBodyData data;
     for (int trial = 0; trial < 8; ++trial) {
       const Sample s = randomSample(n, rng);
-      computeReducedKinematics(reduced, data, s.q, s.qd);
-      ReducedVector tau;
-      ReducedMatrix dq;
-      ReducedMatrix dqd;
-      computeReducedInverseDynamicsDerivatives(reduced, data, s.qdd, tau, dq, dqd);
-      ReducedMatrix fd_q(n, n);
-      ReducedMatrix fd_qd(n, n);
+      computeRigidBodyKinematics(reduced, data, s.q, s.qd);
+      BodyVector tau;
+      BodyMatrix dq;
+      BodyMatrix dqd;
+      computeRigidBodyInverseDynamicsDerivatives(reduced.tree, data, s.qdd, tau, dq, dqd);
+      BodyMatrix fd_q(n, n);
+      BodyMatrix fd_qd(n, n);
       constexpr double h = 1e-6;
       for (int j = 0; j < n; ++j) {
         Sample plus = s;
@@ -164,7 +166,7 @@ TEST(ReducedDynamics, AnalyticDerivativesMatchCentralDifferencesOfArmInverseDyna
                                                                    << dqd << "\nfd\n"
                                                                    << fd_qd;
       // The pass also returns the inverse dynamics itself.
-      const ReducedVector expected = armInverseDynamics(model, arm_data, active, posture, s.q, s.qd, s.qdd);
+      const BodyVector expected = armInverseDynamics(model, arm_data, active, posture, s.q, s.qd, s.qdd);
       EXPECT_LE((tau - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());
     }
   }
@@ -173,22 +175,22 @@ TEST(ReducedDynamics, AnalyticDerivativesMatchCentralDifferencesOfArmInverseDyna
 // The composite-subtree form (R13, one dot product per entry) = the body-by-body derivatives
 // (R6-R8, O(n^2) spatial operations; the form the central-difference test above also checks) to
 // 1e-9 relative, on every active set, with random states.
-TEST(ReducedDynamics, CompositeDerivativesEqualBodyByBodyDerivatives) {
-  const arm::ArmModel& model = test::dtsModel();
+TEST(RigidBodyDynamics, CompositeDerivativesEqualBodyByBodyDerivatives) {
+  const ArmModel& model = test::defaultModel();
   const Eigen::VectorXd posture = testPosture(model);
   std::mt19937 rng(11);
   for (const std::vector<int>& active : activeSets(model)) {
-    const ReducedArmModel reduced = reduceArmModel(model, active, posture);
-    const int n = reduced.n;
-    ReducedArmData data;
+    const RigidBodyModel reduced = reduceArmModel(model, active, posture);
+    const int n = reduced.tree.n;
+    RigidBodyData data;
     for (int trial = 0; trial < 20; ++trial) {
       const Sample s = randomSample(n, rng);
-      computeReducedKinematics(reduced, data, s.q, s.qd);
-      ReducedVector tau;
-      ReducedVector tau_ref;
-      ReducedMatrix dq, dqd, dq_ref, dqd_ref;
-      computeReducedInverseDynamicsDerivatives(reduced, data, s.qdd, tau, dq, dqd);
-      computeReducedInverseDynamicsDerivativesPerBody(reduced, data, s.qdd, tau_ref, dq_ref, dqd_ref);
+      computeRigidBodyKinematics(reduced, data, s.q, s.qd);
+      BodyVector tau;
+      BodyVector tau_ref;
+      BodyMatrix dq, dqd, dq_ref, dqd_ref;
+      computeRigidBodyInverseDynamicsDerivatives(reduced.tree, data, s.qdd, tau, dq, dqd);
+      computeRigidBodyInverseDynamicsDerivativesPerBody(reduced.tree, data, s.qdd, tau_ref, dq_ref, dqd_ref);
       const double scale = dq_ref.cwiseAbs().maxCoeff() + dqd_ref.cwiseAbs().maxCoeff();
       ASSERT_GT(scale, 0.0);
       EXPECT_LE((dq - dq_ref).cwiseAbs().maxCoeff(), 1e-9 * scale) << "n = " << n << "\ncomposite\n"
@@ -202,25 +204,25 @@ TEST(ReducedDynamics, CompositeDerivativesEqualBodyByBodyDerivatives) {
   }
 }
 
-TEST(ReducedDynamics, ComputeFunctionsDoNotAllocate) {
-  const arm::ArmModel& model = test::dtsModel();
-  const ReducedArmModel reduced = reduceArmModel(model, activeSets(model)[0], model.defaultPosture());
-  ReducedArmData data;
+TEST(RigidBodyDynamics, ComputeFunctionsDoNotAllocate) {
+  const ArmModel& model = test::defaultModel();
+  const RigidBodyModel reduced = reduceArmModel(model, activeSets(model)[0], model.defaultPosture());
+  RigidBodyData data;
   std::mt19937 rng(2);
-  const Sample s = randomSample(reduced.n, rng);
-  ReducedVector tau(reduced.n);
-  ReducedMatrix mass(reduced.n, reduced.n);
-  ReducedMatrix dq(reduced.n, reduced.n);
-  ReducedMatrix dqd(reduced.n, reduced.n);
-  EXPECT_NO_HEAP_ALLOCATION(computeReducedKinematics(reduced, data, s.q, s.qd));
-  EXPECT_NO_HEAP_ALLOCATION(computeReducedInverseDynamics(reduced, data, s.qdd, tau));
-  EXPECT_NO_HEAP_ALLOCATION(computeReducedMassMatrix(reduced, data, mass));
-  EXPECT_NO_HEAP_ALLOCATION(computeReducedInverseDynamicsDerivatives(reduced, data, s.qdd, tau, dq, dqd));
-  EXPECT_NO_HEAP_ALLOCATION(computeReducedInverseDynamicsDerivativesPerBody(reduced, data, s.qdd, tau, dq, dqd));
+  const Sample s = randomSample(reduced.tree.n, rng);
+  BodyVector tau(reduced.tree.n);
+  BodyMatrix mass(reduced.tree.n, reduced.tree.n);
+  BodyMatrix dq(reduced.tree.n, reduced.tree.n);
+  BodyMatrix dqd(reduced.tree.n, reduced.tree.n);
+  EXPECT_NO_HEAP_ALLOCATION(computeRigidBodyKinematics(reduced, data, s.q, s.qd));
+  EXPECT_NO_HEAP_ALLOCATION(computeRigidBodyInverseDynamics(reduced.tree, data, s.qdd, tau));
+  EXPECT_NO_HEAP_ALLOCATION(computeRigidBodyMassMatrix(reduced.tree, data, mass));
+  EXPECT_NO_HEAP_ALLOCATION(computeRigidBodyInverseDynamicsDerivatives(reduced.tree, data, s.qdd, tau, dq, dqd));
+  EXPECT_NO_HEAP_ALLOCATION(computeRigidBodyInverseDynamicsDerivativesPerBody(reduced.tree, data, s.qdd, tau, dq, dqd));
 }
 
-TEST(ReducedDynamics, RejectsBadActiveSets) {
-  const arm::ArmModel& model = test::dtsModel();
+TEST(RigidBodyDynamics, RejectsBadActiveSets) {
+  const ArmModel& model = test::defaultModel();
   const Eigen::VectorXd posture = model.defaultPosture();
   EXPECT_THROW((void)reduceArmModel(model, {}, posture), std::invalid_argument);
   EXPECT_THROW((void)reduceArmModel(model, {1, 1}, posture), std::invalid_argument);
@@ -230,4 +232,4 @@ TEST(ReducedDynamics, RejectsBadActiveSets) {
 }
 
 }  // namespace
-}  // namespace fullarm::plant
+}  // namespace fullarm::arm

@@ -1,4 +1,4 @@
-#include "fullarm/plant/reduced_dynamics.hpp"
+#include "fullarm/arm/rigid_body_dynamics.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -9,7 +9,7 @@
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/kinematics.hpp"
 
-namespace fullarm::plant {
+namespace fullarm::arm {
 
 namespace {
 
@@ -52,7 +52,7 @@ Eigen::Matrix3d skewSquare(const Eigen::Vector3d& c) {
   return c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose();
 }
 
-std::vector<int> owners(const arm::ArmModel& model, const std::vector<int>& active) {
+std::vector<int> owners(const ArmModel& model, const std::vector<int>& active) {
   // owner[l]: body whose joint is the nearest active ancestor-or-self of link l, or -1.
   std::vector<int> owner(static_cast<std::size_t>(model.numJoints()), -1);
   for (int l = 0; l < model.numJoints(); ++l) {
@@ -67,9 +67,9 @@ std::vector<int> owners(const arm::ArmModel& model, const std::vector<int>& acti
   return owner;
 }
 
-void checkActive(const arm::ArmModel& model, const std::vector<int>& active, const Eigen::VectorXd& posture) {
-  if (active.empty() || static_cast<int>(active.size()) > kMaxReducedBodies) {
-    throw std::invalid_argument("reduceArmModel: expected 1 to " + std::to_string(kMaxReducedBodies) +
+void checkActive(const ArmModel& model, const std::vector<int>& active, const Eigen::VectorXd& posture) {
+  if (active.empty() || static_cast<int>(active.size()) > kMaxBodies) {
+    throw std::invalid_argument("reduceArmModel: expected 1 to " + std::to_string(kMaxBodies) +
                                 " active joints");
   }
   if (posture.size() != model.numJoints()) {
@@ -88,7 +88,7 @@ void checkActive(const arm::ArmModel& model, const std::vector<int>& active, con
 }
 
 // Body k's frame in the world at the posture, with its own joint at q = 0.
-Eigen::Isometry3d bodyFrameAtZero(const arm::ArmData& d, const std::vector<int>& active, const Eigen::VectorXd& posture,
+Eigen::Isometry3d bodyFrameAtZero(const ArmData& d, const std::vector<int>& active, const Eigen::VectorXd& posture,
                                   int k) {
   const int i = active[static_cast<std::size_t>(k)];
   return d.X_WL[static_cast<std::size_t>(i)] * Eigen::AngleAxisd(-posture[i], Eigen::Vector3d::UnitZ());
@@ -96,21 +96,21 @@ Eigen::Isometry3d bodyFrameAtZero(const arm::ArmData& d, const std::vector<int>&
 
 }  // namespace
 
-ReducedArmModel reduceArmModel(const arm::ArmModel& model, const std::vector<int>& active,
+RigidBodyModel reduceArmModel(const ArmModel& model, const std::vector<int>& active,
                                const Eigen::VectorXd& posture) {
   checkActive(model, active, posture);
-  arm::ArmData d(model);
-  arm::computeForwardKinematics(model, d, posture);
+  ArmData d(model);
+  computeForwardKinematics(model, d, posture);
   const std::vector<int> owner = owners(model, active);
-  ReducedArmModel r;
-  r.n = static_cast<int>(active.size());
+  RigidBodyModel r;
+  r.tree.n = static_cast<int>(active.size());
   r.gravity_W_mps2 = model.gravity_W_mps2;
-  for (int k = 0; k < r.n; ++k) {
+  for (int k = 0; k < r.tree.n; ++k) {
     const auto kk = static_cast<std::size_t>(k);
     const int i = active[kk];
     const int model_parent = model.joints[static_cast<std::size_t>(i)].parent;
     const int p = model_parent < 0 ? -1 : owner[static_cast<std::size_t>(model_parent)];
-    r.parent[kk] = p;
+    r.tree.parent[kk] = p;
     // X_PB0 = X_WP^-1 X_WB0, both at the posture (the locked joints in between are rigid).
     const Eigen::Isometry3d X_WB0 = bodyFrameAtZero(d, active, posture, k);
     const Eigen::Isometry3d X_PB0 =
@@ -127,7 +127,7 @@ ReducedArmModel reduceArmModel(const arm::ArmModel& model, const std::vector<int
     Eigen::Matrix3d inertia_B = Eigen::Matrix3d::Zero();
     for (int l = 0; l < model.numJoints(); ++l) {
       if (owner[static_cast<std::size_t>(l)] != k) continue;
-      const arm::LinkInertial& in = model.joints[static_cast<std::size_t>(l)].inertial;
+      const LinkInertial& in = model.joints[static_cast<std::size_t>(l)].inertial;
       const Eigen::Isometry3d X_BL = X_BW * d.X_WL[static_cast<std::size_t>(l)];
       const Eigen::Vector3d c = X_BL * in.com_m;
       const Eigen::Matrix3d R = X_BL.linear();
@@ -140,30 +140,30 @@ ReducedArmModel reduceArmModel(const arm::ArmModel& model, const std::vector<int
     r.inertia_com_kgm2[kk] = inertia_B - m * skewSquare(r.com_m[kk]);
   }
   // Topological order: the arm model lists parents before children.
-  std::vector<int> order(static_cast<std::size_t>(r.n));
-  for (int k = 0; k < r.n; ++k) order[static_cast<std::size_t>(k)] = k;
+  std::vector<int> order(static_cast<std::size_t>(r.tree.n));
+  for (int k = 0; k < r.tree.n; ++k) order[static_cast<std::size_t>(k)] = k;
   std::sort(order.begin(), order.end(), [&active](int a, int b) {
     return active[static_cast<std::size_t>(a)] < active[static_cast<std::size_t>(b)];
   });
-  std::copy(order.begin(), order.end(), r.order.begin());
-  for (int k = 0; k < r.n; ++k) {
-    for (int b = 0; b < r.n; ++b)
-      r.supports[static_cast<std::size_t>(k)][static_cast<std::size_t>(b)] =
-          arm::jointMovesLink(model, active[static_cast<std::size_t>(k)], active[static_cast<std::size_t>(b)]);
+  std::copy(order.begin(), order.end(), r.tree.order.begin());
+  for (int k = 0; k < r.tree.n; ++k) {
+    for (int b = 0; b < r.tree.n; ++b)
+      r.tree.supports[static_cast<std::size_t>(k)][static_cast<std::size_t>(b)] =
+          jointMovesLink(model, active[static_cast<std::size_t>(k)], active[static_cast<std::size_t>(b)]);
   }
   return r;
 }
 
-ReducedPoint reducePoint(const arm::ArmModel& model, const std::vector<int>& active, const Eigen::VectorXd& posture,
+BodyPoint reducePoint(const ArmModel& model, const std::vector<int>& active, const Eigen::VectorXd& posture,
                          int link, const Eigen::Vector3d& p_L) {
   checkActive(model, active, posture);
   if (link < 0 || link >= model.numJoints())
     throw std::invalid_argument("reducePoint: link index " + std::to_string(link) + " out of range");
-  arm::ArmData d(model);
-  arm::computeForwardKinematics(model, d, posture);
-  ReducedPoint point;
+  ArmData d(model);
+  computeForwardKinematics(model, d, posture);
+  BodyPoint point;
   point.body = owners(model, active)[static_cast<std::size_t>(link)];
-  const Eigen::Vector3d p_W = arm::pointInWorld(d, link, p_L);
+  const Eigen::Vector3d p_W = pointInWorld(d, link, p_L);
   point.p_B = point.body < 0
                   ? p_W
                   : Eigen::Vector3d(
@@ -171,12 +171,13 @@ ReducedPoint reducePoint(const arm::ArmModel& model, const std::vector<int>& act
   return point;
 }
 
-void computeReducedKinematics(const ReducedArmModel& model, ReducedArmData& data, const ReducedVector& q,
-                              const ReducedVector& qd) noexcept {
-  for (int o = 0; o < model.n; ++o) {
-    const int b = model.order[static_cast<std::size_t>(o)];
+void computeRigidBodyKinematics(const RigidBodyModel& model, RigidBodyData& data, const BodyVector& q,
+                              const BodyVector& qd) noexcept {
+  data.ground_accel = {Eigen::Vector3d::Zero(), -model.gravity_W_mps2};
+  for (int o = 0; o < model.tree.n; ++o) {
+    const int b = model.tree.order[static_cast<std::size_t>(o)];
     const auto k = static_cast<std::size_t>(b);
-    const int p = model.parent[k];
+    const int p = model.tree.parent[k];
     Eigen::Matrix3d R0;
     Eigen::Vector3d o_W;
     if (p < 0) {
@@ -214,20 +215,20 @@ void computeReducedKinematics(const ReducedArmModel& model, ReducedArmData& data
 
 namespace {
 
-[[gnu::always_inline]] inline SpatialVector inertiaTimes(const ReducedArmData& data, std::size_t k,
+[[gnu::always_inline]] inline SpatialVector inertiaTimes(const RigidBodyData& data, std::size_t k,
                                                          const SpatialVector& v) noexcept {
   return applyInertia(data.mass_kg[k], data.first_moment_kgm[k], data.inertia_O_kgm2[k], v);
 }
 
 // Newton-Euler at qdd over the current kinematics: A, F, F_tot and tau (R1-R4).
-void newtonEulerPass(const ReducedArmModel& model, ReducedArmData& data, const ReducedVector& qdd,
-                     ReducedVector& tau) noexcept {
-  tau.resize(model.n);  // within the fixed capacity: no allocation
-  const SpatialVector ground_accel{Eigen::Vector3d::Zero(), -model.gravity_W_mps2};
-  for (int o = 0; o < model.n; ++o) {
-    const int b = model.order[static_cast<std::size_t>(o)];
+void newtonEulerPass(const RigidBodyTree& tree, RigidBodyData& data, const BodyVector& qdd,
+                     BodyVector& tau) noexcept {
+  tau.resize(tree.n);  // within the fixed capacity: no allocation
+  const SpatialVector& ground_accel = data.ground_accel;
+  for (int o = 0; o < tree.n; ++o) {
+    const int b = tree.order[static_cast<std::size_t>(o)];
     const auto k = static_cast<std::size_t>(b);
-    const int p = model.parent[k];
+    const int p = tree.parent[k];
     const SpatialVector& A_p = p < 0 ? ground_accel : data.A[static_cast<std::size_t>(p)];
     // A_b = A_p + s qdd + V_b x s qd (the axis is fixed in the parent: s' = V_p x s = V_b x s).
     data.A[k] = A_p + scaled(data.s[k], qdd[b]) + scaled(crossMotion(data.V[k], data.s[k]), data.qd[k]);
@@ -236,29 +237,47 @@ void newtonEulerPass(const ReducedArmModel& model, ReducedArmData& data, const R
     data.F[k] = data.IA[k] + crossForce(data.V[k], data.IV[k]);
     data.F_tot[k] = data.F[k];
   }
-  for (int o = model.n - 1; o >= 0; --o) {
-    const int b = model.order[static_cast<std::size_t>(o)];
+  for (int o = tree.n - 1; o >= 0; --o) {
+    const int b = tree.order[static_cast<std::size_t>(o)];
     const auto k = static_cast<std::size_t>(b);
     tau[b] = dot(data.s[k], data.F_tot[k]);
-    const int p = model.parent[k];
+    const int p = tree.parent[k];
     if (p >= 0) data.F_tot[static_cast<std::size_t>(p)] += data.F_tot[k];
   }
 }
 
 }  // namespace
 
-void computeReducedInverseDynamics(const ReducedArmModel& model, ReducedArmData& data, const ReducedVector& qdd,
-                                   ReducedVector& tau) noexcept {
-  newtonEulerPass(model, data, qdd, tau);
+void computeRigidBodyInverseDynamics(const RigidBodyTree& tree, RigidBodyData& data, const BodyVector& qdd,
+                                   BodyVector& tau) noexcept {
+  newtonEulerPass(tree, data, qdd, tau);
 }
 
-void computeReducedMassMatrix(const ReducedArmModel& model, const ReducedArmData& data, ReducedMatrix& mass) noexcept {
-  const int n = model.n;
+void computeRigidBodyGravity(const RigidBodyTree& tree, const RigidBodyData& data, BodyVector& tau) noexcept {
+  tau.resize(tree.n);  // within the fixed capacity: no allocation
+  // Body force at rest: I (0, a) = (h x a, m a) with a = -g, the ground's acceleration.
+  const Eigen::Vector3d& a = data.ground_accel.bottom;
+  std::array<SpatialVector, kMaxBodies> f{};
+  for (int b = 0; b < tree.n; ++b) {
+    const auto k = static_cast<std::size_t>(b);
+    f[k] = {data.first_moment_kgm[k].cross(a), data.mass_kg[k] * a};
+  }
+  for (int o = tree.n - 1; o >= 0; --o) {
+    const int b = tree.order[static_cast<std::size_t>(o)];
+    const auto k = static_cast<std::size_t>(b);
+    tau[b] = dot(data.s[k], f[k]);
+    const int p = tree.parent[k];
+    if (p >= 0) f[static_cast<std::size_t>(p)] += f[k];
+  }
+}
+
+void computeRigidBodyMassMatrix(const RigidBodyTree& tree, const RigidBodyData& data, BodyMatrix& mass) noexcept {
+  const int n = tree.n;
   mass.setZero(n, n);
   // Composite inertias I^C_b = sum over the subtree (additive at the world origin).
-  std::array<double, kMaxReducedBodies> m{};
-  std::array<Eigen::Vector3d, kMaxReducedBodies> h{};
-  std::array<Eigen::Matrix3d, kMaxReducedBodies> inertia{};
+  std::array<double, kMaxBodies> m{};
+  std::array<Eigen::Vector3d, kMaxBodies> h{};
+  std::array<Eigen::Matrix3d, kMaxBodies> inertia{};
   for (int b = 0; b < n; ++b) {
     const auto k = static_cast<std::size_t>(b);
     m[k] = data.mass_kg[k];
@@ -266,8 +285,8 @@ void computeReducedMassMatrix(const ReducedArmModel& model, const ReducedArmData
     inertia[k] = data.inertia_O_kgm2[k];
   }
   for (int o = n - 1; o >= 0; --o) {
-    const auto k = static_cast<std::size_t>(model.order[static_cast<std::size_t>(o)]);
-    const int p = model.parent[k];
+    const auto k = static_cast<std::size_t>(tree.order[static_cast<std::size_t>(o)]);
+    const int p = tree.parent[k];
     if (p < 0) continue;
     const auto pk = static_cast<std::size_t>(p);
     m[pk] += m[k];
@@ -277,7 +296,7 @@ void computeReducedMassMatrix(const ReducedArmModel& model, const ReducedArmData
   for (int j = 0; j < n; ++j) {
     const auto kj = static_cast<std::size_t>(j);
     const SpatialVector Y = applyInertia(m[kj], h[kj], inertia[kj], data.s[kj]);
-    for (int i = j; i >= 0; i = model.parent[static_cast<std::size_t>(i)]) {
+    for (int i = j; i >= 0; i = tree.parent[static_cast<std::size_t>(i)]) {
       const double value = dot(data.s[static_cast<std::size_t>(i)], Y);
       mass(i, j) = value;
       mass(j, i) = value;
@@ -285,20 +304,20 @@ void computeReducedMassMatrix(const ReducedArmModel& model, const ReducedArmData
   }
 }
 
-void computeReducedInverseDynamicsDerivativesPerBody(const ReducedArmModel& model, ReducedArmData& data,
-                                                     const ReducedVector& qdd, ReducedVector& tau,
-                                                     ReducedMatrix& dtau_dq, ReducedMatrix& dtau_dqd) noexcept {
-  const int n = model.n;
-  computeReducedInverseDynamics(model, data, qdd, tau);
+void computeRigidBodyInverseDynamicsDerivativesPerBody(const RigidBodyTree& tree, RigidBodyData& data,
+                                                     const BodyVector& qdd, BodyVector& tau,
+                                                     BodyMatrix& dtau_dq, BodyMatrix& dtau_dqd) noexcept {
+  const int n = tree.n;
+  computeRigidBodyInverseDynamics(tree, data, qdd, tau);
   dtau_dq.setZero(n, n);
   dtau_dqd.setZero(n, n);
-  const SpatialVector ground_accel{Eigen::Vector3d::Zero(), -model.gravity_W_mps2};
+  const SpatialVector& ground_accel = data.ground_accel;
   const SpatialVector zero{};
-  std::array<SpatialVector, kMaxReducedBodies> dq_sum{};
-  std::array<SpatialVector, kMaxReducedBodies> dqd_sum{};
+  std::array<SpatialVector, kMaxBodies> dq_sum{};
+  std::array<SpatialVector, kMaxBodies> dqd_sum{};
   for (int j = 0; j < n; ++j) {
     const auto kj = static_cast<std::size_t>(j);
-    const int pj = model.parent[kj];
+    const int pj = tree.parent[kj];
     const SpatialVector& s = data.s[kj];
     const SpatialVector& V_p = pj < 0 ? zero : data.V[static_cast<std::size_t>(pj)];
     const SpatialVector& A_p = pj < 0 ? ground_accel : data.A[static_cast<std::size_t>(pj)];
@@ -313,7 +332,7 @@ void computeReducedInverseDynamicsDerivativesPerBody(const ReducedArmModel& mode
     //   dF/dqd = I (w + s x V - t) + s x* (I V) + V x* (I s)
     for (int b = 0; b < n; ++b) {
       const auto k = static_cast<std::size_t>(b);
-      if (!model.supports[kj][k]) {
+      if (!tree.supports[kj][k]) {
         dq_sum[k] = zero;
         dqd_sum[k] = zero;
         continue;
@@ -328,8 +347,8 @@ void computeReducedInverseDynamicsDerivativesPerBody(const ReducedArmModel& mode
     }
     // Subtree sums: joint i sees the bodies of its subtree that joint j moves.
     for (int o = n - 1; o >= 0; --o) {
-      const auto k = static_cast<std::size_t>(model.order[static_cast<std::size_t>(o)]);
-      const int p = model.parent[k];
+      const auto k = static_cast<std::size_t>(tree.order[static_cast<std::size_t>(o)]);
+      const int p = tree.parent[k];
       if (p < 0) continue;
       dq_sum[static_cast<std::size_t>(p)] += dq_sum[k];
       dqd_sum[static_cast<std::size_t>(p)] += dqd_sum[k];
@@ -338,7 +357,7 @@ void computeReducedInverseDynamicsDerivativesPerBody(const ReducedArmModel& mode
     for (int i = 0; i < n; ++i) {
       const auto ki = static_cast<std::size_t>(i);
       double dq = dot(data.s[ki], dq_sum[ki]);
-      if (model.supports[kj][ki] && i != j) dq += dot(crossMotion(s, data.s[ki]), data.F_tot[ki]);
+      if (tree.supports[kj][ki] && i != j) dq += dot(crossMotion(s, data.s[ki]), data.F_tot[ki]);
       dtau_dq(i, j) = dq;
       dtau_dqd(i, j) = dot(data.s[ki], dqd_sum[ki]);
     }
@@ -366,10 +385,10 @@ using Vector6 = Eigen::Matrix<double, 6, 1>;
 
 }  // namespace
 
-void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, ReducedArmData& data,
-                                              const ReducedVector& qdd, ReducedVector& tau, ReducedMatrix& dtau_dq,
-                                              ReducedMatrix& dtau_dqd) noexcept {
-  // R13 (reports/equations.md): the per-body sums of computeReducedInverseDynamicsDerivativesPerBody (R7, R8) collected
+void computeRigidBodyInverseDynamicsDerivatives(const RigidBodyTree& tree, RigidBodyData& data,
+                                              const BodyVector& qdd, BodyVector& tau, BodyMatrix& dtau_dq,
+                                              BodyMatrix& dtau_dqd) noexcept {
+  // R13 (reports/equations.md): the per-body sums of computeRigidBodyInverseDynamicsDerivativesPerBody (R7, R8) collected
   // into composite quantities of each subtree c, so that every (i, j) entry is a dot product. With the Jacobi identity
   // (s x V) x* f + V x* (s x* f) = s x* (V x* f):
   //   sum_{k in c} dF_k/dq_j  = s x* F_tot_c + I^C_c u - B_c w + w x* (IV)^C_c
@@ -379,15 +398,15 @@ void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, Redu
   // j's: dtau_i/dq_j = s_i . D_j. For i a descendant of j it is i's, the turning of s_i cancels s x* F_tot_i, and
   // dtau_i/dq_j = u . (I^C_i s_i) + w . b_i, dtau_i/dqd_j = 2 w . (I^C_i s_i) + s . b_i, b_i = -B_i s_i - s_i x*
   // (IV)^C_i.
-  const int n = model.n;
-  computeReducedInverseDynamics(model, data, qdd, tau);
+  const int n = tree.n;
+  computeRigidBodyInverseDynamics(tree, data, qdd, tau);
   dtau_dq.setZero(n, n);
   dtau_dqd.setZero(n, n);
-  std::array<double, kMaxReducedBodies> mass_c{};
-  std::array<Eigen::Vector3d, kMaxReducedBodies> moment_c{};
-  std::array<Eigen::Matrix3d, kMaxReducedBodies> inertia_c{};
-  std::array<SpatialVector, kMaxReducedBodies> momentum_c{};
-  std::array<Matrix6, kMaxReducedBodies> b_c{};
+  std::array<double, kMaxBodies> mass_c{};
+  std::array<Eigen::Vector3d, kMaxBodies> moment_c{};
+  std::array<Eigen::Matrix3d, kMaxBodies> inertia_c{};
+  std::array<SpatialVector, kMaxBodies> momentum_c{};
+  std::array<Matrix6, kMaxBodies> b_c{};
   for (int b = 0; b < n; ++b) {
     const auto k = static_cast<std::size_t>(b);
     mass_c[k] = data.mass_kg[k];
@@ -407,8 +426,8 @@ void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, Redu
     b_c[k] = p + p.transpose();
   }
   for (int o = n - 1; o >= 0; --o) {
-    const auto k = static_cast<std::size_t>(model.order[static_cast<std::size_t>(o)]);
-    const int parent = model.parent[k];
+    const auto k = static_cast<std::size_t>(tree.order[static_cast<std::size_t>(o)]);
+    const int parent = tree.parent[k];
     if (parent < 0) continue;
     const auto pk = static_cast<std::size_t>(parent);
     mass_c[pk] += mass_c[k];
@@ -417,17 +436,17 @@ void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, Redu
     momentum_c[pk] += momentum_c[k];
     b_c[pk] += b_c[k];
   }
-  const SpatialVector ground_accel{Eigen::Vector3d::Zero(), -model.gravity_W_mps2};
+  const SpatialVector& ground_accel = data.ground_accel;
   const SpatialVector zero{};
-  std::array<SpatialVector, kMaxReducedBodies> a_i{};   // I^C_i s_i
-  std::array<SpatialVector, kMaxReducedBodies> b_i{};   // -B_i s_i - s_i x* (IV)^C_i
-  std::array<SpatialVector, kMaxReducedBodies> d_q{};   // sum over j's subtree of dF/dq_j
-  std::array<SpatialVector, kMaxReducedBodies> d_qd{};  // sum over j's subtree of dF/dqd_j
-  std::array<SpatialVector, kMaxReducedBodies> w_j{};
-  std::array<SpatialVector, kMaxReducedBodies> u_j{};
+  std::array<SpatialVector, kMaxBodies> a_i{};   // I^C_i s_i
+  std::array<SpatialVector, kMaxBodies> b_i{};   // -B_i s_i - s_i x* (IV)^C_i
+  std::array<SpatialVector, kMaxBodies> d_q{};   // sum over j's subtree of dF/dq_j
+  std::array<SpatialVector, kMaxBodies> d_qd{};  // sum over j's subtree of dF/dqd_j
+  std::array<SpatialVector, kMaxBodies> w_j{};
+  std::array<SpatialVector, kMaxBodies> u_j{};
   for (int j = 0; j < n; ++j) {
     const auto kj = static_cast<std::size_t>(j);
-    const int pj = model.parent[kj];
+    const int pj = tree.parent[kj];
     const SpatialVector& s = data.s[kj];
     const SpatialVector& V_p = pj < 0 ? zero : data.V[static_cast<std::size_t>(pj)];
     const SpatialVector& A_p = pj < 0 ? ground_accel : data.A[static_cast<std::size_t>(pj)];
@@ -450,10 +469,10 @@ void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, Redu
     const auto kj = static_cast<std::size_t>(j);
     for (int i = 0; i < n; ++i) {
       const auto ki = static_cast<std::size_t>(i);
-      if (i != j && model.supports[kj][ki]) {  // i a descendant of j
+      if (i != j && tree.supports[kj][ki]) {  // i a descendant of j
         dtau_dq(i, j) = dot(u_j[kj], a_i[ki]) + dot(w_j[kj], b_i[ki]);
         dtau_dqd(i, j) = 2.0 * dot(w_j[kj], a_i[ki]) + dot(data.s[kj], b_i[ki]);
-      } else if (model.supports[ki][kj]) {  // i an ancestor of, or equal to, j
+      } else if (tree.supports[ki][kj]) {  // i an ancestor of, or equal to, j
         dtau_dq(i, j) = dot(data.s[ki], d_q[kj]);
         dtau_dqd(i, j) = dot(data.s[ki], d_qd[kj]);
       }
@@ -461,4 +480,4 @@ void computeReducedInverseDynamicsDerivatives(const ReducedArmModel& model, Redu
   }
 }
 
-}  // namespace fullarm::plant
+}  // namespace fullarm::arm
