@@ -12,12 +12,12 @@
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
-#include "fullarm/controllers/linear_analysis.hpp"
-#include "fullarm/controllers/nonlinear_stage.hpp"
-#include "fullarm/controllers/tuner.hpp"
-#include "fullarm/controllers/validation.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/core/job_pool.hpp"
+#include "fullarm/design/linear_analysis.hpp"
+#include "fullarm/design/nonlinear_stage.hpp"
+#include "fullarm/design/tuner.hpp"
+#include "fullarm/design/validation.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::app {
@@ -25,7 +25,7 @@ namespace {
 
 using controllers::GainsConfig;
 using controllers::JointGains;
-using controllers::TuningResult;
+using design::TuningResult;
 
 constexpr const char* kGainsFileName = "gains.yaml";
 constexpr int kImpedancePoints = 80;
@@ -33,24 +33,24 @@ constexpr int kImpedancePoints = 80;
 struct TuneRun {
   GainsConfig tuned;  // the whole gains file with the tuned joints replaced
   std::vector<TuningResult> results;
-  std::vector<controllers::PreparedJoint> nominal;        // nominal model of each tuned joint
-  std::vector<controllers::NonlinearStageResult> stages;  // empty when the stage is off
+  std::vector<design::PreparedJoint> nominal;        // nominal model of each tuned joint
+  std::vector<design::NonlinearStageResult> stages;  // empty when the stage is off
   // The contact goal (Eq. C6) of each joint's written gains on the linear stage's model set and
   // coupled grid, whether or not it was a hard goal.
-  std::vector<controllers::CoupledGoal> contact;
+  std::vector<design::CoupledGoal> contact;
   double wall_s = 0.0;
   bool pass = false;
 };
 
 // The joint model the tuner designs for: the plant's joint, its load at the default posture
 // and the validation file's nominal user (joint space), as `fullarm validate` simulates it.
-controllers::JointPlantModel jointModel(const arm::ArmModel& model, const plant::PlantConfig& plant_config,
-                                        const controllers::ValidationConfig& validation, const std::string& name) {
-  controllers::JointPlantModel jm;
+design::JointPlantModel jointModel(const arm::ArmModel& model, const plant::PlantConfig& plant_config,
+                                   const design::ValidationConfig& validation, const std::string& name) {
+  design::JointPlantModel jm;
   jm.joint = plant_config.joints[static_cast<std::size_t>(plant::findPlantJoint(plant_config, name))];
   plant::UserArmParams no_user;
   const int idx = model.jointIndex(jm.joint.name);
-  jm.load = controllers::jointLoadFromArm(model, no_user, idx, model.defaultPosture());
+  jm.load = design::jointLoadFromArm(model, no_user, idx, model.defaultPosture());
   jm.load.user_inertia_kgm2 = validation.user.inertia_kgm2;
   jm.load.user_stiffness_nm_per_rad = validation.user.stiffness_nm_per_rad;
   jm.load.user_damping_nms_per_rad = validation.user.damping_nms_per_rad;
@@ -59,8 +59,7 @@ controllers::JointPlantModel jointModel(const arm::ArmModel& model, const plant:
 }
 
 TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_config, const GainsConfig& gains,
-                const controllers::ValidationConfig& validation, std::vector<std::string> joints,
-                const TuneOptions& o) {
+                const design::ValidationConfig& validation, std::vector<std::string> joints, const TuneOptions& o) {
   if (gains.controller != controllers::ControllerKind::kAdmittance) {
     throw core::ConfigError(
         gains.source, "controller",
@@ -71,16 +70,16 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
   }
   std::vector<int> slots;
   for (const std::string& name : joints) slots.push_back(controllers::findGainsJoint(gains, name));
-  controllers::LoopSetup setup;
+  design::LoopSetup setup;
   setup.control_period_s = gains.control_period_s;
   setup.delay_samples = validation.ranges.delay_min_samples;
-  controllers::TunerOptions options;
+  design::TunerOptions options;
   options.global_evaluations = o.global_evaluations;
   options.local_evaluations = o.local_evaluations;
   options.rounds = o.rounds;
   options.seed = o.seed;
   // The wall the tuner designs for is the one validate renders.
-  controllers::TuningGoals goals;
+  design::TuningGoals goals;
   if (validation.wall.enabled) {
     goals.wall_stiffness_nm_per_rad = validation.wall.stiffness_nm_per_rad;
     goals.wall_damping_nms_per_rad = validation.wall.damping_nms_per_rad;
@@ -90,7 +89,7 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
   run.nominal.resize(slots.size());
   if (o.nonlinear_rounds > 0) run.stages.resize(slots.size());
   run.contact.resize(slots.size());
-  std::vector<controllers::JointPlantModel> models;
+  std::vector<design::JointPlantModel> models;
   for (int slot : slots) models.push_back(jointModel(model, plant_config, validation, gains.joints[slot].name));
   const auto start = std::chrono::steady_clock::now();
   // Each joint's tuning is self-contained and seeded, so the result does not depend on the thread
@@ -99,59 +98,59 @@ TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_conf
   // starts as soon as its linear stage ends, and a thread that finds no joint left helps the
   // running nonlinear stages with their simulations (job_pool.hpp, docs/controllers.md "Scheduling
   // of tune"). The stage takes its runs in set order, so its result is the sequential one.
-  std::vector<controllers::JointScenario> scenarios(slots.size());
-  std::vector<controllers::LinearHardGoals> hard(slots.size());
+  std::vector<design::JointScenario> scenarios(slots.size());
+  std::vector<design::LinearHardGoals> hard(slots.size());
   core::JobPool pool(o.threads);
   pool.run(static_cast<int>(slots.size()), [&](int i) {
     const auto k = static_cast<std::size_t>(i);
     const JointGains& initial = gains.joints[static_cast<std::size_t>(slots[k])];
     const double q = model.defaultPosture()[model.jointIndex(initial.name)];
-    controllers::TunerOptions joint_options = options;
+    design::TunerOptions joint_options = options;
     // Seeded by the joint's place in the gains file, not in --joints: a joint's result does not
     // depend on which other joints are tuned with it.
     joint_options.seed = options.seed + static_cast<std::uint64_t>(slots[k]);
     // validate's scenario of this joint: its free move and detector set the coupled goal's
     // damping requirement (coupled_stability.hpp).
-    scenarios[k] = controllers::validationScenario(
-        controllers::makeJointScenario(model, plant_config, gains, initial.name), validation);
-    controllers::TuningGoals joint_goals = goals;
-    joint_goals.detector = controllers::detectorModelOf(scenarios[k]);
+    scenarios[k] =
+        design::validationScenario(design::makeJointScenario(model, plant_config, gains, initial.name), validation);
+    design::TuningGoals joint_goals = goals;
+    joint_goals.detector = design::detectorModelOf(scenarios[k]);
     joint_goals.detector.modal_amplitude = o.modal_amplitude;
-    joint_goals.contact_detector = controllers::contactDetectorModelOf(scenarios[k]);
+    joint_goals.contact_detector = design::contactDetectorModelOf(scenarios[k]);
     joint_goals.contact_hard = o.contact_goal;
-    run.results[k] = controllers::tuneJoint(models[k], q, initial, setup, joint_goals, controllers::TuningBounds{},
-                                            validation.ranges, joint_options);
-    run.nominal[k] = controllers::prepareJoint(models[k], controllers::solveOperatingPoint(models[k], q), setup);
+    run.results[k] = design::tuneJoint(models[k], q, initial, setup, joint_goals, design::TuningBounds{},
+                                       validation.ranges, joint_options);
+    run.nominal[k] = design::prepareJoint(models[k], design::solveOperatingPoint(models[k], q), setup);
     if (o.nonlinear_rounds > 0) {
       // The linear stage's hard goals on its final model set: the nonlinear stage prefers
       // candidates that meet them and says so when the written gains do not.
       hard[k].goals = joint_goals;
-      controllers::LoopSetup goal_setup = setup;
+      design::LoopSetup goal_setup = setup;
       goal_setup.grid_points = joint_options.grid_points;
-      for (const controllers::ModelVariation& v : run.results[k].model_set) {
-        hard[k].models.push_back(controllers::prepareVariation(models[k], q, goal_setup, v));
+      for (const design::ModelVariation& v : run.results[k].model_set) {
+        hard[k].models.push_back(design::prepareVariation(models[k], q, goal_setup, v));
       }
       hard[k].coupled_models = run.results[k].coupled_models;
       // Nonlinear verification on validate's closed-loop harness (nonlinear_stage.hpp).
-      controllers::NonlinearStageOptions nl;
+      design::NonlinearStageOptions nl;
       nl.rounds = o.nonlinear_rounds;
       nl.seed = o.seed;
       nl.pool = &pool;
-      run.stages[k] = controllers::refineNonlinear(scenarios[k], run.results[k].tuned, initial, validation.ranges,
-                                                   validation.linear, nl, &hard[k]);
+      run.stages[k] = design::refineNonlinear(scenarios[k], run.results[k].tuned, initial, validation.ranges,
+                                              validation.linear, nl, &hard[k]);
     }
     // The contact goal of the written gains (reported whether or not it was a hard goal).
-    std::vector<controllers::PreparedJoint> contact_models = run.results[k].coupled_models;
+    std::vector<design::PreparedJoint> contact_models = run.results[k].coupled_models;
     if (o.nonlinear_rounds > 0) {
       contact_models.insert(contact_models.end(), hard[k].models.begin(), hard[k].models.end());
     } else {
-      controllers::LoopSetup goal_setup = setup;
+      design::LoopSetup goal_setup = setup;
       goal_setup.grid_points = joint_options.grid_points;
-      for (const controllers::ModelVariation& v : run.results[k].model_set) {
-        contact_models.push_back(controllers::prepareVariation(models[k], q, goal_setup, v));
+      for (const design::ModelVariation& v : run.results[k].model_set) {
+        contact_models.push_back(design::prepareVariation(models[k], q, goal_setup, v));
       }
     }
-    run.contact[k] = controllers::evaluateCoupledContact(
+    run.contact[k] = design::evaluateCoupledContact(
         contact_models, o.nonlinear_rounds > 0 ? run.stages[k].gains : run.results[k].tuned,
         {joint_goals.wall_stiffness_nm_per_rad, joint_goals.wall_damping_nms_per_rad}, joint_goals.contact_detector);
   });
@@ -180,7 +179,7 @@ nlohmann::json gainsJson(const JointGains& g) {
           {"boundary_layer_radps", g.sliding_mode.boundary_layer_radps}};
 }
 
-nlohmann::json goalsJson(const controllers::GoalValues& v) {
+nlohmann::json goalsJson(const design::GoalValues& v) {
   return {{"peak_sensitivity", v.peak_sensitivity},
           {"spectral_radius", v.spectral_radius},
           {"min_real_loop", v.min_real_loop},
@@ -197,7 +196,7 @@ nlohmann::json goalsJson(const controllers::GoalValues& v) {
 }
 
 // A sampled plant and user (a model of the set, or the sample of a failed run).
-nlohmann::json sampleJson(const controllers::MonteCarloSample& m) {
+nlohmann::json sampleJson(const design::MonteCarloSample& m) {
   return {{"bulk_modulus_scale", m.bulk_modulus_scale},
           {"valve_gain_scale", m.valve_gain_scale},
           {"friction_scale", m.friction_scale},
@@ -208,8 +207,8 @@ nlohmann::json sampleJson(const controllers::MonteCarloSample& m) {
 }
 
 // The contact goal (Eq. C6) of the written gains: <= 1 met.
-nlohmann::json contactJson(const controllers::CoupledGoal& c) {
-  return {{"value", controllers::coupledGoalValue(c)},
+nlohmann::json contactJson(const design::CoupledGoal& c) {
+  return {{"value", design::coupledGoalValue(c)},
           {"spectral_radius", c.spectral_radius},
           {"detector_score", c.detector_score},
           {"mode_hz", c.detector_hz},
@@ -221,7 +220,7 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
   for (std::size_t k = 0; k < run.results.size(); ++k) {
     const TuningResult& r = run.results[k];
     nlohmann::json models = nlohmann::json::array();
-    for (const controllers::ModelVariation& v : r.model_set) {
+    for (const design::ModelVariation& v : r.model_set) {
       models.push_back(sampleJson(v));
     }
     joints.push_back({{"joint", r.joint},
@@ -237,11 +236,11 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
                       {"contact_goal", contactJson(run.contact[k])}});
   }
   nlohmann::json stages = nlohmann::json::array();
-  for (const controllers::NonlinearStageResult& st : run.stages) {
-    const auto scoreJson = [](const controllers::NonlinearScore& sc) {
+  for (const design::NonlinearStageResult& st : run.stages) {
+    const auto scoreJson = [](const design::NonlinearScore& sc) {
       // Each failed run with its sample.
       nlohmann::json failed = nlohmann::json::array();
-      for (const controllers::FailedRun& f : sc.failed_runs) {
+      for (const design::FailedRun& f : sc.failed_runs) {
         nlohmann::json sample = sampleJson(f.sample);
         sample["index"] = f.sample.index;
         const nlohmann::json entry = {{"set_index", f.set_index}, {"failure", f.failure}, {"sample", sample}};
@@ -307,7 +306,7 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
                    "soft"};
   const auto row = [&](const TuningResult& r, bool tuned) {
     const JointGains& g = tuned ? r.tuned : r.initial;
-    const controllers::GoalValues& v = tuned ? r.tuned_goals : r.initial_goals;
+    const design::GoalValues& v = tuned ? r.tuned_goals : r.initial_goals;
     table.rows.push_back({r.joint + (tuned ? " tuned" : " start"),
                           tuned ? (r.feasible ? "feasible" : "infeasible") : (v.feasible() ? "feasible" : "infeasible"),
                           g.impedance.inertia_kgm2, g.impedance.damping_nms_per_rad, g.impedance.stiffness_nm_per_rad,
@@ -344,10 +343,10 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
                   "RMS user torque [N m]",
                   "simulations",
                   "linear hard goals (written gains)"};
-    for (const controllers::NonlinearStageResult& st : run.stages) {
+    for (const design::NonlinearStageResult& st : run.stages) {
       std::string checks;
       for (int c : st.check_failures) checks += (checks.empty() ? "" : ", ") + std::to_string(c);
-      const auto fails = [](const controllers::NonlinearScore& sc) {
+      const auto fails = [](const design::NonlinearScore& sc) {
         return sc.linear_ok ? std::to_string(sc.failures) + " / " + std::to_string(sc.runs)
                             : std::string("linear fail");
       };
@@ -360,7 +359,7 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
     }
     nt.significant_digits = 4;
     section.addTable(std::move(nt));
-    for (const controllers::NonlinearStageResult& st : run.stages) section.addParagraph(st.verdict);
+    for (const design::NonlinearStageResult& st : run.stages) section.addParagraph(st.verdict);
   }
 
   reports::XyChart convergence;
@@ -395,14 +394,14 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
   impedance.title = "Rendered impedance in free motion |Z(f)|, nominal model: starting vs tuned gains";
   impedance.x_axis = {"Frequency", "Hz", true};
   impedance.y_axis = {"|Z|", "N·m·s/rad", true};
-  const Eigen::VectorXd f = controllers::logspace(0.1, 200.0, kImpedancePoints);
+  const Eigen::VectorXd f = design::logspace(0.1, 200.0, kImpedancePoints);
   for (std::size_t k = 0; k < run.results.size(); ++k) {
     for (bool tuned : {false, true}) {
       reports::Series s;
       s.name = run.results[k].joint + (tuned ? " tuned" : " start");
       const JointGains& g = tuned ? run.results[k].tuned : run.results[k].initial;
       for (Eigen::Index i = 0; i < f.size(); ++i) {
-        const double m = std::abs(controllers::renderedImpedance(run.nominal[k], g, {}, 2.0 * std::numbers::pi * f[i]));
+        const double m = std::abs(design::renderedImpedance(run.nominal[k], g, {}, 2.0 * std::numbers::pi * f[i]));
         s.x.push_back(f[i]);
         s.y.push_back(std::isfinite(m) && m > 0.0 ? m : std::numeric_limits<double>::quiet_NaN());
       }
@@ -464,8 +463,8 @@ int runTune(const TuneOptions& o) {
       plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), model);
   const GainsConfig gains =
       controllers::loadGainsConfig(configPathOr(o.gains, controllers::defaultTuneStartGainsPath), model);
-  const controllers::ValidationConfig validation =
-      controllers::loadValidationConfig(configPathOr(o.validation_config, controllers::defaultValidationConfigPath));
+  const design::ValidationConfig validation =
+      design::loadValidationConfig(configPathOr(o.validation_config, design::defaultValidationConfigPath));
   const TuneRun run = tuneArm(model, plant_config, gains, validation, o.joints, o);
   const std::filesystem::path out(o.out_dir);
   writeText(out / kGainsFileName, controllers::formatGainsYaml(run.tuned));
@@ -473,11 +472,11 @@ int runTune(const TuneOptions& o) {
   int feasible = 0;
   for (const TuningResult& r : run.results) feasible += r.feasible ? 1 : 0;
   int verified = 0;
-  for (const controllers::NonlinearStageResult& st : run.stages) verified += st.verified ? 1 : 0;
+  for (const design::NonlinearStageResult& st : run.stages) verified += st.verified ? 1 : 0;
   std::ostringstream headline;
   headline << feasible << " of " << run.results.size() << " joints meet every linear hard goal";
   int written_feasible = 0;
-  for (const controllers::NonlinearStageResult& st : run.stages) written_feasible += st.linear_hard_goals_met ? 1 : 0;
+  for (const design::NonlinearStageResult& st : run.stages) written_feasible += st.linear_hard_goals_met ? 1 : 0;
   if (!run.stages.empty()) {
     headline << "; " << verified << " verified by the nonlinear stage; the written gains of " << written_feasible
              << " meet the linear hard goals";
@@ -489,7 +488,7 @@ int runTune(const TuneOptions& o) {
   addToReport(run, report, "Tuning");
   report.write(out);
   for (const TuningResult& r : run.results) std::cout << r.verdict << "\n";
-  for (const controllers::NonlinearStageResult& st : run.stages) std::cout << st.verdict << "\n";
+  for (const design::NonlinearStageResult& st : run.stages) std::cout << st.verdict << "\n";
   std::cout << "Tuned gains: " << (std::filesystem::absolute(out) / kGainsFileName).string() << " (" << std::fixed
             << std::setprecision(1) << run.wall_s << " s)\n";
   return run.pass ? 0 : 1;
@@ -499,8 +498,7 @@ TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::
                              reports::Report& report) {
   const plant::PlantConfig plant_config = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
   const GainsConfig gains = controllers::loadGainsConfig(controllers::defaultTuneStartGainsPath(), model);
-  const controllers::ValidationConfig validation =
-      controllers::loadValidationConfig(controllers::defaultValidationConfigPath());
+  const design::ValidationConfig validation = design::loadValidationConfig(design::defaultValidationConfigPath());
   // `fullarm tune`'s own budget and start: the demo's tuned gains are the shipped dts_gains.yaml
   // (a smaller linear budget moved the linear optima and with them the nonlinear stage's result).
   const TuneOptions o;
@@ -513,10 +511,10 @@ TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::
   int feasible = 0;
   for (const TuningResult& r : run.results) feasible += r.feasible ? 1 : 0;
   int verified = 0;
-  for (const controllers::NonlinearStageResult& st : run.stages) verified += st.verified ? 1 : 0;
+  for (const design::NonlinearStageResult& st : run.stages) verified += st.verified ? 1 : 0;
   std::ostringstream detail;
   int written_feasible = 0;
-  for (const controllers::NonlinearStageResult& st : run.stages) written_feasible += st.linear_hard_goals_met ? 1 : 0;
+  for (const design::NonlinearStageResult& st : run.stages) written_feasible += st.linear_hard_goals_met ? 1 : 0;
   detail << feasible << " of " << run.results.size() << " joints meet the linear hard goals, " << verified
          << " verified by the nonlinear stage, written gains of " << written_feasible << " meet the linear hard goals, "
          << std::fixed << std::setprecision(1) << run.wall_s << " s wall";

@@ -14,19 +14,19 @@
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
-#include "fullarm/controllers/paper_claim.hpp"
-#include "fullarm/controllers/scenario_analysis.hpp"
-#include "fullarm/controllers/validation.hpp"
 #include "fullarm/core/config_error.hpp"
+#include "fullarm/design/paper_claim.hpp"
+#include "fullarm/design/scenario_analysis.hpp"
+#include "fullarm/design/validation.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::app {
 namespace {
 
-using controllers::ClosedLoopResult;
-using controllers::JointMonteCarlo;
-using controllers::JointScenario;
-using controllers::ScenarioLinearResult;
+using design::ClosedLoopResult;
+using design::JointMonteCarlo;
+using design::JointScenario;
+using design::ScenarioLinearResult;
 
 // Wall dampings of the Z-width curve [N m s/rad].
 const std::vector<double> kZWidthDampings = {0.0, 0.5, 1.0, 2.0, 5.0, 10.0};
@@ -47,14 +47,14 @@ struct JointOutcome {
   bool pass = false;
   std::string verdict;
   bool has_claim = false;
-  controllers::PaperClaimResult claim;
-  controllers::ClosedLoopTrace worst_trace;
+  design::PaperClaimResult claim;
+  design::ClosedLoopTrace worst_trace;
   ClosedLoopResult worst_result;
 };
 
 struct Outcome {
   std::vector<JointOutcome> joints;
-  controllers::ValidationConfig config;
+  design::ValidationConfig config;
   std::filesystem::path gains_source;
   int threads = 1;
   double wall_s = 0.0;
@@ -64,7 +64,7 @@ struct Outcome {
   }
 };
 
-std::string describeSample(const controllers::MonteCarloSample& s) {
+std::string describeSample(const design::MonteCarloSample& s) {
   std::ostringstream os;
   os << std::setprecision(3) << "bulk modulus x" << s.bulk_modulus_scale << ", valve gain x" << s.valve_gain_scale
      << ", friction x" << s.friction_scale << ", inertia x" << s.inertia_scale << ", user K "
@@ -88,7 +88,7 @@ std::vector<std::string> splitJoints(const std::string& text) {
 }
 
 Outcome validate(const arm::ArmModel& model, const plant::PlantConfig& plant_config,
-                 const controllers::GainsConfig& gains, const controllers::ValidationConfig& config,
+                 const controllers::GainsConfig& gains, const design::ValidationConfig& config,
                  const std::vector<std::string>& joint_names, int threads, bool paper_claim,
                  const std::vector<std::string>& claim_joints) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -98,7 +98,7 @@ Outcome validate(const arm::ArmModel& model, const plant::PlantConfig& plant_con
   out.threads = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::vector<JointScenario> nominal;
   for (const std::string& name : joint_names) {
-    JointScenario sc = controllers::makeJointScenario(model, plant_config, gains, name);
+    JointScenario sc = design::makeJointScenario(model, plant_config, gains, name);
     sc.load.inertia_kgm2 += config.user.inertia_kgm2 - sc.user.inertia_kgm2;
     sc.user = config.user;
     sc.wall = config.wall;
@@ -106,28 +106,28 @@ Outcome validate(const arm::ArmModel& model, const plant::PlantConfig& plant_con
     nominal.push_back(sc);
   }
   out.joints.resize(nominal.size());
-  const controllers::LinearRequirements req = config.linear;
+  const design::LinearRequirements req = config.linear;
   // Linear checks and (optionally) the paper-claim measurement, one job per joint.
-  controllers::parallelFor(static_cast<int>(nominal.size()), out.threads, [&](int j) {
+  design::parallelFor(static_cast<int>(nominal.size()), out.threads, [&](int j) {
     JointOutcome& o = out.joints[static_cast<std::size_t>(j)];
     o.nominal = nominal[static_cast<std::size_t>(j)];
-    o.linear = controllers::analyzeScenario(o.nominal, req, config.ranges.delay_max_samples, kZWidthDampings);
+    o.linear = design::analyzeScenario(o.nominal, req, config.ranges.delay_max_samples, kZWidthDampings);
     const bool claim_here =
         paper_claim && (claim_joints.empty() || std::find(claim_joints.begin(), claim_joints.end(),
                                                           shortJointName(o.nominal.joint_name)) != claim_joints.end());
     if (claim_here) {
-      o.claim = controllers::measurePaperClaim(o.nominal);
+      o.claim = design::measurePaperClaim(o.nominal);
       o.has_claim = true;
     }
   });
   const auto t1 = std::chrono::steady_clock::now();
-  const std::vector<JointMonteCarlo> mc = controllers::runMonteCarlo(nominal, config, out.threads);
+  const std::vector<JointMonteCarlo> mc = design::runMonteCarlo(nominal, config, out.threads);
   out.monte_carlo_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   for (std::size_t j = 0; j < nominal.size(); ++j) {
     JointOutcome& o = out.joints[j];
     o.monte_carlo = mc[j];
-    const controllers::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
-    o.worst_result = controllers::simulateJoint(controllers::applySample(nominal[j], worst.sample), &o.worst_trace);
+    const design::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
+    o.worst_result = design::simulateJoint(design::applySample(nominal[j], worst.sample), &o.worst_trace);
     o.pass = o.linear.pass && o.monte_carlo.pass();
     std::ostringstream v;
     if (!o.linear.pass) v << "linear: " << o.linear.reason << ". ";
@@ -153,14 +153,14 @@ std::vector<std::size_t> thinned(std::size_t n) {
 nlohmann::json toJson(const Outcome& out) {
   nlohmann::json joints = nlohmann::json::array();
   for (const JointOutcome& o : out.joints) {
-    const controllers::LinearChecks& f = o.linear.free;
-    const controllers::LinearChecks& c = o.linear.contact;
+    const design::LinearChecks& f = o.linear.free;
+    const design::LinearChecks& c = o.linear.contact;
     nlohmann::json zw = nlohmann::json::array();
-    for (const controllers::ZWidthPoint& p : o.linear.z_width) {
+    for (const design::ZWidthPoint& p : o.linear.z_width) {
       zw.push_back({{"wall_damping_nms_per_rad", p.damping_nms_per_rad},
                     {"max_wall_stiffness_nm_per_rad", p.max_stiffness_nm_per_rad}});
     }
-    const controllers::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
+    const design::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
     nlohmann::json j = {
         {"name", o.nominal.joint_name},
         {"pass", o.pass},
@@ -213,7 +213,7 @@ nlohmann::json toJson(const Outcome& out) {
             {"delay_samples", worst.sample.delay_samples}}}}},
     };
     if (o.has_claim) {
-      const auto fig = [](const controllers::ControllerFigures& x) {
+      const auto fig = [](const design::ControllerFigures& x) {
         return nlohmann::json{{"free_rms_user_torque_nm", x.free_rms_user_torque_nm},
                               {"free_peak_user_torque_nm", x.free_peak_user_torque_nm},
                               {"onset_peak_valve_v", x.onset_peak_valve_v},
@@ -266,7 +266,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
       "Worst case"};
   t.significant_digits = 4;
   for (const JointOutcome& o : out.joints) {
-    const controllers::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
+    const design::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
     const double ms = std::max(o.linear.free.margins.peak_sensitivity, o.linear.contact.margins.peak_sensitivity);
     t.rows.push_back({shortJointName(o.nominal.joint_name), o.pass ? std::string("PASS") : "FAIL: " + o.verdict,
                       o.linear.free.spectral_radius, o.linear.contact.spectral_radius,
@@ -293,7 +293,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
   reports::XyChart imp{
       "Rendered impedance |Z| (free motion)", {"Frequency", "Hz", true}, {"|Z|", "N m s/rad", true}, {}, ""};
   for (const JointOutcome& o : out.joints) {
-    const controllers::FrequencyData& fd = o.linear.free.frequency;
+    const design::FrequencyData& fd = o.linear.free.frequency;
     reports::Series m{shortJointName(o.nominal.joint_name), {}, {}, reports::SeriesMode::kAuto, {}};
     reports::Series p = m, n = m, z = m;
     n.mode = reports::SeriesMode::kLines;
@@ -344,7 +344,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
       "Z-width", {"Wall damping", "N m s/rad", false}, {"Largest stable wall stiffness", "N m/rad", true}, {}, ""};
   for (const JointOutcome& o : out.joints) {
     reports::Series s{shortJointName(o.nominal.joint_name), {}, {}, reports::SeriesMode::kLinesMarkers, {}};
-    for (const controllers::ZWidthPoint& p : o.linear.z_width) {
+    for (const design::ZWidthPoint& p : o.linear.z_width) {
       if (p.max_stiffness_nm_per_rad <= 0.0) continue;
       s.x.push_back(p.damping_nms_per_rad);
       s.y.push_back(p.max_stiffness_nm_per_rad);
@@ -368,7 +368,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
       "Rendered wall stiffness", {"User torque / penetration", "N m/rad", false}, {}, 0, std::nullopt, ""};
   for (const JointOutcome& o : out.joints) {
     reports::HistogramSeries a{shortJointName(o.nominal.joint_name), {}}, b = a, c = a;
-    for (const controllers::MonteCarloRun& r : o.monte_carlo.runs) {
+    for (const design::MonteCarloRun& r : o.monte_carlo.runs) {
       a.samples.push_back(r.result.free_rms_user_torque_nm);
       b.samples.push_back(std::max(r.result.free_hold_speed_rms_radps, r.result.contact_hold_speed_rms_radps) /
                           out.config.oscillation_speed_radps);
@@ -391,8 +391,8 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
                b.monte_carlo.runs[static_cast<std::size_t>(b.monte_carlo.worst)].severity;
       });
   if (worst_joint != out.joints.end() && !worst_joint->worst_trace.t_s.empty()) {
-    const controllers::ClosedLoopTrace& tr = worst_joint->worst_trace;
-    const controllers::MonteCarloRun& w =
+    const design::ClosedLoopTrace& tr = worst_joint->worst_trace;
+    const design::MonteCarloRun& w =
         worst_joint->monte_carlo.runs[static_cast<std::size_t>(worst_joint->monte_carlo.worst)];
     reports::Section& ws = report.addSection("Worst case found: " + shortJointName(worst_joint->nominal.joint_name) +
                                              " run #" + std::to_string(w.sample.index));
@@ -445,8 +445,8 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
     for (const JointOutcome& o : out.joints) {
       if (!o.has_claim) continue;
       const std::string j = shortJointName(o.nominal.joint_name);
-      const controllers::ControllerFigures& a = o.claim.admittance;
-      const controllers::ControllerFigures& p = o.claim.torque_pid;
+      const design::ControllerFigures& a = o.claim.admittance;
+      const design::ControllerFigures& p = o.claim.torque_pid;
       ct.rows.push_back({j, "admittance", a.free_rms_user_torque_nm, a.free_peak_user_torque_nm, a.onset_peak_valve_v,
                          a.max_stable_wall_nm_per_rad, "gains file"});
       ct.rows.push_back({j, "torque PID", p.free_rms_user_torque_nm, p.free_peak_user_torque_nm, p.onset_peak_valve_v,
@@ -528,8 +528,8 @@ int runValidate(const ValidateOptions& o) {
       plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), model);
   const controllers::GainsConfig gains =
       controllers::loadGainsConfig(configPathOr(o.gains_config, controllers::defaultGainsConfigPath), model);
-  controllers::ValidationConfig config =
-      controllers::loadValidationConfig(configPathOr(o.ranges_config, controllers::defaultValidationConfigPath));
+  design::ValidationConfig config =
+      design::loadValidationConfig(configPathOr(o.ranges_config, design::defaultValidationConfigPath));
   if (o.samples) config.samples = *o.samples;
   if (o.seed) config.seed = static_cast<std::uint64_t>(*o.seed);
   const std::vector<std::string> joints = jointList(gains, o.joints);
@@ -557,7 +557,7 @@ ValidateDemoStep runValidateDemoStep(const arm::ArmModel& model, const std::file
                                      reports::Report& report) {
   const plant::PlantConfig plant_config = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
   const controllers::GainsConfig gains = controllers::loadGainsConfig(gains_path, model);
-  controllers::ValidationConfig config = controllers::loadValidationConfig(controllers::defaultValidationConfigPath());
+  design::ValidationConfig config = design::loadValidationConfig(design::defaultValidationConfigPath());
   config.samples = samples;
   const Outcome out = validate(model, plant_config, gains, config, jointList(gains, ""), 0, true, {"EB"});
   printOutcome(out, std::cout);
