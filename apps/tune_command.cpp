@@ -196,7 +196,7 @@ nlohmann::json goalsJson(const design::GoalValues& v) {
 }
 
 // A sampled plant and user (a model of the set, or the sample of a failed run).
-nlohmann::json sampleJson(const design::MonteCarloSample& m) {
+nlohmann::json sampleJson(const design::ModelVariation& m) {
   return {{"bulk_modulus_scale", m.bulk_modulus_scale},
           {"valve_gain_scale", m.valve_gain_scale},
           {"friction_scale", m.friction_scale},

@@ -64,7 +64,7 @@ struct Outcome {
   }
 };
 
-std::string describeSample(const design::MonteCarloSample& s) {
+std::string describeSample(const design::ModelVariation& s) {
   std::ostringstream os;
   os << std::setprecision(3) << "bulk modulus x" << s.bulk_modulus_scale << ", valve gain x" << s.valve_gain_scale
      << ", friction x" << s.friction_scale << ", inertia x" << s.inertia_scale << ", user K "

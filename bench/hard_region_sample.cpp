@@ -131,10 +131,9 @@ int run(int argc, char** argv) {
 
   // The stage's initial sample set and search box (nonlinear_stage.hpp).
   const fd::NonlinearStageOptions stage;
-  std::vector<fd::MonteCarloSample> set = fd::ringCorners(validation.ranges);
-  for (const fd::MonteCarloSample& c : fd::stressCorners(validation.ranges, stage.corner_user_fraction))
-    set.push_back(c);
-  for (const fd::MonteCarloSample& s : fd::stageSamples(validation.ranges, 1, sc.joint_name, 0, stage.samples)) {
+  std::vector<fd::ModelVariation> set = fd::ringCorners(validation.ranges);
+  for (const fd::ModelVariation& c : fd::stressCorners(validation.ranges, stage.corner_user_fraction)) set.push_back(c);
+  for (const fd::ModelVariation& s : fd::stageSamples(validation.ranges, 1, sc.joint_name, 0, stage.samples)) {
     set.push_back(s);
   }
   const double lo[5] = {std::log10(stage.min_inertia_kgm2), std::log10(stage.min_damping_nms_per_rad),

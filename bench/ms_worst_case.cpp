@@ -150,7 +150,7 @@ void compareRing(const fd::JointScenario& nominal, const fd::JointPlantModel& jm
                 ft::windowStd(longer.qd, n - 500, n), sp);
   }
   // validate's own run of this model (free move, free hold, wall), as drawn and idealised.
-  fd::MonteCarloSample sample = v;
+  fd::ModelVariation sample = v;
   sample.index = 0;
   for (int mode = 0; mode < 4; ++mode) {
     fd::JointScenario sc = fd::applySample(nominal, sample);
@@ -233,7 +233,7 @@ void analyseJoint(const Context& c, const std::string& short_name) {
     constexpr int kDraws = 1000;
     int unstable = 0, ms_over = 0;
     for (int i = 0; i < kDraws; ++i) {
-      const fd::MonteCarloSample d = fd::drawSample(c.validation.ranges, 20261123, slot, i);
+      const fd::ModelVariation d = fd::drawVariation(c.validation.ranges, 20261123, slot, i);
       const fd::PreparedJoint pd = fd::prepareVariation(jm, q_lin, goal_setup, d);
       const fd::LinearChecks l = fd::analyzePrepared(pd, gains, fd::VirtualWall{}, false, false);
       const fd::CoupledGoal cg = fd::evaluateCoupled({pd}, gains, goals.detector);

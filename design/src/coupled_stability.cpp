@@ -11,8 +11,6 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "fullarm/design/tuner.hpp"
-
 namespace fullarm::design {
 
 ModeDecay slowestOscillatoryMode(const Eigen::VectorXcd& poles_z, double period_s) {

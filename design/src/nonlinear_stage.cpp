@@ -111,9 +111,9 @@ struct RunSpread {
 
 }  // namespace
 
-std::vector<MonteCarloSample> stressCorners(const UncertaintyRanges& r, double user_fraction) {
+std::vector<ModelVariation> stressCorners(const UncertaintyRanges& r, double user_fraction) {
   const auto weak = [user_fraction](const UniformRange& u) { return u.min + user_fraction * (u.max - u.min); };
-  MonteCarloSample fast;
+  ModelVariation fast;
   fast.index = kCornerIndex;
   fast.bulk_modulus_scale = r.bulk_modulus_scale.min;
   fast.valve_gain_scale = r.valve_gain_scale.max;
@@ -122,14 +122,14 @@ std::vector<MonteCarloSample> stressCorners(const UncertaintyRanges& r, double u
   fast.delay_samples = r.delay_max_samples;
   fast.user_stiffness_nm_per_rad = weak(r.user_stiffness_nm_per_rad);
   fast.user_damping_nms_per_rad = weak(r.user_damping_nms_per_rad);
-  MonteCarloSample slow = fast;
+  ModelVariation slow = fast;
   slow.index = kCornerIndex + 1;
   slow.bulk_modulus_scale = r.bulk_modulus_scale.max;
   slow.valve_gain_scale = r.valve_gain_scale.min;
   slow.friction_scale = r.friction_scale.max;
   slow.inertia_scale = r.inertia_scale.max;
   slow.delay_samples = r.delay_min_samples;
-  MonteCarloSample stiff = fast;
+  ModelVariation stiff = fast;
   stiff.index = kCornerIndex + 2;
   stiff.user_stiffness_nm_per_rad = r.user_stiffness_nm_per_rad.max;
   return {fast, slow, stiff};
@@ -153,12 +153,12 @@ double passedRunMargin(const ClosedLoopResult& run, double threshold_radps) noex
   return m;
 }
 
-std::vector<MonteCarloSample> ringCorners(const UncertaintyRanges& r) {
-  const MonteCarloSample slow = stressCorners(r, 0.0)[1];
-  std::vector<MonteCarloSample> out;
+std::vector<ModelVariation> ringCorners(const UncertaintyRanges& r) {
+  const ModelVariation slow = stressCorners(r, 0.0)[1];
+  std::vector<ModelVariation> out;
   int index = kCornerIndex + 3;
   for (const double f : kRingStiffnessFractions) {
-    MonteCarloSample c = slow;
+    ModelVariation c = slow;
     c.index = index++;
     c.user_damping_nms_per_rad = r.user_damping_nms_per_rad.min;
     c.user_stiffness_nm_per_rad =
@@ -168,17 +168,17 @@ std::vector<MonteCarloSample> ringCorners(const UncertaintyRanges& r) {
   return out;
 }
 
-std::vector<MonteCarloSample> stageSamples(const UncertaintyRanges& ranges, std::uint64_t seed,
-                                           const std::string& joint_name, int first, int count) {
-  std::vector<MonteCarloSample> out;
+std::vector<ModelVariation> stageSamples(const UncertaintyRanges& ranges, std::uint64_t seed,
+                                         const std::string& joint_name, int first, int count) {
+  std::vector<ModelVariation> out;
   out.reserve(static_cast<std::size_t>(std::max(count, 0)));
   for (int i = 0; i < count; ++i)
-    out.push_back(drawSample(ranges, seed ^ kStageSalt, core::nameSlot(joint_name), first + i));
+    out.push_back(drawVariation(ranges, seed ^ kStageSalt, core::nameSlot(joint_name), first + i));
   return out;
 }
 
 NonlinearScore scoreNonlinear(const JointScenario& scenario, const controllers::JointGains& gains,
-                              const std::vector<MonteCarloSample>& set, const LinearRequirements& req, int max_delay,
+                              const std::vector<ModelVariation>& set, const LinearRequirements& req, int max_delay,
                               int failure_cap, const LinearHardGoals* hard_goals, int threads, core::JobPool* pool,
                               bool reject_hard_violation) {
   NonlinearScore s;
@@ -296,9 +296,9 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const contro
   // an evaluation capped at the incumbent's failures stops after the fewest simulations.
   if (o.ring_corners) res.set = ringCorners(ranges);
   if (o.stress_corners) {
-    for (const MonteCarloSample& c : stressCorners(ranges, o.corner_user_fraction)) res.set.push_back(c);
+    for (const ModelVariation& c : stressCorners(ranges, o.corner_user_fraction)) res.set.push_back(c);
   }
-  for (const MonteCarloSample& sample : stageSamples(ranges, o.seed, scenario.joint_name, 0, o.samples)) {
+  for (const ModelVariation& sample : stageSamples(ranges, o.seed, scenario.joint_name, 0, o.samples)) {
     res.set.push_back(sample);
   }
   int next_index = o.samples;
@@ -374,12 +374,12 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const contro
       if (!improved) step *= 0.5;
     }
     // Worst-case addition: a fresh check batch on the incumbent; its failures join the set.
-    const std::vector<MonteCarloSample> check =
+    const std::vector<ModelVariation> check =
         stageSamples(ranges, o.seed, scenario.joint_name, next_index, o.check_samples);
     next_index += o.check_samples;
     JointScenario sc = scenario;
     sc.gains = best_gains;
-    std::vector<std::pair<double, MonteCarloSample>> failed;
+    std::vector<std::pair<double, ModelVariation>> failed;
     // Blocks of runs taken in batch order: the same failures for any thread count and scheduling.
     const RunSpread spread{o.threads, o.pool};
     std::vector<ClosedLoopResult> results;

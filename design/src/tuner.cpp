@@ -260,28 +260,6 @@ std::pair<double, std::string> worstHardGoal(const GoalValues& values, const Tun
   return {value, std::string(name)};
 }
 
-JointPlantModel applyVariation(const JointPlantModel& nominal, const ModelVariation& v) {
-  JointPlantModel m = nominal;
-  m.joint.fluid.oil_bulk_modulus_pa *= v.bulk_modulus_scale;
-  m.joint.valve.rated_flow_m3ps *= v.valve_gain_scale;
-  m.load.inertia_kgm2 *= v.inertia_scale;
-  m.load.user_inertia_kgm2 *= v.inertia_scale;
-  m.joint.friction.viscous_nms_per_rad *= v.friction_scale;
-  m.joint.friction.coulomb_nm *= v.friction_scale;
-  m.joint.friction.static_nm *= v.friction_scale;
-  m.load.user_stiffness_nm_per_rad = v.user_stiffness_nm_per_rad;
-  m.load.user_damping_nms_per_rad = v.user_damping_nms_per_rad;
-  return m;
-}
-
-PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,
-                               const ModelVariation& v) {
-  const JointPlantModel m = applyVariation(nominal, v);
-  LoopSetup s = setup;
-  s.delay_samples = v.delay_samples;
-  return prepareJoint(m, solveOperatingPoint(m, q_rad), s);
-}
-
 GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const controllers::JointGains& gains,
                          const TuningGoals& goals, const std::vector<PreparedJoint>& coupled) {
   GoalValues worst;

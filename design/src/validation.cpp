@@ -132,21 +132,7 @@ std::filesystem::path defaultValidationConfigPath() {
   return core::defaultConfigPath("dts_validation.yaml");
 }
 
-MonteCarloSample drawSample(const UncertaintyRanges& r, std::uint64_t seed, int joint_slot, int index) noexcept {
-  core::RandomStream stream(seed, static_cast<std::uint64_t>(joint_slot), static_cast<std::uint64_t>(index));
-  MonteCarloSample s;
-  s.index = index;
-  s.bulk_modulus_scale = stream.uniform(r.bulk_modulus_scale.min, r.bulk_modulus_scale.max);
-  s.valve_gain_scale = stream.uniform(r.valve_gain_scale.min, r.valve_gain_scale.max);
-  s.friction_scale = stream.uniform(r.friction_scale.min, r.friction_scale.max);
-  s.inertia_scale = stream.uniform(r.inertia_scale.min, r.inertia_scale.max);
-  s.user_stiffness_nm_per_rad = stream.uniform(r.user_stiffness_nm_per_rad.min, r.user_stiffness_nm_per_rad.max);
-  s.user_damping_nms_per_rad = stream.uniform(r.user_damping_nms_per_rad.min, r.user_damping_nms_per_rad.max);
-  s.delay_samples = stream.uniformInt(r.delay_min_samples, r.delay_max_samples);
-  return s;
-}
-
-JointScenario applySample(const JointScenario& nominal, const MonteCarloSample& s) {
+JointScenario applySample(const JointScenario& nominal, const ModelVariation& s) {
   JointScenario sc = nominal;
   sc.joint.fluid.oil_bulk_modulus_pa *= s.bulk_modulus_scale;
   sc.joint.valve.rated_flow_m3ps *= s.valve_gain_scale;
@@ -217,7 +203,7 @@ std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nom
     const int i = job % per_joint;
     MonteCarloRun& run = out[static_cast<std::size_t>(j)].runs[static_cast<std::size_t>(i)];
     run.sample =
-        drawSample(config.ranges, config.seed, core::nameSlot(bases[static_cast<std::size_t>(j)].joint_name), i);
+        drawVariation(config.ranges, config.seed, core::nameSlot(bases[static_cast<std::size_t>(j)].joint_name), i);
     run.result = simulateJoint(applySample(bases[static_cast<std::size_t>(j)], run.sample));
     run.severity = runSeverity(run.result, config.oscillation_speed_radps);
   });

@@ -239,7 +239,7 @@ JointPlantModel tuneModel(const std::string& name, const ValidationConfig& vc) {
 // C3 rejects it, and ranks B_m 0.7, 1.44, 3 in the order of the harness's measured deviations.
 TEST(CoupledStability, PredictsTheHrRun33UserDeviceModeOfTheNonlinearHarness) {
   const ValidationConfig vc = loadValidationConfig(defaultValidationConfigPath());
-  const MonteCarloSample run33 = drawSample(vc.ranges, vc.seed, core::nameSlot("R_HR"), 33);
+  const ModelVariation run33 = drawVariation(vc.ranges, vc.seed, core::nameSlot("R_HR"), 33);
   ASSERT_NEAR(run33.user_stiffness_nm_per_rad, 4.1, 0.05);
   ASSERT_NEAR(run33.user_damping_nms_per_rad, 0.15, 0.01);
   controllers::JointGains hr =
@@ -312,7 +312,7 @@ TEST(CoupledStability, ModalHoldSpeedsEqualTheSimulatedLinearMoveAndHold) {
         test::dtsGains().joints[static_cast<std::size_t>(controllers::findGainsJoint(test::dtsGains(), c.joint))];
     const JointPlantModel jm = tuneModel(c.joint, vc);
     const double q = test::dtsModel().defaultPosture()[test::dtsModel().jointIndex(c.joint)];
-    MonteCarloSample v;
+    ModelVariation v;
     v.user_stiffness_nm_per_rad = c.k_h;
     v.user_damping_nms_per_rad = c.b_h;
     v.delay_samples = c.delay;
@@ -356,7 +356,7 @@ TEST(CoupledStability, ANonFiniteLoopEndsWithTheBoundPathsErrorNotAHang) {
       test::dtsGains().joints[static_cast<std::size_t>(controllers::findGainsJoint(test::dtsGains(), "R_HR"))];
   const JointPlantModel jm = tuneModel("R_HR", vc);
   const double q = test::dtsModel().defaultPosture()[test::dtsModel().jointIndex("R_HR")];
-  MonteCarloSample v;
+  ModelVariation v;
   v.user_stiffness_nm_per_rad = 4.1;
   v.user_damping_nms_per_rad = 0.15;
   std::vector<PreparedJoint> models{prepareVariation(jm, q, LoopSetup{}, v)};
@@ -388,8 +388,8 @@ TEST(CoupledStability, ContactGoalPredictsTheStiffUsersContactOscillationOfTheNo
   attempt.sliding_mode = {300.0000000000001, 5.0, 1302.6230314486584};
   const JointPlantModel jm = tuneModel("R_SFE", vc);
   const double q = test::dtsModel().defaultPosture()[test::dtsModel().jointIndex("R_SFE")];
-  const MonteCarloSample ring = ringCorners(vc.ranges)[3];
-  const MonteCarloSample stiff = stressCorners(vc.ranges, 0.05)[2];
+  const ModelVariation ring = ringCorners(vc.ranges)[3];
+  const ModelVariation stiff = stressCorners(vc.ranges, 0.05)[2];
   ASSERT_DOUBLE_EQ(ring.user_stiffness_nm_per_rad, vc.ranges.user_stiffness_nm_per_rad.max);
   ASSERT_DOUBLE_EQ(stiff.user_stiffness_nm_per_rad, vc.ranges.user_stiffness_nm_per_rad.max);
   for (const controllers::JointGains* g : {&optimum, &attempt}) {
@@ -402,7 +402,7 @@ TEST(CoupledStability, ContactGoalPredictsTheStiffUsersContactOscillationOfTheNo
                      1.875 * (nominal.timing.wall_gap_rad + nominal.timing.push_rad) / nominal.timing.contact_move_s);
     EXPECT_DOUBLE_EQ(contact.hold_s, nominal.timing.contact_hold_s);
     const VirtualWall wall{nominal.wall.stiffness_nm_per_rad, nominal.wall.damping_nms_per_rad};
-    for (const MonteCarloSample& sample : {ring, stiff}) {
+    for (const ModelVariation& sample : {ring, stiff}) {
       const ClosedLoopResult r = simulateJoint(applySample(nominal, sample));
       const PreparedJoint p = prepareVariation(jm, q, LoopSetup{}, sample);
       const CoupledGoal c = evaluateCoupledContact({p}, *g, wall, contact);

@@ -124,7 +124,7 @@ TEST(NonlinearStage, SamplesAreItsOwnStreamInsideTheRangesAndRepeatable) {
     // Not validate's draws of any slot's run i (validate hashes the name; compare with a direct draw).
     for (int slot = 0; slot < 4; ++slot) {
       EXPECT_NE(a[i].user_stiffness_nm_per_rad,
-                drawSample(vc.ranges, vc.seed, slot, static_cast<int>(i)).user_stiffness_nm_per_rad);
+                drawVariation(vc.ranges, vc.seed, slot, static_cast<int>(i)).user_stiffness_nm_per_rad);
     }
   }
 }
@@ -208,8 +208,8 @@ TEST(NonlinearStage, TheFastStressCornerExposesTheDelayLimitedHydraulicOscillati
   const UncertaintyRanges& r = vc.ranges;
   const auto corners = stressCorners(r, 0.05);
   ASSERT_EQ(corners.size(), 3u);
-  const MonteCarloSample& fast = corners[0];
-  const MonteCarloSample& slow = corners[1];
+  const ModelVariation& fast = corners[0];
+  const ModelVariation& slow = corners[1];
   EXPECT_EQ(fast.bulk_modulus_scale, r.bulk_modulus_scale.min);
   EXPECT_EQ(fast.valve_gain_scale, r.valve_gain_scale.max);
   EXPECT_EQ(fast.delay_samples, r.delay_max_samples);
@@ -221,7 +221,7 @@ TEST(NonlinearStage, TheFastStressCornerExposesTheDelayLimitedHydraulicOscillati
   EXPECT_DOUBLE_EQ(slow.user_stiffness_nm_per_rad, weak(r.user_stiffness_nm_per_rad));
   EXPECT_EQ(corners[2].user_stiffness_nm_per_rad, r.user_stiffness_nm_per_rad.max);
   EXPECT_EQ(corners[2].bulk_modulus_scale, r.bulk_modulus_scale.min);
-  for (const MonteCarloSample& c : corners) {
+  for (const ModelVariation& c : corners) {
     EXPECT_DOUBLE_EQ(c.user_damping_nms_per_rad, weak(r.user_damping_nms_per_rad));
   }
   controllers::GainsConfig g = test::referenceGains();
@@ -252,7 +252,7 @@ TEST(NonlinearStage, TheRingCornersExposeTheUndampedStiffUserModeOfHr) {
   const ValidationConfig vc = defaultValidation();
   const UncertaintyRanges& r = vc.ranges;
   const auto rings = ringCorners(r);
-  const MonteCarloSample slow = stressCorners(r, 0.05)[1];
+  const ModelVariation slow = stressCorners(r, 0.05)[1];
   ASSERT_EQ(rings.size(), std::size(kRingStiffnessFractions));
   for (std::size_t i = 0; i < rings.size(); ++i) {
     EXPECT_EQ(rings[i].bulk_modulus_scale, r.bulk_modulus_scale.max);
@@ -285,7 +285,7 @@ TEST(NonlinearStage, TheRingCornersExposeTheUndampedStiffUserModeOfHr) {
   const double sigma_min = detectorDecayRate(sc.timing.detect_window_s, kOscillationSustainRatio);
 
   int failed = 0;
-  for (const MonteCarloSample& c : rings) {
+  for (const ModelVariation& c : rings) {
     const ClosedLoopResult before = simulateJoint(applySample(sc, c));
     const ClosedLoopResult after = simulateJoint(applySample(damped, c));
     EXPECT_TRUE(after.acceptable()) << "K_h " << c.user_stiffness_nm_per_rad << ": " << after.failure;
@@ -338,7 +338,7 @@ TEST(NonlinearStage, ScoresAndReportsTheLinearHardGoals) {
   LinearHardGoals impossible = loose;
   impossible.goals.max_peak_sensitivity = 0.5;
 
-  const std::vector<MonteCarloSample> one = stageSamples(vc.ranges, vc.seed, "R_EB", 0, 1);
+  const std::vector<ModelVariation> one = stageSamples(vc.ranges, vc.seed, "R_EB", 0, 1);
   const int max_delay = vc.ranges.delay_max_samples;
   const NonlinearScore bare = scoreNonlinear(sc, sc.gains, one, vc.linear, max_delay);
   const NonlinearScore met = scoreNonlinear(sc, sc.gains, one, vc.linear, max_delay, 1000, &loose);
@@ -442,7 +442,7 @@ TEST(NonlinearStage, SfeRingCornerRingsTooSlowlyAndTheSearchGoesOnToMoreMargin) 
   // the margin is above the target, within its budget; it need not reach the target).
   EXPECT_GT(first_pass.final_score.worst_passed_detector_margin, with_target.final_score.worst_passed_detector_margin);
   EXPECT_GT(with_target.evaluations, first_pass.evaluations);
-  for (const MonteCarloSample& c : with_target.set) {
+  for (const ModelVariation& c : with_target.set) {
     JointScenario chosen = sc;
     chosen.gains = with_target.gains;
     ClosedLoopTrace t;
@@ -495,7 +495,7 @@ TEST(NonlinearStage, HardFeasibleSearchStartsFromTheLinearOptimumAndWritesOnlyGa
   ASSERT_FALSE(meets(sc.gains));
 
   // A violating candidate is not simulated when rejection is asked for.
-  std::vector<MonteCarloSample> one = stageSamples(vc.ranges, vc.seed, "R_HR", 0, 1);
+  std::vector<ModelVariation> one = stageSamples(vc.ranges, vc.seed, "R_HR", 0, 1);
   const NonlinearScore rejected =
       scoreNonlinear(sc, sc.gains, one, vc.linear, vc.ranges.delay_max_samples, 1000, &hard, 1, nullptr, true);
   EXPECT_TRUE(rejected.hard_rejected);
@@ -572,7 +572,7 @@ TEST(NonlinearStage, HardFeasibleSearchStartsFromTheLinearOptimumAndWritesOnlyGa
 TEST(NonlinearStage, ScoreDoesNotDependOnTheThreadCount) {
   const ValidationConfig vc = defaultValidation();
   const JointScenario sc = sfeWithItsOldGains(vc);
-  std::vector<MonteCarloSample> set = ringCorners(vc.ranges);
+  std::vector<ModelVariation> set = ringCorners(vc.ranges);
   set.push_back(stageSamples(vc.ranges, 1, "R_SFE", 0, 1)[0]);
   for (const int cap : {0, 1000}) {
     const NonlinearScore one = scoreNonlinear(sc, sc.gains, set, vc.linear, 3, cap, nullptr, 1);

@@ -91,7 +91,7 @@ struct Ring {
 // K_h (q0 - q) - B_h qd), the trim command fed forward, and a burst added to the applied command.
 inline Ring nonlinearRing(const JointScenario& nominal, const JointPlantModel& jm_v, const ModelVariation& v,
                           const controllers::JointGains& gains, double q0, double f_hz, double a_v, double duration_s) {
-  MonteCarloSample sample = v;
+  ModelVariation sample = v;
   sample.index = 0;
   JointScenario sc = applySample(nominal, sample);
   idealize(sc, true, true);

@@ -1,6 +1,5 @@
-// Monte-Carlo validation: the ranges file (strict, clear errors, fuzzed), the sample streams
-// (inside their ranges, uniform by moments, independent of order), the thread pool, and
-// thread-count independence of a real (small) Monte-Carlo.
+// Monte-Carlo validation: the ranges file (strict, clear errors, fuzzed), a sample applied to
+// the scenario, the thread pool, and thread-count independence of a real (small) Monte-Carlo.
 
 #include <gtest/gtest.h>
 
@@ -82,54 +81,9 @@ TEST(ValidationConfig, MutatedInputsGiveErrorsNotCrashes) {
   EXPECT_GT(errors, 50);
 }
 
-// Each drawn value lies in its range and the streams are uniform: sample means and variances
-// match (a + b)/2 and (b - a)^2/12 within 5 standard errors; delays hit every integer equally.
-TEST(MonteCarloSampling, SamplesAreUniformInTheirRanges) {
-  UncertaintyRanges r;
-  r.bulk_modulus_scale = {0.5, 1.5};
-  r.user_stiffness_nm_per_rad = {10.0, 70.0};
-  r.delay_min_samples = 1;
-  r.delay_max_samples = 3;
-  const int n = 20000;
-  double sum = 0.0, sum_sq = 0.0;
-  int delays[4] = {0, 0, 0, 0};
-  for (int i = 0; i < n; ++i) {
-    const MonteCarloSample s = drawSample(r, 42, 3, i);
-    ASSERT_GE(s.bulk_modulus_scale, 0.5);
-    ASSERT_LT(s.bulk_modulus_scale, 1.5);
-    ASSERT_GE(s.user_stiffness_nm_per_rad, 10.0);
-    ASSERT_LE(s.user_stiffness_nm_per_rad, 70.0);
-    ASSERT_GE(s.delay_samples, 1);
-    ASSERT_LE(s.delay_samples, 3);
-    ++delays[s.delay_samples];
-    sum += s.user_stiffness_nm_per_rad;
-    sum_sq += s.user_stiffness_nm_per_rad * s.user_stiffness_nm_per_rad;
-  }
-  const double mean = sum / n;
-  const double var = sum_sq / n - mean * mean;
-  const double sigma = 60.0 / std::sqrt(12.0);
-  EXPECT_NEAR(mean, 40.0, 5.0 * sigma / std::sqrt(n));
-  EXPECT_NEAR(var, 3600.0 / 12.0, 5.0 * std::sqrt(0.8) * sigma * sigma / std::sqrt(n));  // var of s^2 for uniform
-  for (int d = 1; d <= 3; ++d) EXPECT_NEAR(delays[d], n / 3.0, 5.0 * std::sqrt(n * (1.0 / 3) * (2.0 / 3))) << d;
-}
-
-TEST(MonteCarloSampling, StreamsDependOnlyOnSeedJointAndIndex) {
-  UncertaintyRanges r;
-  const MonteCarloSample a = drawSample(r, 7, 2, 11);
-  // Draw others in between: no hidden state.
-  for (int i = 0; i < 100; ++i) (void)drawSample(r, 7, 5, i);
-  const MonteCarloSample b = drawSample(r, 7, 2, 11);
-  EXPECT_EQ(a.bulk_modulus_scale, b.bulk_modulus_scale);
-  EXPECT_EQ(a.user_damping_nms_per_rad, b.user_damping_nms_per_rad);
-  EXPECT_EQ(a.delay_samples, b.delay_samples);
-  EXPECT_NE(drawSample(r, 7, 2, 12).bulk_modulus_scale, a.bulk_modulus_scale);
-  EXPECT_NE(drawSample(r, 8, 2, 11).bulk_modulus_scale, a.bulk_modulus_scale);
-  EXPECT_NE(drawSample(r, 7, 3, 11).bulk_modulus_scale, a.bulk_modulus_scale);
-}
-
 TEST(MonteCarloSampling, ApplySampleScalesThePlant) {
   const JointScenario nominal = makeJointScenario(test::dtsModel(), test::dtsPlant(), test::dtsGains(), "EB");
-  MonteCarloSample s;
+  ModelVariation s;
   s.bulk_modulus_scale = 0.7;
   s.valve_gain_scale = 1.1;
   s.friction_scale = 2.0;

@@ -31,7 +31,7 @@
 
 #include "fullarm/design/closed_loop.hpp"
 #include "fullarm/design/linear_analysis.hpp"
-#include "fullarm/design/validation.hpp"
+#include "fullarm/design/uncertainty.hpp"
 
 namespace fullarm::design {
 
@@ -78,13 +78,13 @@ inline constexpr double kCoupledDampingFractions[] = {0.0, 1.0 / 16.0, 1.0};
 /// the K_h and B_h fractions above, the inertia scale at both ends of its range, and every
 /// delay in [delay_min_samples, delay_max_samples]; bulk modulus, valve gain and friction are
 /// `plant`'s. Order: delay, inertia, damping, stiffness (stiffness fastest).
-[[nodiscard]] std::vector<MonteCarloSample> coupledVariations(const MonteCarloSample& plant,
-                                                              const UncertaintyRanges& ranges);
+[[nodiscard]] std::vector<ModelVariation> coupledVariations(const ModelVariation& plant,
+                                                            const UncertaintyRanges& ranges);
 
 /// prepareVariation() of every coupledVariations() of every plant variation in `plants`.
 [[nodiscard]] std::vector<PreparedJoint> prepareCoupledGrid(const JointPlantModel& nominal, double q_rad,
                                                             const LoopSetup& setup,
-                                                            const std::vector<MonteCarloSample>& plants,
+                                                            const std::vector<ModelVariation>& plants,
                                                             const UncertaintyRanges& ranges);
 
 /// What the detector sees of a closed-loop mode over the free hold (closed_loop.hpp).

@@ -111,9 +111,9 @@ struct LinearHardGoals {
 
 /// One failed run of a score: where it sits in the sample set and why it failed.
 struct FailedRun {
-  int set_index = 0;        ///< index in the sample set scored
-  MonteCarloSample sample;  ///< that sample
-  std::string failure;      ///< ClosedLoopResult::failure
+  int set_index = 0;      ///< index in the sample set scored
+  ModelVariation sample;  ///< that sample
+  std::string failure;    ///< ClosedLoopResult::failure
 };
 
 /// The score of one candidate over a sample set.
@@ -142,13 +142,13 @@ struct NonlinearScore {
 
 /// What refineNonlinear() returns.
 struct NonlinearStageResult {
-  controllers::JointGains gains;      ///< the refined gains (linear optimum or start when already best)
-  NonlinearScore linear_optimum;      ///< score of the linear stage's gains on the initial set
-  NonlinearScore start;               ///< score of the starting gains on the initial set
-  NonlinearScore final_score;         ///< score of `gains` on the final set
-  std::vector<int> check_failures;    ///< failures of each round's check batch (capped: early stop)
-  std::vector<MonteCarloSample> set;  ///< the final sample set (initial + added worst cases)
-  std::vector<double> history;        ///< best cost after each evaluation
+  controllers::JointGains gains;    ///< the refined gains (linear optimum or start when already best)
+  NonlinearScore linear_optimum;    ///< score of the linear stage's gains on the initial set
+  NonlinearScore start;             ///< score of the starting gains on the initial set
+  NonlinearScore final_score;       ///< score of `gains` on the final set
+  std::vector<int> check_failures;  ///< failures of each round's check batch (capped: early stop)
+  std::vector<ModelVariation> set;  ///< the final sample set (initial + added worst cases)
+  std::vector<double> history;      ///< best cost after each evaluation
   int evaluations = 0;    ///< candidate evaluations (each up to set.size() simulations; hard-rejected ones none)
   int simulations = 0;    ///< closed-loop runs in total
   bool verified = false;  ///< the last check batch and the final set had no failure
@@ -174,7 +174,7 @@ struct NonlinearStageResult {
 /// pushes (so "too sluggish" cannot apply) nor damps anything; the measured failures sit just
 /// above it (HR, validate run 268: 14 Hz at K_h 6, B_h 1.04; SAA run 106: K_h 73.5, B_h 0.55).
 /// Indices 1000000, 1000001, 1000002 (their sensor-noise streams).
-[[nodiscard]] std::vector<MonteCarloSample> stressCorners(const UncertaintyRanges& ranges, double user_fraction);
+[[nodiscard]] std::vector<ModelVariation> stressCorners(const UncertaintyRanges& ranges, double user_fraction);
 
 /// The stiffness fractions of ringCorners(): K_h at these fractions of its range.
 inline constexpr double kRingStiffnessFractions[] = {0.25, 0.5, 0.75, 1.0};
@@ -188,7 +188,7 @@ inline constexpr double kRingStiffnessFractions[] = {0.25, 0.5, 0.75, 1.0};
 /// windows (docs/analysis.md, "HR's run 264"). validate's draws reach this region rarely (B_h
 /// within 1 % of its minimum), which is why 300-run check batches missed it. Indices 1000003 ...
 /// 1000006 (their sensor-noise streams).
-[[nodiscard]] std::vector<MonteCarloSample> ringCorners(const UncertaintyRanges& ranges);
+[[nodiscard]] std::vector<ModelVariation> ringCorners(const UncertaintyRanges& ranges);
 
 /// The detector's own score of a run's holds: for each hold (free, contact),
 /// min(late / threshold, late / (r early)) with r = kOscillationSustainRatio, late and early the
@@ -214,15 +214,15 @@ inline constexpr double kRingStiffnessFractions[] = {0.25, 0.5, 0.75, 1.0};
 /// `reject_hard_violation`: a candidate that violates a hard goal is not simulated and costs +inf
 /// (NonlinearScore::hard_rejected).
 [[nodiscard]] NonlinearScore scoreNonlinear(const JointScenario& scenario, const controllers::JointGains& gains,
-                                            const std::vector<MonteCarloSample>& set, const LinearRequirements& req,
+                                            const std::vector<ModelVariation>& set, const LinearRequirements& req,
                                             int max_delay, int failure_cap = std::numeric_limits<int>::max(),
                                             const LinearHardGoals* hard_goals = nullptr, int threads = 1,
                                             core::JobPool* pool = nullptr, bool reject_hard_violation = false);
 
 /// Draws `count` samples of the stage's own stream (seed salted, so not validate's draws) for
 /// joint `joint_name`, indices [first, first + count).
-[[nodiscard]] std::vector<MonteCarloSample> stageSamples(const UncertaintyRanges& ranges, std::uint64_t seed,
-                                                         const std::string& joint_name, int first, int count);
+[[nodiscard]] std::vector<ModelVariation> stageSamples(const UncertaintyRanges& ranges, std::uint64_t seed,
+                                                       const std::string& joint_name, int first, int count);
 
 /// The stage: starts from the better of `linear_optimum` and `start` (by cost on the initial
 /// set), compass search, check batches and worst-case additions as described above. The compass

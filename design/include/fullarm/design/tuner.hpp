@@ -32,7 +32,7 @@
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/design/coupled_stability.hpp"
 #include "fullarm/design/linear_analysis.hpp"
-#include "fullarm/design/validation.hpp"
+#include "fullarm/design/uncertainty.hpp"
 
 namespace fullarm::design {
 
@@ -75,10 +75,6 @@ struct TuningGoals {
   double wall_check_hz = 1.0;
   double wall_accuracy = 0.2;  ///< relative error of the rendered stiffness that scores 1
 };
-
-/// A member of the model set: one draw of the validation's uncertainty (validation.hpp), so the
-/// tuner designs against the ranges `fullarm validate` checks.
-using ModelVariation = MonteCarloSample;
 
 enum class GlobalAlgorithm { kDirectL, kIsres };
 
@@ -135,14 +131,6 @@ struct TuningResult {
   int evaluations = 0;
   std::vector<std::string> nlopt_results;  ///< result code of every NLopt run, in order
 };
-
-/// The joint model of one variation: bulk modulus, valve flow gain, inertias and friction scaled,
-/// the variation's user spring and damper.
-[[nodiscard]] JointPlantModel applyVariation(const JointPlantModel& nominal, const ModelVariation& v);
-
-/// Builds the joint model of one variation (applyVariation) at `q_rad` with the variation's delay.
-[[nodiscard]] PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,
-                                             const ModelVariation& v);
 
 /// Evaluates the goals of `gains` over `models` (worst case over the set); the coupled goal runs
 /// over `models` and `coupled` (the coupled grid; may be empty).

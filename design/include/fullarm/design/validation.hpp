@@ -15,27 +15,9 @@
 
 #include "fullarm/design/closed_loop.hpp"
 #include "fullarm/design/scenario_analysis.hpp"
+#include "fullarm/design/uncertainty.hpp"
 
 namespace fullarm::design {
-
-/// A closed interval sampled uniformly.
-struct UniformRange {
-  double min = 1.0;
-  double max = 1.0;
-};
-
-/// The uncertainty of one Monte-Carlo sample's plant and user, as factors on the nominal
-/// values (scales) or absolute values.
-struct UncertaintyRanges {
-  UniformRange bulk_modulus_scale{0.6, 1.4};          ///< oil bulk modulus
-  UniformRange valve_gain_scale{0.8, 1.2};            ///< valve flow gain (rated flow)
-  UniformRange friction_scale{0.5, 2.0};              ///< Coulomb, static and viscous friction together
-  UniformRange inertia_scale{0.8, 1.3};               ///< link + user inertia about the joint
-  UniformRange user_stiffness_nm_per_rad{0.0, 75.0};  ///< K_h (0-3x Viviani's elbow)
-  UniformRange user_damping_nms_per_rad{0.0, 25.0};   ///< B_h (0-3x Viviani's elbow)
-  int delay_min_samples = 1;                          ///< computation delay, uniform integer in [min, max]
-  int delay_max_samples = 3;
-};
 
 /// A validation file.
 struct ValidationConfig {
@@ -58,31 +40,12 @@ struct ValidationConfig {
 /// $FULLARM_CONFIG_DIR/dts_validation.yaml if set, else the source-tree or installed config folder.
 [[nodiscard]] std::filesystem::path defaultValidationConfigPath();
 
-/// The drawn values of one Monte-Carlo run.
-struct MonteCarloSample {
-  int index = 0;
-  double bulk_modulus_scale = 1.0;
-  double valve_gain_scale = 1.0;
-  double friction_scale = 1.0;
-  double inertia_scale = 1.0;
-  double user_stiffness_nm_per_rad = 0.0;
-  double user_damping_nms_per_rad = 0.0;
-  int delay_samples = 1;
-};
-
-/// Draws run `index` of joint `joint_slot` from its own counter-based stream (SplitMix64 of
-/// seed, joint and index): the same sample whatever order or thread runs it. runMonteCarlo uses
-/// a hash of the joint's name as its slot, so a joint's samples do not depend on which other
-/// joints are validated.
-[[nodiscard]] MonteCarloSample drawSample(const UncertaintyRanges& ranges, std::uint64_t seed, int joint_slot,
-                                          int index) noexcept;
-
 /// The nominal scenario with a sample applied (plant parameters scaled, user and delay set).
-[[nodiscard]] JointScenario applySample(const JointScenario& nominal, const MonteCarloSample& sample);
+[[nodiscard]] JointScenario applySample(const JointScenario& nominal, const ModelVariation& sample);
 
 /// One Monte-Carlo run.
 struct MonteCarloRun {
-  MonteCarloSample sample;
+  ModelVariation sample;
   ClosedLoopResult result;
   /// How close to failing: 1 + |result| badness for a failed (unstable or sluggish) run; otherwise the largest hold
   /// speed deviation over the detector threshold (in [0, 1]). The worst case maximises it.

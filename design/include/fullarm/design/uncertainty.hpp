@@ -1,0 +1,62 @@
+#pragma once
+/// @file
+/// The uncertainty box of the plant and the user that `fullarm validate` checks and `fullarm
+/// tune` designs against: its ranges, one draw of it (a model variation), the seeded sampler
+/// and the joint model of a variation. validation.hpp, tuner.hpp, coupled_stability.hpp and
+/// nonlinear_stage.hpp all use these. Offline (allocates), not @rt, except where marked.
+
+#include <cstdint>
+
+#include "fullarm/design/joint_linearization.hpp"
+#include "fullarm/design/linear_analysis.hpp"
+
+namespace fullarm::design {
+
+/// A closed interval sampled uniformly.
+struct UniformRange {
+  double min = 1.0;
+  double max = 1.0;
+};
+
+/// The uncertainty of one Monte-Carlo sample's plant and user, as factors on the nominal
+/// values (scales) or absolute values.
+struct UncertaintyRanges {
+  UniformRange bulk_modulus_scale{0.6, 1.4};          ///< oil bulk modulus
+  UniformRange valve_gain_scale{0.8, 1.2};            ///< valve flow gain (rated flow)
+  UniformRange friction_scale{0.5, 2.0};              ///< Coulomb, static and viscous friction together
+  UniformRange inertia_scale{0.8, 1.3};               ///< link + user inertia about the joint
+  UniformRange user_stiffness_nm_per_rad{0.0, 75.0};  ///< K_h (0-3x Viviani's elbow)
+  UniformRange user_damping_nms_per_rad{0.0, 25.0};   ///< B_h (0-3x Viviani's elbow)
+  int delay_min_samples = 1;                          ///< computation delay, uniform integer in [min, max]
+  int delay_max_samples = 3;
+};
+
+/// One point of the uncertainty box: a Monte-Carlo run of `validate`, a member of the tuner's
+/// model set, a sample of its nonlinear stage or a node of the coupled grid.
+struct ModelVariation {
+  int index = 0;  ///< which draw (or corner) it is; the run's sensor-noise stream
+  double bulk_modulus_scale = 1.0;
+  double valve_gain_scale = 1.0;
+  double friction_scale = 1.0;
+  double inertia_scale = 1.0;
+  double user_stiffness_nm_per_rad = 0.0;
+  double user_damping_nms_per_rad = 0.0;
+  int delay_samples = 1;
+};
+
+/// Draws run `index` of joint `joint_slot` from its own counter-based stream (SplitMix64 of
+/// seed, joint and index): the same sample whatever order or thread runs it. runMonteCarlo uses
+/// a hash of the joint's name as its slot, so a joint's samples do not depend on which other
+/// joints are validated. @rt
+[[nodiscard]] ModelVariation drawVariation(const UncertaintyRanges& ranges, std::uint64_t seed, int joint_slot,
+                                           int index) noexcept;
+
+/// The joint model of one variation: bulk modulus, valve flow gain, inertias and friction scaled,
+/// the variation's user spring and damper.
+[[nodiscard]] JointPlantModel applyVariation(const JointPlantModel& nominal, const ModelVariation& v);
+
+/// Builds the joint model of one variation (applyVariation) at `q_rad` with the variation's delay.
+[[nodiscard]] PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,
+                                             const ModelVariation& v);
+
+}  // namespace fullarm::design
