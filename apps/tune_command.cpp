@@ -12,12 +12,8 @@
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
-#include "fullarm/core/config_error.hpp"
-#include "fullarm/core/job_pool.hpp"
 #include "fullarm/design/linear_analysis.hpp"
-#include "fullarm/design/nonlinear_stage.hpp"
-#include "fullarm/design/tuner.hpp"
-#include "fullarm/design/validation.hpp"
+#include "fullarm/design/tune_arm.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::app {
@@ -29,146 +25,6 @@ using design::TuningResult;
 
 constexpr const char* kGainsFileName = "gains.yaml";
 constexpr int kImpedancePoints = 80;
-
-struct TuneRun {
-  GainsConfig tuned;  // the whole gains file with the tuned joints replaced
-  std::vector<TuningResult> results;
-  std::vector<design::PreparedJoint> nominal;        // nominal model of each tuned joint
-  std::vector<design::NonlinearStageResult> stages;  // empty when the stage is off
-  // The contact goal (Eq. C6) of each joint's written gains on the linear stage's model set and
-  // coupled grid, whether or not it was a hard goal.
-  std::vector<design::CoupledGoal> contact;
-  double wall_s = 0.0;
-  bool pass = false;
-};
-
-// The joint model the tuner designs for: the plant's joint, its load at the default posture
-// and the validation file's nominal user (joint space), as `fullarm validate` simulates it.
-design::JointPlantModel jointModel(const arm::ArmModel& model, const plant::PlantConfig& plant_config,
-                                   const design::ValidationConfig& validation, const std::string& name) {
-  design::JointPlantModel jm;
-  jm.joint = plant_config.joints[static_cast<std::size_t>(plant::findPlantJoint(plant_config, name))];
-  plant::UserArmParams no_user;
-  const int idx = model.jointIndex(jm.joint.name);
-  jm.load = design::jointLoadFromArm(model, no_user, idx, model.defaultPosture());
-  jm.load.user_inertia_kgm2 = validation.user.inertia_kgm2;
-  jm.load.user_stiffness_nm_per_rad = validation.user.stiffness_nm_per_rad;
-  jm.load.user_damping_nms_per_rad = validation.user.damping_nms_per_rad;
-  jm.include_user = true;
-  return jm;
-}
-
-TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_config, const GainsConfig& gains,
-                const design::ValidationConfig& validation, std::vector<std::string> joints, const TuneOptions& o) {
-  if (gains.controller != controllers::ControllerKind::kAdmittance) {
-    throw core::ConfigError(
-        gains.source, "controller",
-        "fullarm tune tunes the admittance controller; got " + std::string(controllerKindName(gains.controller)));
-  }
-  if (joints.empty()) {
-    for (const JointGains& g : gains.joints) joints.push_back(g.name);
-  }
-  std::vector<int> slots;
-  for (const std::string& name : joints) slots.push_back(controllers::findGainsJoint(gains, name));
-  design::LoopSetup setup;
-  setup.control_period_s = gains.control_period_s;
-  setup.delay_samples = validation.ranges.delay_min_samples;
-  design::TunerOptions options;
-  options.global_evaluations = o.global_evaluations;
-  options.local_evaluations = o.local_evaluations;
-  options.rounds = o.rounds;
-  options.seed = o.seed;
-  // The wall the tuner designs for is the one validate renders.
-  design::TuningGoals goals;
-  if (validation.wall.enabled) {
-    goals.wall_stiffness_nm_per_rad = validation.wall.stiffness_nm_per_rad;
-    goals.wall_damping_nms_per_rad = validation.wall.damping_nms_per_rad;
-  }
-  TuneRun run;
-  run.results.resize(slots.size());
-  run.nominal.resize(slots.size());
-  if (o.nonlinear_rounds > 0) run.stages.resize(slots.size());
-  run.contact.resize(slots.size());
-  std::vector<design::JointPlantModel> models;
-  for (int slot : slots) models.push_back(jointModel(model, plant_config, validation, gains.joints[slot].name));
-  const auto start = std::chrono::steady_clock::now();
-  // Each joint's tuning is self-contained and seeded, so the result does not depend on the thread
-  // count or on the scheduling. One job per joint (its linear stage, then its nonlinear stage) on a
-  // shared pool: a thread takes the next joint as soon as it is free, so a joint's nonlinear stage
-  // starts as soon as its linear stage ends, and a thread that finds no joint left helps the
-  // running nonlinear stages with their simulations (job_pool.hpp, docs/controllers.md "Scheduling
-  // of tune"). The stage takes its runs in set order, so its result is the sequential one.
-  std::vector<design::JointScenario> scenarios(slots.size());
-  std::vector<design::LinearHardGoals> hard(slots.size());
-  core::JobPool pool(o.threads);
-  pool.run(static_cast<int>(slots.size()), [&](int i) {
-    const auto k = static_cast<std::size_t>(i);
-    const JointGains& initial = gains.joints[static_cast<std::size_t>(slots[k])];
-    const double q = model.defaultPosture()[model.jointIndex(initial.name)];
-    design::TunerOptions joint_options = options;
-    // Seeded by the joint's place in the gains file, not in --joints: a joint's result does not
-    // depend on which other joints are tuned with it.
-    joint_options.seed = options.seed + static_cast<std::uint64_t>(slots[k]);
-    // validate's scenario of this joint: its free move and detector set the coupled goal's
-    // damping requirement (coupled_stability.hpp).
-    scenarios[k] =
-        design::validationScenario(design::makeJointScenario(model, plant_config, gains, initial.name), validation);
-    design::TuningGoals joint_goals = goals;
-    joint_goals.detector = design::detectorModelOf(scenarios[k]);
-    joint_goals.detector.modal_amplitude = o.modal_amplitude;
-    joint_goals.contact_detector = design::contactDetectorModelOf(scenarios[k]);
-    joint_goals.contact_hard = o.contact_goal;
-    run.results[k] = design::tuneJoint(models[k], q, initial, setup, joint_goals, design::TuningBounds{},
-                                       validation.ranges, joint_options);
-    run.nominal[k] = design::prepareJoint(models[k], design::solveOperatingPoint(models[k], q), setup);
-    if (o.nonlinear_rounds > 0) {
-      // The linear stage's hard goals on its final model set: the nonlinear stage prefers
-      // candidates that meet them and says so when the written gains do not.
-      hard[k].goals = joint_goals;
-      design::LoopSetup goal_setup = setup;
-      goal_setup.grid_points = joint_options.grid_points;
-      for (const design::ModelVariation& v : run.results[k].model_set) {
-        hard[k].models.push_back(design::prepareVariation(models[k], q, goal_setup, v));
-      }
-      hard[k].coupled_models = run.results[k].coupled_models;
-      // Nonlinear verification on validate's closed-loop harness (nonlinear_stage.hpp).
-      design::NonlinearStageOptions nl;
-      nl.rounds = o.nonlinear_rounds;
-      nl.seed = o.seed;
-      nl.pool = &pool;
-      run.stages[k] = design::refineNonlinear(scenarios[k], run.results[k].tuned, initial, validation.ranges,
-                                              validation.linear, nl, &hard[k]);
-    }
-    // The contact goal of the written gains (reported whether or not it was a hard goal).
-    std::vector<design::PreparedJoint> contact_models = run.results[k].coupled_models;
-    if (o.nonlinear_rounds > 0) {
-      contact_models.insert(contact_models.end(), hard[k].models.begin(), hard[k].models.end());
-    } else {
-      design::LoopSetup goal_setup = setup;
-      goal_setup.grid_points = joint_options.grid_points;
-      for (const design::ModelVariation& v : run.results[k].model_set) {
-        contact_models.push_back(design::prepareVariation(models[k], q, goal_setup, v));
-      }
-    }
-    run.contact[k] = design::evaluateCoupledContact(
-        contact_models, o.nonlinear_rounds > 0 ? run.stages[k].gains : run.results[k].tuned,
-        {joint_goals.wall_stiffness_nm_per_rad, joint_goals.wall_damping_nms_per_rad}, joint_goals.contact_detector);
-  });
-  run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  run.tuned = gains;
-  run.tuned.source.clear();
-  run.pass = true;
-  for (std::size_t k = 0; k < slots.size(); ++k) {
-    if (run.stages.empty()) {
-      run.tuned.joints[static_cast<std::size_t>(slots[k])] = run.results[k].tuned;
-      run.pass = run.pass && run.results[k].feasible;
-    } else {
-      run.tuned.joints[static_cast<std::size_t>(slots[k])] = run.stages[k].gains;
-      run.pass = run.pass && run.stages[k].verified;
-    }
-  }
-  return run;
-}
 
 nlohmann::json gainsJson(const JointGains& g) {
   return {{"inertia_kgm2", g.impedance.inertia_kgm2},
@@ -215,7 +71,7 @@ nlohmann::json contactJson(const design::CoupledGoal& c) {
           {"mode_decay_per_s", c.detector_decay_per_s}};
 }
 
-void addToReport(const TuneRun& run, reports::Report& report, const std::string& heading) {
+void addToReport(const design::ArmTuningResult& run, reports::Report& report, const std::string& heading) {
   nlohmann::json joints = nlohmann::json::array();
   for (std::size_t k = 0; k < run.results.size(); ++k) {
     const TuningResult& r = run.results[k];
@@ -431,26 +287,26 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
   tune->add_option("--ranges", o.validation_config,
                    "User model and uncertainty ranges (default: config/dts_validation.yaml)")
       ->check(CLI::ExistingFile);
-  tune->add_option("--joints", o.joints, "Joints to tune, e.g. EB,WR (default: all)")->delimiter(',');
-  tune->add_option("--global-evals", o.global_evaluations, "Global-stage evaluations per round")
+  tune->add_option("--joints", o.tuning.joints, "Joints to tune, e.g. EB,WR (default: all)")->delimiter(',');
+  tune->add_option("--global-evals", o.tuning.global_evaluations, "Global-stage evaluations per round")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  tune->add_option("--local-evals", o.local_evaluations, "Local (COBYLA) evaluations per round")
+  tune->add_option("--local-evals", o.tuning.local_evaluations, "Local (COBYLA) evaluations per round")
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
-  tune->add_option("--rounds", o.rounds, "Worst-case rounds")->check(CLI::Range(1, 20))->capture_default_str();
-  tune->add_option("--seed", o.seed, "Seed of the worst-case search")->capture_default_str();
-  tune->add_option("--threads", o.threads, "Worker threads (one joint each)")
+  tune->add_option("--rounds", o.tuning.rounds, "Worst-case rounds")->check(CLI::Range(1, 20))->capture_default_str();
+  tune->add_option("--seed", o.tuning.seed, "Seed of the worst-case search")->capture_default_str();
+  tune->add_option("--threads", o.tuning.threads, "Worker threads (one joint each)")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
-  tune->add_option("--nonlinear-rounds", o.nonlinear_rounds,
+  tune->add_option("--nonlinear-rounds", o.tuning.nonlinear_rounds,
                    "Rounds of the nonlinear verification stage (0: linear stage only)")
       ->check(CLI::Range(0, 20))
       ->capture_default_str();
-  tune->add_flag("--modal-amplitude,!--peak-speed-amplitude", o.modal_amplitude,
+  tune->add_flag("--modal-amplitude,!--peak-speed-amplitude", o.tuning.modal_amplitude,
                  "Coupled goal: each mode's own speed amplitude after the free move (Eq. C5, the default) or "
                  "(--peak-speed-amplitude) the move's peak speed (Eq. C3, a bound)");
-  tune->add_flag("--contact-goal", o.contact_goal,
+  tune->add_flag("--contact-goal", o.tuning.contact_goal,
                  "Make the contact goal (Eq. C6: every mode against the wall judged decaying by the contact hold's "
                  "detector) a hard goal of the linear stage; it is reported in summary.json either way");
   tune->add_option("--out", o.out_dir, "Output folder")->capture_default_str();
@@ -465,7 +321,7 @@ int runTune(const TuneOptions& o) {
       controllers::loadGainsConfig(configPathOr(o.gains, controllers::defaultTuneStartGainsPath), model);
   const design::ValidationConfig validation =
       design::loadValidationConfig(configPathOr(o.validation_config, design::defaultValidationConfigPath));
-  const TuneRun run = tuneArm(model, plant_config, gains, validation, o.joints, o);
+  const design::ArmTuningResult run = design::tuneArm(model, plant_config, gains, validation, o.tuning);
   const std::filesystem::path out(o.out_dir);
   writeText(out / kGainsFileName, controllers::formatGainsYaml(run.tuned));
   reports::Report report("tune", "Admittance gains tuned per joint");
@@ -501,8 +357,8 @@ TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::
   const design::ValidationConfig validation = design::loadValidationConfig(design::defaultValidationConfigPath());
   // `fullarm tune`'s own budget and start: the demo's tuned gains are the shipped dts_gains.yaml
   // (a smaller linear budget moved the linear optima and with them the nonlinear stage's result).
-  const TuneOptions o;
-  const TuneRun run = tuneArm(model, plant_config, gains, validation, {}, o);
+  const design::ArmTuningResult run =
+      design::tuneArm(model, plant_config, gains, validation, design::ArmTuningOptions{});
   TuneDemoStep step;
   step.gains_file = out_dir / "tuned_gains.yaml";
   writeText(step.gains_file, controllers::formatGainsYaml(run.tuned));

@@ -103,8 +103,8 @@ int run(int argc, char** argv) {
   const int slot = fc::findGainsJoint(start, args[0]);
   const fc::JointGains& initial = start.joints[static_cast<std::size_t>(slot)];
 
-  // The linear stage as `fullarm tune` runs it (apps/tune_command.cpp).
-  const fd::JointPlantModel jm = ft::tunerJointModel(model, plant, validation, initial.name);
+  // The linear stage as `fullarm tune` runs it (design/src/tune_arm.cpp).
+  const fd::JointPlantModel jm = fd::tunerJointModel(model, plant, validation, initial.name);
   const double q = model.defaultPosture()[model.jointIndex(initial.name)];
   fd::LoopSetup setup;
   setup.control_period_s = start.control_period_s;

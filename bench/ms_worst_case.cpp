@@ -170,7 +170,7 @@ void analyseJoint(const Context& c, const std::string& short_name) {
   const int slot = fc::findGainsJoint(c.start, short_name);
   const fc::JointGains& initial = c.start.joints[static_cast<std::size_t>(slot)];
   const fc::JointGains& gains = c.shipped.joints[static_cast<std::size_t>(fc::findGainsJoint(c.shipped, short_name))];
-  const fd::JointPlantModel jm = ft::tunerJointModel(c.model, c.plant, c.validation, initial.name);
+  const fd::JointPlantModel jm = fd::tunerJointModel(c.model, c.plant, c.validation, initial.name);
   const double q = c.model.defaultPosture()[c.model.jointIndex(initial.name)];
   fd::LoopSetup setup;
   setup.control_period_s = c.shipped.control_period_s;

@@ -80,7 +80,7 @@ TEST_P(WorstCaseMs, PoleAtThePeakRingsInTheNonlinearPlantAtThePredictedFrequency
   g.sliding_mode = {300.0, 5.0, c.boundary_layer_radps};
   g.torque_filter_hz = 0.0;
   g.error_rate_filter_hz = 0.0;
-  const JointPlantModel jm = test::tunerJointModel(test::dtsModel(), test::dtsPlant(), validation, g.name);
+  const JointPlantModel jm = tunerJointModel(test::dtsModel(), test::dtsPlant(), validation, g.name);
   const double q0 = test::dtsModel().defaultPosture()[test::dtsModel().jointIndex(g.name)];
   LoopSetup setup;
   setup.grid_points = 120;  // the tuner's grid

@@ -27,27 +27,13 @@
 #include "fullarm/controllers/joint_controller.hpp"
 #include "fullarm/design/closed_loop.hpp"
 #include "fullarm/design/linear_analysis.hpp"
+#include "fullarm/design/tune_arm.hpp"
 #include "fullarm/design/tuner.hpp"
 #include "fullarm/design/validation.hpp"
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::design::test {
-
-// The joint model `fullarm tune` designs for (apps/tune_command.cpp): the plant's joint, its load
-// at the default posture, validate's nominal user in joint space.
-inline JointPlantModel tunerJointModel(const arm::ArmModel& model, const plant::PlantConfig& plant_config,
-                                       const ValidationConfig& validation, const std::string& name) {
-  JointPlantModel jm;
-  jm.joint = plant_config.joints[static_cast<std::size_t>(plant::findPlantJoint(plant_config, name))];
-  const plant::UserArmParams no_user;
-  jm.load = jointLoadFromArm(model, no_user, model.jointIndex(jm.joint.name), model.defaultPosture());
-  jm.load.user_inertia_kgm2 = validation.user.inertia_kgm2;
-  jm.load.user_stiffness_nm_per_rad = validation.user.stiffness_nm_per_rad;
-  jm.load.user_damping_nms_per_rad = validation.user.damping_nms_per_rad;
-  jm.include_user = true;
-  return jm;
-}
 
 // The scenario with ideal sensors (24-bit converters over the same span, no noise or bias) and/or
 // without Coulomb and static friction (the viscous term stays, as in the linear model).
