@@ -121,7 +121,6 @@ int run(int argc, char** argv) {
   goals.contact_detector = fd::contactDetectorModelOf(sc);
   goals.contact_hard = contact;
   fd::TunerOptions options;
-  options.seed = 1 + static_cast<std::uint64_t>(slot);
   const fd::TuningResult tr =
       fd::tuneJoint(jm, q, initial, setup, goals, fd::TuningBounds{}, validation.ranges, options);
   fd::LoopSetup goal_setup = setup;

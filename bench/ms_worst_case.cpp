@@ -185,7 +185,6 @@ void analyseJoint(const Context& c, const std::string& short_name) {
   goals.detector = fd::detectorModelOf(sc);
   goals.detector.modal_amplitude = c.modal_amplitude;
   fd::TunerOptions options;  // tune's defaults: 300 + 150 evaluations, 3 rounds
-  options.seed = 1 + static_cast<std::uint64_t>(slot);
   const fd::TuningResult tr =
       fd::tuneJoint(jm, q, initial, setup, goals, fd::TuningBounds{}, c.validation.ranges, options);
   fd::LoopSetup goal_setup = setup;

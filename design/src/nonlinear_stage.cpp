@@ -14,8 +14,6 @@ namespace fullarm::design {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// Salt of the stage's sample stream: the tuner never sees the draws of `validate` (seed, joint).
-constexpr std::uint64_t kStageSalt = 0x74756e652d6e6c31ULL;  // "tune-nl1"
 
 struct Point {
   double log_damping = 0.0;    // log10 B_m
@@ -173,7 +171,7 @@ std::vector<ModelVariation> stageSamples(const UncertaintyRanges& ranges, std::u
   std::vector<ModelVariation> out;
   out.reserve(static_cast<std::size_t>(std::max(count, 0)));
   for (int i = 0; i < count; ++i)
-    out.push_back(drawVariation(ranges, seed ^ kStageSalt, core::nameSlot(joint_name), first + i));
+    out.push_back(drawVariation(ranges, seed ^ kNonlinearStageSalt, core::nameSlot(joint_name), first + i));
   return out;
 }
 

@@ -71,10 +71,9 @@ ArmTuningResult tuneArm(const arm::ArmModel& model, const plant::PlantConfig& pl
     const auto k = static_cast<std::size_t>(i);
     const controllers::JointGains& initial = gains.joints[static_cast<std::size_t>(slots[k])];
     const double q = model.defaultPosture()[model.jointIndex(initial.name)];
-    TunerOptions joint_options = options;
-    // Seeded by the joint's place in the gains file, not in the joint list: a joint's result does
-    // not depend on which other joints are tuned with it.
-    joint_options.seed = options.seed + static_cast<std::uint64_t>(slots[k]);
+    // One seed for every joint: tuneJoint draws each joint's worst-case models from a stream keyed
+    // by the joint's name, so a joint's result does not depend on which other joints are tuned.
+    const TunerOptions& joint_options = options;
     // validate's scenario of this joint: its free move and detector set the coupled goal's
     // damping requirement (coupled_stability.hpp).
     scenarios[k] = validationScenario(makeJointScenario(model, plant_config, gains, initial.name), validation);

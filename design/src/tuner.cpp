@@ -5,9 +5,10 @@
 #include <limits>
 #include <nlopt.hpp>
 #include <numbers>
-#include <random>
 #include <sstream>
 #include <stdexcept>
+
+#include "fullarm/core/random.hpp"
 
 namespace fullarm::design {
 
@@ -221,23 +222,6 @@ std::string runOptimizer(nlopt::opt& opt, Search& search, const Vector& x_full) 
   return name;
 }
 
-double draw(std::mt19937_64& rng, const UniformRange& r) {
-  return r.min + (r.max - r.min) * std::generate_canonical<double, 53>(rng);
-}
-
-ModelVariation sampleVariation(std::mt19937_64& rng, const UncertaintyRanges& r) {
-  ModelVariation v;
-  v.bulk_modulus_scale = draw(rng, r.bulk_modulus_scale);
-  v.valve_gain_scale = draw(rng, r.valve_gain_scale);
-  v.friction_scale = draw(rng, r.friction_scale);
-  v.inertia_scale = draw(rng, r.inertia_scale);
-  v.user_stiffness_nm_per_rad = draw(rng, r.user_stiffness_nm_per_rad);
-  v.user_damping_nms_per_rad = draw(rng, r.user_damping_nms_per_rad);
-  const int span = r.delay_max_samples - r.delay_min_samples + 1;
-  v.delay_samples = r.delay_min_samples + static_cast<int>(rng() % static_cast<std::uint64_t>(std::max(span, 1)));
-  return v;
-}
-
 // Two corners of the box: a stiff, fast plant with a light, soft, undamped user and the longest
 // delay, and the reverse.
 ModelVariation corner(const UncertaintyRanges& r, bool high) {
@@ -345,7 +329,6 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const contr
   TuningResult result;
   result.joint = initial.name;
   result.initial = initial;
-  std::mt19937_64 rng(options.seed);
 
   ModelVariation nominal_variation;
   nominal_variation.delay_samples = setup.delay_samples;
@@ -424,7 +407,12 @@ TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const contr
     ModelVariation worst_v;
     double worst_hard = -std::numeric_limits<double>::infinity();
     std::vector<ModelVariation> candidates = {corner(ranges, true), corner(ranges, false)};
-    for (int i = 0; i < options.worst_case_samples; ++i) candidates.push_back(sampleVariation(rng, ranges));
+    // Seeded draws of the box from the worst-case search's own stream of this joint (uncertainty.hpp):
+    // round r draws indices [r N, (r + 1) N), N = worst_case_samples.
+    for (int i = 0; i < options.worst_case_samples; ++i) {
+      candidates.push_back(drawVariation(ranges, options.seed ^ kWorstCaseSearchSalt, core::nameSlot(initial.name),
+                                         round * options.worst_case_samples + i));
+    }
     for (const ModelVariation& v : candidates) {
       const std::vector<PreparedJoint> one = {prepareVariation(nominal, q_rad, s, v)};
       const double h = evaluateGoals(one, incumbent, goals).hard;

@@ -83,7 +83,6 @@ TEST(TuneArm, LinearStageIsTuneJointOnTheTunersJointModelAndValidatesGoals) {
     options.global_evaluations = 40;
     options.local_evaluations = 20;
     options.rounds = 2;
-    options.seed = 1 + static_cast<std::uint64_t>(controllers::findGainsJoint(startGains(), name));
     const TuningResult direct = tuneJoint(jm, q, initial, setup, goals, TuningBounds{}, validation().ranges, options);
     expectSameGains(run.results[k].tuned, direct.tuned);
     EXPECT_EQ(run.results[k].evaluations, direct.evaluations);

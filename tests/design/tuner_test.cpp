@@ -7,6 +7,7 @@
 
 #include "design_fixture.hpp"
 #include "fullarm/controllers/gains.hpp"
+#include "fullarm/core/random.hpp"
 #include "fullarm/design/tuner.hpp"
 
 namespace fullarm::design {
@@ -115,6 +116,43 @@ TEST(Tuner, IsDeterministic) {
     EXPECT_EQ(a.model_set[i].delay_samples, b.model_set[i].delay_samples);
   }
   EXPECT_EQ(a.nlopt_results, b.nlopt_results);
+}
+
+// The worst-case search draws its random models with the box's one sampler (uncertainty.hpp),
+// from its own salted stream keyed by the joint's name: every model it adds is a corner of the box
+// or a draw of that stream, recomputed here, and none is a draw of validate's stream.
+TEST(Tuner, WorstCaseModelsAreCornersOrDrawsOfTheJointsOwnStream) {
+  const Fixture f = elbow();
+  TunerOptions o = smallBudget();
+  o.rounds = 4;
+  o.worst_case_samples = 6;
+  const UncertaintyRanges ranges;
+  const TuningResult r = tuneJoint(f.model, f.q_rad, f.gains, LoopSetup{}, TuningGoals{}, TuningBounds{}, ranges, o);
+  ASSERT_GE(r.model_set.size(), 2u) << "no worst-case model was added: the test checks nothing";
+  const auto same = [](const ModelVariation& a, const ModelVariation& b) {
+    return a.bulk_modulus_scale == b.bulk_modulus_scale && a.valve_gain_scale == b.valve_gain_scale &&
+           a.friction_scale == b.friction_scale && a.inertia_scale == b.inertia_scale &&
+           a.user_stiffness_nm_per_rad == b.user_stiffness_nm_per_rad &&
+           a.user_damping_nms_per_rad == b.user_damping_nms_per_rad && a.delay_samples == b.delay_samples;
+  };
+  const auto at_end = [](double x, const UniformRange& u) { return x == u.min || x == u.max; };
+  int draws = 0;
+  for (std::size_t m = 1; m < r.model_set.size(); ++m) {
+    const ModelVariation& v = r.model_set[m];
+    const bool corner = at_end(v.bulk_modulus_scale, ranges.bulk_modulus_scale) &&
+                        at_end(v.valve_gain_scale, ranges.valve_gain_scale) &&
+                        at_end(v.friction_scale, ranges.friction_scale) &&
+                        at_end(v.inertia_scale, ranges.inertia_scale);
+    if (corner) continue;
+    bool found = false;
+    for (int i = 0; i < o.rounds * o.worst_case_samples && !found; ++i) {
+      found = same(v, drawVariation(ranges, o.seed ^ kWorstCaseSearchSalt, core::nameSlot(f.gains.name), i));
+      EXPECT_FALSE(same(v, drawVariation(ranges, o.seed, core::nameSlot(f.gains.name), i))) << i;
+    }
+    EXPECT_TRUE(found) << "model " << m << " is neither a corner nor a draw of the joint's worst-case stream";
+    draws += found ? 1 : 0;
+  }
+  EXPECT_GE(draws, 1) << "only corners were added: the stream is not checked";  // 2 of 3 at this budget
 }
 
 TEST(Tuner, InfeasibleSpecificationGetsAClearVerdict) {

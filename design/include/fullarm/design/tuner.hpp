@@ -85,6 +85,8 @@ struct TunerOptions {
   int local_evaluations = 150;   ///< per round
   int rounds = 3;                ///< worst-case rounds (models added: rounds - 1 at most)
   int worst_case_samples = 24;   ///< random models (plus corners) searched per round
+  /// Seed of the worst-case search's random models: drawVariation() with seed ^
+  /// kWorstCaseSearchSalt, keyed by the joint's name (and of ISRES's generator).
   std::uint64_t seed = 1;
   int grid_points = 120;  ///< frequency grid of the goal evaluations
 };

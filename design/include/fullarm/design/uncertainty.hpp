@@ -44,12 +44,19 @@ struct ModelVariation {
   int delay_samples = 1;
 };
 
-/// Draws run `index` of joint `joint_slot` from its own counter-based stream (SplitMix64 of
-/// seed, joint and index): the same sample whatever order or thread runs it. runMonteCarlo uses
-/// a hash of the joint's name as its slot, so a joint's samples do not depend on which other
-/// joints are validated. @rt
+/// The one sampler of the box: draws sample `index` of joint `joint_slot` from its own
+/// counter-based stream (core::RandomStream: SplitMix64 of seed, joint and index), uniform in
+/// every range, the delay uniform over its integers: the same sample whatever order or thread
+/// draws it. Every consumer keys its joint by core::nameSlot() of the joint's name, so a joint's
+/// draws do not depend on which other joints are in the run, and salts the seed with its own
+/// constant below (validate uses the seed as given), so no consumer sees another's draws. @rt
 [[nodiscard]] ModelVariation drawVariation(const UncertaintyRanges& ranges, std::uint64_t seed, int joint_slot,
                                            int index) noexcept;
+
+/// Seed salt of the tuner's worst-case search (tuneJoint's random models). ASCII "tune-wc1".
+inline constexpr std::uint64_t kWorstCaseSearchSalt = 0x74756e652d776331ULL;
+/// Seed salt of the nonlinear stage's samples (stageSamples()). ASCII "tune-nl1".
+inline constexpr std::uint64_t kNonlinearStageSalt = 0x74756e652d6e6c31ULL;
 
 /// The joint model of one variation: bulk modulus, valve flow gain, inertias and friction scaled,
 /// the variation's user spring and damper.
