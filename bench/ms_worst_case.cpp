@@ -153,7 +153,7 @@ void compareRing(const fd::JointScenario& nominal, const fd::JointPlantModel& jm
   fd::ModelVariation sample = v;
   sample.index = 0;
   for (int mode = 0; mode < 4; ++mode) {
-    fd::JointScenario sc = fd::applySample(nominal, sample);
+    fd::JointScenario sc = fd::variationScenario(nominal, sample);
     ft::idealize(sc, (mode & 1) != 0, (mode & 2) != 0);
     const fd::ClosedLoopResult r = fd::simulateJoint(sc);
     std::printf(

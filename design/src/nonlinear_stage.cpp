@@ -211,8 +211,9 @@ NonlinearScore scoreNonlinear(const JointScenario& scenario, const controllers::
   for (std::size_t first = 0; first < set.size() && s.failures <= failure_cap;) {
     const std::size_t n = std::min(spread.blockSize(), set.size() - first);
     results.resize(std::max(results.size(), n));
-    spread.run(static_cast<int>(n),
-               [&](int j) { results[static_cast<std::size_t>(j)] = simulateJoint(applySample(sc, set[first + j])); });
+    spread.run(static_cast<int>(n), [&](int j) {
+      results[static_cast<std::size_t>(j)] = simulateJoint(variationScenario(sc, set[first + j]));
+    });
     for (std::size_t j = 0; j < n; ++j) {
       const ClosedLoopResult& r = results[j];
       rms_sum += r.free_rms_user_torque_nm;
@@ -386,7 +387,7 @@ NonlinearStageResult refineNonlinear(const JointScenario& scenario, const contro
       n = std::min(spread.blockSize(), check.size() - first);
       results.resize(std::max(results.size(), n));
       spread.run(static_cast<int>(n), [&](int j) {
-        results[static_cast<std::size_t>(j)] = simulateJoint(applySample(sc, check[first + j]));
+        results[static_cast<std::size_t>(j)] = simulateJoint(variationScenario(sc, check[first + j]));
       });
       for (std::size_t j = 0; j < n; ++j) {
         ++res.simulations;

@@ -1,6 +1,7 @@
 #include "fullarm/design/uncertainty.hpp"
 
 #include "fullarm/core/random.hpp"
+#include "fullarm/design/scenario_analysis.hpp"
 
 namespace fullarm::design {
 
@@ -30,6 +31,20 @@ JointPlantModel applyVariation(const JointPlantModel& nominal, const ModelVariat
   m.load.user_stiffness_nm_per_rad = v.user_stiffness_nm_per_rad;
   m.load.user_damping_nms_per_rad = v.user_damping_nms_per_rad;
   return m;
+}
+
+JointScenario variationScenario(const JointScenario& nominal, const ModelVariation& v) {
+  const JointPlantModel m = applyVariation(scenarioPlantModel(nominal), v);
+  JointScenario sc = nominal;
+  sc.joint = m.joint;
+  sc.load.inertia_kgm2 = m.load.inertia_kgm2 + m.load.user_inertia_kgm2;
+  sc.user.inertia_kgm2 = m.load.user_inertia_kgm2;
+  sc.user.stiffness_nm_per_rad = m.load.user_stiffness_nm_per_rad;
+  sc.user.damping_nms_per_rad = m.load.user_damping_nms_per_rad;
+  sc.delay_samples = v.delay_samples;
+  // Each run its own sensor-noise stream.
+  sc.noise_seed = nominal.noise_seed + 1000003ULL * static_cast<std::uint64_t>(v.index + 1);
+  return sc;
 }
 
 PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,

@@ -74,7 +74,7 @@ ArmValidationResult validateArm(const arm::ArmModel& model, const plant::PlantCo
     JointValidationResult& o = out.joints[j];
     o.monte_carlo = mc[j];
     const MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
-    o.worst_result = simulateJoint(applySample(nominal[j], worst.sample), &o.worst_trace);
+    o.worst_result = simulateJoint(variationScenario(nominal[j], worst.sample), &o.worst_trace);
     o.pass = o.linear.pass && o.monte_carlo.pass();
     std::ostringstream v;
     if (!o.linear.pass) v << "linear: " << o.linear.reason << ". ";

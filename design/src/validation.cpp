@@ -132,22 +132,6 @@ std::filesystem::path defaultValidationConfigPath() {
   return core::defaultConfigPath("dts_validation.yaml");
 }
 
-JointScenario applySample(const JointScenario& nominal, const ModelVariation& s) {
-  JointScenario sc = nominal;
-  sc.joint.fluid.oil_bulk_modulus_pa *= s.bulk_modulus_scale;
-  sc.joint.valve.rated_flow_m3ps *= s.valve_gain_scale;
-  sc.joint.friction.coulomb_nm *= s.friction_scale;
-  sc.joint.friction.static_nm *= s.friction_scale;
-  sc.joint.friction.viscous_nms_per_rad *= s.friction_scale;
-  sc.load.inertia_kgm2 *= s.inertia_scale;
-  sc.user.stiffness_nm_per_rad = s.user_stiffness_nm_per_rad;
-  sc.user.damping_nms_per_rad = s.user_damping_nms_per_rad;
-  sc.delay_samples = s.delay_samples;
-  // Each run its own sensor-noise stream.
-  sc.noise_seed = nominal.noise_seed + 1000003ULL * static_cast<std::uint64_t>(s.index + 1);
-  return sc;
-}
-
 double runSeverity(const ClosedLoopResult& r, double threshold) noexcept {
   const double speed = std::max(r.free_hold_speed_rms_radps, r.contact_hold_speed_rms_radps) / threshold;
   if (!r.acceptable()) return 1.0 + speed;
@@ -204,7 +188,7 @@ std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nom
     MonteCarloRun& run = out[static_cast<std::size_t>(j)].runs[static_cast<std::size_t>(i)];
     run.sample =
         drawVariation(config.ranges, config.seed, core::nameSlot(bases[static_cast<std::size_t>(j)].joint_name), i);
-    run.result = simulateJoint(applySample(bases[static_cast<std::size_t>(j)], run.sample));
+    run.result = simulateJoint(variationScenario(bases[static_cast<std::size_t>(j)], run.sample));
     run.severity = runSeverity(run.result, config.oscillation_speed_radps);
   });
   for (JointMonteCarlo& m : out) {

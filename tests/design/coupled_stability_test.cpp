@@ -257,8 +257,8 @@ TEST(CoupledStability, PredictsTheHrRun33UserDeviceModeOfTheNonlinearHarness) {
     controllers::JointGains g = hr;
     g.impedance.damping_nms_per_rad = bm;
     gc.joints[slot] = g;
-    const JointScenario sc =
-        applySample(validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), gc, "HR"), vc), run33);
+    const JointScenario sc = variationScenario(
+        validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), gc, "HR"), vc), run33);
     ClosedLoopTrace trace;
     const ClosedLoopResult r = simulateJoint(sc, &trace);
     const auto end = static_cast<std::size_t>(
@@ -403,7 +403,7 @@ TEST(CoupledStability, ContactGoalPredictsTheStiffUsersContactOscillationOfTheNo
     EXPECT_DOUBLE_EQ(contact.hold_s, nominal.timing.contact_hold_s);
     const VirtualWall wall{nominal.wall.stiffness_nm_per_rad, nominal.wall.damping_nms_per_rad};
     for (const ModelVariation& sample : {ring, stiff}) {
-      const ClosedLoopResult r = simulateJoint(applySample(nominal, sample));
+      const ClosedLoopResult r = simulateJoint(variationScenario(nominal, sample));
       const PreparedJoint p = prepareVariation(jm, q, LoopSetup{}, sample);
       const CoupledGoal c = evaluateCoupledContact({p}, *g, wall, contact);
       DetectorModel free_detector = detectorModelOf(nominal);

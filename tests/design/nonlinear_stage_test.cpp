@@ -229,13 +229,13 @@ TEST(NonlinearStage, TheFastStressCornerExposesTheDelayLimitedHydraulicOscillati
   hr.impedance = {0.2, 12.0, 20.0};
   hr.sliding_mode = {300.0, 5.0, 48.0};
   const JointScenario sc = validationScenario(makeJointScenario(test::dtsModel(), test::dtsPlant(), g, "HR"), vc);
-  const ClosedLoopResult old_gains = simulateJoint(applySample(sc, fast));
+  const ClosedLoopResult old_gains = simulateJoint(variationScenario(sc, fast));
   EXPECT_TRUE(old_gains.oscillating) << old_gains.failure;
   EXPECT_GT(old_gains.oscillation_frequency_hz, 10.0);
   EXPECT_LT(old_gains.oscillation_frequency_hz, 20.0);
   JointScenario halved = sc;
   halved.gains.sliding_mode.boundary_layer_radps *= 2.0;
-  const ClosedLoopResult fixed = simulateJoint(applySample(halved, fast));
+  const ClosedLoopResult fixed = simulateJoint(variationScenario(halved, fast));
   EXPECT_TRUE(fixed.acceptable()) << fixed.failure;
 }
 
@@ -286,8 +286,8 @@ TEST(NonlinearStage, TheRingCornersExposeTheUndampedStiffUserModeOfHr) {
 
   int failed = 0;
   for (const ModelVariation& c : rings) {
-    const ClosedLoopResult before = simulateJoint(applySample(sc, c));
-    const ClosedLoopResult after = simulateJoint(applySample(damped, c));
+    const ClosedLoopResult before = simulateJoint(variationScenario(sc, c));
+    const ClosedLoopResult after = simulateJoint(variationScenario(damped, c));
     EXPECT_TRUE(after.acceptable()) << "K_h " << c.user_stiffness_nm_per_rad << ": " << after.failure;
     if (before.acceptable()) continue;
     ++failed;
@@ -355,7 +355,7 @@ TEST(NonlinearStage, ScoresAndReportsTheLinearHardGoals) {
   // late / (r early)), the larger of the two holds, or the sluggish criterion's score) and 0.25 x
   // the transparency term.
   ClosedLoopTrace trace;
-  const ClosedLoopResult run = simulateJoint(applySample(sc, one[0]), &trace);
+  const ClosedLoopResult run = simulateJoint(variationScenario(sc, one[0]), &trace);
   ASSERT_TRUE(run.acceptable()) << run.failure;
   const auto w = static_cast<std::size_t>(std::lround(sc.timing.detect_window_s / sc.dt_s));
   const auto free_end = static_cast<std::size_t>(
@@ -372,7 +372,7 @@ TEST(NonlinearStage, ScoresAndReportsTheLinearHardGoals) {
   EXPECT_NEAR(detectorMargin(run, sc.oscillation_speed_radps), margin, 1e-9);
   // ... and the sluggish criterion's score when the wall was not reached: the push over
   // sluggish_push_friction_ratio x the breakaway torque of the sampled plant.
-  const JointScenario sampled = applySample(sc, one[0]);
+  const JointScenario sampled = variationScenario(sc, one[0]);
   const double limit = sampled.sluggish_push_friction_ratio *
                        std::max(sampled.joint.friction.static_nm, sampled.joint.friction.coulomb_nm);
   EXPECT_NEAR(run.sluggish_push_limit_nm, limit, 1e-12);
@@ -416,7 +416,7 @@ TEST(NonlinearStage, SfeRingCornerRingsTooSlowlyAndTheSearchGoesOnToMoreMargin) 
   const auto rings = ringCorners(vc.ranges);
   EXPECT_EQ(rings[1].user_damping_nms_per_rad, vc.ranges.user_damping_nms_per_rad.min);
   ClosedLoopTrace trace;
-  const ClosedLoopResult ring = simulateJoint(applySample(sc, rings[1]), &trace);
+  const ClosedLoopResult ring = simulateJoint(variationScenario(sc, rings[1]), &trace);
   ASSERT_FALSE(ring.acceptable());
   const auto w = static_cast<std::size_t>(std::lround(sc.timing.detect_window_s / sc.dt_s));
   const auto free_end = static_cast<std::size_t>(
@@ -446,7 +446,7 @@ TEST(NonlinearStage, SfeRingCornerRingsTooSlowlyAndTheSearchGoesOnToMoreMargin) 
     JointScenario chosen = sc;
     chosen.gains = with_target.gains;
     ClosedLoopTrace t;
-    const ClosedLoopResult r = simulateJoint(applySample(chosen, c), &t);
+    const ClosedLoopResult r = simulateJoint(variationScenario(chosen, c), &t);
     ASSERT_TRUE(r.acceptable()) << r.failure;
     const double l = windowStd(t.qd_radps, free_end - w, free_end);
     EXPECT_LE(std::min(l / sc.oscillation_speed_radps,
@@ -533,7 +533,7 @@ TEST(NonlinearStage, HardFeasibleSearchStartsFromTheLinearOptimumAndWritesOnlyGa
   at_optimum.gains = optimum;
   std::size_t next_failed = 0;
   for (std::size_t i = 0; i < static_cast<std::size_t>(restricted.linear_optimum.runs); ++i) {
-    const ClosedLoopResult r = simulateJoint(applySample(at_optimum, restricted.set[i]));
+    const ClosedLoopResult r = simulateJoint(variationScenario(at_optimum, restricted.set[i]));
     if (r.acceptable()) continue;
     ASSERT_LT(next_failed, restricted.linear_optimum.failed_runs.size());
     EXPECT_EQ(restricted.linear_optimum.failed_runs[next_failed].set_index, static_cast<int>(i));

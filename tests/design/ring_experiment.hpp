@@ -3,7 +3,7 @@
 // real?). Shared by tests/design/linear_vs_nonlinear_test.cpp and bench/ms_worst_case.cpp.
 //
 // The nonlinear side is validate's closed-loop harness reduced to a hold at the linearisation's
-// trim: the joint of applySample() on validate's scenario (CVODES plant), with ideal sensors
+// trim: the joint of variationScenario() on validate's scenario (CVODES plant), with ideal sensors
 // (24-bit converters over the same span, no noise or bias), no Coulomb/static friction and the
 // tight reference tolerances, started at the trim (spool, pressures, q) that the linearisation
 // uses, the user applied as validate's harness applies it (K_h (q0 - q) - B_h qd from the true
@@ -71,7 +71,7 @@ struct Ring {
   bool solver_ok = true;
 };
 
-// validate's nonlinear joint (applySample on validate's scenario, CVODES) with ideal sensors
+// validate's nonlinear joint (variationScenario on validate's scenario, CVODES) with ideal sensors
 // (24-bit, no noise), no Coulomb/static friction, tight solver tolerances, started at rest at the
 // linearisation's trim (q, spool, pressures), the user as validate's harness applies it (sampled
 // K_h (q0 - q) - B_h qd), the trim command fed forward, and a burst added to the applied command.
@@ -79,7 +79,7 @@ inline Ring nonlinearRing(const JointScenario& nominal, const JointPlantModel& j
                           const controllers::JointGains& gains, double q0, double f_hz, double a_v, double duration_s) {
   ModelVariation sample = v;
   sample.index = 0;
-  JointScenario sc = applySample(nominal, sample);
+  JointScenario sc = variationScenario(nominal, sample);
   idealize(sc, true, true);
   sc.solver = plant::tightReferenceOptions(sc.solver);
   JointPlantModel jm_nf = jm_v;

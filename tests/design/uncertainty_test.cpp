@@ -1,12 +1,13 @@
 // The uncertainty box: the sampler (inside its ranges, uniform by moments, a function of seed,
-// joint and index only) and the joint model of a variation (each parameter against its own
-// scaling, computed here by hand).
+// joint and index only), the joint model of a variation (each parameter against its own scaling,
+// computed here by hand) and the scenario of a variation (the same joint).
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "design_fixture.hpp"
+#include "fullarm/design/scenario_analysis.hpp"
 #include "fullarm/design/uncertainty.hpp"
 
 namespace fullarm::design {
@@ -89,6 +90,49 @@ TEST(Uncertainty, ApplyVariationScalesTheJointModel) {
   EXPECT_EQ(m.load.user_stiffness_nm_per_rad, 33.0);
   EXPECT_EQ(m.load.user_damping_nms_per_rad, 4.0);
   EXPECT_EQ(m.include_user, nominal.include_user);
+}
+
+// The scenario of a variation (the nonlinear runs) is the varied joint model (the linear analysis)
+// written back: the same hydraulics, the same link and user inertia, the same user; each value
+// against its own scaling of the nominal scenario, computed here by hand.
+TEST(Uncertainty, TheScenarioOfAVariationIsItsJointModel) {
+  const JointScenario nominal = makeJointScenario(test::dtsModel(), test::dtsPlant(), test::dtsGains(), "EB");
+  ASSERT_GT(nominal.user.inertia_kgm2, 0.0);
+  ModelVariation v;
+  v.index = 7;
+  v.bulk_modulus_scale = 0.7;
+  v.valve_gain_scale = 1.1;
+  v.friction_scale = 2.0;
+  v.inertia_scale = 1.25;
+  v.user_stiffness_nm_per_rad = 33.0;
+  v.user_damping_nms_per_rad = 4.0;
+  v.delay_samples = 3;
+  const JointScenario sc = variationScenario(nominal, v);
+  EXPECT_DOUBLE_EQ(sc.joint.fluid.oil_bulk_modulus_pa, 0.7 * nominal.joint.fluid.oil_bulk_modulus_pa);
+  EXPECT_DOUBLE_EQ(sc.joint.valve.rated_flow_m3ps, 1.1 * nominal.joint.valve.rated_flow_m3ps);
+  EXPECT_DOUBLE_EQ(sc.joint.friction.coulomb_nm, 2.0 * nominal.joint.friction.coulomb_nm);
+  EXPECT_DOUBLE_EQ(sc.joint.friction.static_nm, 2.0 * nominal.joint.friction.static_nm);
+  EXPECT_DOUBLE_EQ(sc.joint.friction.viscous_nms_per_rad, 2.0 * nominal.joint.friction.viscous_nms_per_rad);
+  EXPECT_EQ(sc.joint.actuator.inertia_kgm2, nominal.joint.actuator.inertia_kgm2);
+  // The scenario's load carries link + user inertia: both scaled, so the whole load is.
+  EXPECT_DOUBLE_EQ(sc.load.inertia_kgm2, 1.25 * nominal.load.inertia_kgm2);
+  EXPECT_DOUBLE_EQ(sc.user.inertia_kgm2, 1.25 * nominal.user.inertia_kgm2);
+  EXPECT_EQ(sc.load.gravity_cos_nm, nominal.load.gravity_cos_nm);
+  EXPECT_EQ(sc.expected_gravity_cos_nm, nominal.expected_gravity_cos_nm);
+  EXPECT_EQ(sc.user.stiffness_nm_per_rad, 33.0);
+  EXPECT_EQ(sc.user.damping_nms_per_rad, 4.0);
+  EXPECT_EQ(sc.delay_samples, 3);
+  EXPECT_EQ(sc.noise_seed, nominal.noise_seed + 1000003ULL * 8);
+  EXPECT_NO_THROW(plant::validateJointParams(sc.joint));
+  // Read back as a joint model, it is the varied joint model of the linear analysis.
+  const JointPlantModel linear = applyVariation(scenarioPlantModel(nominal), v);
+  const JointPlantModel back = scenarioPlantModel(sc);
+  EXPECT_DOUBLE_EQ(back.load.inertia_kgm2, linear.load.inertia_kgm2);
+  EXPECT_DOUBLE_EQ(back.load.user_inertia_kgm2, linear.load.user_inertia_kgm2);
+  EXPECT_EQ(back.load.user_stiffness_nm_per_rad, linear.load.user_stiffness_nm_per_rad);
+  EXPECT_EQ(back.load.user_damping_nms_per_rad, linear.load.user_damping_nms_per_rad);
+  EXPECT_EQ(back.joint.fluid.oil_bulk_modulus_pa, linear.joint.fluid.oil_bulk_modulus_pa);
+  EXPECT_EQ(back.joint.friction.coulomb_nm, linear.joint.friction.coulomb_nm);
 }
 
 }  // namespace

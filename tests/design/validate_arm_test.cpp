@@ -56,7 +56,7 @@ TEST(ValidateArm, EachJointIsItsLinearChecksAndItsRunsSimulatedOneByOne) {
     int failures = 0;
     for (int i = 0; i < 6; ++i) {
       const ModelVariation v = drawVariation(config.ranges, config.seed, core::nameSlot(name), i);
-      const ClosedLoopResult r = simulateJoint(applySample(sc, v));
+      const ClosedLoopResult r = simulateJoint(variationScenario(sc, v));
       const MonteCarloRun& run = j.monte_carlo.runs[static_cast<std::size_t>(i)];
       EXPECT_EQ(run.sample.user_stiffness_nm_per_rad, v.user_stiffness_nm_per_rad) << name << " run " << i;
       EXPECT_EQ(run.result.acceptable(), r.acceptable()) << name << " run " << i;

@@ -1,5 +1,5 @@
-// Monte-Carlo validation: the ranges file (strict, clear errors, fuzzed), a sample applied to
-// the scenario, the thread pool, and thread-count independence of a real (small) Monte-Carlo.
+// Monte-Carlo validation: the ranges file (strict, clear errors, fuzzed), the thread pool, and
+// thread-count independence of a real (small) Monte-Carlo.
 
 #include <gtest/gtest.h>
 
@@ -79,29 +79,6 @@ TEST(ValidationConfig, MutatedInputsGiveErrorsNotCrashes) {
     }
   }
   EXPECT_GT(errors, 50);
-}
-
-TEST(MonteCarloSampling, ApplySampleScalesThePlant) {
-  const JointScenario nominal = makeJointScenario(test::dtsModel(), test::dtsPlant(), test::dtsGains(), "EB");
-  ModelVariation s;
-  s.bulk_modulus_scale = 0.7;
-  s.valve_gain_scale = 1.1;
-  s.friction_scale = 2.0;
-  s.inertia_scale = 1.25;
-  s.user_stiffness_nm_per_rad = 33.0;
-  s.user_damping_nms_per_rad = 4.0;
-  s.delay_samples = 3;
-  const JointScenario sc = applySample(nominal, s);
-  EXPECT_DOUBLE_EQ(sc.joint.fluid.oil_bulk_modulus_pa, 0.7 * nominal.joint.fluid.oil_bulk_modulus_pa);
-  EXPECT_DOUBLE_EQ(sc.joint.valve.rated_flow_m3ps, 1.1 * nominal.joint.valve.rated_flow_m3ps);
-  EXPECT_DOUBLE_EQ(sc.joint.friction.coulomb_nm, 2.0 * nominal.joint.friction.coulomb_nm);
-  EXPECT_DOUBLE_EQ(sc.joint.friction.static_nm, 2.0 * nominal.joint.friction.static_nm);
-  EXPECT_DOUBLE_EQ(sc.joint.friction.viscous_nms_per_rad, 2.0 * nominal.joint.friction.viscous_nms_per_rad);
-  EXPECT_DOUBLE_EQ(sc.load.inertia_kgm2, 1.25 * nominal.load.inertia_kgm2);
-  EXPECT_EQ(sc.user.stiffness_nm_per_rad, 33.0);
-  EXPECT_EQ(sc.user.damping_nms_per_rad, 4.0);
-  EXPECT_EQ(sc.delay_samples, 3);
-  EXPECT_NO_THROW(plant::validateJointParams(sc.joint));
 }
 
 TEST(ParallelFor, RunsEveryIndexOnceAndPropagatesErrors) {

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 
+#include "fullarm/design/closed_loop.hpp"
 #include "fullarm/design/joint_linearization.hpp"
 #include "fullarm/design/linear_analysis.hpp"
 
@@ -58,9 +59,19 @@ inline constexpr std::uint64_t kWorstCaseSearchSalt = 0x74756e652d776331ULL;
 /// Seed salt of the nonlinear stage's samples (stageSamples()). ASCII "tune-nl1".
 inline constexpr std::uint64_t kNonlinearStageSalt = 0x74756e652d6e6c31ULL;
 
-/// The joint model of one variation: bulk modulus, valve flow gain, inertias and friction scaled,
-/// the variation's user spring and damper.
+/// The joint model of one variation, the one place where a variation meets the joint's
+/// parameters: oil bulk modulus, valve rated flow and friction (Coulomb, static, viscous) scaled;
+/// the inertia about the joint, link and user alike (`load.inertia_kgm2` and
+/// `load.user_inertia_kgm2`), scaled by `inertia_scale` (the actuator's own inertia, a part of the
+/// hydraulics, is not); the user's spring and damper set to the variation's. Gravity is kept.
 [[nodiscard]] JointPlantModel applyVariation(const JointPlantModel& nominal, const ModelVariation& v);
+
+/// The closed-loop scenario of one variation, for the nonlinear runs of `validate` and the
+/// tuner's nonlinear stage: the joint model applyVariation(scenarioPlantModel(nominal), v)
+/// written back (hydraulics; the scenario's load inertia = link + user inertia, both scaled; the
+/// user's inertia, stiffness and damping), the variation's delay, and its own sensor-noise stream
+/// (from v.index). scenarioPlantModel() of the result is that varied joint model (up to rounding).
+[[nodiscard]] JointScenario variationScenario(const JointScenario& nominal, const ModelVariation& v);
 
 /// Builds the joint model of one variation (applyVariation) at `q_rad` with the variation's delay.
 [[nodiscard]] PreparedJoint prepareVariation(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,

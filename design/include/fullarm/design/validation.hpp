@@ -40,9 +40,6 @@ struct ValidationConfig {
 /// $FULLARM_CONFIG_DIR/dts_validation.yaml if set, else the source-tree or installed config folder.
 [[nodiscard]] std::filesystem::path defaultValidationConfigPath();
 
-/// The nominal scenario with a sample applied (plant parameters scaled, user and delay set).
-[[nodiscard]] JointScenario applySample(const JointScenario& nominal, const ModelVariation& sample);
-
 /// One Monte-Carlo run.
 struct MonteCarloRun {
   ModelVariation sample;
