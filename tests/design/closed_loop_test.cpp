@@ -116,7 +116,7 @@ TEST(ClosedLoop, ComputationDelayDestabilises) {
 // A load cell that fails mid-motion: the controller latches the fault and commands exactly 0 V
 // from then on; the valve at null stops driving the joint, which slows to the slow sag that the
 // underlapped valve's null leakage allows under gravity and the user's push (no hydraulic lock:
-// docs/controllers.md, Safety).
+// docs/controllers.md, "Faults").
 TEST(ClosedLoop, SensorFaultStopsTheJoint) {
   for (controllers::ControllerKind kind :
        {controllers::ControllerKind::kAdmittance, controllers::ControllerKind::kTorquePid}) {

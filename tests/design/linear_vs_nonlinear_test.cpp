@@ -3,7 +3,8 @@
 // operating points) are stable in the nonlinear CVODES closed-loop simulation, and at 120 %
 // the simulation oscillates and the detector flags it. (On the light wrist joints the nonlinear
 // loop stays stable beyond 120 %: the linear model leaves out Coulomb friction, which damps
-// those joints' small limit cycles; docs/controllers.md records it. The 80 % side holds there.)
+// those joints' small limit cycles; docs/analysis.md, "Closed-loop simulation", records it. The
+// 80 % side holds there.)
 
 #include <gtest/gtest.h>
 

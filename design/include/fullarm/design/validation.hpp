@@ -4,7 +4,7 @@
 /// Monte-Carlo over plant and user uncertainty, each sample a nonlinear closed-loop simulation
 /// (closed_loop.hpp: free motion, then a virtual wall), run on a thread pool with results that
 /// do not depend on the number of threads. Ranges come from config/dts_validation.yaml
-/// (schema: docs/controllers.md).
+/// (schema: docs/analysis.md).
 
 #include <cstdint>
 #include <filesystem>
