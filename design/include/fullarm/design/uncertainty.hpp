@@ -1,9 +1,10 @@
 #pragma once
 /// @file
 /// The uncertainty box of the plant and the user that `fullarm validate` checks and `fullarm
-/// tune` designs against: its ranges, one draw of it (a model variation), the seeded sampler
-/// and the joint model of a variation. validation.hpp, tuner.hpp, coupled_stability.hpp and
-/// nonlinear_stage.hpp all use these. Offline (allocates), not @rt, except where marked.
+/// tune` designs against: its ranges, one draw of it (a model variation), the one seeded sampler,
+/// and the one function that applies a variation to a joint (applyVariation), with the linear
+/// model and the closed-loop scenario built on it. validation.hpp, tuner.hpp, coupled_stability.hpp
+/// and nonlinear_stage.hpp all use these. Offline (allocates), not @rt, except where marked.
 
 #include <cstdint>
 
