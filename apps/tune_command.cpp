@@ -12,12 +12,8 @@
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
-#include "fullarm/controllers/linear_analysis.hpp"
-#include "fullarm/controllers/nonlinear_stage.hpp"
-#include "fullarm/controllers/tuner.hpp"
-#include "fullarm/controllers/validation.hpp"
-#include "fullarm/core/config_error.hpp"
-#include "fullarm/core/job_pool.hpp"
+#include "fullarm/design/linear_analysis.hpp"
+#include "fullarm/design/tune_arm.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::app {
@@ -25,151 +21,10 @@ namespace {
 
 using controllers::GainsConfig;
 using controllers::JointGains;
-using controllers::TuningResult;
+using design::TuningResult;
 
 constexpr const char* kGainsFileName = "gains.yaml";
 constexpr int kImpedancePoints = 80;
-
-struct TuneRun {
-  GainsConfig tuned;  // the whole gains file with the tuned joints replaced
-  std::vector<TuningResult> results;
-  std::vector<controllers::PreparedJoint> nominal;        // nominal model of each tuned joint
-  std::vector<controllers::NonlinearStageResult> stages;  // empty when the stage is off
-  // The contact goal (Eq. C6) of each joint's written gains on the linear stage's model set and
-  // coupled grid, whether or not it was a hard goal.
-  std::vector<controllers::CoupledGoal> contact;
-  double wall_s = 0.0;
-  bool pass = false;
-};
-
-// The joint model the tuner designs for: the plant's joint, its load at the default posture
-// and the validation file's nominal user (joint space), as `fullarm validate` simulates it.
-controllers::JointPlantModel jointModel(const arm::ArmModel& model, const plant::PlantConfig& plant_config,
-                                        const controllers::ValidationConfig& validation, const std::string& name) {
-  controllers::JointPlantModel jm;
-  jm.joint = plant_config.joints[static_cast<std::size_t>(plant::findPlantJoint(plant_config, name))];
-  plant::UserArmParams no_user;
-  const int idx = model.jointIndex(jm.joint.name);
-  jm.load = controllers::jointLoadFromArm(model, no_user, idx, model.defaultPosture());
-  jm.load.user_inertia_kgm2 = validation.user.inertia_kgm2;
-  jm.load.user_stiffness_nm_per_rad = validation.user.stiffness_nm_per_rad;
-  jm.load.user_damping_nms_per_rad = validation.user.damping_nms_per_rad;
-  jm.include_user = true;
-  return jm;
-}
-
-TuneRun tuneArm(const arm::ArmModel& model, const plant::PlantConfig& plant_config, const GainsConfig& gains,
-                const controllers::ValidationConfig& validation, std::vector<std::string> joints,
-                const TuneOptions& o) {
-  if (gains.controller != controllers::ControllerKind::kAdmittance) {
-    throw core::ConfigError(
-        gains.source, "controller",
-        "fullarm tune tunes the admittance controller; got " + std::string(controllerKindName(gains.controller)));
-  }
-  if (joints.empty()) {
-    for (const JointGains& g : gains.joints) joints.push_back(g.name);
-  }
-  std::vector<int> slots;
-  for (const std::string& name : joints) slots.push_back(controllers::findGainsJoint(gains, name));
-  controllers::LoopSetup setup;
-  setup.control_period_s = gains.control_period_s;
-  setup.delay_samples = validation.ranges.delay_min_samples;
-  controllers::TunerOptions options;
-  options.global_evaluations = o.global_evaluations;
-  options.local_evaluations = o.local_evaluations;
-  options.rounds = o.rounds;
-  options.seed = o.seed;
-  // The wall the tuner designs for is the one validate renders.
-  controllers::TuningGoals goals;
-  if (validation.wall.enabled) {
-    goals.wall_stiffness_nm_per_rad = validation.wall.stiffness_nm_per_rad;
-    goals.wall_damping_nms_per_rad = validation.wall.damping_nms_per_rad;
-  }
-  TuneRun run;
-  run.results.resize(slots.size());
-  run.nominal.resize(slots.size());
-  if (o.nonlinear_rounds > 0) run.stages.resize(slots.size());
-  run.contact.resize(slots.size());
-  std::vector<controllers::JointPlantModel> models;
-  for (int slot : slots) models.push_back(jointModel(model, plant_config, validation, gains.joints[slot].name));
-  const auto start = std::chrono::steady_clock::now();
-  // Each joint's tuning is self-contained and seeded, so the result does not depend on the thread
-  // count or on the scheduling. One job per joint (its linear stage, then its nonlinear stage) on a
-  // shared pool: a thread takes the next joint as soon as it is free, so a joint's nonlinear stage
-  // starts as soon as its linear stage ends, and a thread that finds no joint left helps the
-  // running nonlinear stages with their simulations (job_pool.hpp, docs/controllers.md "Scheduling
-  // of tune"). The stage takes its runs in set order, so its result is the sequential one.
-  std::vector<controllers::JointScenario> scenarios(slots.size());
-  std::vector<controllers::LinearHardGoals> hard(slots.size());
-  core::JobPool pool(o.threads);
-  pool.run(static_cast<int>(slots.size()), [&](int i) {
-    const auto k = static_cast<std::size_t>(i);
-    const JointGains& initial = gains.joints[static_cast<std::size_t>(slots[k])];
-    const double q = model.defaultPosture()[model.jointIndex(initial.name)];
-    controllers::TunerOptions joint_options = options;
-    // Seeded by the joint's place in the gains file, not in --joints: a joint's result does not
-    // depend on which other joints are tuned with it.
-    joint_options.seed = options.seed + static_cast<std::uint64_t>(slots[k]);
-    // validate's scenario of this joint: its free move and detector set the coupled goal's
-    // damping requirement (coupled_stability.hpp).
-    scenarios[k] = controllers::validationScenario(
-        controllers::makeJointScenario(model, plant_config, gains, initial.name), validation);
-    controllers::TuningGoals joint_goals = goals;
-    joint_goals.detector = controllers::detectorModelOf(scenarios[k]);
-    joint_goals.detector.modal_amplitude = o.modal_amplitude;
-    joint_goals.contact_detector = controllers::contactDetectorModelOf(scenarios[k]);
-    joint_goals.contact_hard = o.contact_goal;
-    run.results[k] = controllers::tuneJoint(models[k], q, initial, setup, joint_goals, controllers::TuningBounds{},
-                                            validation.ranges, joint_options);
-    run.nominal[k] = controllers::prepareJoint(models[k], controllers::solveOperatingPoint(models[k], q), setup);
-    if (o.nonlinear_rounds > 0) {
-      // The linear stage's hard goals on its final model set: the nonlinear stage prefers
-      // candidates that meet them and says so when the written gains do not.
-      hard[k].goals = joint_goals;
-      controllers::LoopSetup goal_setup = setup;
-      goal_setup.grid_points = joint_options.grid_points;
-      for (const controllers::ModelVariation& v : run.results[k].model_set) {
-        hard[k].models.push_back(controllers::prepareVariation(models[k], q, goal_setup, v));
-      }
-      hard[k].coupled_models = run.results[k].coupled_models;
-      // Nonlinear verification on validate's closed-loop harness (nonlinear_stage.hpp).
-      controllers::NonlinearStageOptions nl;
-      nl.rounds = o.nonlinear_rounds;
-      nl.seed = o.seed;
-      nl.pool = &pool;
-      run.stages[k] = controllers::refineNonlinear(scenarios[k], run.results[k].tuned, initial, validation.ranges,
-                                                   validation.linear, nl, &hard[k]);
-    }
-    // The contact goal of the written gains (reported whether or not it was a hard goal).
-    std::vector<controllers::PreparedJoint> contact_models = run.results[k].coupled_models;
-    if (o.nonlinear_rounds > 0) {
-      contact_models.insert(contact_models.end(), hard[k].models.begin(), hard[k].models.end());
-    } else {
-      controllers::LoopSetup goal_setup = setup;
-      goal_setup.grid_points = joint_options.grid_points;
-      for (const controllers::ModelVariation& v : run.results[k].model_set) {
-        contact_models.push_back(controllers::prepareVariation(models[k], q, goal_setup, v));
-      }
-    }
-    run.contact[k] = controllers::evaluateCoupledContact(
-        contact_models, o.nonlinear_rounds > 0 ? run.stages[k].gains : run.results[k].tuned,
-        {joint_goals.wall_stiffness_nm_per_rad, joint_goals.wall_damping_nms_per_rad}, joint_goals.contact_detector);
-  });
-  run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  run.tuned = gains;
-  run.tuned.source.clear();
-  run.pass = true;
-  for (std::size_t k = 0; k < slots.size(); ++k) {
-    if (run.stages.empty()) {
-      run.tuned.joints[static_cast<std::size_t>(slots[k])] = run.results[k].tuned;
-      run.pass = run.pass && run.results[k].feasible;
-    } else {
-      run.tuned.joints[static_cast<std::size_t>(slots[k])] = run.stages[k].gains;
-      run.pass = run.pass && run.stages[k].verified;
-    }
-  }
-  return run;
-}
 
 nlohmann::json gainsJson(const JointGains& g) {
   return {{"inertia_kgm2", g.impedance.inertia_kgm2},
@@ -180,7 +35,7 @@ nlohmann::json gainsJson(const JointGains& g) {
           {"boundary_layer_radps", g.sliding_mode.boundary_layer_radps}};
 }
 
-nlohmann::json goalsJson(const controllers::GoalValues& v) {
+nlohmann::json goalsJson(const design::GoalValues& v) {
   return {{"peak_sensitivity", v.peak_sensitivity},
           {"spectral_radius", v.spectral_radius},
           {"min_real_loop", v.min_real_loop},
@@ -197,7 +52,7 @@ nlohmann::json goalsJson(const controllers::GoalValues& v) {
 }
 
 // A sampled plant and user (a model of the set, or the sample of a failed run).
-nlohmann::json sampleJson(const controllers::MonteCarloSample& m) {
+nlohmann::json sampleJson(const design::ModelVariation& m) {
   return {{"bulk_modulus_scale", m.bulk_modulus_scale},
           {"valve_gain_scale", m.valve_gain_scale},
           {"friction_scale", m.friction_scale},
@@ -208,20 +63,20 @@ nlohmann::json sampleJson(const controllers::MonteCarloSample& m) {
 }
 
 // The contact goal (Eq. C6) of the written gains: <= 1 met.
-nlohmann::json contactJson(const controllers::CoupledGoal& c) {
-  return {{"value", controllers::coupledGoalValue(c)},
+nlohmann::json contactJson(const design::CoupledGoal& c) {
+  return {{"value", design::coupledGoalValue(c)},
           {"spectral_radius", c.spectral_radius},
           {"detector_score", c.detector_score},
           {"mode_hz", c.detector_hz},
           {"mode_decay_per_s", c.detector_decay_per_s}};
 }
 
-void addToReport(const TuneRun& run, reports::Report& report, const std::string& heading) {
+void addToReport(const design::ArmTuningResult& run, reports::Report& report, const std::string& heading) {
   nlohmann::json joints = nlohmann::json::array();
   for (std::size_t k = 0; k < run.results.size(); ++k) {
     const TuningResult& r = run.results[k];
     nlohmann::json models = nlohmann::json::array();
-    for (const controllers::ModelVariation& v : r.model_set) {
+    for (const design::ModelVariation& v : r.model_set) {
       models.push_back(sampleJson(v));
     }
     joints.push_back({{"joint", r.joint},
@@ -237,11 +92,11 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
                       {"contact_goal", contactJson(run.contact[k])}});
   }
   nlohmann::json stages = nlohmann::json::array();
-  for (const controllers::NonlinearStageResult& st : run.stages) {
-    const auto scoreJson = [](const controllers::NonlinearScore& sc) {
+  for (const design::NonlinearStageResult& st : run.stages) {
+    const auto scoreJson = [](const design::NonlinearScore& sc) {
       // Each failed run with its sample.
       nlohmann::json failed = nlohmann::json::array();
-      for (const controllers::FailedRun& f : sc.failed_runs) {
+      for (const design::FailedRun& f : sc.failed_runs) {
         nlohmann::json sample = sampleJson(f.sample);
         sample["index"] = f.sample.index;
         const nlohmann::json entry = {{"set_index", f.set_index}, {"failure", f.failure}, {"sample", sample}};
@@ -307,7 +162,7 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
                    "soft"};
   const auto row = [&](const TuningResult& r, bool tuned) {
     const JointGains& g = tuned ? r.tuned : r.initial;
-    const controllers::GoalValues& v = tuned ? r.tuned_goals : r.initial_goals;
+    const design::GoalValues& v = tuned ? r.tuned_goals : r.initial_goals;
     table.rows.push_back({r.joint + (tuned ? " tuned" : " start"),
                           tuned ? (r.feasible ? "feasible" : "infeasible") : (v.feasible() ? "feasible" : "infeasible"),
                           g.impedance.inertia_kgm2, g.impedance.damping_nms_per_rad, g.impedance.stiffness_nm_per_rad,
@@ -344,10 +199,10 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
                   "RMS user torque [N m]",
                   "simulations",
                   "linear hard goals (written gains)"};
-    for (const controllers::NonlinearStageResult& st : run.stages) {
+    for (const design::NonlinearStageResult& st : run.stages) {
       std::string checks;
       for (int c : st.check_failures) checks += (checks.empty() ? "" : ", ") + std::to_string(c);
-      const auto fails = [](const controllers::NonlinearScore& sc) {
+      const auto fails = [](const design::NonlinearScore& sc) {
         return sc.linear_ok ? std::to_string(sc.failures) + " / " + std::to_string(sc.runs)
                             : std::string("linear fail");
       };
@@ -360,7 +215,7 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
     }
     nt.significant_digits = 4;
     section.addTable(std::move(nt));
-    for (const controllers::NonlinearStageResult& st : run.stages) section.addParagraph(st.verdict);
+    for (const design::NonlinearStageResult& st : run.stages) section.addParagraph(st.verdict);
   }
 
   reports::XyChart convergence;
@@ -395,14 +250,14 @@ void addToReport(const TuneRun& run, reports::Report& report, const std::string&
   impedance.title = "Rendered impedance in free motion |Z(f)|, nominal model: starting vs tuned gains";
   impedance.x_axis = {"Frequency", "Hz", true};
   impedance.y_axis = {"|Z|", "N·m·s/rad", true};
-  const Eigen::VectorXd f = controllers::logspace(0.1, 200.0, kImpedancePoints);
+  const Eigen::VectorXd f = design::logspace(0.1, 200.0, kImpedancePoints);
   for (std::size_t k = 0; k < run.results.size(); ++k) {
     for (bool tuned : {false, true}) {
       reports::Series s;
       s.name = run.results[k].joint + (tuned ? " tuned" : " start");
       const JointGains& g = tuned ? run.results[k].tuned : run.results[k].initial;
       for (Eigen::Index i = 0; i < f.size(); ++i) {
-        const double m = std::abs(controllers::renderedImpedance(run.nominal[k], g, {}, 2.0 * std::numbers::pi * f[i]));
+        const double m = std::abs(design::renderedImpedance(run.nominal[k], g, {}, 2.0 * std::numbers::pi * f[i]));
         s.x.push_back(f[i]);
         s.y.push_back(std::isfinite(m) && m > 0.0 ? m : std::numeric_limits<double>::quiet_NaN());
       }
@@ -432,26 +287,26 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
   tune->add_option("--ranges", o.validation_config,
                    "User model and uncertainty ranges (default: config/dts_validation.yaml)")
       ->check(CLI::ExistingFile);
-  tune->add_option("--joints", o.joints, "Joints to tune, e.g. EB,WR (default: all)")->delimiter(',');
-  tune->add_option("--global-evals", o.global_evaluations, "Global-stage evaluations per round")
+  tune->add_option("--joints", o.tuning.joints, "Joints to tune, e.g. EB,WR (default: all)")->delimiter(',');
+  tune->add_option("--global-evals", o.tuning.global_evaluations, "Global-stage evaluations per round")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  tune->add_option("--local-evals", o.local_evaluations, "Local (COBYLA) evaluations per round")
+  tune->add_option("--local-evals", o.tuning.local_evaluations, "Local (COBYLA) evaluations per round")
       ->check(CLI::Range(0, 100000))
       ->capture_default_str();
-  tune->add_option("--rounds", o.rounds, "Worst-case rounds")->check(CLI::Range(1, 20))->capture_default_str();
-  tune->add_option("--seed", o.seed, "Seed of the worst-case search")->capture_default_str();
-  tune->add_option("--threads", o.threads, "Worker threads (one joint each)")
+  tune->add_option("--rounds", o.tuning.rounds, "Worst-case rounds")->check(CLI::Range(1, 20))->capture_default_str();
+  tune->add_option("--seed", o.tuning.seed, "Seed of the worst-case search")->capture_default_str();
+  tune->add_option("--threads", o.tuning.threads, "Worker threads (one joint each)")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
-  tune->add_option("--nonlinear-rounds", o.nonlinear_rounds,
+  tune->add_option("--nonlinear-rounds", o.tuning.nonlinear_rounds,
                    "Rounds of the nonlinear verification stage (0: linear stage only)")
       ->check(CLI::Range(0, 20))
       ->capture_default_str();
-  tune->add_flag("--modal-amplitude,!--peak-speed-amplitude", o.modal_amplitude,
+  tune->add_flag("--modal-amplitude,!--peak-speed-amplitude", o.tuning.modal_amplitude,
                  "Coupled goal: each mode's own speed amplitude after the free move (Eq. C5, the default) or "
                  "(--peak-speed-amplitude) the move's peak speed (Eq. C3, a bound)");
-  tune->add_flag("--contact-goal", o.contact_goal,
+  tune->add_flag("--contact-goal", o.tuning.contact_goal,
                  "Make the contact goal (Eq. C6: every mode against the wall judged decaying by the contact hold's "
                  "detector) a hard goal of the linear stage; it is reported in summary.json either way");
   tune->add_option("--out", o.out_dir, "Output folder")->capture_default_str();
@@ -464,20 +319,20 @@ int runTune(const TuneOptions& o) {
       plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), model);
   const GainsConfig gains =
       controllers::loadGainsConfig(configPathOr(o.gains, controllers::defaultTuneStartGainsPath), model);
-  const controllers::ValidationConfig validation =
-      controllers::loadValidationConfig(configPathOr(o.validation_config, controllers::defaultValidationConfigPath));
-  const TuneRun run = tuneArm(model, plant_config, gains, validation, o.joints, o);
+  const design::ValidationConfig validation =
+      design::loadValidationConfig(configPathOr(o.validation_config, design::defaultValidationConfigPath));
+  const design::ArmTuningResult run = design::tuneArm(model, plant_config, gains, validation, o.tuning);
   const std::filesystem::path out(o.out_dir);
   writeText(out / kGainsFileName, controllers::formatGainsYaml(run.tuned));
   reports::Report report("tune", "Admittance gains tuned per joint");
   int feasible = 0;
   for (const TuningResult& r : run.results) feasible += r.feasible ? 1 : 0;
   int verified = 0;
-  for (const controllers::NonlinearStageResult& st : run.stages) verified += st.verified ? 1 : 0;
+  for (const design::NonlinearStageResult& st : run.stages) verified += st.verified ? 1 : 0;
   std::ostringstream headline;
   headline << feasible << " of " << run.results.size() << " joints meet every linear hard goal";
   int written_feasible = 0;
-  for (const controllers::NonlinearStageResult& st : run.stages) written_feasible += st.linear_hard_goals_met ? 1 : 0;
+  for (const design::NonlinearStageResult& st : run.stages) written_feasible += st.linear_hard_goals_met ? 1 : 0;
   if (!run.stages.empty()) {
     headline << "; " << verified << " verified by the nonlinear stage; the written gains of " << written_feasible
              << " meet the linear hard goals";
@@ -489,7 +344,7 @@ int runTune(const TuneOptions& o) {
   addToReport(run, report, "Tuning");
   report.write(out);
   for (const TuningResult& r : run.results) std::cout << r.verdict << "\n";
-  for (const controllers::NonlinearStageResult& st : run.stages) std::cout << st.verdict << "\n";
+  for (const design::NonlinearStageResult& st : run.stages) std::cout << st.verdict << "\n";
   std::cout << "Tuned gains: " << (std::filesystem::absolute(out) / kGainsFileName).string() << " (" << std::fixed
             << std::setprecision(1) << run.wall_s << " s)\n";
   return run.pass ? 0 : 1;
@@ -499,12 +354,11 @@ TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::
                              reports::Report& report) {
   const plant::PlantConfig plant_config = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
   const GainsConfig gains = controllers::loadGainsConfig(controllers::defaultTuneStartGainsPath(), model);
-  const controllers::ValidationConfig validation =
-      controllers::loadValidationConfig(controllers::defaultValidationConfigPath());
+  const design::ValidationConfig validation = design::loadValidationConfig(design::defaultValidationConfigPath());
   // `fullarm tune`'s own budget and start: the demo's tuned gains are the shipped dts_gains.yaml
   // (a smaller linear budget moved the linear optima and with them the nonlinear stage's result).
-  const TuneOptions o;
-  const TuneRun run = tuneArm(model, plant_config, gains, validation, {}, o);
+  const design::ArmTuningResult run =
+      design::tuneArm(model, plant_config, gains, validation, design::ArmTuningOptions{});
   TuneDemoStep step;
   step.gains_file = out_dir / "tuned_gains.yaml";
   writeText(step.gains_file, controllers::formatGainsYaml(run.tuned));
@@ -513,10 +367,10 @@ TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::
   int feasible = 0;
   for (const TuningResult& r : run.results) feasible += r.feasible ? 1 : 0;
   int verified = 0;
-  for (const controllers::NonlinearStageResult& st : run.stages) verified += st.verified ? 1 : 0;
+  for (const design::NonlinearStageResult& st : run.stages) verified += st.verified ? 1 : 0;
   std::ostringstream detail;
   int written_feasible = 0;
-  for (const controllers::NonlinearStageResult& st : run.stages) written_feasible += st.linear_hard_goals_met ? 1 : 0;
+  for (const design::NonlinearStageResult& st : run.stages) written_feasible += st.linear_hard_goals_met ? 1 : 0;
   detail << feasible << " of " << run.results.size() << " joints meet the linear hard goals, " << verified
          << " verified by the nonlinear stage, written gains of " << written_feasible << " meet the linear hard goals, "
          << std::fixed << std::setprecision(1) << run.wall_s << " s wall";

@@ -2,37 +2,24 @@
 // `fullarm tune` and the tune step of `fullarm demo`.
 
 #include <CLI/CLI.hpp>
-#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/design/tune_arm.hpp"
 #include "fullarm/reports/report.hpp"
 
 namespace fullarm::app {
 
-/// Options of `fullarm tune`.
+/// Options of `fullarm tune`: the files, the output folder, and the tuning's budget and switches.
 struct TuneOptions {
-  std::string arm_config;           ///< arm model YAML (default: dts_master.yaml)
-  std::string plant_config;         ///< --plant (default: dts_plant.yaml)
-  std::string gains;                ///< starting gains (default: dts_tune_start.yaml); B_o and filters are kept
-  std::string validation_config;    ///< user model and uncertainty ranges (default: dts_validation.yaml)
-  std::vector<std::string> joints;  ///< short or model names; empty = every joint of the gains file
+  std::string arm_config;         ///< arm model YAML (default: dts_master.yaml)
+  std::string plant_config;       ///< --plant (default: dts_plant.yaml)
+  std::string gains;              ///< starting gains (default: dts_tune_start.yaml); B_o and filters are kept
+  std::string validation_config;  ///< user model and uncertainty ranges (default: dts_validation.yaml)
   std::string out_dir = "out/tune";
-  int global_evaluations = 300;
-  int local_evaluations = 150;
-  int rounds = 3;
-  std::uint64_t seed = 1;
-  int threads = 2;
-  int nonlinear_rounds = 3;  ///< rounds of the nonlinear verification stage (0: linear stage only)
-  /// The coupled goal's V0 per mode from the free move through the closed loop (Eq. C5, the
-  /// default) or, when false (`--peak-speed-amplitude`), the move's peak speed (Eq. C3, a bound;
-  /// docs/analysis.md, "Conservatism").
-  bool modal_amplitude = true;
-  /// The contact goal (Eq. C6) as a hard goal of the linear stage (`--contact-goal`); it is
-  /// reported for the written gains either way.
-  bool contact_goal = false;
+  design::ArmTuningOptions tuning;  ///< joints, budget, seed, threads, stages and goals (design::tuneArm)
 };
 
 /// Adds `tune` to `app`.

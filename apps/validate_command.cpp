@@ -1,75 +1,30 @@
 #include "validate_command.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <complex>
 #include <iomanip>
 #include <iostream>
 #include <numbers>
 #include <sstream>
-#include <thread>
 #include <vector>
 
 #include "cli_values.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
-#include "fullarm/controllers/paper_claim.hpp"
-#include "fullarm/controllers/scenario_analysis.hpp"
-#include "fullarm/controllers/validation.hpp"
 #include "fullarm/core/config_error.hpp"
+#include "fullarm/design/validate_arm.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::app {
 namespace {
 
-using controllers::ClosedLoopResult;
-using controllers::JointMonteCarlo;
-using controllers::JointScenario;
-using controllers::ScenarioLinearResult;
-
-// Wall dampings of the Z-width curve [N m s/rad].
-const std::vector<double> kZWidthDampings = {0.0, 0.5, 1.0, 2.0, 5.0, 10.0};
 // Largest number of frequency points per Bode/Nyquist series in the report.
 constexpr std::size_t kMaxFrequencyPoints = 300;
 
 std::string fixed(double v, int digits) {
   std::ostringstream os;
   os << std::setprecision(digits) << v;
-  return os.str();
-}
-
-// Everything validate computes for one joint.
-struct JointOutcome {
-  JointScenario nominal;
-  ScenarioLinearResult linear;
-  JointMonteCarlo monte_carlo;
-  bool pass = false;
-  std::string verdict;
-  bool has_claim = false;
-  controllers::PaperClaimResult claim;
-  controllers::ClosedLoopTrace worst_trace;
-  ClosedLoopResult worst_result;
-};
-
-struct Outcome {
-  std::vector<JointOutcome> joints;
-  controllers::ValidationConfig config;
-  std::filesystem::path gains_source;
-  int threads = 1;
-  double wall_s = 0.0;
-  double monte_carlo_wall_s = 0.0;
-  [[nodiscard]] bool pass() const {
-    return !joints.empty() && std::all_of(joints.begin(), joints.end(), [](const JointOutcome& j) { return j.pass; });
-  }
-};
-
-std::string describeSample(const controllers::MonteCarloSample& s) {
-  std::ostringstream os;
-  os << std::setprecision(3) << "bulk modulus x" << s.bulk_modulus_scale << ", valve gain x" << s.valve_gain_scale
-     << ", friction x" << s.friction_scale << ", inertia x" << s.inertia_scale << ", user K "
-     << s.user_stiffness_nm_per_rad << " N m/rad, B " << s.user_damping_nms_per_rad << " N m s/rad, delay "
-     << s.delay_samples;
   return os.str();
 }
 
@@ -87,61 +42,6 @@ std::vector<std::string> splitJoints(const std::string& text) {
   return out;
 }
 
-Outcome validate(const arm::ArmModel& model, const plant::PlantConfig& plant_config,
-                 const controllers::GainsConfig& gains, const controllers::ValidationConfig& config,
-                 const std::vector<std::string>& joint_names, int threads, bool paper_claim,
-                 const std::vector<std::string>& claim_joints) {
-  const auto t0 = std::chrono::steady_clock::now();
-  Outcome out;
-  out.config = config;
-  out.gains_source = gains.source;
-  out.threads = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  std::vector<JointScenario> nominal;
-  for (const std::string& name : joint_names) {
-    JointScenario sc = controllers::makeJointScenario(model, plant_config, gains, name);
-    sc.load.inertia_kgm2 += config.user.inertia_kgm2 - sc.user.inertia_kgm2;
-    sc.user = config.user;
-    sc.wall = config.wall;
-    sc.oscillation_speed_radps = config.oscillation_speed_radps;
-    nominal.push_back(sc);
-  }
-  out.joints.resize(nominal.size());
-  const controllers::LinearRequirements req = config.linear;
-  // Linear checks and (optionally) the paper-claim measurement, one job per joint.
-  controllers::parallelFor(static_cast<int>(nominal.size()), out.threads, [&](int j) {
-    JointOutcome& o = out.joints[static_cast<std::size_t>(j)];
-    o.nominal = nominal[static_cast<std::size_t>(j)];
-    o.linear = controllers::analyzeScenario(o.nominal, req, config.ranges.delay_max_samples, kZWidthDampings);
-    const bool claim_here =
-        paper_claim && (claim_joints.empty() || std::find(claim_joints.begin(), claim_joints.end(),
-                                                          shortJointName(o.nominal.joint_name)) != claim_joints.end());
-    if (claim_here) {
-      o.claim = controllers::measurePaperClaim(o.nominal);
-      o.has_claim = true;
-    }
-  });
-  const auto t1 = std::chrono::steady_clock::now();
-  const std::vector<JointMonteCarlo> mc = controllers::runMonteCarlo(nominal, config, out.threads);
-  out.monte_carlo_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-  for (std::size_t j = 0; j < nominal.size(); ++j) {
-    JointOutcome& o = out.joints[j];
-    o.monte_carlo = mc[j];
-    const controllers::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
-    o.worst_result = controllers::simulateJoint(controllers::applySample(nominal[j], worst.sample), &o.worst_trace);
-    o.pass = o.linear.pass && o.monte_carlo.pass();
-    std::ostringstream v;
-    if (!o.linear.pass) v << "linear: " << o.linear.reason << ". ";
-    if (!o.monte_carlo.pass()) {
-      v << "Monte-Carlo: " << o.monte_carlo.failures << " of " << o.monte_carlo.runs.size()
-        << " runs failed; worst run #" << worst.sample.index << " (" << describeSample(worst.sample)
-        << "): " << worst.result.failure;
-    }
-    o.verdict = o.pass ? "pass" : v.str();
-  }
-  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return out;
-}
-
 // Thins a frequency response to at most kMaxFrequencyPoints points.
 std::vector<std::size_t> thinned(std::size_t n) {
   std::vector<std::size_t> idx;
@@ -150,17 +50,17 @@ std::vector<std::size_t> thinned(std::size_t n) {
   return idx;
 }
 
-nlohmann::json toJson(const Outcome& out) {
+nlohmann::json toJson(const design::ArmValidationResult& out) {
   nlohmann::json joints = nlohmann::json::array();
-  for (const JointOutcome& o : out.joints) {
-    const controllers::LinearChecks& f = o.linear.free;
-    const controllers::LinearChecks& c = o.linear.contact;
+  for (const design::JointValidationResult& o : out.joints) {
+    const design::LinearChecks& f = o.linear.free;
+    const design::LinearChecks& c = o.linear.contact;
     nlohmann::json zw = nlohmann::json::array();
-    for (const controllers::ZWidthPoint& p : o.linear.z_width) {
+    for (const design::ZWidthPoint& p : o.linear.z_width) {
       zw.push_back({{"wall_damping_nms_per_rad", p.damping_nms_per_rad},
                     {"max_wall_stiffness_nm_per_rad", p.max_stiffness_nm_per_rad}});
     }
-    const controllers::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
+    const design::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
     nlohmann::json j = {
         {"name", o.nominal.joint_name},
         {"pass", o.pass},
@@ -213,7 +113,7 @@ nlohmann::json toJson(const Outcome& out) {
             {"delay_samples", worst.sample.delay_samples}}}}},
     };
     if (o.has_claim) {
-      const auto fig = [](const controllers::ControllerFigures& x) {
+      const auto fig = [](const design::ControllerFigures& x) {
         return nlohmann::json{{"free_rms_user_torque_nm", x.free_rms_user_torque_nm},
                               {"free_peak_user_torque_nm", x.free_peak_user_torque_nm},
                               {"onset_peak_valve_v", x.onset_peak_valve_v},
@@ -236,9 +136,9 @@ nlohmann::json toJson(const Outcome& out) {
           {"joints", joints}};
 }
 
-void addToReport(const Outcome& out, reports::Report& report, const std::string& prefix) {
+void addToReport(const design::ArmValidationResult& out, reports::Report& report, const std::string& prefix) {
   int passed = 0, runs = 0, failures = 0;
-  for (const JointOutcome& o : out.joints) {
+  for (const design::JointValidationResult& o : out.joints) {
     passed += o.pass ? 1 : 0;
     runs += static_cast<int>(o.monte_carlo.runs.size());
     failures += o.monte_carlo.failures;
@@ -265,8 +165,8 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
       "Ms",        "min Re L", "min Re Z [N m s/rad]",   "Gain limit (x)",         "MC failures", "Wall not reached",
       "Worst case"};
   t.significant_digits = 4;
-  for (const JointOutcome& o : out.joints) {
-    const controllers::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
+  for (const design::JointValidationResult& o : out.joints) {
+    const design::MonteCarloRun& worst = o.monte_carlo.runs[static_cast<std::size_t>(o.monte_carlo.worst)];
     const double ms = std::max(o.linear.free.margins.peak_sensitivity, o.linear.contact.margins.peak_sensitivity);
     t.rows.push_back({shortJointName(o.nominal.joint_name), o.pass ? std::string("PASS") : "FAIL: " + o.verdict,
                       o.linear.free.spectral_radius, o.linear.contact.spectral_radius,
@@ -276,7 +176,7 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
                       o.linear.predicted_gain_limit,
                       std::to_string(o.monte_carlo.failures) + " / " + std::to_string(o.monte_carlo.runs.size()),
                       std::to_string(o.monte_carlo.wall_not_reached),
-                      "#" + std::to_string(worst.sample.index) + ": " + describeSample(worst.sample) +
+                      "#" + std::to_string(worst.sample.index) + ": " + design::describeVariation(worst.sample) +
                           (worst.result.acceptable() ? " (stable)" : " -> " + worst.result.failure)});
   }
   verdict.addTable(std::move(t));
@@ -292,8 +192,8 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
   reports::XyChart nyq{"Nyquist plot of L", {"Re L", "", false}, {"Im L", "", false}, {}, ""};
   reports::XyChart imp{
       "Rendered impedance |Z| (free motion)", {"Frequency", "Hz", true}, {"|Z|", "N m s/rad", true}, {}, ""};
-  for (const JointOutcome& o : out.joints) {
-    const controllers::FrequencyData& fd = o.linear.free.frequency;
+  for (const design::JointValidationResult& o : out.joints) {
+    const design::FrequencyData& fd = o.linear.free.frequency;
     reports::Series m{shortJointName(o.nominal.joint_name), {}, {}, reports::SeriesMode::kAuto, {}};
     reports::Series p = m, n = m, z = m;
     n.mode = reports::SeriesMode::kLines;
@@ -342,9 +242,9 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
       "stable, against the wall's damping.");
   reports::XyChart zc{
       "Z-width", {"Wall damping", "N m s/rad", false}, {"Largest stable wall stiffness", "N m/rad", true}, {}, ""};
-  for (const JointOutcome& o : out.joints) {
+  for (const design::JointValidationResult& o : out.joints) {
     reports::Series s{shortJointName(o.nominal.joint_name), {}, {}, reports::SeriesMode::kLinesMarkers, {}};
-    for (const controllers::ZWidthPoint& p : o.linear.z_width) {
+    for (const design::ZWidthPoint& p : o.linear.z_width) {
       if (p.max_stiffness_nm_per_rad <= 0.0) continue;
       s.x.push_back(p.damping_nms_per_rad);
       s.y.push_back(p.max_stiffness_nm_per_rad);
@@ -366,9 +266,9 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
       "Above 1 (and sustained) is an oscillation."};
   reports::Histogram h3{
       "Rendered wall stiffness", {"User torque / penetration", "N m/rad", false}, {}, 0, std::nullopt, ""};
-  for (const JointOutcome& o : out.joints) {
+  for (const design::JointValidationResult& o : out.joints) {
     reports::HistogramSeries a{shortJointName(o.nominal.joint_name), {}}, b = a, c = a;
-    for (const controllers::MonteCarloRun& r : o.monte_carlo.runs) {
+    for (const design::MonteCarloRun& r : o.monte_carlo.runs) {
       a.samples.push_back(r.result.free_rms_user_torque_nm);
       b.samples.push_back(std::max(r.result.free_hold_speed_rms_radps, r.result.contact_hold_speed_rms_radps) /
                           out.config.oscillation_speed_radps);
@@ -386,18 +286,19 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
 
   // The worst run of the worst joint.
   const auto worst_joint =
-      std::max_element(out.joints.begin(), out.joints.end(), [](const JointOutcome& a, const JointOutcome& b) {
-        return a.monte_carlo.runs[static_cast<std::size_t>(a.monte_carlo.worst)].severity <
-               b.monte_carlo.runs[static_cast<std::size_t>(b.monte_carlo.worst)].severity;
-      });
+      std::max_element(out.joints.begin(), out.joints.end(),
+                       [](const design::JointValidationResult& a, const design::JointValidationResult& b) {
+                         return a.monte_carlo.runs[static_cast<std::size_t>(a.monte_carlo.worst)].severity <
+                                b.monte_carlo.runs[static_cast<std::size_t>(b.monte_carlo.worst)].severity;
+                       });
   if (worst_joint != out.joints.end() && !worst_joint->worst_trace.t_s.empty()) {
-    const controllers::ClosedLoopTrace& tr = worst_joint->worst_trace;
-    const controllers::MonteCarloRun& w =
+    const design::ClosedLoopTrace& tr = worst_joint->worst_trace;
+    const design::MonteCarloRun& w =
         worst_joint->monte_carlo.runs[static_cast<std::size_t>(worst_joint->monte_carlo.worst)];
     reports::Section& ws = report.addSection("Worst case found: " + shortJointName(worst_joint->nominal.joint_name) +
                                              " run #" + std::to_string(w.sample.index));
     ws.addParagraph(
-        describeSample(w.sample) + ". " +
+        design::describeVariation(w.sample) + ". " +
         (worst_joint->worst_result.acceptable() ? std::string("Stable.") : worst_joint->worst_result.failure));
     reports::XyChart qc{"Joint angle",
                         {"Time", "s", false},
@@ -422,8 +323,8 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
   }
 
   // The paper's claim.
-  const bool any_claim =
-      std::any_of(out.joints.begin(), out.joints.end(), [](const JointOutcome& o) { return o.has_claim; });
+  const bool any_claim = std::any_of(out.joints.begin(), out.joints.end(),
+                                     [](const design::JointValidationResult& o) { return o.has_claim; });
   if (any_claim) {
     reports::Section& pc = report.addSection("The paper's claim, measured");
     pc.addParagraph(
@@ -442,11 +343,11 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
                   "Largest stable wall [N m/rad]",
                   "Note"};
     ct.significant_digits = 4;
-    for (const JointOutcome& o : out.joints) {
+    for (const design::JointValidationResult& o : out.joints) {
       if (!o.has_claim) continue;
       const std::string j = shortJointName(o.nominal.joint_name);
-      const controllers::ControllerFigures& a = o.claim.admittance;
-      const controllers::ControllerFigures& p = o.claim.torque_pid;
+      const design::ControllerFigures& a = o.claim.admittance;
+      const design::ControllerFigures& p = o.claim.torque_pid;
       ct.rows.push_back({j, "admittance", a.free_rms_user_torque_nm, a.free_peak_user_torque_nm, a.onset_peak_valve_v,
                          a.max_stable_wall_nm_per_rad, "gains file"});
       ct.rows.push_back({j, "torque PID", p.free_rms_user_torque_nm, p.free_peak_user_torque_nm, p.onset_peak_valve_v,
@@ -458,9 +359,9 @@ void addToReport(const Outcome& out, reports::Report& report, const std::string&
   }
 }
 
-void printOutcome(const Outcome& out, std::ostream& os) {
+void printOutcome(const design::ArmValidationResult& out, std::ostream& os) {
   os << std::left;
-  for (const JointOutcome& o : out.joints) {
+  for (const design::JointValidationResult& o : out.joints) {
     os << "  " << std::setw(5) << shortJointName(o.nominal.joint_name) << (o.pass ? "PASS" : "FAIL") << "  linear "
        << (o.linear.pass ? "ok" : "fail") << " (rho free " << fixed(o.linear.free.spectral_radius, 5) << ", wall "
        << fixed(o.linear.contact.spectral_radius, 5) << ", Ms " << fixed(o.linear.free.margins.peak_sensitivity, 3)
@@ -528,19 +429,23 @@ int runValidate(const ValidateOptions& o) {
       plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), model);
   const controllers::GainsConfig gains =
       controllers::loadGainsConfig(configPathOr(o.gains_config, controllers::defaultGainsConfigPath), model);
-  controllers::ValidationConfig config =
-      controllers::loadValidationConfig(configPathOr(o.ranges_config, controllers::defaultValidationConfigPath));
+  design::ValidationConfig config =
+      design::loadValidationConfig(configPathOr(o.ranges_config, design::defaultValidationConfigPath));
   if (o.samples) config.samples = *o.samples;
   if (o.seed) config.seed = static_cast<std::uint64_t>(*o.seed);
   const std::vector<std::string> joints = jointList(gains, o.joints);
   std::cout << "fullarm validate: " << joints.size() << " joint(s), " << config.samples
             << " Monte-Carlo runs each, seed " << config.seed << "\n";
-  const Outcome out = validate(model, plant_config, gains, config, joints, o.threads, o.paper_claim, {});
+  design::ArmValidationOptions options;
+  options.joints = joints;
+  options.threads = o.threads;
+  options.paper_claim = o.paper_claim;
+  const design::ArmValidationResult out = design::validateArm(model, plant_config, gains, config, options);
   printOutcome(out, std::cout);
 
   reports::Report report("validate", "Stability validation of the joint controllers");
   int failed = 0;
-  for (const JointOutcome& j : out.joints) failed += j.pass ? 0 : 1;
+  for (const design::JointValidationResult& j : out.joints) failed += j.pass ? 0 : 1;
   report.setVerdict(
       out.pass(), out.pass() ? "Every joint passed the linear checks and all " + std::to_string(config.samples) +
                                    " Monte-Carlo runs"
@@ -557,14 +462,17 @@ ValidateDemoStep runValidateDemoStep(const arm::ArmModel& model, const std::file
                                      reports::Report& report) {
   const plant::PlantConfig plant_config = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
   const controllers::GainsConfig gains = controllers::loadGainsConfig(gains_path, model);
-  controllers::ValidationConfig config = controllers::loadValidationConfig(controllers::defaultValidationConfigPath());
+  design::ValidationConfig config = design::loadValidationConfig(design::defaultValidationConfigPath());
   config.samples = samples;
-  const Outcome out = validate(model, plant_config, gains, config, jointList(gains, ""), 0, true, {"EB"});
+  design::ArmValidationOptions options;
+  options.paper_claim = true;
+  options.paper_claim_joints = {"EB"};
+  const design::ArmValidationResult out = design::validateArm(model, plant_config, gains, config, options);
   printOutcome(out, std::cout);
   report.results()["validate"] = toJson(out);
   addToReport(out, report, "validate_");
   int failed = 0;
-  for (const JointOutcome& j : out.joints) failed += j.pass ? 0 : 1;
+  for (const design::JointValidationResult& j : out.joints) failed += j.pass ? 0 : 1;
   ValidateDemoStep step;
   step.pass = out.pass();
   step.detail = std::to_string(out.joints.size() - static_cast<std::size_t>(failed)) + " of " +

@@ -28,16 +28,17 @@
 #include <vector>
 
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/controllers/coupled_stability.hpp"
 #include "fullarm/controllers/gains.hpp"
-#include "fullarm/controllers/nonlinear_stage.hpp"
-#include "fullarm/controllers/tuner.hpp"
-#include "fullarm/controllers/validation.hpp"
+#include "fullarm/design/coupled_stability.hpp"
+#include "fullarm/design/nonlinear_stage.hpp"
+#include "fullarm/design/tuner.hpp"
+#include "fullarm/design/validation.hpp"
 #include "fullarm/plant/plant_config.hpp"
 #include "ring_experiment.hpp"
 
 namespace fc = fullarm::controllers;
-namespace ft = fullarm::controllers::test;
+namespace fd = fullarm::design;
+namespace ft = fullarm::design::test;
 
 namespace {
 
@@ -98,42 +99,40 @@ int run(int argc, char** argv) {
   const auto model = fullarm::arm::loadArmModel(fullarm::arm::defaultArmModelPath());
   const auto plant = fullarm::plant::loadPlantConfig(fullarm::plant::defaultPlantConfigPath(), model);
   const auto start = fc::loadGainsConfig(fc::defaultTuneStartGainsPath(), model);
-  const auto validation = fc::loadValidationConfig(fc::defaultValidationConfigPath());
+  const auto validation = fd::loadValidationConfig(fd::defaultValidationConfigPath());
   const int slot = fc::findGainsJoint(start, args[0]);
   const fc::JointGains& initial = start.joints[static_cast<std::size_t>(slot)];
 
-  // The linear stage as `fullarm tune` runs it (apps/tune_command.cpp).
-  const fc::JointPlantModel jm = ft::tunerJointModel(model, plant, validation, initial.name);
+  // The linear stage as `fullarm tune` runs it (design/src/tune_arm.cpp).
+  const fd::JointPlantModel jm = fd::tunerJointModel(model, plant, validation, initial.name);
   const double q = model.defaultPosture()[model.jointIndex(initial.name)];
-  fc::LoopSetup setup;
+  fd::LoopSetup setup;
   setup.control_period_s = start.control_period_s;
   setup.delay_samples = validation.ranges.delay_min_samples;
-  const fc::JointScenario sc =
-      fc::validationScenario(fc::makeJointScenario(model, plant, start, initial.name), validation);
-  fc::TuningGoals goals;
+  const fd::JointScenario sc =
+      fd::validationScenario(fd::makeJointScenario(model, plant, start, initial.name), validation);
+  fd::TuningGoals goals;
   if (validation.wall.enabled) {
     goals.wall_stiffness_nm_per_rad = validation.wall.stiffness_nm_per_rad;
     goals.wall_damping_nms_per_rad = validation.wall.damping_nms_per_rad;
   }
-  goals.detector = fc::detectorModelOf(sc);
+  goals.detector = fd::detectorModelOf(sc);
   goals.detector.modal_amplitude = true;
-  goals.contact_detector = fc::contactDetectorModelOf(sc);
+  goals.contact_detector = fd::contactDetectorModelOf(sc);
   goals.contact_hard = contact;
-  fc::TunerOptions options;
-  options.seed = 1 + static_cast<std::uint64_t>(slot);
-  const fc::TuningResult tr =
-      fc::tuneJoint(jm, q, initial, setup, goals, fc::TuningBounds{}, validation.ranges, options);
-  fc::LoopSetup goal_setup = setup;
+  fd::TunerOptions options;
+  const fd::TuningResult tr =
+      fd::tuneJoint(jm, q, initial, setup, goals, fd::TuningBounds{}, validation.ranges, options);
+  fd::LoopSetup goal_setup = setup;
   goal_setup.grid_points = options.grid_points;
-  std::vector<fc::PreparedJoint> models;
-  for (const fc::ModelVariation& v : tr.model_set) models.push_back(fc::prepareVariation(jm, q, goal_setup, v));
+  std::vector<fd::PreparedJoint> models;
+  for (const fd::ModelVariation& v : tr.model_set) models.push_back(fd::prepareVariation(jm, q, goal_setup, v));
 
   // The stage's initial sample set and search box (nonlinear_stage.hpp).
-  const fc::NonlinearStageOptions stage;
-  std::vector<fc::MonteCarloSample> set = fc::ringCorners(validation.ranges);
-  for (const fc::MonteCarloSample& c : fc::stressCorners(validation.ranges, stage.corner_user_fraction))
-    set.push_back(c);
-  for (const fc::MonteCarloSample& s : fc::stageSamples(validation.ranges, 1, sc.joint_name, 0, stage.samples)) {
+  const fd::NonlinearStageOptions stage;
+  std::vector<fd::ModelVariation> set = fd::ringCorners(validation.ranges);
+  for (const fd::ModelVariation& c : fd::stressCorners(validation.ranges, stage.corner_user_fraction)) set.push_back(c);
+  for (const fd::ModelVariation& s : fd::stageSamples(validation.ranges, 1, sc.joint_name, 0, stage.samples)) {
     set.push_back(s);
   }
   const double lo[5] = {std::log10(stage.min_inertia_kgm2), std::log10(stage.min_damping_nms_per_rad),
@@ -160,9 +159,9 @@ int run(int argc, char** argv) {
     g.impedance = {x[0], x[1], x[2]};
     g.sliding_mode.lambda_per_s = x[4];
     g.sliding_mode.boundary_layer_radps = g.sliding_mode.valve_bound_v / x[3];
-    fc::GoalValues v;
+    fd::GoalValues v;
     try {
-      v = fc::evaluateGoals(models, g, goals, tr.coupled_models);
+      v = fd::evaluateGoals(models, g, goals, tr.coupled_models);
     } catch (const std::runtime_error&) {
       ++unscorable;
       continue;
@@ -171,8 +170,8 @@ int run(int argc, char** argv) {
     ++feasible;
     if (v.soft > soft_max) continue;
     ++scored;
-    const fc::NonlinearScore s =
-        fc::scoreNonlinear(sc, g, set, validation.linear, validation.ranges.delay_max_samples, 0, nullptr, 2);
+    const fd::NonlinearScore s =
+        fd::scoreNonlinear(sc, g, set, validation.linear, validation.ranges.delay_max_samples, 0, nullptr, 2);
     const bool ok = s.linear_ok && s.failures == 0;
     passed += ok ? 1 : 0;
     std::string why = !s.linear_ok ? "validate's linear check" : ok ? "" : s.failed_runs.front().failure;

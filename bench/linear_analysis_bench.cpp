@@ -1,4 +1,4 @@
-// Cost of the linear analysis of one DTS joint (controllers/linear_analysis.hpp), per joint of
+// Cost of the linear analysis of one DTS joint (design/linear_analysis.hpp), per joint of
 // the default arm: prepareJoint (trim, analytic linearisation, two ZOH discretisations),
 // closedLoopSpectralRadius (what a tuner evaluates per candidate) and analyzePrepared (all
 // checks: margins on a 600-point grid, rendered impedance, gain limits). The peer in the same
@@ -12,7 +12,7 @@
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/controllers/joint_controller.hpp"
-#include "fullarm/controllers/linear_analysis.hpp"
+#include "fullarm/design/linear_analysis.hpp"
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
@@ -20,6 +20,7 @@ namespace {
 
 using namespace fullarm;
 using namespace fullarm::controllers;
+using namespace fullarm::design;
 
 const arm::ArmModel& model() {
   static const arm::ArmModel m = arm::loadArmModel(arm::defaultArmModelPath());

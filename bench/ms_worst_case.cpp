@@ -23,19 +23,20 @@
 #include <vector>
 
 #include "fullarm/arm/arm_yaml.hpp"
-#include "fullarm/controllers/coupled_stability.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/controllers/joint_controller.hpp"
-#include "fullarm/controllers/linear_analysis.hpp"
-#include "fullarm/controllers/scenario_analysis.hpp"
-#include "fullarm/controllers/tuner.hpp"
-#include "fullarm/controllers/validation.hpp"
+#include "fullarm/design/coupled_stability.hpp"
+#include "fullarm/design/linear_analysis.hpp"
+#include "fullarm/design/scenario_analysis.hpp"
+#include "fullarm/design/tuner.hpp"
+#include "fullarm/design/validation.hpp"
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/plant_config.hpp"
 #include "ring_experiment.hpp"
 
 namespace fc = fullarm::controllers;
-namespace ft = fullarm::controllers::test;
+namespace fd = fullarm::design;
+namespace ft = fullarm::design::test;
 
 namespace {
 
@@ -44,7 +45,7 @@ struct Context {
   fullarm::plant::PlantConfig plant;
   fc::GainsConfig shipped;
   fc::GainsConfig start;
-  fc::ValidationConfig validation;
+  fd::ValidationConfig validation;
   bool modal_amplitude = true;  // the coupled goal's V0 as `fullarm tune` (Eq. C5) unless --peak-speed-amplitude
 };
 
@@ -71,8 +72,8 @@ void printPoles(const Eigen::VectorXcd& z, double T, double near_hz) {
   }
 }
 
-void compareRing(const fc::JointScenario& nominal, const fc::JointPlantModel& jm, const fc::PreparedJoint& p,
-                 const fc::ModelVariation& v, const fc::JointGains& gains, double q0, std::complex<double> z_pred) {
+void compareRing(const fd::JointScenario& nominal, const fd::JointPlantModel& jm, const fd::PreparedJoint& p,
+                 const fd::ModelVariation& v, const fc::JointGains& gains, double q0, std::complex<double> z_pred) {
   const double T = p.setup.control_period_s;
   const std::complex<double> s_pred = std::log(z_pred) / T;
   const double f = std::abs(s_pred.imag()) / (2.0 * std::numbers::pi);
@@ -90,7 +91,7 @@ void compareRing(const fc::JointScenario& nominal, const fc::JointPlantModel& jm
   const double a_v = 5e-4 / unit_spool;
   Eigen::VectorXcd poles;
   const ft::Ring lin = ft::linearRing(p, gains, f, a_v, start_s + len_s, &poles);
-  const ft::Ring nl = ft::nonlinearRing(nominal, fc::applyVariation(jm, v), v, gains, q0, f, a_v, start_s + len_s);
+  const ft::Ring nl = ft::nonlinearRing(nominal, fd::applyVariation(jm, v), v, gains, q0, f, a_v, start_s + len_s);
   double dmin = std::numeric_limits<double>::infinity();
   for (Eigen::Index i = 0; i < poles.size(); ++i) dmin = std::min(dmin, std::abs(poles[i] - z_pred));
   std::printf(
@@ -122,26 +123,26 @@ void compareRing(const fc::JointScenario& nominal, const fc::JointPlantModel& jm
       f_l, sig_l, f_n, sig_n, peak_l, peak_n, spool_max);
   // The same model linearised at validate's free-hold and wall operating points.
   {
-    const fc::JointPlantModel jm_v = fc::applyVariation(jm, v);
+    const fd::JointPlantModel jm_v = fd::applyVariation(jm, v);
     const double q_free = nominal.start_rad + nominal.direction * nominal.timing.free_move_rad;
-    const fc::PreparedJoint pf = fc::prepareJoint(jm_v, fc::solveOperatingPoint(jm_v, q_free), p.setup);
-    const fc::PreparedJoint pw =
-        fc::prepareJoint(jm_v, fc::solveOperatingPoint(jm_v, fc::wallPosition(nominal)), p.setup);
-    const fc::ModeDecay mf = fc::slowestOscillatoryMode(fc::closedLoopPoles(pf, gains, fc::VirtualWall{}), T);
-    const fc::VirtualWall wall{nominal.wall.stiffness_nm_per_rad, nominal.wall.damping_nms_per_rad};
-    const fc::ModeDecay mw = fc::slowestOscillatoryMode(fc::closedLoopPoles(pw, gains, wall), T);
-    const fc::LinearChecks lf = fc::analyzePrepared(pf, gains, fc::VirtualWall{}, false, false);
+    const fd::PreparedJoint pf = fd::prepareJoint(jm_v, fd::solveOperatingPoint(jm_v, q_free), p.setup);
+    const fd::PreparedJoint pw =
+        fd::prepareJoint(jm_v, fd::solveOperatingPoint(jm_v, fd::wallPosition(nominal)), p.setup);
+    const fd::ModeDecay mf = fd::slowestOscillatoryMode(fd::closedLoopPoles(pf, gains, fd::VirtualWall{}), T);
+    const fd::VirtualWall wall{nominal.wall.stiffness_nm_per_rad, nominal.wall.damping_nms_per_rad};
+    const fd::ModeDecay mw = fd::slowestOscillatoryMode(fd::closedLoopPoles(pw, gains, wall), T);
+    const fd::LinearChecks lf = fd::analyzePrepared(pf, gains, fd::VirtualWall{}, false, false);
     std::printf(
         "      at validate's operating points: free hold (q %.3f) Ms %.3f at %.3f Hz, spectral radius %.6f, "
         "slowest oscillatory %.3f Hz sigma %+.3f; against the wall spectral radius %.6f, slowest %.3f Hz sigma "
         "%+.3f\n",
         q_free, lf.margins.peak_sensitivity, lf.margins.peak_sensitivity_radps / (2.0 * std::numbers::pi),
-        fc::closedLoopSpectralRadius(pf, gains, fc::VirtualWall{}), mf.frequency_hz, mf.decay_rate_per_s,
-        fc::closedLoopSpectralRadius(pw, gains, wall), mw.frequency_hz, mw.decay_rate_per_s);
+        fd::closedLoopSpectralRadius(pf, gains, fd::VirtualWall{}), mf.frequency_hz, mf.decay_rate_per_s,
+        fd::closedLoopSpectralRadius(pw, gains, wall), mw.frequency_hz, mw.decay_rate_per_s);
   }
   // Where the ring ends: the nonlinear ring (ideal sensors, no Coulomb) run for 4 s.
   {
-    const ft::Ring longer = ft::nonlinearRing(nominal, fc::applyVariation(jm, v), v, gains, q0, f, a_v, 4.0);
+    const ft::Ring longer = ft::nonlinearRing(nominal, fd::applyVariation(jm, v), v, gains, q0, f, a_v, 4.0);
     const std::size_t n = longer.qd.size();
     double sp = 0.0;
     for (std::size_t k = n - 500; k < n; ++k) sp = std::max(sp, std::abs(longer.spool[k] - longer.spool[0]));
@@ -149,12 +150,12 @@ void compareRing(const fc::JointScenario& nominal, const fc::JointPlantModel& jm
                 ft::windowStd(longer.qd, n - 500, n), sp);
   }
   // validate's own run of this model (free move, free hold, wall), as drawn and idealised.
-  fc::MonteCarloSample sample = v;
+  fd::ModelVariation sample = v;
   sample.index = 0;
   for (int mode = 0; mode < 4; ++mode) {
-    fc::JointScenario sc = fc::applySample(nominal, sample);
+    fd::JointScenario sc = fd::variationScenario(nominal, sample);
     ft::idealize(sc, (mode & 1) != 0, (mode & 2) != 0);
-    const fc::ClosedLoopResult r = fc::simulateJoint(sc);
+    const fd::ClosedLoopResult r = fd::simulateJoint(sc);
     std::printf(
         "      validate run (%s sensors, %s): %s; hold speed deviation free %.4f (early %.4f), contact %.4f "
         "(early %.4f) rad/s, %.1f Hz%s%s\n",
@@ -169,30 +170,29 @@ void analyseJoint(const Context& c, const std::string& short_name) {
   const int slot = fc::findGainsJoint(c.start, short_name);
   const fc::JointGains& initial = c.start.joints[static_cast<std::size_t>(slot)];
   const fc::JointGains& gains = c.shipped.joints[static_cast<std::size_t>(fc::findGainsJoint(c.shipped, short_name))];
-  const fc::JointPlantModel jm = ft::tunerJointModel(c.model, c.plant, c.validation, initial.name);
+  const fd::JointPlantModel jm = fd::tunerJointModel(c.model, c.plant, c.validation, initial.name);
   const double q = c.model.defaultPosture()[c.model.jointIndex(initial.name)];
-  fc::LoopSetup setup;
+  fd::LoopSetup setup;
   setup.control_period_s = c.shipped.control_period_s;
   setup.delay_samples = c.validation.ranges.delay_min_samples;
-  fc::TuningGoals goals;
+  fd::TuningGoals goals;
   if (c.validation.wall.enabled) {
     goals.wall_stiffness_nm_per_rad = c.validation.wall.stiffness_nm_per_rad;
     goals.wall_damping_nms_per_rad = c.validation.wall.damping_nms_per_rad;
   }
-  const fc::JointScenario sc =
-      fc::validationScenario(fc::makeJointScenario(c.model, c.plant, c.shipped, initial.name), c.validation);
-  goals.detector = fc::detectorModelOf(sc);
+  const fd::JointScenario sc =
+      fd::validationScenario(fd::makeJointScenario(c.model, c.plant, c.shipped, initial.name), c.validation);
+  goals.detector = fd::detectorModelOf(sc);
   goals.detector.modal_amplitude = c.modal_amplitude;
-  fc::TunerOptions options;  // tune's defaults: 300 + 150 evaluations, 3 rounds
-  options.seed = 1 + static_cast<std::uint64_t>(slot);
-  const fc::TuningResult tr =
-      fc::tuneJoint(jm, q, initial, setup, goals, fc::TuningBounds{}, c.validation.ranges, options);
-  fc::LoopSetup goal_setup = setup;
+  fd::TunerOptions options;  // tune's defaults: 300 + 150 evaluations, 3 rounds
+  const fd::TuningResult tr =
+      fd::tuneJoint(jm, q, initial, setup, goals, fd::TuningBounds{}, c.validation.ranges, options);
+  fd::LoopSetup goal_setup = setup;
   goal_setup.grid_points = options.grid_points;
-  std::vector<fc::PreparedJoint> models;
-  for (const fc::ModelVariation& v : tr.model_set) models.push_back(fc::prepareVariation(jm, q, goal_setup, v));
-  const fc::GoalValues gv = fc::evaluateGoals(models, gains, goals, tr.coupled_models);
-  const auto [hard, name] = fc::worstHardGoal(gv, goals);
+  std::vector<fd::PreparedJoint> models;
+  for (const fd::ModelVariation& v : tr.model_set) models.push_back(fd::prepareVariation(jm, q, goal_setup, v));
+  const fd::GoalValues gv = fd::evaluateGoals(models, gains, goals, tr.coupled_models);
+  const auto [hard, name] = fd::worstHardGoal(gv, goals);
   std::printf(
       "%s (q %.4f rad): stage hard goals on the shipped gains: Ms %.3f, min Re L %.3f, coupled score %.3f "
       "(%.3f Hz, sigma %.3f /s); worst '%s' %.3f\n",
@@ -200,15 +200,15 @@ void analyseJoint(const Context& c, const std::string& short_name) {
       gv.coupled_mode_decay_per_s, name.c_str(), hard);
   // The coupled goal with each mode's own amplitude after the free move (Eq. C5) instead of V0.
   {
-    fc::TuningGoals modal = goals;
+    fd::TuningGoals modal = goals;
     modal.detector.modal_amplitude = true;
-    const fc::GoalValues gm = fc::evaluateGoals(models, gains, modal, tr.coupled_models);
-    const auto [hm, nm] = fc::worstHardGoal(gm, modal);
+    const fd::GoalValues gm = fd::evaluateGoals(models, gains, modal, tr.coupled_models);
+    const auto [hm, nm] = fd::worstHardGoal(gm, modal);
     std::printf("  with modal V0 (Eq. C5): coupled score %.3f (%.3f Hz, sigma %.3f /s); worst '%s' %.3f\n",
                 gm.coupled_detector_score, gm.coupled_mode_hz, gm.coupled_mode_decay_per_s, nm.c_str(), hm);
   }
   // validate's own linear check of the nominal scenario (operating points: end of the free move, wall).
-  const fc::ScenarioLinearResult vr = fc::analyzeScenario(sc, c.validation.linear, 1, {});
+  const fd::ScenarioLinearResult vr = fd::analyzeScenario(sc, c.validation.linear, 1, {});
   std::printf("  validate's nominal: Ms free %.3f at %.3f Hz (q %.4f), contact %.3f at %.3f Hz\n",
               vr.free.margins.peak_sensitivity, vr.free.margins.peak_sensitivity_radps / (2.0 * std::numbers::pi),
               sc.start_rad + sc.direction * sc.timing.free_move_rad, vr.contact.margins.peak_sensitivity,
@@ -216,13 +216,13 @@ void analyseJoint(const Context& c, const std::string& short_name) {
   // The tuner's nominal model at other operating points along the scenario's motion.
   for (double dq : {0.0, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.3}) {
     const double qq = sc.start_rad + sc.direction * dq;
-    const fc::PreparedJoint pj = fc::prepareJoint(jm, fc::solveOperatingPoint(jm, qq), goal_setup);
-    const fc::LinearChecks l = fc::analyzePrepared(pj, gains, fc::VirtualWall{}, false, false);
-    const fc::OperatingPoint& o = pj.coupled.linear.op;
+    const fd::PreparedJoint pj = fd::prepareJoint(jm, fd::solveOperatingPoint(jm, qq), goal_setup);
+    const fd::LinearChecks l = fd::analyzePrepared(pj, gains, fd::VirtualWall{}, false, false);
+    const fd::OperatingPoint& o = pj.coupled.linear.op;
     std::printf(
         "  tuner's nominal at q %.4f: Ms %.3f at %.3f Hz (trim spool %.2e, p_a %.3e, p_b %.3e Pa, command %.2e V)\n",
         qq, l.margins.peak_sensitivity, l.margins.peak_sensitivity_radps / (2.0 * std::numbers::pi),
-        o.state[fc::kSpool], o.state[fc::kPressureA], o.state[fc::kPressureB], o.command);
+        o.state[fd::kSpool], o.state[fd::kPressureA], o.state[fd::kPressureB], o.command);
   }
   // How often validate's box holds such a model: seeded draws (not validate's stream), each
   // linearised at the tuner's operating point and at validate's free-hold point, closed loop with
@@ -232,11 +232,11 @@ void analyseJoint(const Context& c, const std::string& short_name) {
     constexpr int kDraws = 1000;
     int unstable = 0, ms_over = 0;
     for (int i = 0; i < kDraws; ++i) {
-      const fc::MonteCarloSample d = fc::drawSample(c.validation.ranges, 20261123, slot, i);
-      const fc::PreparedJoint pd = fc::prepareVariation(jm, q_lin, goal_setup, d);
-      const fc::LinearChecks l = fc::analyzePrepared(pd, gains, fc::VirtualWall{}, false, false);
-      const fc::CoupledGoal cg = fc::evaluateCoupled({pd}, gains, goals.detector);
-      if (fc::coupledGoalValue(cg) >= 10.0) {
+      const fd::ModelVariation d = fd::drawVariation(c.validation.ranges, 20261123, slot, i);
+      const fd::PreparedJoint pd = fd::prepareVariation(jm, q_lin, goal_setup, d);
+      const fd::LinearChecks l = fd::analyzePrepared(pd, gains, fd::VirtualWall{}, false, false);
+      const fd::CoupledGoal cg = fd::evaluateCoupled({pd}, gains, goals.detector);
+      if (fd::coupledGoalValue(cg) >= 10.0) {
         if (++unstable <= 3) {
           std::printf(
               "    growing: bulk x%.3f valve x%.3f friction x%.3f inertia x%.3f K_h %.2f B_h %.2f delay %d: "
@@ -251,12 +251,12 @@ void analyseJoint(const Context& c, const std::string& short_name) {
                 kDraws, q_lin, unstable, ms_over, goals.max_peak_sensitivity);
   }
   for (std::size_t i = 0; i < models.size(); ++i) {
-    const fc::ModelVariation& v = tr.model_set[i];
-    const fc::LinearChecks lc = fc::analyzePrepared(models[i], gains, fc::VirtualWall{}, false, false);
+    const fd::ModelVariation& v = tr.model_set[i];
+    const fd::LinearChecks lc = fd::analyzePrepared(models[i], gains, fd::VirtualWall{}, false, false);
     // The same loop on the fine default grid (600 points), as validate computes it.
-    fc::PreparedJoint fine = models[i];
+    fd::PreparedJoint fine = models[i];
     fine.setup.grid_points = 600;
-    const fc::LinearChecks lf = fc::analyzePrepared(fine, gains, fc::VirtualWall{}, false, false);
+    const fd::LinearChecks lf = fd::analyzePrepared(fine, gains, fd::VirtualWall{}, false, false);
     const double f_ms = lc.margins.peak_sensitivity_radps / (2.0 * std::numbers::pi);
     std::printf("  model %zu: bulk x%.3f valve x%.3f friction x%.3f inertia x%.3f K_h %.2f B_h %.2f delay %d\n", i,
                 v.bulk_modulus_scale, v.valve_gain_scale, v.friction_scale, v.inertia_scale,
@@ -295,7 +295,7 @@ int main(int argc, char** argv) {
   c.plant = fullarm::plant::loadPlantConfig(fullarm::plant::defaultPlantConfigPath(), c.model);
   c.shipped = fc::loadGainsConfig(fc::defaultGainsConfigPath(), c.model);
   c.start = fc::loadGainsConfig(fc::defaultTuneStartGainsPath(), c.model);
-  c.validation = fc::loadValidationConfig(fc::defaultValidationConfigPath());
+  c.validation = fd::loadValidationConfig(fd::defaultValidationConfigPath());
   std::vector<std::string> joints;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];

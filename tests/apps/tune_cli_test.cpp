@@ -90,10 +90,10 @@ TEST(TuneCli, ContactGoalIsReportedAndMetWhenMadeHard) {
 }
 
 // Reproducibility: `fullarm tune` starts from the fixed config/dts_tune_start.yaml (not from the
-// gains file it writes) and seeds each joint by its place in the file, so tuning one joint with the
-// default budget writes exactly the gains the shipped config/dts_gains.yaml holds for it (that file
-// is the output of `fullarm tune --out DIR`, all joints). WR: its stage needs no search, so the run
-// is short (the linear stage plus one 300-run check batch).
+// gains file it writes) and keys each joint's random draws by its name, so tuning one joint with
+// the default budget writes exactly the gains the shipped config/dts_gains.yaml holds for it (that
+// file is the output of `fullarm tune --out DIR`, all joints). WR: its stage needs no search, so
+// the run is short (the linear stage plus one 300-run check batch).
 TEST(TuneCli, OneJointWithTheDefaultBudgetReproducesTheShippedGains) {
   const auto dir = tempDir("wr_default");
   const Result r = runFullarm("tune --joints WR --out " + dir.string());

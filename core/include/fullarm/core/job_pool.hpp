@@ -4,7 +4,7 @@
 /// fans out (its nonlinear stage's simulations). `fullarm tune` runs each joint's linear stage and
 /// then its nonlinear stage as one job: a worker takes the next job as soon as it is free, and a
 /// worker that finds no job left helps the jobs still running with their simulations instead of
-/// idling (docs/controllers.md, "Scheduling of tune"). Which thread runs what depends on timing;
+/// idling (docs/analysis.md, "Scheduling of tune"). Which thread runs what depends on timing;
 /// the callers make the results independent of it (the nonlinear stage takes its runs in set order
 /// and sizes its blocks by available(), which changes only how many runs are simulated ahead).
 /// Offline (allocates, locks), not @rt.

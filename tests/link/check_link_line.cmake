@@ -1,0 +1,35 @@
+# Script mode: reads the link command of the executable TARGET in the build tree BUILD_DIR
+# (link.txt of the Makefile generators, or its build statement in build.ninja) and fails when
+# it names a library the 1 kHz law must not pull in: NLopt, SUNDIALS, or the fullarm modules
+# above controllers (plant, design, haptics). It also fails when the command does not name
+# fullarm_controllers, so a wrong or empty file cannot pass.
+set(link_txt "${BUILD_DIR}/tests/link/CMakeFiles/${TARGET}.dir/link.txt")
+if(EXISTS "${link_txt}")
+  file(READ "${link_txt}" command)
+elseif(EXISTS "${BUILD_DIR}/build.ninja")
+  file(STRINGS "${BUILD_DIR}/build.ninja" lines)
+  set(command "")
+  set(inside FALSE)
+  foreach(line IN LISTS lines)
+    if(line MATCHES "^build [^:]*${TARGET}[^:]*: CXX_EXECUTABLE_LINKER")
+      set(inside TRUE)
+    elseif(inside AND line MATCHES "^  ")
+      string(APPEND command "${line}\n")
+    elseif(inside)
+      break()
+    endif()
+  endforeach()
+else()
+  message(FATAL_ERROR "no link command found for ${TARGET} under ${BUILD_DIR} (neither ${link_txt} nor build.ninja)")
+endif()
+string(TOLOWER "${command}" lower)
+if(NOT lower MATCHES "fullarm_controllers")
+  message(FATAL_ERROR "the link command of ${TARGET} does not name fullarm_controllers:\n${command}")
+endif()
+foreach(forbidden IN ITEMS nlopt sundials cvodes fullarm_plant fullarm_design fullarm_haptics)
+  if(lower MATCHES "${forbidden}")
+    message(FATAL_ERROR "${TARGET} links only fullarm::controllers, yet its link command names '${forbidden}': "
+                        "fullarm::controllers must depend on fullarm::arm and fullarm::core only.\n${command}")
+  endif()
+endforeach()
+message(STATUS "${TARGET}: the link command names fullarm_controllers and no NLopt, SUNDIALS, plant, design or haptics")
