@@ -1,6 +1,11 @@
 #include "figures.hpp"
 
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <iterator>
 #include <string>
 #include <string_view>
@@ -80,6 +85,97 @@ const char* modeName(SeriesMode mode, bool scatter) {
   return scatter ? "markers" : "lines";
 }
 
+// Base64 (RFC 4648, with padding) of `bytes`.
+std::string base64(const std::vector<unsigned char>& bytes) {
+  static constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  std::size_t i = 0;
+  for (; i + 3 <= bytes.size(); i += 3) {
+    const std::uint32_t n = (std::uint32_t{bytes[i]} << 16) | (std::uint32_t{bytes[i + 1]} << 8) | bytes[i + 2];
+    out += kAlphabet[(n >> 18) & 63];
+    out += kAlphabet[(n >> 12) & 63];
+    out += kAlphabet[(n >> 6) & 63];
+    out += kAlphabet[n & 63];
+  }
+  if (i + 1 == bytes.size()) {
+    const std::uint32_t n = std::uint32_t{bytes[i]} << 16;
+    out += kAlphabet[(n >> 18) & 63];
+    out += kAlphabet[(n >> 12) & 63];
+    out += "==";
+  } else if (i + 2 == bytes.size()) {
+    const std::uint32_t n = (std::uint32_t{bytes[i]} << 16) | (std::uint32_t{bytes[i + 1]} << 8);
+    out += kAlphabet[(n >> 18) & 63];
+    out += kAlphabet[(n >> 12) & 63];
+    out += kAlphabet[(n >> 6) & 63];
+    out += '=';
+  }
+  return out;
+}
+
+template <typename T>
+void appendLittleEndian(std::vector<unsigned char>& bytes, T value) {
+  unsigned char raw[sizeof(T)];
+  std::memcpy(raw, &value, sizeof(T));
+  if constexpr (std::endian::native == std::endian::big) {
+    std::reverse(std::begin(raw), std::end(raw));
+  }
+  bytes.insert(bytes.end(), std::begin(raw), std::end(raw));
+}
+
+// Below this ratio of an array's span to its largest magnitude, float32 rounding (relative
+// 6e-8) would reach 1e-4 of the span, a fraction of a pixel no more: such arrays keep float64.
+constexpr double kFloat32MinSpanRatio = 6e-4;
+
+// A numeric array in Plotly's typed-array form {"dtype", "bdata": base64 of little-endian values},
+// about a quarter the size of decimal text. float32 (7 significant digits, ample for a chart)
+// unless the values sit so close together relative to their size that float32 would blur them.
+// NaN (a missing value) stays NaN, which Plotly draws as a gap.
+json typedArray(const std::vector<double>& values, const char* shape = nullptr) {
+  double low = INFINITY;
+  double high = -INFINITY;
+  double magnitude = 0.0;
+  bool fits_float = true;
+  for (const double v : values) {
+    if (std::isnan(v)) continue;
+    low = std::min(low, v);
+    high = std::max(high, v);
+    magnitude = std::max(magnitude, std::abs(v));
+    if (std::abs(v) > 3e38 || (v != 0.0 && std::abs(v) < 1e-37)) fits_float = false;
+  }
+  const bool use_float32 = fits_float && (magnitude == 0.0 || (high - low) >= kFloat32MinSpanRatio * magnitude);
+  std::vector<unsigned char> bytes;
+  bytes.reserve(values.size() * (use_float32 ? 4 : 8));
+  for (const double v : values) {
+    if (use_float32) {
+      appendLittleEndian(bytes, static_cast<float>(v));
+    } else {
+      appendLittleEndian(bytes, v);
+    }
+  }
+  json array = {{"dtype", use_float32 ? "f4" : "f8"}, {"bdata", base64(bytes)}};
+  if (shape != nullptr) array["shape"] = shape;
+  return array;
+}
+
+// Sets the trace's x values: `x0` and `dx` when they are evenly spaced (time axes), else `x`.
+void setX(json& trace, const std::vector<double>& x) {
+  if (x.size() >= 3 && std::isfinite(x.front()) && std::isfinite(x.back())) {
+    const double dx = (x.back() - x.front()) / static_cast<double>(x.size() - 1);
+    const double tolerance = 1e-9 * std::max(std::abs(x.front()), std::abs(x.back()));
+    bool even = dx != 0.0;
+    for (std::size_t i = 0; even && i < x.size(); ++i) {
+      even = std::abs(x[i] - (x.front() + static_cast<double>(i) * dx)) <= tolerance;
+    }
+    if (even) {
+      trace["x0"] = x.front();
+      trace["dx"] = dx;
+      return;
+    }
+  }
+  trace["x"] = typedArray(x);
+}
+
 }  // namespace
 
 json xyFigure(const XyChart& chart, bool scatter) {
@@ -89,11 +185,11 @@ json xyFigure(const XyChart& chart, bool scatter) {
         {"type", "scatter"},
         {"mode", modeName(series.mode, scatter)},
         {"name", plotlyText(series.name)},
-        {"x", series.x},
-        {"y", series.y},
+        {"y", typedArray(series.y)},
         {"line", {{"width", 1.8}}},
         {"marker", {{"size", 6}}},
     };
+    setX(trace, series.x);
     if (!series.point_labels.empty()) {
       json labels = json::array();
       for (const std::string& label : series.point_labels) {
@@ -159,11 +255,17 @@ json histogramFigure(const Histogram& histogram, const HistogramBins& bins) {
 }
 
 json heatMapFigure(const HeatMap& heat_map) {
+  std::vector<double> z;
+  z.reserve(heat_map.y.size() * heat_map.x.size());
+  for (const std::vector<double>& row : heat_map.z) {
+    z.insert(z.end(), row.begin(), row.end());
+  }
+  const std::string shape = std::to_string(heat_map.y.size()) + "," + std::to_string(heat_map.x.size());
   json trace = {
       {"type", "heatmap"},
-      {"x", heat_map.x},
-      {"y", heat_map.y},
-      {"z", heat_map.z},
+      {"x", typedArray(heat_map.x)},
+      {"y", typedArray(heat_map.y)},
+      {"z", typedArray(z, shape.c_str())},
       {"hoverongaps", false},
       {"colorbar",
        {{"title",

@@ -6,14 +6,19 @@
 // file: or data: URL, if a [data-chart] element does not reach data-rendered="true" within
 // 30 s, or if a chart's SVG holds no plotted content; exit status 2 on bad usage. Saves a
 // full-page screenshot either way. Environment: FULLARM_CHROMIUM overrides /usr/bin/chromium.
-import { chromium } from "playwright-core";
-import { mkdtemp, rm, mkdir } from "node:fs/promises";
+//
+// Chromium is driven through the DevTools protocol over a pipe (--remote-debugging-pipe: JSON
+// messages separated by NUL bytes on file descriptors 3 and 4), with Node's standard library
+// alone: no npm package, and any Node.js from 18 on (Debian 12's own).
+import { spawn } from "node:child_process";
+import { mkdtemp, rm, mkdir, writeFile } from "node:fs/promises";
 import { existsSync } from "node:fs";
 import { tmpdir } from "node:os";
 import path from "node:path";
 import { pathToFileURL } from "node:url";
 
 const kRenderTimeoutMs = 30_000;
+const kProtocolTimeoutMs = 60_000;
 const kViewport = { width: 1280, height: 900 };
 
 function usage(message) {
@@ -40,103 +45,247 @@ if (!existsSync(reportPath)) usage(`no such file: ${reportPath}`);
 const executablePath = process.env.FULLARM_CHROMIUM || "/usr/bin/chromium";
 if (!existsSync(executablePath)) usage(`no Chromium at ${executablePath} (set FULLARM_CHROMIUM)`);
 
+// A DevTools-protocol connection over Chromium's pipe: send() returns the command's result,
+// on() subscribes to events of a session.
+class Browser {
+  constructor(child) {
+    this.child = child;
+    this.nextId = 1;
+    this.pending = new Map();
+    this.listeners = [];
+    this.buffer = Buffer.alloc(0);
+    this.closed = false;
+    child.stdio[4].on("data", (chunk) => this.receive(chunk));
+    child.on("exit", (code, signal) => {
+      this.closed = true;
+      for (const { reject } of this.pending.values()) {
+        reject(new Error(`Chromium exited (code ${code}, signal ${signal})`));
+      }
+      this.pending.clear();
+    });
+  }
+
+  receive(chunk) {
+    this.buffer = Buffer.concat([this.buffer, chunk]);
+    let end;
+    while ((end = this.buffer.indexOf(0)) !== -1) {
+      const message = JSON.parse(this.buffer.subarray(0, end).toString("utf8"));
+      this.buffer = this.buffer.subarray(end + 1);
+      if (message.id !== undefined) {
+        const waiter = this.pending.get(message.id);
+        this.pending.delete(message.id);
+        if (!waiter) continue;
+        clearTimeout(waiter.timer);
+        if (message.error) waiter.reject(new Error(`${waiter.method}: ${message.error.message}`));
+        else waiter.resolve(message.result);
+      } else {
+        for (const listener of this.listeners) {
+          if (listener.method === message.method && listener.sessionId === message.sessionId) {
+            listener.handler(message.params);
+          }
+        }
+      }
+    }
+  }
+
+  send(method, params = {}, sessionId = undefined) {
+    if (this.closed) return Promise.reject(new Error(`${method}: Chromium has exited`));
+    const id = this.nextId++;
+    const message = { id, method, params };
+    if (sessionId) message.sessionId = sessionId;
+    return new Promise((resolve, reject) => {
+      const timer = setTimeout(() => {
+        this.pending.delete(id);
+        reject(new Error(`${method}: no answer within ${kProtocolTimeoutMs / 1000} s`));
+      }, kProtocolTimeoutMs);
+      this.pending.set(id, { resolve, reject, method, timer });
+      this.child.stdio[3].write(JSON.stringify(message) + "\0");
+    });
+  }
+
+  on(method, sessionId, handler) {
+    this.listeners.push({ method, sessionId, handler });
+  }
+
+  once(method, sessionId) {
+    return new Promise((resolve) => {
+      const listener = { method, sessionId, handler: (params) => {
+        this.listeners.splice(this.listeners.indexOf(listener), 1);
+        resolve(params);
+      } };
+      this.listeners.push(listener);
+    });
+  }
+}
+
+// Evaluates `expression` in the page and returns its value (awaiting a promise).
+async function evaluate(browser, sessionId, expression) {
+  const { result, exceptionDetails } = await browser.send(
+    "Runtime.evaluate", { expression, awaitPromise: true, returnByValue: true }, sessionId);
+  if (exceptionDetails) {
+    throw new Error(`evaluation failed: ${exceptionDetails.exception?.description ?? exceptionDetails.text}`);
+  }
+  return result.value;
+}
+
 const problems = [];
 const userDataDir = await mkdtemp(path.join(tmpdir(), "fullarm-check-report-"));
-let context;
+let child;
+let chromiumLog = "";
 try {
-  context = await chromium.launchPersistentContext(userDataDir, {
-    executablePath,
-    headless: true,
-    viewport: kViewport,
-    offline: true,
-    args: [
-      "--headless",
-      "--no-sandbox",
-      "--disable-gpu",
-      "--disable-quic",
-      "--no-first-run",
-      "--disable-background-networking",
-      "--disable-component-update",
-      "--disable-sync",
-    ],
+  child = spawn(executablePath, [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--no-default-browser-check",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--disable-extensions",
+    "--hide-scrollbars",
+    "--mute-audio",
+    `--user-data-dir=${userDataDir}`,
+    `--window-size=${kViewport.width},${kViewport.height}`,
+    "--remote-debugging-pipe",
+    "about:blank",
+  ], { stdio: ["ignore", "ignore", "pipe", "pipe", "pipe"] });
+  child.stderr.on("data", (chunk) => { chromiumLog = (chromiumLog + chunk.toString()).slice(-4000); });
+  const spawned = new Promise((resolve, reject) => {
+    child.once("spawn", resolve);
+    child.once("error", reject);
   });
-  const page = context.pages()[0] ?? (await context.newPage());
+  await spawned;
+  const browser = new Browser(child);
 
-  page.on("console", (message) => {
-    if (message.type() === "error") problems.push(`console error: ${message.text()}`);
-  });
-  page.on("pageerror", (error) => problems.push(`page error: ${error.message}`));
-  // Anything but file: and data: is a network request: record it and never let it out.
-  await context.route("**/*", (route) => {
-    const url = route.request().url();
-    if (url.startsWith("file:") || url.startsWith("data:")) return route.continue();
-    problems.push(`network request: ${url}`);
-    return route.abort("blockedbyclient");
-  });
-  page.on("request", (request) => {
-    const url = request.url();
-    if (!url.startsWith("file:") && !url.startsWith("data:")) {
-      problems.push(`request: ${url}`);
+  // The page target Chromium opened, in a flat session.
+  const { targetInfos } = await browser.send("Target.getTargets");
+  let page = targetInfos.find((target) => target.type === "page");
+  if (!page) {
+    const { targetId } = await browser.send("Target.createTarget", { url: "about:blank" });
+    page = { targetId };
+  }
+  const { sessionId } = await browser.send("Target.attachToTarget", { targetId: page.targetId, flatten: true });
+
+  browser.on("Runtime.consoleAPICalled", sessionId, (event) => {
+    if (event.type === "error" || event.type === "assert") {
+      const text = event.args.map((arg) => arg.value ?? arg.description ?? "").join(" ");
+      problems.push(`console error: ${text}`);
     }
   });
+  browser.on("Runtime.exceptionThrown", sessionId, (event) => {
+    const details = event.exceptionDetails;
+    problems.push(`page error: ${details.exception?.description ?? details.text}`);
+  });
+  browser.on("Log.entryAdded", sessionId, (event) => {
+    if (event.entry.level === "error") problems.push(`console error: ${event.entry.text}`);
+  });
+  // Anything but file: and data: is a network request: record it and never let it out.
+  browser.on("Fetch.requestPaused", sessionId, (event) => {
+    const url = event.request.url;
+    if (url.startsWith("file:") || url.startsWith("data:")) {
+      browser.send("Fetch.continueRequest", { requestId: event.requestId }, sessionId).catch(() => {});
+    } else {
+      problems.push(`network request: ${url}`);
+      browser.send("Fetch.failRequest", { requestId: event.requestId, errorReason: "BlockedByClient" }, sessionId)
+        .catch(() => {});
+    }
+  });
+  browser.on("Network.requestWillBeSent", sessionId, (event) => {
+    const url = event.request.url;
+    if (!url.startsWith("file:") && !url.startsWith("data:")) problems.push(`request: ${url}`);
+  });
 
-  await page.goto(pathToFileURL(reportPath).href, { waitUntil: "load" });
+  await browser.send("Runtime.enable", {}, sessionId);
+  await browser.send("Log.enable", {}, sessionId);
+  await browser.send("Page.enable", {}, sessionId);
+  await browser.send("Network.enable", {}, sessionId);
+  await browser.send("Network.emulateNetworkConditions",
+                     { offline: true, latency: 0, downloadThroughput: -1, uploadThroughput: -1 }, sessionId);
+  await browser.send("Fetch.enable", { patterns: [{ urlPattern: "*" }] }, sessionId);
+  await browser.send("Emulation.setDeviceMetricsOverride",
+                     { width: kViewport.width, height: kViewport.height, deviceScaleFactor: 1, mobile: false },
+                     sessionId);
 
-  const chartCount = await page.locator("[data-chart]").count();
+  const loaded = browser.once("Page.loadEventFired", sessionId);
+  const navigation = await browser.send("Page.navigate", { url: pathToFileURL(reportPath).href }, sessionId);
+  if (navigation.errorText) throw new Error(`navigation failed: ${navigation.errorText}`);
+  await loaded;
+
+  const chartCount = await evaluate(browser, sessionId, `document.querySelectorAll("[data-chart]").length`);
   if (chartCount < minCharts) {
     problems.push(`found ${chartCount} [data-chart] elements, expected at least ${minCharts}`);
   }
   // Wait until every chart has settled: data-rendered is "true", or "error" on failure.
-  let settled = true;
-  try {
-    await page.waitForFunction(
-      () => [...document.querySelectorAll("[data-chart]")].every(
-        (element) => element.hasAttribute("data-rendered")),
-      null, { timeout: kRenderTimeoutMs });
-  } catch {
-    settled = false;
-  }
-  const notRendered = await page.$$eval("[data-chart]", (elements) => elements
-    .filter((element) => element.getAttribute("data-rendered") !== "true")
-    .map((element) => `${element.dataset.chart} (data-rendered=${element.getAttribute("data-rendered")})`));
+  const settled = await evaluate(browser, sessionId, `new Promise((resolve) => {
+      const start = performance.now();
+      const poll = () => {
+        const all = [...document.querySelectorAll("[data-chart]")];
+        if (all.every((element) => element.hasAttribute("data-rendered"))) return resolve(true);
+        if (performance.now() - start > ${kRenderTimeoutMs}) return resolve(false);
+        setTimeout(poll, 50);
+      };
+      poll();
+    })`);
+  const notRendered = await evaluate(browser, sessionId, `[...document.querySelectorAll("[data-chart]")]
+      .filter((element) => element.getAttribute("data-rendered") !== "true")
+      .map((element) => element.dataset.chart + " (data-rendered=" + element.getAttribute("data-rendered") + ")")`);
   if (notRendered.length > 0) {
     problems.push(`charts not rendered${settled ? "" : ` within ${kRenderTimeoutMs / 1000} s`}: ` +
                   notRendered.join(", "));
   }
 
   // Each chart must have drawn something: a trace path with geometry or a heat-map image.
-  const charts = await page.$$eval("[data-chart]", (elements) => elements.map((element) => {
-    const svg = element.querySelector("svg.main-svg");
-    const shapes = [...element.querySelectorAll(
-      "svg.main-svg .trace path, svg.main-svg .trace image, svg.main-svg .hm image")];
-    const drawn = shapes.filter((shape) => {
-      if (shape.tagName.toLowerCase() === "image") {
-        return (shape.getAttribute("href") || shape.getAttribute("xlink:href") || "").length > 0;
-      }
-      const d = shape.getAttribute("d") || "";
-      return d.length > 0 && d !== "M0,0Z";
-    }).length;
-    return { id: element.dataset.chart, hasSvg: Boolean(svg), drawn };
-  }));
+  const charts = await evaluate(browser, sessionId, `[...document.querySelectorAll("[data-chart]")].map((element) => {
+      const svg = element.querySelector("svg.main-svg");
+      const shapes = [...element.querySelectorAll(
+        "svg.main-svg .trace path, svg.main-svg .trace image, svg.main-svg .hm image")];
+      const drawn = shapes.filter((shape) => {
+        if (shape.tagName.toLowerCase() === "image") {
+          return (shape.getAttribute("href") || shape.getAttribute("xlink:href") || "").length > 0;
+        }
+        const d = shape.getAttribute("d") || "";
+        return d.length > 0 && d !== "M0,0Z";
+      }).length;
+      return { id: element.dataset.chart, hasSvg: Boolean(svg), drawn };
+    })`);
   for (const chart of charts) {
     if (!chart.hasSvg) problems.push(`chart ${chart.id}: no SVG`);
     else if (chart.drawn === 0) problems.push(`chart ${chart.id}: SVG has no plotted content`);
   }
 
   // The page must open with its verdict.
-  const headline = await page.$eval("h1", (element) => element.textContent.trim()).catch(() => "");
+  const headline = await evaluate(browser, sessionId,
+                                  `(document.querySelector("h1")?.textContent ?? "").trim()`);
   if (!headline) problems.push("no <h1> title");
-  if ((await page.locator(".verdict .badge").count()) !== 1) problems.push("no verdict badge");
+  const badges = await evaluate(browser, sessionId, `document.querySelectorAll(".verdict .badge").length`);
+  if (badges !== 1) problems.push("no verdict badge");
 
+  // Full-page screenshot: the viewport grown to the page's height.
+  const metrics = await browser.send("Page.getLayoutMetrics", {}, sessionId);
+  const fullHeight = Math.ceil((metrics.cssContentSize ?? metrics.contentSize).height);
+  await browser.send("Emulation.setDeviceMetricsOverride",
+                     { width: kViewport.width, height: Math.max(kViewport.height, fullHeight),
+                       deviceScaleFactor: 1, mobile: false }, sessionId);
+  const { data } = await browser.send("Page.captureScreenshot", { format: "png", captureBeyondViewport: true },
+                                      sessionId);
   await mkdir(path.dirname(screenshotPath), { recursive: true });
-  await page.screenshot({ path: screenshotPath, fullPage: true });
+  await writeFile(screenshotPath, Buffer.from(data, "base64"));
   const drawn = charts.map((chart) => `${chart.id}: ${chart.drawn}`).join(", ");
   console.log(`check_report: ${reportPath}: ${charts.length} charts (drawn shapes ${drawn})`);
   console.log(`check_report: screenshot ${screenshotPath}`);
+  await browser.send("Browser.close").catch(() => {});
 } catch (error) {
   problems.push(`unexpected failure: ${error.stack || error}`);
+  if (chromiumLog) console.error(`check_report: the end of Chromium's log:\n${chromiumLog}`);
 } finally {
-  if (context) await context.close();
+  if (child && child.exitCode === null && child.signalCode === null) {
+    const exited = new Promise((resolve) => child.once("exit", resolve));
+    const timer = setTimeout(() => child.kill("SIGKILL"), 3_000);
+    await exited;
+    clearTimeout(timer);
+  }
   await rm(userDataDir, { recursive: true, force: true });
 }
 

@@ -77,10 +77,10 @@ TEST(HtmlDataBlock, CannotBeBrokenOutOfByAClosingScriptTagInALabel) {
   const nlohmann::json& trace = data.at("charts").at("chart-1").at("data").at(0);
   EXPECT_EQ(trace.at("name"),
             "&lt;/script&gt;&lt;script&gt;alert(&quot;x&quot;)&lt;/script&gt;&lt;!-- &amp; &#39;q&#39;");
-  EXPECT_EQ(trace.at("y"), (nlohmann::json{3.0, 4.0}));
+  EXPECT_EQ(test::chartValues(trace.at("y")), (std::vector<double>{3.0, 4.0}));
 }
 
-TEST(HtmlDataBlock, NanBecomesNullAndTheBlockStaysValidJson) {
+TEST(HtmlDataBlock, NanStaysAGapAndTheBlockStaysValidJson) {
   Report report("demo", "Gaps");
   report.setVerdict(true, "ok");
   XyChart chart;
@@ -89,10 +89,77 @@ TEST(HtmlDataBlock, NanBecomesNullAndTheBlockStaysValidJson) {
   chart.series.push_back({"s", {0.0, 1.0, 2.0}, {1.0, nan, 3.0}, SeriesMode::kAuto, {}});
   report.addSection("S").addLineChart(chart);
   const nlohmann::json data = nlohmann::json::parse(jsonDataBlock(report.html()));
-  const nlohmann::json& y = data.at("charts").at("chart-1").at("data").at(0).at("y");
+  const std::vector<double> y = test::chartValues(data.at("charts").at("chart-1").at("data").at(0).at("y"));
+  ASSERT_EQ(y.size(), 3U);
   EXPECT_EQ(y[0], 1.0);
-  EXPECT_TRUE(y[1].is_null());
+  EXPECT_TRUE(std::isnan(y[1]));
   EXPECT_EQ(y[2], 3.0);
+}
+
+// Chart arrays travel as float32 where that is finer than a pixel, float64 where the values
+// sit close together relative to their size, and evenly spaced x values as x0 and dx.
+TEST(HtmlDataBlock, ChartArraysKeepTheirValues) {
+  Report report("demo", "Arrays");
+  report.setVerdict(true, "ok");
+  XyChart chart;
+  chart.title = "Arrays";
+  std::vector<double> time_s;
+  std::vector<double> wide;
+  std::vector<double> narrow;
+  std::vector<double> uneven;
+  for (int i = 0; i < 1001; ++i) {
+    time_s.push_back(0.25 + i * 1e-3);
+    wide.push_back(std::sin(0.01 * i) * 123.456);
+    narrow.push_back(1000.0 + 1e-4 * i);
+    uneven.push_back(i * i * 1e-6);
+  }
+  chart.series.push_back({"wide", time_s, wide, SeriesMode::kLines, {}});
+  chart.series.push_back({"narrow", uneven, narrow, SeriesMode::kLines, {}});
+  report.addSection("S").addLineChart(chart);
+  const nlohmann::json data = nlohmann::json::parse(jsonDataBlock(report.html()));
+  const nlohmann::json& traces = data.at("charts").at("chart-1").at("data");
+
+  const nlohmann::json& even = traces.at(0);
+  EXPECT_FALSE(even.contains("x"));
+  EXPECT_DOUBLE_EQ(even.at("x0").get<double>(), 0.25);
+  EXPECT_NEAR(even.at("dx").get<double>(), 1e-3, 1e-15);
+  EXPECT_EQ(even.at("y").at("dtype"), "f4");
+  const std::vector<double> wide_read = test::chartValues(even.at("y"));
+  ASSERT_EQ(wide_read.size(), wide.size());
+  for (std::size_t i = 0; i < wide.size(); ++i) {
+    EXPECT_NEAR(wide_read[i], wide[i], 1e-7 * 123.456) << i;
+  }
+
+  const nlohmann::json& close = traces.at(1);
+  EXPECT_EQ(close.at("y").at("dtype"), "f8");
+  EXPECT_EQ(test::chartValues(close.at("y")), narrow);
+  const std::vector<double> x_read = test::chartValues(close.at("x"));
+  ASSERT_EQ(x_read.size(), uneven.size());
+  for (std::size_t i = 0; i < uneven.size(); ++i) {
+    EXPECT_NEAR(x_read[i], uneven[i], 1e-7) << i;
+  }
+}
+
+TEST(HtmlDataBlock, HeatMapValuesAreRowMajorWithTheirShape) {
+  Report report("demo", "Heat map");
+  report.setVerdict(true, "ok");
+  HeatMap map;
+  map.title = "Map";
+  map.x = {0.0, 1.0, 2.0};
+  map.y = {10.0, 20.0};
+  map.z = {{1.0, 2.0, 3.0}, {4.0, std::numeric_limits<double>::quiet_NaN(), 6.0}};
+  report.addSection("S").addHeatMap(map);
+  const nlohmann::json data = nlohmann::json::parse(jsonDataBlock(report.html()));
+  const nlohmann::json& trace = data.at("charts").at("chart-1").at("data").at(0);
+  EXPECT_EQ(trace.at("z").at("shape"), "2,3");
+  const std::vector<double> z = test::chartValues(trace.at("z"));
+  ASSERT_EQ(z.size(), 6U);
+  EXPECT_EQ(z[0], 1.0);
+  EXPECT_EQ(z[2], 3.0);
+  EXPECT_EQ(z[3], 4.0);
+  EXPECT_TRUE(std::isnan(z[4]));
+  EXPECT_EQ(z[5], 6.0);
+  EXPECT_EQ(test::chartValues(trace.at("y")), (std::vector<double>{10.0, 20.0}));
 }
 
 TEST(HtmlNetwork, NoAttributeOrStyleLoadsFromTheNetwork) {
@@ -137,7 +204,7 @@ TEST(HtmlPlotly, LibraryIsInlinedWhole) {
   const std::string html = makeSampleReport().html();
   EXPECT_GT(html.size(), 1'000'000U);
   EXPECT_NE(html.find(std::string("plotly.js v") + std::string(plotlyVersion())), std::string::npos);
-  // Byte for byte the file npm installed, inside a script element.
+  // Byte for byte the bundle the build made, inside a script element.
   const std::string library = readFile(FULLARM_TEST_PLOTLY_JS);
   ASSERT_GT(library.size(), 1'000'000U);
   const std::size_t at = html.find(library);

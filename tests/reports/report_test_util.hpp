@@ -6,9 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -16,9 +19,57 @@
 
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include "fullarm/reports/report.hpp"
 
 namespace fullarm::reports::test {
+
+// The values of a chart array as Plotly reads it: a plain JSON array, or a typed array
+// {"dtype": "f4" | "f8", "bdata": base64 of little-endian values}, decoded here with a decoder
+// of its own (a lookup of each base64 character, no shared code with the writer).
+inline std::vector<double> chartValues(const nlohmann::json& array) {
+  std::vector<double> values;
+  if (array.is_array()) {
+    for (const nlohmann::json& v : array) {
+      values.push_back(v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>());
+    }
+    return values;
+  }
+  const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  const std::string text = array.at("bdata").get<std::string>();
+  std::vector<unsigned char> bytes;
+  std::uint32_t bits = 0;
+  int bit_count = 0;
+  for (const char c : text) {
+    if (c == '=') break;
+    const std::size_t index = alphabet.find(c);
+    EXPECT_NE(index, std::string::npos) << "not base64: " << c;
+    bits = (bits << 6) | static_cast<std::uint32_t>(index);
+    bit_count += 6;
+    if (bit_count >= 8) {
+      bit_count -= 8;
+      bytes.push_back(static_cast<unsigned char>((bits >> bit_count) & 0xFFU));
+    }
+  }
+  const std::string dtype = array.at("dtype").get<std::string>();
+  const std::size_t width = dtype == "f4" ? 4 : 8;
+  EXPECT_TRUE(dtype == "f4" || dtype == "f8") << dtype;
+  EXPECT_EQ(bytes.size() % width, 0U);
+  for (std::size_t at = 0; at + width <= bytes.size(); at += width) {
+    // Little-endian on the test machines (x86-64, arm64).
+    if (width == 4) {
+      float f = 0.0F;
+      std::memcpy(&f, &bytes[at], 4);
+      values.push_back(f);
+    } else {
+      double d = 0.0;
+      std::memcpy(&d, &bytes[at], 8);
+      values.push_back(d);
+    }
+  }
+  return values;
+}
 
 // A fresh, empty folder for the running test.
 inline std::filesystem::path freshTempDir() {
