@@ -7,6 +7,14 @@
 #include "fullarm/core/job_pool.hpp"
 
 namespace fullarm::design {
+namespace {
+
+// A joint's model name without its side prefix ("R_EB" -> "EB"), as progress lines name joints.
+std::string shortName(const std::string& name) {
+  return name.starts_with("R_") ? name.substr(2) : name;
+}
+
+}  // namespace
 
 JointPlantModel tunerJointModel(const arm::ArmModel& model, const plant::PlantConfig& plant_config,
                                 const ValidationConfig& validation, const std::string& name) {
@@ -67,6 +75,8 @@ ArmTuningResult tuneArm(const arm::ArmModel& model, const plant::PlantConfig& pl
   std::vector<JointScenario> scenarios(slots.size());
   std::vector<LinearHardGoals> hard(slots.size());
   core::JobPool pool(o.threads);
+  core::Progress& progress = core::progressOrQuiet(o.progress);
+  progress.begin("tune", slots.size() * (o.nonlinear_rounds > 0 ? 2 : 1));
   pool.run(static_cast<int>(slots.size()), [&](int i) {
     const auto k = static_cast<std::size_t>(i);
     const controllers::JointGains& initial = gains.joints[static_cast<std::size_t>(slots[k])];
@@ -85,6 +95,8 @@ ArmTuningResult tuneArm(const arm::ArmModel& model, const plant::PlantConfig& pl
     run.results[k] =
         tuneJoint(models[k], q, initial, setup, joint_goals, TuningBounds{}, validation.ranges, joint_options);
     run.nominal[k] = prepareJoint(models[k], solveOperatingPoint(models[k], q), setup);
+    progress.step(shortName(initial.name) + ": linear stage " +
+                  (run.results[k].feasible ? "meets its hard goals" : "misses a hard goal"));
     if (o.nonlinear_rounds > 0) {
       // The linear stage's hard goals on its final model set: the nonlinear stage prefers
       // candidates that meet them and says so when the written gains do not.
@@ -102,6 +114,8 @@ ArmTuningResult tuneArm(const arm::ArmModel& model, const plant::PlantConfig& pl
       nl.pool = &pool;
       run.stages[k] = refineNonlinear(scenarios[k], run.results[k].tuned, initial, validation.ranges, validation.linear,
                                       nl, &hard[k]);
+      progress.step(shortName(initial.name) + ": nonlinear stage " +
+                    (run.stages[k].verified ? "verified" : "NOT verified"));
     }
     // The contact goal of the written gains (reported whether or not it was a hard goal).
     std::vector<PreparedJoint> contact_models = run.results[k].coupled_models;
@@ -119,6 +133,7 @@ ArmTuningResult tuneArm(const arm::ArmModel& model, const plant::PlantConfig& pl
         {joint_goals.wall_stiffness_nm_per_rad, joint_goals.wall_damping_nms_per_rad}, joint_goals.contact_detector);
   });
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  progress.end();
   run.tuned = gains;
   run.tuned.source.clear();
   run.pass = true;

@@ -58,6 +58,9 @@ ArmValidationResult validateArm(const arm::ArmModel& model, const plant::PlantCo
   const std::vector<double> z_width_dampings(std::begin(kValidationZWidthDampings),
                                              std::end(kValidationZWidthDampings));
   // Linear checks and (optionally) the paper-claim measurement, one job per joint.
+  core::Progress& progress = core::progressOrQuiet(options.progress);
+  progress.begin(options.paper_claim ? "validate: linear checks and paper claim" : "validate: linear checks",
+                 nominal.size());
   parallelFor(static_cast<int>(nominal.size()), out.threads, [&](int j) {
     JointValidationResult& o = out.joints[static_cast<std::size_t>(j)];
     o.nominal = nominal[static_cast<std::size_t>(j)];
@@ -66,9 +69,11 @@ ArmValidationResult validateArm(const arm::ArmModel& model, const plant::PlantCo
       o.claim = measurePaperClaim(o.nominal);
       o.has_claim = true;
     }
+    progress.step(o.nominal.joint_name + (o.linear.pass ? ": linear checks pass" : ": linear checks FAIL"));
   });
+  progress.end();
   const auto t1 = std::chrono::steady_clock::now();
-  const std::vector<JointMonteCarlo> mc = runMonteCarlo(nominal, config, out.threads);
+  const std::vector<JointMonteCarlo> mc = runMonteCarlo(nominal, config, out.threads, options.progress);
   out.monte_carlo_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   for (std::size_t j = 0; j < nominal.size(); ++j) {
     JointValidationResult& o = out.joints[j];

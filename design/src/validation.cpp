@@ -172,7 +172,7 @@ JointScenario validationScenario(const JointScenario& nominal, const ValidationC
 }
 
 std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nominal, const ValidationConfig& config,
-                                           int threads) {
+                                           int threads, core::Progress* progress) {
   std::vector<JointScenario> bases = nominal;
   std::vector<JointMonteCarlo> out(bases.size());
   for (std::size_t j = 0; j < bases.size(); ++j) {
@@ -182,6 +182,8 @@ std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nom
     out[j].runs.resize(static_cast<std::size_t>(config.samples));
   }
   const int per_joint = config.samples;
+  core::Progress& report = core::progressOrQuiet(progress);
+  report.begin("validate: Monte-Carlo runs", bases.size() * static_cast<std::size_t>(per_joint));
   parallelFor(static_cast<int>(bases.size()) * per_joint, threads, [&](int job) {
     const int j = job / per_joint;
     const int i = job % per_joint;
@@ -190,7 +192,9 @@ std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nom
         drawVariation(config.ranges, config.seed, core::nameSlot(bases[static_cast<std::size_t>(j)].joint_name), i);
     run.result = simulateJoint(variationScenario(bases[static_cast<std::size_t>(j)], run.sample));
     run.severity = runSeverity(run.result, config.oscillation_speed_radps);
+    report.advance();
   });
+  std::size_t failed = 0;
   for (JointMonteCarlo& m : out) {
     for (int i = 0; i < static_cast<int>(m.runs.size()); ++i) {
       const MonteCarloRun& run = m.runs[static_cast<std::size_t>(i)];
@@ -199,7 +203,10 @@ std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nom
       if (run.result.acceptable() && !run.result.wall_reached) ++m.wall_not_reached;
       if (m.worst < 0 || run.severity > m.runs[static_cast<std::size_t>(m.worst)].severity) m.worst = i;
     }
+    failed += static_cast<std::size_t>(m.failures);
   }
+  report.end(std::to_string(failed) + " of " + std::to_string(bases.size() * static_cast<std::size_t>(per_joint)) +
+             " runs failed");
   return out;
 }
 

@@ -14,6 +14,7 @@
 
 #include "fullarm/arm/arm_model.hpp"
 #include "fullarm/controllers/gains.hpp"
+#include "fullarm/core/progress.hpp"
 #include "fullarm/design/coupled_stability.hpp"
 #include "fullarm/design/joint_linearization.hpp"
 #include "fullarm/design/linear_analysis.hpp"
@@ -39,6 +40,8 @@ struct ArmTuningOptions {
   /// The contact goal (Eq. C6) as a hard goal of the linear stage; it is computed for the written
   /// gains either way (ArmTuningResult::contact).
   bool contact_goal = false;
+  /// Reports each joint's stages as they end (a step per stage and joint); null: silent. Not owned.
+  core::Progress* progress = nullptr;
 };
 
 /// What tuneArm() returns; the vectors are indexed like ArmTuningOptions::joints (or the gains

@@ -13,6 +13,7 @@
 
 #include "fullarm/arm/arm_model.hpp"
 #include "fullarm/controllers/gains.hpp"
+#include "fullarm/core/progress.hpp"
 #include "fullarm/design/closed_loop.hpp"
 #include "fullarm/design/paper_claim.hpp"
 #include "fullarm/design/scenario_analysis.hpp"
@@ -32,6 +33,9 @@ struct ArmValidationOptions {
   bool paper_claim = false;         ///< also measure the paper's claim (measurePaperClaim)
   /// The joints whose claim is measured (short or model names); empty = every validated joint.
   std::vector<std::string> paper_claim_joints;
+  /// Reports the linear checks (a step per joint) and the Monte-Carlo (a unit per run); null:
+  /// silent. Not owned.
+  core::Progress* progress = nullptr;
 };
 
 /// Everything validateArm() computes for one joint.

@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "fullarm/core/progress.hpp"
 #include "fullarm/design/closed_loop.hpp"
 #include "fullarm/design/scenario_analysis.hpp"
 #include "fullarm/design/uncertainty.hpp"
@@ -69,9 +70,11 @@ struct JointMonteCarlo {
 
 /// Runs `config.samples` simulations of every nominal scenario (its user, wall and detector
 /// replaced by the config's) on `threads` worker threads (<= 0: hardware concurrency).
-/// Results are identical for any thread count.
+/// Results are identical for any thread count. Reports each finished run as a unit of
+/// `progress` (a task "validate: Monte-Carlo" of samples x joints runs) unless it is null.
 [[nodiscard]] std::vector<JointMonteCarlo> runMonteCarlo(const std::vector<JointScenario>& nominal,
-                                                         const ValidationConfig& config, int threads);
+                                                         const ValidationConfig& config, int threads,
+                                                         core::Progress* progress = nullptr);
 
 /// Runs `jobs` calls of `job(i)` for i in [0, jobs) on `threads` worker threads (<= 0: hardware
 /// concurrency), each index exactly once; rethrows the first exception after all threads end.
