@@ -2,6 +2,8 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <algorithm>
 #include <vector>
 
 #include "fullarm/core/config_error.hpp"
@@ -48,6 +50,34 @@ Eigen::VectorXd parseJointVector(std::string_view text, const arm::ArmModel& mod
 
 std::filesystem::path configPathOr(const std::string& option_value, std::filesystem::path (*default_path)()) {
   return option_value.empty() ? default_path() : std::filesystem::path(option_value);
+}
+
+std::vector<std::string> gainsJointNames(const controllers::GainsConfig& gains, const std::vector<std::string>& names,
+                                         const std::string& option) {
+  std::vector<std::string> out;
+  if (names.empty()) {
+    for (const controllers::JointGains& g : gains.joints) out.push_back(g.name);
+    return out;
+  }
+  for (const std::string& n : names) {
+    std::string model_name;
+    try {
+      model_name = gains.joints[static_cast<std::size_t>(controllers::findGainsJoint(gains, n))].name;
+    } catch (const core::ConfigError& e) {
+      throw core::ConfigError({}, option, std::string(e.what()));
+    }
+    if (std::find(out.begin(), out.end(), model_name) != out.end()) {
+      throw core::ConfigError({}, option, "names joint " + model_name + " twice: expected each joint at most once");
+    }
+    out.push_back(model_name);
+  }
+  return out;
+}
+
+std::string numberText(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
 }
 
 std::string shortJointName(const std::string& name) {

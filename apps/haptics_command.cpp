@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli_values.hpp"
+#include "output_files.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/core/data_paths.hpp"
 #include "fullarm/haptics/contact_forces.hpp"
@@ -55,24 +56,21 @@ std::string linksInContactText(const arm::ArmModel& model, const haptics::Contac
 
 }  // namespace
 
-CLI::App* addHapticsCommand(CLI::App& app, HapticsQueryOptions& o) {
+CLI::App* addHapticsCommand(CLI::App& app, HapticsQueryOptions& o, OptionTable& table) {
   CLI::App* haptics = app.add_subcommand("haptics", "Full-arm haptic rendering: minima, contact forces, torques");
   haptics->require_subcommand(1);
   CLI::App* query = haptics->add_subcommand(
       "query", "Global search of the arm against a scene at one configuration; print the minima, forces and torques");
-  query->add_option("--scene", o.scene, "Scene YAML (scenes/valve_wall.yaml)")->required()->check(CLI::ExistingFile);
-  query->add_option("--q", o.q_text, "Joint angles [rad], e.g. \"1.2,-0.3,0,0.7,0,0,0\"")->required();
-  query->add_option("--out", o.out_dir, "Write summary.json and report.html to this folder");
-  query->add_option("--mode", o.mode, "full-arm: every link renders; hand-only: only the hand (the paper's baseline)")
-      ->check(CLI::IsMember({"full-arm", "hand-only"}))
-      ->capture_default_str();
-  query->add_option("--search", o.search, "Global search: snch (spatialized normal cones) or bullet (Bullet 3)")
-      ->check(CLI::IsMember({"snch", "bullet"}))
-      ->capture_default_str();
-  query->add_option("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)")
-      ->check(CLI::ExistingFile);
-  query->add_option("--haptics-config", o.haptics_config, "Haptics YAML (default: config/haptics.yaml)")
-      ->check(CLI::ExistingFile);
+  OptionDeclarer declare(*query, table);
+  declare.file("--scene", o.scene, "Scene YAML (scenes/valve_wall.yaml)")->required();
+  declare.numberList("--q", o.q_text, "Joint angles [rad], e.g. \"1.2,-0.3,0,0.7,0,0,0\"")->required();
+  declare.folder("--out", o.out_dir, "Write summary.json and report.html to this folder");
+  declare.choice("--mode", o.mode, "full-arm: every link renders; hand-only: only the hand (the paper's baseline)",
+                 {"full-arm", "hand-only"});
+  declare.choice("--search", o.search, "Global search: snch (spatialized normal cones) or bullet (Bullet 3)",
+                 {"snch", "bullet"});
+  declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
+  declare.file("--haptics-config", o.haptics_config, "Haptics YAML (default: config/haptics.yaml)");
   return query;
 }
 
@@ -151,7 +149,7 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
       mergeJson(r, t->json);
       section.addTable(std::move(t->table));
     }
-    report.write(o.out_dir);
+    writeReport(report, o.out_dir);
     std::cout << "\nReport: " << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
   }
   return contact.status.ok() ? 0 : 1;

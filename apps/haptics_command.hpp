@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include "cli_options.hpp"
 #include "fullarm/arm/arm_model.hpp"
 #include "fullarm/reports/report.hpp"
 
@@ -23,7 +24,7 @@ struct HapticsQueryOptions {
 };
 
 /// Adds `haptics` with its `query` subcommand to `app`; returns the `query` subcommand.
-CLI::App* addHapticsCommand(CLI::App& app, HapticsQueryOptions& options);
+CLI::App* addHapticsCommand(CLI::App& app, HapticsQueryOptions& options, OptionTable& table);
 
 /// Runs `fullarm haptics query`: prints the minima, the contact forces, the per-link contact
 /// records and the joint torques; with --out also summary.json and report.html.

@@ -1,12 +1,14 @@
 #include "plant_command.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <numbers>
 #include <sstream>
 
 #include "cli_values.hpp"
+#include "output_files.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/plant/arm_plant.hpp"
@@ -58,37 +60,31 @@ void addTraceCharts(reports::Section& section, const plant::JointTrace& tr) {
 
 }  // namespace
 
-CLI::App* addPlantCommand(CLI::App& app, PlantSimulateOptions& o) {
+CLI::App* addPlantCommand(CLI::App& app, PlantSimulateOptions& o, OptionTable& table) {
   CLI::App* plant = app.add_subcommand("plant", "The hydraulic plant model of the DTS arm (SUNDIALS CVODES)");
   plant->require_subcommand(1);
   CLI::App* sim = plant->add_subcommand("simulate",
                                         "Drive one joint (or the whole arm) with a command signal; "
                                         "write a CSV log, summary.json and report.html");
-  sim->add_option("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)")
-      ->check(CLI::ExistingFile);
-  sim->add_option("--plant-config", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)")
-      ->check(CLI::ExistingFile);
-  sim->add_option("--joint", o.joint, "Joint to excite, e.g. EB or R_EB")->capture_default_str();
-  sim->add_flag("--arm", o.whole_arm,
-                "Run all 7 arm joints (the same command on each, or command_<joint> CSV columns)");
-  sim->add_option("--input", o.input, "chirp | step | sine | multisine | <file>.csv (header time_s,command)")
-      ->capture_default_str();
-  sim->add_option("--duration", o.duration_s, "Simulated time [s]")->check(CLI::PositiveNumber)->capture_default_str();
-  sim->add_option("--amplitude", o.amplitude,
-                  "Signal amplitude in command units (V, or N m in torque-loop mode); default full scale");
-  sim->add_option("--frequency", o.frequency_hz, "Sine frequency [Hz]")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sim->add_option("--start-hz", o.start_hz, "Chirp start / multisine fundamental [Hz]")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sim->add_option("--stop-hz", o.stop_hz, "Chirp stop / highest multisine harmonic [Hz]")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sim->add_option("--input-mode", o.input_mode, "Override the joints' input mode")
-      ->check(CLI::IsMember({"valve_voltage", "torque_loop"}));
-  sim->add_option("--dt", o.dt_s, "Control period [s]")->check(CLI::Range(1e-5, 0.1))->capture_default_str();
-  sim->add_option("--out", o.out_dir, "Output folder")->capture_default_str();
+  OptionDeclarer declare(*sim, table);
+  declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
+  declare.file("--plant-config", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)");
+  declare.name("--joint", o.joint, "Joint to excite, e.g. EB or R_EB");
+  declare.flag("--arm", o.whole_arm, "Run all 7 arm joints (the same command on each, or command_<joint> CSV columns)");
+  declare.name("--input", o.input, "chirp | step | sine | multisine | <file>.csv (header time_s,command)");
+  declare.number("--duration", o.duration_s,
+                 "Simulated time; a run records at most 2,000,000 joint samples (duration / dt x joints)",
+                 {1e-3, 3600.0, "s"});
+  declare.number("--amplitude", o.amplitude,
+                 "Signal amplitude in command units (V, or N m in torque-loop mode); default full scale",
+                 {0.0, 1000.0, "V or N m"});
+  declare.number("--frequency", o.frequency_hz, "Sine frequency (below half the control rate)", {1e-3, 5000.0, "Hz"});
+  declare.number("--start-hz", o.start_hz, "Chirp start / multisine fundamental", {1e-3, 5000.0, "Hz"});
+  declare.number("--stop-hz", o.stop_hz, "Chirp stop / highest multisine harmonic (below half the control rate)",
+                 {1e-3, 5000.0, "Hz"});
+  declare.choice("--input-mode", o.input_mode, "Override the joints' input mode", {"valve_voltage", "torque_loop"});
+  declare.number("--dt", o.dt_s, "Control period", {1e-5, 0.1, "s"});
+  declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
   return sim;
 }
 
@@ -109,13 +105,39 @@ int runPlantSimulate(const PlantSimulateOptions& o) {
   if (o.stop_hz <= o.start_hz && (o.input == "chirp" || o.input == "multisine")) {
     throw core::ConfigError({}, "--stop-hz", "must be above --start-hz");
   }
+  // Frequencies the control period can represent; the memory of the traces bounded up front.
+  const double nyquist_hz = 0.5 / o.dt_s;
+  const auto below_nyquist = [&](const char* option, double hz) {
+    if (hz >= nyquist_hz) {
+      throw core::ConfigError({}, option,
+                              "is " + numberText(hz) + " Hz: expected below half the control rate (" +
+                                  numberText(nyquist_hz) + " Hz at --dt " + numberText(o.dt_s) + " s)");
+    }
+  };
+  if (o.input == "sine") below_nyquist("--frequency", o.frequency_hz);
+  if (o.input == "chirp" || o.input == "multisine") below_nyquist("--stop-hz", o.stop_hz);
+  const double samples = (std::round(o.duration_s / o.dt_s) + 1.0) * static_cast<double>(joints.size());
+  if (samples > kMaxTraceSamples) {
+    throw core::ConfigError({}, "--duration",
+                            numberText(o.duration_s) + " s at --dt " + numberText(o.dt_s) + " s on " +
+                                std::to_string(joints.size()) + " joint(s) is " + std::to_string(std::lround(samples)) +
+                                " trace samples: expected at most 2000000 (about 130 MB of traces); shorten the run "
+                                "or lengthen --dt");
+  }
   plant::InputSignal input;
   input.name = o.input;
   input.amplitude = o.amplitude;
   input.frequency_hz = o.frequency_hz;
   input.start_hz = o.start_hz;
   input.stop_hz = o.stop_hz;
-  const plant::CommandFunction command = plant::makeCommand(input, model, joints, o.duration_s);
+  plant::CommandFunction command;
+  try {
+    command = plant::makeCommand(input, model, joints, o.duration_s);
+  } catch (const std::invalid_argument& e) {
+    throw core::ConfigError({}, "--input", e.what());
+  } catch (const std::runtime_error& e) {
+    throw core::ConfigError(o.input, "--input", e.what());
+  }
   const bool is_csv = o.input.size() > 4 && o.input.ends_with(".csv");
   const std::string description = is_csv ? "command table " + o.input : o.input + " signal";
 
@@ -123,12 +145,13 @@ int runPlantSimulate(const PlantSimulateOptions& o) {
             << o.duration_s << " s at " << 1.0 / o.dt_s << " Hz\n";
   const plant::SimulationResult r = plant::simulate(model, config, joints, command, o.duration_s, o.dt_s);
 
-  std::filesystem::create_directories(o.out_dir);
+  createOutputFolder(o.out_dir);
   reports::Report report("plant simulate",
                          "Hydraulic plant: " + (o.whole_arm ? std::string("whole arm") : joints[0].name));
   for (const plant::JointTrace& tr : r.traces) {
     const std::string name = o.whole_arm ? "plant_log_" + shortJointName(tr.joint) + ".csv" : "plant_log.csv";
-    plant::writeTraceCsv(tr, std::filesystem::path(o.out_dir) / name);
+    const std::filesystem::path file = std::filesystem::path(o.out_dir) / name;
+    writeOutput(file, [&] { plant::writeTraceCsv(tr, file); });
     report.addFile(name);
   }
   const bool pass = r.passed();
@@ -168,7 +191,7 @@ int runPlantSimulate(const PlantSimulateOptions& o) {
                        "p_a_pa, p_b_pa, spool_fraction (state at time_s; command held over the following period).");
   section.addTable(std::move(stats.table));
   for (const plant::JointTrace& tr : r.traces) addTraceCharts(report.addSection("Joint " + tr.joint), tr);
-  report.write(o.out_dir);
+  writeReport(report, o.out_dir);
   std::cout << headline << "\nReal-time factor " << r.realTimeFactor() << ", " << r.stats.steps << " CVODES steps, "
             << r.stats.jac_evals
             << " Jacobians\nReport: " << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
@@ -187,8 +210,8 @@ PlantDemoStep runPlantDemoStep(const arm::ArmModel& model, const std::filesystem
   constexpr double kDuration_s = 5.0;
   const plant::SimulationResult r = plant::simulate(
       model, config, {joint}, plant::makeCommand(input, model, {joint}, kDuration_s), kDuration_s, 1e-3);
-  std::filesystem::create_directories(out_dir);
-  plant::writeTraceCsv(r.traces[0], out_dir / "plant_chirp.csv");
+  createOutputFolder(out_dir);
+  writeOutput(out_dir / "plant_chirp.csv", [&] { plant::writeTraceCsv(r.traces[0], out_dir / "plant_chirp.csv"); });
   report.addFile("plant_chirp.csv");
   PlantDemoStep step;
   step.pass = r.solver_ok;

@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "cli_options.hpp"
 #include "fullarm/arm/arm_model.hpp"
 #include "fullarm/reports/report.hpp"
 
@@ -28,13 +29,22 @@ struct PlantSimulateOptions {
   std::string out_dir = "out/plant";
 };
 
-/// Adds `plant` with its `simulate` subcommand to `app`; returns the `simulate` subcommand.
-CLI::App* addPlantCommand(CLI::App& app, PlantSimulateOptions& options);
+/// The most joint samples (duration / dt + 1, times the active joints) one run records: the
+/// traces are kept in memory (8 doubles a sample, 64 MB per million samples) until the CSV files
+/// and the report are written, so the run's memory is bounded before it starts. At 1 kHz: 2000 s
+/// of one joint, 285 s of the 7-joint arm.
+inline constexpr double kMaxTraceSamples = 2e6;
+
+/// Adds `plant` with its `simulate` subcommand to `app`, its options declared in `table`;
+/// returns the `simulate` subcommand.
+CLI::App* addPlantCommand(CLI::App& app, PlantSimulateOptions& options, OptionTable& table);
 
 /// Runs `fullarm plant simulate`: CSV log(s), summary.json, report.html.
 /// @return 0 when the run passed (no solver failure, pressures within [return, supply] up to
 ///   the check-valve margin, stops not exceeded by more than 0.5 deg), 1 otherwise.
-/// @throws core::ConfigError / std::runtime_error for bad input (exit code 2 in main).
+/// @throws core::ConfigError for bad input (an option's value, a run longer than
+///   kMaxTraceSamples allows, an unreadable command table); OutputError when the output folder
+///   cannot be written.
 int runPlantSimulate(const PlantSimulateOptions& options);
 
 /// Result of the demo's plant step.

@@ -10,6 +10,8 @@
 #include <stdexcept>
 
 #include "cli_values.hpp"
+#include "exit_codes.hpp"
+#include "output_files.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/design/linear_analysis.hpp"
@@ -267,49 +269,32 @@ void addToReport(const design::ArmTuningResult& run, reports::Report& report, co
   section.addLineChart(std::move(impedance));
 }
 
-void writeText(const std::filesystem::path& path, const std::string& text) {
-  std::filesystem::create_directories(path.parent_path());
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write " + path.string());
-}
 
 }  // namespace
 
-CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o) {
+CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o, OptionTable& table) {
   CLI::App* tune = app.add_subcommand(
       "tune", "Tune the admittance gains per joint (NLopt, systune-style goals); write gains.yaml and a report");
-  tune->add_option("--plant", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)")->check(CLI::ExistingFile);
-  tune->add_option("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)")
-      ->check(CLI::ExistingFile);
-  tune->add_option("--gains", o.gains, "Starting gains YAML (default: config/dts_tune_start.yaml); B_o is kept")
-      ->check(CLI::ExistingFile);
-  tune->add_option("--ranges", o.validation_config,
-                   "User model and uncertainty ranges (default: config/dts_validation.yaml)")
-      ->check(CLI::ExistingFile);
-  tune->add_option("--joints", o.tuning.joints, "Joints to tune, e.g. EB,WR (default: all)")->delimiter(',');
-  tune->add_option("--global-evals", o.tuning.global_evaluations, "Global-stage evaluations per round")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  tune->add_option("--local-evals", o.tuning.local_evaluations, "Local (COBYLA) evaluations per round")
-      ->check(CLI::Range(0, 100000))
-      ->capture_default_str();
-  tune->add_option("--rounds", o.tuning.rounds, "Worst-case rounds")->check(CLI::Range(1, 20))->capture_default_str();
-  tune->add_option("--seed", o.tuning.seed, "Seed of the worst-case search")->capture_default_str();
-  tune->add_option("--threads", o.tuning.threads, "Worker threads (one joint each)")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str();
-  tune->add_option("--nonlinear-rounds", o.tuning.nonlinear_rounds,
-                   "Rounds of the nonlinear verification stage (0: linear stage only)")
-      ->check(CLI::Range(0, 20))
-      ->capture_default_str();
-  tune->add_flag("--modal-amplitude,!--peak-speed-amplitude", o.tuning.modal_amplitude,
-                 "Coupled goal: each mode's own speed amplitude after the free move (Eq. C5, the default) or "
-                 "(--peak-speed-amplitude) the move's peak speed (Eq. C3, a bound)");
-  tune->add_flag("--contact-goal", o.tuning.contact_goal,
-                 "Make the contact goal (Eq. C6: every mode against the wall judged decaying by the contact hold's "
-                 "detector) a hard goal of the linear stage; it is reported in summary.json either way");
-  tune->add_option("--out", o.out_dir, "Output folder")->capture_default_str();
+  OptionDeclarer declare(*tune, table);
+  declare.file("--plant", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)");
+  declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
+  declare.file("--gains", o.gains, "Starting gains YAML (default: config/dts_tune_start.yaml); B_o is kept");
+  declare.file("--ranges", o.validation_config, "User model and uncertainty ranges (default: config/dts_validation.yaml)");
+  declare.list("--joints", o.tuning.joints, "Joints to tune, e.g. EB,WR (default: all)");
+  declare.integer("--global-evals", o.tuning.global_evaluations, "Global-stage evaluations per round", 1, 100000);
+  declare.integer("--local-evals", o.tuning.local_evaluations, "Local (COBYLA) evaluations per round", 0, 100000);
+  declare.integer("--rounds", o.tuning.rounds, "Worst-case rounds", 1, 20);
+  declare.integer("--seed", o.tuning.seed, "Seed of the worst-case search", 0, 2147483647);
+  declare.integer("--threads", o.tuning.threads, "Worker threads (one joint each)", 1, 64);
+  declare.integer("--nonlinear-rounds", o.tuning.nonlinear_rounds,
+                  "Rounds of the nonlinear verification stage (0: linear stage only)", 0, 20);
+  declare.flag("--modal-amplitude,!--peak-speed-amplitude", o.tuning.modal_amplitude,
+               "Coupled goal: each mode's own speed amplitude after the free move (Eq. C5, the default) or "
+               "(--peak-speed-amplitude) the move's peak speed (Eq. C3, a bound)");
+  declare.flag("--contact-goal", o.tuning.contact_goal,
+               "Make the contact goal (Eq. C6: every mode against the wall judged decaying by the contact hold's "
+               "detector) a hard goal of the linear stage; it is reported in summary.json either way");
+  declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
   return tune;
 }
 
@@ -321,9 +306,11 @@ int runTune(const TuneOptions& o) {
       controllers::loadGainsConfig(configPathOr(o.gains, controllers::defaultTuneStartGainsPath), model);
   const design::ValidationConfig validation =
       design::loadValidationConfig(configPathOr(o.validation_config, design::defaultValidationConfigPath));
+  // Each joint named once, and known to the gains file (also "EB" against "R_EB").
+  static_cast<void>(gainsJointNames(gains, o.tuning.joints, "--joints"));
   const design::ArmTuningResult run = design::tuneArm(model, plant_config, gains, validation, o.tuning);
   const std::filesystem::path out(o.out_dir);
-  writeText(out / kGainsFileName, controllers::formatGainsYaml(run.tuned));
+  writeTextFile(out / kGainsFileName, controllers::formatGainsYaml(run.tuned));
   reports::Report report("tune", "Admittance gains tuned per joint");
   int feasible = 0;
   for (const TuningResult& r : run.results) feasible += r.feasible ? 1 : 0;
@@ -342,26 +329,27 @@ int runTune(const TuneOptions& o) {
   report.addHeadlineNumber("wall_time_s", "Tuning wall time", run.wall_s, "s");
   report.addFile(kGainsFileName);
   addToReport(run, report, "Tuning");
-  report.write(out);
+  writeReport(report, out);
   for (const TuningResult& r : run.results) std::cout << r.verdict << "\n";
   for (const design::NonlinearStageResult& st : run.stages) std::cout << st.verdict << "\n";
   std::cout << "Tuned gains: " << (std::filesystem::absolute(out) / kGainsFileName).string() << " (" << std::fixed
             << std::setprecision(1) << run.wall_s << " s)\n";
-  return run.pass ? 0 : 1;
+  return run.pass ? kExitPass : kExitInconclusive;
 }
 
 TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir,
-                             reports::Report& report) {
+                             reports::Report& report, core::Progress& progress) {
   const plant::PlantConfig plant_config = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
   const GainsConfig gains = controllers::loadGainsConfig(controllers::defaultTuneStartGainsPath(), model);
   const design::ValidationConfig validation = design::loadValidationConfig(design::defaultValidationConfigPath());
   // `fullarm tune`'s own budget and start: the demo's tuned gains are the shipped dts_gains.yaml
   // (a smaller linear budget moved the linear optima and with them the nonlinear stage's result).
-  const design::ArmTuningResult run =
-      design::tuneArm(model, plant_config, gains, validation, design::ArmTuningOptions{});
+  design::ArmTuningOptions tuning;
+  tuning.progress = &progress;
+  const design::ArmTuningResult run = design::tuneArm(model, plant_config, gains, validation, tuning);
   TuneDemoStep step;
   step.gains_file = out_dir / "tuned_gains.yaml";
-  writeText(step.gains_file, controllers::formatGainsYaml(run.tuned));
+  writeTextFile(step.gains_file, controllers::formatGainsYaml(run.tuned));
   report.addFile("tuned_gains.yaml");
   addToReport(run, report, "Tune the admittance controller");
   int feasible = 0;

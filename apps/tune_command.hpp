@@ -6,7 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "cli_options.hpp"
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/core/progress.hpp"
 #include "fullarm/design/tune_arm.hpp"
 #include "fullarm/reports/report.hpp"
 
@@ -23,12 +25,13 @@ struct TuneOptions {
 };
 
 /// Adds `tune` to `app`.
-CLI::App* addTuneCommand(CLI::App& app, TuneOptions& options);
+CLI::App* addTuneCommand(CLI::App& app, TuneOptions& options, OptionTable& table);
 
 /// Runs `fullarm tune`: gains.yaml (loadable by `validate`), summary.json, report.html.
 /// @return 0 when every tuned joint passed the nonlinear verification stage (or, with
-/// nonlinear_rounds = 0, met its linear hard goals), 1 otherwise.
-/// @throws core::ConfigError / std::runtime_error for bad input (exit code 2 in main).
+/// nonlinear_rounds = 0, met its linear hard goals); 4 (inconclusive) otherwise: the tuning's
+/// budget ran out before gains were verified for every joint, which proves no gains infeasible.
+/// @throws core::ConfigError for bad input; OutputError when the output folder cannot be written.
 int runTune(const TuneOptions& options);
 
 /// Result of the demo's tune step.
@@ -41,6 +44,7 @@ struct TuneDemoStep {
 /// The demo step: tunes all 7 joints on the default plant with `fullarm tune`'s default budget
 /// and start (so it writes the shipped dts_gains.yaml's gains), writes `tuned_gains.yaml` into
 /// `out_dir` and adds its section and the `results.tune` keys to `report`.
-TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir, reports::Report& report);
+TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir, reports::Report& report,
+                             core::Progress& progress);
 
 }  // namespace fullarm::app

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cli_values.hpp"
+#include "output_files.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/core/config_error.hpp"
@@ -26,20 +27,6 @@ std::string fixed(double v, int digits) {
   std::ostringstream os;
   os << std::setprecision(digits) << v;
   return os.str();
-}
-
-std::vector<std::string> splitJoints(const std::string& text) {
-  std::vector<std::string> out;
-  std::string cur;
-  for (char c : text + ",") {
-    if (c == ',' || c == ' ') {
-      if (!cur.empty()) out.push_back(cur);
-      cur.clear();
-    } else {
-      cur += c;
-    }
-  }
-  return out;
 }
 
 // Thins a frequency response to at most kMaxFrequencyPoints points.
@@ -385,41 +372,30 @@ void printOutcome(const design::ArmValidationResult& out, std::ostream& os) {
 }
 
 std::vector<std::string> jointList(const controllers::GainsConfig& gains, const std::string& text) {
-  std::vector<std::string> names;
-  if (text.empty()) {
-    for (const controllers::JointGains& g : gains.joints) names.push_back(g.name);
-    return names;
-  }
-  for (const std::string& n : splitJoints(text)) {
-    names.push_back(gains.joints[static_cast<std::size_t>(controllers::findGainsJoint(gains, n))].name);
-  }
-  return names;
+  return gainsJointNames(gains, text.empty() ? std::vector<std::string>{} : splitList(text), "--joints");
 }
 
 }  // namespace
 
-CLI::App* addValidateCommand(CLI::App& app, ValidateOptions& o) {
+CLI::App* addValidateCommand(CLI::App& app, ValidateOptions& o, OptionTable& table) {
   CLI::App* cmd = app.add_subcommand(
       "validate",
       "Validate controller gains per joint: linear checks, then a seeded Monte-Carlo of nonlinear closed-loop "
       "simulations (free motion, then a virtual wall); exit 1 on FAIL");
-  cmd->add_option("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--plant", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)")->check(CLI::ExistingFile);
-  cmd->add_option("--gains", o.gains_config, "Gains YAML (default: config/dts_gains.yaml)")->check(CLI::ExistingFile);
-  cmd->add_option("--ranges", o.ranges_config, "Monte-Carlo ranges YAML (default: config/dts_validation.yaml)")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--out", o.out_dir, "Output folder")->capture_default_str();
-  cmd->add_option("--samples", o.samples, "Monte-Carlo runs per joint (overrides the ranges file)")
-      ->check(CLI::Range(1, 1000000));
-  cmd->add_option("--seed", o.seed, "Monte-Carlo seed (overrides the ranges file)")
-      ->check(CLI::Range(std::int64_t{0}, std::int64_t{2147483647}));
-  cmd->add_option("--threads", o.threads, "Worker threads (0: one per core); results do not depend on it")
-      ->check(CLI::Range(0, 256))
-      ->capture_default_str();
-  cmd->add_option("--joints", o.joints, "Comma-separated joints, e.g. EB,WR (default: every joint of the gains file)");
-  cmd->add_flag("--paper-claim", o.paper_claim,
-                "Also measure the paper's claim (admittance vs torque PID at equal transparency) per joint");
+  OptionDeclarer declare(*cmd, table);
+  declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
+  declare.file("--plant", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)");
+  declare.file("--gains", o.gains_config, "Gains YAML (default: config/dts_gains.yaml)");
+  declare.file("--ranges", o.ranges_config, "Monte-Carlo ranges YAML (default: config/dts_validation.yaml)");
+  declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
+  // The Monte-Carlo keeps every run's result (a few hundred bytes each): 100,000 runs per joint
+  // stay below a gigabyte for the 7 joints.
+  declare.integer("--samples", o.samples, "Monte-Carlo runs per joint (overrides the ranges file)", 1, 100000);
+  declare.integer("--seed", o.seed, "Monte-Carlo seed (overrides the ranges file)", 0, 2147483647);
+  declare.integer("--threads", o.threads, "Worker threads (0: one per core); results do not depend on it", 0, 256);
+  declare.list("--joints", o.joints, "Comma-separated joints, e.g. EB,WR (default: every joint of the gains file)");
+  declare.flag("--paper-claim", o.paper_claim,
+               "Also measure the paper's claim (admittance vs torque PID at equal transparency) per joint");
   return cmd;
 }
 
@@ -440,6 +416,7 @@ int runValidate(const ValidateOptions& o) {
   options.joints = joints;
   options.threads = o.threads;
   options.paper_claim = o.paper_claim;
+  options.progress = o.progress;
   const design::ArmValidationResult out = design::validateArm(model, plant_config, gains, config, options);
   printOutcome(out, std::cout);
 
@@ -452,14 +429,14 @@ int runValidate(const ValidateOptions& o) {
                              : std::to_string(failed) + " of " + std::to_string(out.joints.size()) + " joints failed");
   report.results()["validate"] = toJson(out);
   addToReport(out, report, "");
-  report.write(o.out_dir);
+  writeReport(report, o.out_dir);
   std::cout << (out.pass() ? "PASS" : "FAIL")
             << "\nReport: " << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
   return out.pass() ? 0 : 1;
 }
 
 ValidateDemoStep runValidateDemoStep(const arm::ArmModel& model, const std::filesystem::path& gains_path, int samples,
-                                     reports::Report& report) {
+                                     reports::Report& report, core::Progress& progress) {
   const plant::PlantConfig plant_config = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
   const controllers::GainsConfig gains = controllers::loadGainsConfig(gains_path, model);
   design::ValidationConfig config = design::loadValidationConfig(design::defaultValidationConfigPath());
@@ -467,6 +444,7 @@ ValidateDemoStep runValidateDemoStep(const arm::ArmModel& model, const std::file
   design::ArmValidationOptions options;
   options.paper_claim = true;
   options.paper_claim_joints = {"EB"};
+  options.progress = &progress;
   const design::ArmValidationResult out = design::validateArm(model, plant_config, gains, config, options);
   printOutcome(out, std::cout);
   report.results()["validate"] = toJson(out);

@@ -7,7 +7,9 @@
 #include <optional>
 #include <string>
 
+#include "cli_options.hpp"
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/core/progress.hpp"
 #include "fullarm/reports/report.hpp"
 
 namespace fullarm::app {
@@ -24,15 +26,16 @@ struct ValidateOptions {
   int threads = 0;                   ///< 0: hardware concurrency
   std::string joints;                ///< comma-separated subset (default: every joint of the gains file)
   bool paper_claim = false;          ///< also measure the paper's claim per joint
+  core::Progress* progress = nullptr;  ///< where the validation reports its progress (null: silent)
 };
 
 /// Adds `validate` to `app`.
-CLI::App* addValidateCommand(CLI::App& app, ValidateOptions& options);
+CLI::App* addValidateCommand(CLI::App& app, ValidateOptions& options, OptionTable& table);
 
 /// Runs `fullarm validate`: per joint the linear checks, then the Monte-Carlo of nonlinear
 /// closed-loop simulations; summary.json and report.html in the output folder.
 /// @return 0 when every joint passes, 1 otherwise.
-/// @throws core::ConfigError / std::runtime_error for bad input (exit code 2 in main).
+/// @throws core::ConfigError for bad input; OutputError when the output folder cannot be written.
 int runValidate(const ValidateOptions& options);
 
 /// Result of the demo's validate step.
@@ -45,6 +48,6 @@ struct ValidateDemoStep {
 /// per joint and the paper-claim measurement on the elbow; adds its sections and the
 /// `results.validate` keys to `report`.
 ValidateDemoStep runValidateDemoStep(const arm::ArmModel& model, const std::filesystem::path& gains, int samples,
-                                     reports::Report& report);
+                                     reports::Report& report, core::Progress& progress);
 
 }  // namespace fullarm::app

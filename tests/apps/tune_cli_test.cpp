@@ -28,7 +28,7 @@ std::filesystem::path tempDir(const std::string& name) {
 TEST(TuneCli, WritesLoadableGainsAndSummary) {
   const auto dir = tempDir("eb");
   const Result r = runFullarm("tune --joints EB --global-evals 40 --local-evals 30 --rounds 1 --out " + dir.string());
-  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 4) << r.output;  // 4: budget ran out before verified gains
   const fullarm::arm::ArmModel model = fullarm::arm::loadArmModel(fullarm::arm::defaultArmModelPath());
   const fullarm::controllers::GainsConfig gains = fullarm::controllers::loadGainsConfig(dir / "gains.yaml", model);
   EXPECT_EQ(gains.joints.size(), 7u);
@@ -61,7 +61,7 @@ TEST(TuneCli, ContactGoalIsReportedAndMetWhenMadeHard) {
     const auto dir = tempDir(hard ? "eb_contact_hard" : "eb_contact_reported");
     const Result r = runFullarm("tune --joints EB --global-evals 40 --local-evals 30 --rounds 1 --nonlinear-rounds 0" +
                                 std::string(hard ? " --contact-goal" : "") + " --out " + dir.string());
-    ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+    ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 4) << r.output;  // 4: budget ran out before verified gains
     std::ifstream in(dir / "summary.json");
     const nlohmann::json summary = nlohmann::json::parse(in);
     const nlohmann::json& joint = summary["results"]["tune"]["joints"][0];
