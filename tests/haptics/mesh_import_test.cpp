@@ -445,17 +445,10 @@ int checkDrcFolder(const fs::path& dir) {
   return files;
 }
 
-// The repository's copies (scenes/meshes/gazebo-drc), on every machine.
+// Every mesh of the eight DRC practice models in the repository (scenes/meshes/gazebo-drc; the
+// ball valve has two).
 TEST(MeshImportDrcTest, EveryDaeOfTheRepositoryDrcFolderLoads) {
-  EXPECT_EQ(checkDrcFolder(repoMesh("")), 3);
-}
-
-// The whole shared DRC folder (nine models) where the development machines have it; the three the
-// project uses are checked above everywhere.
-TEST(MeshImportDrcTest, EveryDaeOfTheSharedDrcFolderLoads) {
-  const fs::path dir = FULLARM_DRC_MESH_DIR;
-  if (!fs::is_directory(dir)) GTEST_SKIP() << "DRC mesh folder not found: " << dir;
-  EXPECT_EQ(checkDrcFolder(dir), 9);
+  EXPECT_EQ(checkDrcFolder(repoMesh("")), 9);
 }
 
 TEST(MeshImportDrcTest, TruncatedDrcWallGivesMeshError) {
