@@ -1,4 +1,4 @@
-// Diagnostic (issue 4, docs/analysis.md "Contact damping (Eq. C6) and SFE's remaining conflict",
+// Diagnostic (docs/analysis.md "Contact damping (Eq. C6) and SFE's remaining conflict",
 // "The hard-feasible region, sampled"): is there a
 // point that meets every linear hard goal of `fullarm tune` and fails none of the nonlinear
 // stage's runs? A global, deterministic sample instead of the stage's local search.

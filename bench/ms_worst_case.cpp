@@ -1,4 +1,4 @@
-// Diagnostic (issue 4, docs/analysis.md "Known limits"): where does the tuner's worst-case peak
+// Diagnostic (docs/analysis.md "Known limits"): where does the tuner's worst-case peak
 // sensitivity Ms of the shipped gains come from, and is it real?
 //
 //   ms_worst_case [--peak-speed-amplitude] [JOINT...]        (default: SFE SAA WFE)

@@ -2,7 +2,7 @@
 // or re-balanced ones, the relative RMS error of every joint's angle and load pressure against
 // a tight CVODES reference (rtol 1e-8, absolute tolerances 1000x tighter) on four full-scale
 // 0.5-80 Hz chirps (the EB joint and the 7-joint arm, each from the default posture and from
-// 0.1 rad inside the upper limits), the rtol-halving difference on the EB chirp, and
+// 0.1 rad inside the upper limits), the rtol-halving difference on the EB chirp (the plant tests' 0.5 % criterion), and
 // the CPU-time real-time factor of 5 s of EB and arm chirp. Prints a Markdown table.
 //
 //   build/release/bench/plant_tolerance_sweep [--integrator rodas3|rodas4|ros34pw2|cvodes] [--variant NAME]...
@@ -97,7 +97,7 @@ Trace runChirp(const std::vector<JointParams>& joints, const SolverOptions& opti
 struct Worst {
   double q = 0.0, p = 0.0;
 };
-// The criterion is 0.5 % RMS between rtol and rtol / 2; a default tolerance must keep
+// The plant tests' criterion is 0.5 % RMS between rtol and rtol / 2; a default tolerance must keep
 // every joint within a quarter of it against the tight reference (docs/plant.md).
 constexpr double kBudget = 0.25 * 0.005;
 Worst worstError(const Trace& ref, const Trace& t) {

@@ -6,9 +6,8 @@ scripts/setup-deps
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$(nproc)" --target fullarm
 out="${1:-out/demo}"
-# The demo exits 1 when a step's verdict fails (today: validate on the tuned gains, see
-# docs/controllers.md); the report is written either way, so say where it is, then pass the
-# verdict on.
+# The demo exits 1 when a step's verdict fails; the report is written either way, so say where
+# it is, then pass the verdict on.
 status=0
 build/release/apps/fullarm demo --out "$out" || status=$?
 [ -f "$out/report.html" ] && echo "Open $(pwd)/$out/report.html in a browser (it needs no network)."

@@ -24,7 +24,7 @@
 
 namespace fullarm::plant {
 
-// ---- RAII ownership of every SUNDIALS handle (research/plant.md section 3.5) ---------------
+// ---- RAII ownership of every SUNDIALS handle (docs/sources.md, Plant 3.5) ---------------
 namespace {
 
 // Layout of the CVODES state vector for n joints: joint k's hydraulic states at
@@ -710,7 +710,7 @@ void ArmPlant::evaluateRates(const double* y, double* ydot) noexcept {
           ydot[hydraulicIndex(k, kPressureB)] = 0.0;
       continue;
     }
-    // Spool (research/plant.md 1.1): xv'' = w^2 (u - xv) - 2 zeta w xv'.
+    // Spool (docs/sources.md, Plant 1.1): xv'' = w^2 (u - xv) - 2 zeta w xv'.
     const double volts = p.input_mode == InputMode::kValveVoltage
                              ? cmd_.command[k]
                              : p.torque_loop.gain_v_per_nm * (cmd_.command[k] - tau_cell_[k]);
@@ -720,7 +720,7 @@ void ArmPlant::evaluateRates(const double* y, double* ydot) noexcept {
     const double vv = y[hydraulicIndex(k, kSpoolRate)];
     ydot[hydraulicIndex(k, kSpool)] = vv;
     ydot[hydraulicIndex(k, kSpoolRate)] = w * w * (u - xv) - 2.0 * p.valve.damping_ratio * w * vv;
-    // Chambers (research/plant.md 1.3): p' = beta(p)/V (Q_in - leakage - dV/dt).
+    // Chambers (docs/sources.md, Plant 1.3): p' = beta(p)/V (Q_in - leakage - dV/dt).
     const double pa = y[hydraulicIndex(k, kPressureA)];
     const double pb = y[hydraulicIndex(k, kPressureB)];
     JointTerms& c = terms_[static_cast<std::size_t>(k)];
@@ -948,7 +948,7 @@ void ArmPlant::harvestStats() noexcept {
 }
 
 void ArmPlant::reinitSolver() noexcept {
-  // CVodeReInit resets CVODES' counters: bank them first (research/plant.md 3.2), unless they
+  // CVodeReInit resets CVODES' counters: bank them first (docs/sources.md, Plant 3.2), unless they
   // belong to the run before the last reset().
   if (!cvodes_counters_stale_) harvestStats();
   cvodes_counters_stale_ = false;
@@ -986,7 +986,7 @@ core::RtStatus ArmPlant::step(double dt_s, const PlantCommand& command) noexcept
   core::RtStatus status;
   for (int event = 0;; ++event) {
     if (need_reinit_) reinitSolver();
-    // One-shot stop time, set before every call (SUNDIALS 6.4.1 pitfall, research/plant.md 3.2).
+    // One-shot stop time, set before every call (SUNDIALS 6.4.1 pitfall, docs/sources.md, Plant 3.2).
     CVodeSetStopTime(mem, t_end);
     double t_reached = t_;
     const int flag = CVode(mem, t_end, y, &t_reached, CV_NORMAL);

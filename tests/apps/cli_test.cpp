@@ -88,7 +88,7 @@ TEST(Cli, GarbagePostureIsRejected) {
 }
 
 // The loader's error cases through the program: each must exit 2 and print the file, the key
-// path and what was expected (issue: one test per case).
+// path and what was expected (one test per case).
 struct BadConfigCase {
   const char* name;
   const char* from;

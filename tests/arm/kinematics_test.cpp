@@ -1,5 +1,5 @@
 // Forward kinematics and point Jacobians of the DTS master model, against the published SL
-// poses (reference sarcos-master-arm.md sections 2.3 and 2.5), orocos-kdl and finite differences.
+// poses (docs/dts-reference.md §2.3 and §2.5), orocos-kdl and finite differences.
 
 #include "fullarm/arm/kinematics.hpp"
 

@@ -1,5 +1,5 @@
 // Inverse dynamics against the published SL figures of the DTS master (reference
-// sarcos-master-arm.md section 4.5): SL's generated Newton-Euler code evaluated with the
+// docs/dts-reference.md §4.5): SL's generated Newton-Euler code evaluated with the
 // identified parameter set of section 4.3. That set is not physically consistent (section 4.4),
 // so it is built here in code, without validation, only to drive an independent oracle; it
 // exercises the off-diagonal inertia convention, which the default model's diagonal inertias

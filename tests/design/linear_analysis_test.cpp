@@ -23,9 +23,9 @@ namespace {
 
 using Complex = std::complex<double>;
 
-/// Published figures are quoted to 0.5 % (issue 4, "Done when").
+/// Published figures are quoted to 0.5 %.
 constexpr double kPublishedRelative = 0.005;
-/// Colgate's boundary within 5 % (issue 4).
+/// Colgate's boundary within 5 %.
 constexpr double kColgateRelative = 0.05;
 
 Complex polynomial(const std::vector<double>& c, Complex s) {
@@ -36,7 +36,7 @@ Complex polynomial(const std::vector<double>& c, Complex s) {
 
 TEST(Margins, MatlabAllmarginVector) {
   // L = 25 / (s^3 + 10 s^2 + 10 s + 10): GM 3.6 at 3.1623 rad/s, PM 29.11 deg at 1.7844 rad/s,
-  // delay margin 0.2847 s (MATLAB allmargin documentation; research/control_hil.md 1).
+  // delay margin 0.2847 s (MATLAB allmargin documentation; docs/sources.md, Control 1).
   const auto loop = [](double w) { return 25.0 / polynomial({1, 10, 10, 10}, Complex(0.0, w)); };
   const LoopMargins m = computeMargins(loop, {});
   EXPECT_NEAR(m.gain_margin, 3.6, 3.6 * kPublishedRelative);

@@ -55,8 +55,8 @@ TEST(PredictedLimitWrist, StableAt80Percent) {
   EXPECT_TRUE(below.stable) << below.failure;
 }
 
-// Issue 4: the tuner's worst-case Ms of the gains shipped on 2026-11-22 (config/dts_gains.yaml of
-// branch ctrl-sfe; fixed here so that a re-tune does not move the test) is real. On the worst model
+// The tuner's worst-case Ms of a set of shipped gains (an earlier config/dts_gains.yaml, fixed
+// here so that a re-tune does not move the test) is real. On the worst model
 // of the linear stage's hard-goal set (bench/ms_worst_case), the closed-loop pole at the Ms peak is
 // reproduced by validate's nonlinear CVODES joint at the same operating point: ideal sensors, no
 // Coulomb/static friction, a small burst at the valve command near the predicted frequency, the

@@ -32,7 +32,7 @@ ValidationConfig defaultValidation() {
   return loadValidationConfig(defaultValidationConfigPath());
 }
 
-// Fixed, hand-sized EB gains (the conservative defaults of commit 784533d: J_m 0.2, B_m 12,
+// Fixed, hand-sized EB gains (conservative defaults: J_m 0.2, B_m 12,
 // K_m 20, lambda 300, B_o/eps = 5/48), so that these tests do not move with config/dts_gains.yaml.
 controllers::GainsConfig handSized() {
   controllers::GainsConfig g = test::referenceGains();

@@ -1,5 +1,5 @@
 #pragma once
-// Ring-down experiments on one joint, linear and nonlinear (issue 4: is the tuner's worst-case Ms
+// Ring-down experiments on one joint, linear and nonlinear (is the tuner's worst-case Ms
 // real?). Shared by tests/design/linear_vs_nonlinear_test.cpp and bench/ms_worst_case.cpp.
 //
 // The nonlinear side is validate's closed-loop harness reduced to a hold at the linearisation's

@@ -1,4 +1,4 @@
-// The convex-link path of the SNCH query (branch snch-1ms) against independent oracles:
+// The convex-link path of the SNCH query against independent oracles:
 // - convexSupportVertex (hill climbing on the vertex graph) against the maximum over all
 //   vertices (brute force);
 // - triangleConvexMeshDistanceBounds (GJK) against brute force: the distance between a

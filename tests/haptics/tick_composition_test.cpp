@@ -1,4 +1,4 @@
-// The 1 kHz tick's pieces composed in order on the valve scene (DESIGN.md section 2): forward
+// The 1 kHz tick's pieces composed in order on the valve scene (docs/architecture.md): forward
 // kinematics, local descent of the minima a global search handed over, contact springs,
 // tailored Jacobian torques (Eq. 1-2), gravity, the arm controller. The kinematics and the
 // gravity torques are computed exactly once per tick: every piece after the first reads them.

@@ -77,7 +77,7 @@ TEST(ArmPlant, IdealTorqueSourcesReproduceRigidBodyDynamics) {
     arm::computeInverseDynamics(model, data, q, qd, qdd);
     const Eigen::VectorXd tau = data.tau.head(n);
     const Eigen::VectorXd expected = cmd.command.head(n);
-    EXPECT_MATRIX_NEAR(tau, expected, PlantTolerance::kIssueRigidBody * std::max(1.0, expected.norm()));
+    EXPECT_MATRIX_NEAR(tau, expected, PlantTolerance::kRigidBody * std::max(1.0, expected.norm()));
     EXPECT_MATRIX_NEAR(ydot.segment(4 * n, n), qd.head(n), 0.0);
   }
 }
@@ -112,7 +112,7 @@ TEST(ArmPlant, IdealTorqueFreeMotionConservesArmEnergy) {
   }
   Eigen::VectorXd q0 = model.defaultPosture();
   const double ke0 = e0 - arm::computePotentialEnergy(model, data, q0);
-  EXPECT_LE(ke_scale, PlantTolerance::kIssueRigidBody * std::abs(e0) + 1e-6 * ke0);
+  EXPECT_LE(ke_scale, PlantTolerance::kRigidBody * std::abs(e0) + 1e-6 * ke0);
   EXPECT_GT(plant.stats().steps, 0);
 }
 

@@ -54,7 +54,7 @@ ChirpRun runChirp(const JointParams& joint, const SolverOptions& options, double
   return r;
 }
 
-// The issue's chirp checks run with each integrator: CVODES (the reference), Rodas3 and Rodas4.
+// The chirp checks run with each integrator: CVODES (the reference), Rodas3 and Rodas4.
 class PlantChirp : public ::testing::TestWithParam<IntegratorKind> {
  protected:
   [[nodiscard]] SolverOptions options() const {
@@ -71,7 +71,7 @@ TEST_P(PlantChirp, PressuresStayWithinSupplyAndReturnAndStopsHold) {
     const ChirpRun r = runChirp(joint, options(), 4.0, 0.1);
     EXPECT_GE(r.p_min, joint.return_pressure_pa - kPressureMargin_pa) << joint.name;
     EXPECT_LE(r.p_max, joint.supply_pressure_pa + kPressureMargin_pa) << joint.name;
-    EXPECT_LE(r.overshoot_rad * 180.0 / std::numbers::pi, PlantTolerance::kIssueStopDeg) << joint.name;
+    EXPECT_LE(r.overshoot_rad * 180.0 / std::numbers::pi, PlantTolerance::kStopOvershootDeg) << joint.name;
     // The chirp loads the chambers to near supply and return (the bounds are not vacuous).
     EXPECT_GT(r.p_max - r.p_min, 0.3 * (joint.supply_pressure_pa - joint.return_pressure_pa)) << joint.name;
     if (r.overshoot_rad > 0.0) ++joints_at_stop;
@@ -87,8 +87,8 @@ TEST_P(PlantChirp, ResponseIsIndependentOfSolverTolerance) {
   half.rtol *= 0.5;
   const ChirpRun a = runChirp(joint, options(), 4.0);
   const ChirpRun b = runChirp(joint, half, 4.0);
-  EXPECT_LT(normalisedRmsDifference(a.q, b.q), PlantTolerance::kIssueRtolRms);
-  EXPECT_LT(normalisedRmsDifference(a.p_load, b.p_load), PlantTolerance::kIssueRtolRms);
+  EXPECT_LT(normalisedRmsDifference(a.q, b.q), PlantTolerance::kRtolHalvingRms);
+  EXPECT_LT(normalisedRmsDifference(a.p_load, b.p_load), PlantTolerance::kRtolHalvingRms);
   // ... and the comparison is not vacuous: a tenfold looser rtol is visibly different.
   SolverOptions loose = options();
   loose.rtol *= 100.0;
@@ -110,7 +110,7 @@ INSTANTIATE_TEST_SUITE_P(Integrators, PlantChirp,
 
 // Rodas3 and Rodas4 at the configured tolerances against the tight CVODES reference on the EB chirp, from
 // the default posture and from 0.1 rad inside the upper limit (stop contacts): within the same
-// 0.5 % RMS the issue allows between rtol and rtol/2, for the angle and the load pressure.
+// 0.5 % RMS allowed between rtol and rtol/2, for the angle and the load pressure.
 TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnJointChirp) {
   const PlantConfig& config = test::dtsPlant();
   const JointParams& joint = config.joints[static_cast<std::size_t>(findPlantJoint(config, "EB"))];
@@ -124,9 +124,9 @@ TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnJointChirp) {
       const char* name = integrator == IntegratorKind::kRodas3   ? "Rodas3"
                          : integrator == IntegratorKind::kRodas4 ? "Rodas4"
                                                                  : "ROS34PW2";
-      EXPECT_LT(normalisedRmsDifference(ref.q, r.q), PlantTolerance::kIssueRtolRms)
+      EXPECT_LT(normalisedRmsDifference(ref.q, r.q), PlantTolerance::kRtolHalvingRms)
           << name << " from limit " << from_limit;
-      EXPECT_LT(normalisedRmsDifference(ref.p_load, r.p_load), PlantTolerance::kIssueRtolRms)
+      EXPECT_LT(normalisedRmsDifference(ref.p_load, r.p_load), PlantTolerance::kRtolHalvingRms)
           << name << " from limit " << from_limit;
     }
   }
@@ -179,9 +179,9 @@ TEST(PlantIntegrators, Rodas3MatchesTightCvodesReferenceOnArmChirp) {
                          : variant == 2 ? "Rodas3 rigid once per period"
                                         : "ROS34PW2";
       for (std::size_t j = 0; j < ref.size(); ++j) {
-        EXPECT_LT(normalisedRmsDifference(ref[j].q, r[j].q), 2.0 * PlantTolerance::kIssueRtolRms)
+        EXPECT_LT(normalisedRmsDifference(ref[j].q, r[j].q), 2.0 * PlantTolerance::kRtolHalvingRms)
             << name << " " << config.joints[j].name << " from limit " << from_limit;
-        EXPECT_LT(normalisedRmsDifference(ref[j].p_load, r[j].p_load), 2.0 * PlantTolerance::kIssueRtolRms)
+        EXPECT_LT(normalisedRmsDifference(ref[j].p_load, r[j].p_load), 2.0 * PlantTolerance::kRtolHalvingRms)
             << name << " " << config.joints[j].name << " from limit " << from_limit;
       }
     }

@@ -1,5 +1,5 @@
 // One hydraulic joint against analytic hydraulics (Merritt, Hydraulic Control Systems;
-// research/plant.md section 1.6): natural frequency, pressure build-up, no-load velocity,
+// docs/sources.md, Plant 1.6): natural frequency, pressure build-up, no-load velocity,
 // passivity. Every oracle here is a closed-form formula, not the plant code.
 
 #include <gtest/gtest.h>
@@ -84,7 +84,7 @@ TEST(ActuatorGeometry, SharedSinCosFormMatchesTheArmModelsCylinder) {
 }
 
 // Blocked spool (valve overlapped, closed), impulse in velocity: the joint rings at
-// omega_h = sqrt(4 beta D^2 / (V_t J)) (research/plant.md 1.6).
+// omega_h = sqrt(4 beta D^2 / (V_t J)) (docs/sources.md, Plant 1.6).
 TEST_P(JointPhysics, BlockedSpoolImpulseRingsAtHydraulicNaturalFrequency) {
   JointParams p = test::vaneJoint();
   p.valve.lap_pa_m = p.valve.lap_pb_m = p.valve.lap_at_m = p.valve.lap_bt_m = 1e-5;  // closed at null
@@ -111,8 +111,8 @@ TEST_P(JointPhysics, BlockedSpoolImpulseRingsAtHydraulicNaturalFrequency) {
   }
   ASSERT_GE(crossings.size(), 5u);
   const double period = (crossings.back() - crossings.front()) / static_cast<double>(crossings.size() - 1);
-  EXPECT_NEAR(1.0 / period, f_expected_hz, PlantTolerance::kIssueFrequency * f_expected_hz);
-  EXPECT_NEAR(f_expected_hz, 45.9, 0.1);  // the research note's worked example
+  EXPECT_NEAR(1.0 / period, f_expected_hz, PlantTolerance::kNaturalFrequency * f_expected_hz);
+  EXPECT_NEAR(f_expected_hz, 45.9, 0.1);  // the worked example of docs/sources.md, Plant 1.6
 }
 
 // Blocked load, small opening: dP_L/dt = 4 beta Q_L / V_t with Q_L = K_v x sqrt(p_s - p_a).
@@ -135,7 +135,7 @@ TEST_P(JointPhysics, BlockedLoadPressureBuildUpRate) {
   const double kv = p.valve.rated_flow_m3ps / std::sqrt(p.valve.rated_pressure_drop_pa);
   const double q_l = kv * x * std::sqrt(p.supply_pressure_pa - s0.p_a_pa);
   const double expected = 4.0 * p.fluid.oil_bulk_modulus_pa * q_l / 6e-6;
-  EXPECT_NEAR(rate, expected, PlantTolerance::kIssueBuildUp * expected);
+  EXPECT_NEAR(rate, expected, PlantTolerance::kBuildUpRate * expected);
 }
 
 // No load: steady velocity Q_L / D at three openings, Q_L = K_v x sqrt((p_s - p_r)/2).
@@ -161,7 +161,7 @@ TEST_P(JointPhysics, NoLoadSteadyVelocityAtThreeOpenings) {
       if (k == steps - 201) q_start = plant.state(0).q_rad;
     }
     const double v = (plant.state(0).q_rad - q_start) / 0.2;  // mean over the last 0.2 s
-    EXPECT_NEAR(v, expected, PlantTolerance::kIssueVelocity * expected) << "opening " << x;
+    EXPECT_NEAR(v, expected, PlantTolerance::kNoLoadVelocity * expected) << "opening " << x;
     EXPECT_LT(plant.state(0).q_rad, p.max_rad);
   }
 }

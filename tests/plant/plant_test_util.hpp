@@ -19,15 +19,15 @@ namespace fullarm::plant::test {
 
 /// Named tolerances of the plant suites.
 struct PlantTolerance {
-  static constexpr double kIssueFrequency = 0.03;  ///< issue: natural frequency within 3 %
-  static constexpr double kIssueBuildUp = 0.03;    ///< issue: pressure build-up within 3 %
-  static constexpr double kIssueVelocity = 0.02;   ///< issue: no-load velocity within 2 %
-  static constexpr double kIssueRigidBody = 1e-6;  ///< issue: ideal-torque arm vs fullarm::arm, relative
-  static constexpr double kIssueRtolRms = 0.005;   ///< issue: halving rtol changes the response < 0.5 % RMS
-  static constexpr double kIssueStopDeg = 0.5;     ///< issue: hard stop exceeded by at most 0.5 deg
+  static constexpr double kNaturalFrequency = 0.03;  ///< natural frequency within 3 %
+  static constexpr double kBuildUpRate = 0.03;       ///< pressure build-up within 3 %
+  static constexpr double kNoLoadVelocity = 0.02;    ///< no-load velocity within 2 %
+  static constexpr double kRigidBody = 1e-6;         ///< ideal-torque arm vs fullarm::arm, relative
+  static constexpr double kRtolHalvingRms = 0.005;   ///< halving rtol changes the response < 0.5 % RMS
+  static constexpr double kStopOvershootDeg = 0.5;   ///< hard stop exceeded by at most 0.5 deg
 };
 
-/// A symmetric rotary-vane joint of the research note's worked example (section 1.6):
+/// A symmetric rotary-vane joint of the worked example of docs/sources.md, Plant 1.6:
 /// D = 2.5e-6 m^3/rad, V_t = 6e-6 m^3 at mid-stroke (q = 0), beta = 1e9 Pa, no air, no
 /// leakage, no friction, range [-1, 1] rad, critically centred valve.
 inline JointParams vaneJoint() {

@@ -18,7 +18,7 @@ struct Tolerance {
   static constexpr double kFiniteDifference = 1e-6;
   /// Step of the central finite differences.
   static constexpr double kFdStep = 1e-6;
-  /// Published figures printed to six decimals (reference sarcos-master-arm.md).
+  /// Published figures printed to six decimals (docs/dts-reference.md).
   static constexpr double kSixDecimals = 1.5e-6;
 };
 

@@ -6,7 +6,7 @@
 /// cylinder's fixed mount) and lever angle phi = q + lever_angle_offset between them, the
 /// law of cosines gives the cylinder length L(phi) = sqrt(r^2 + d^2 - 2 r d cos(phi)) and the
 /// effective moment arm dL/dphi = r d sin(phi) / L, which equals r at phi = acos(r/d)
-/// (reference sarcos-master-arm.md section 5).
+/// (docs/dts-reference.md §5).
 
 #include "fullarm/arm/arm_model.hpp"
 

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// Count <-> SI conversion of the potentiometers and joint torque sensors, following the
-/// SL translation rule restated in reference sarcos-master-arm.md section 6.1.
+/// SL translation rule restated in docs/dts-reference.md §6.1.
 
 #include "fullarm/arm/arm_model.hpp"
 

@@ -17,7 +17,7 @@ namespace fullarm::design {
 /// Which linear results gate the verdict. Closed-loop stability (spectral radius < 1, free and
 /// in contact, for every delay analysed) always does.
 struct LinearRequirements {
-  double max_peak_sensitivity = 1.7;   ///< Ms bound (research note: Ms <= 1.7 <=> GM >= 2.4, PM >= 34 deg)
+  double max_peak_sensitivity = 1.7;   ///< Ms bound (docs/sources.md, Control 1: Ms <= 1.7 <=> GM >= 2.4, PM >= 34 deg)
   bool gate_peak_sensitivity = false;  ///< fail when Ms exceeds the bound
   bool gate_sector = false;            ///< fail when min Re L <= -1 (circle criterion for sat())
   bool gate_passivity = false;         ///< fail when min Re Z < 0 (the device is not passive)

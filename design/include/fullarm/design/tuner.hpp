@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// Gain tuning of the admittance controller, one joint at a time, in the spirit of MATLAB
-/// `systune` (research/control_hil.md section 1): minimise the worst normalised soft goal
+/// `systune` (docs/sources.md, Control 1): minimise the worst normalised soft goal
 /// subject to every normalised hard goal <= 1 over a set of plant models, the set growing by
 /// the worst-case model found after each round (docs/analysis.md). NLopt: a deterministic
 /// global stage (GN_ORIG_DIRECT_L, or GN_ISRES with a fixed seed) on the log-scaled

@@ -23,7 +23,7 @@ namespace fullarm::design {
 /// A validation file.
 struct ValidationConfig {
   std::filesystem::path source;
-  int samples = 300;       ///< Monte-Carlo runs per joint (>= 1; the issue asks >= 300)
+  int samples = 300;       ///< Monte-Carlo runs per joint (>= 1; 300 bounds a failure rate of 1 % at 95 % confidence)
   std::uint64_t seed = 1;  ///< the runs depend only on (seed, joint, run index)
   UserImpedance user{};    ///< nominal user (inertia used for every sample)
   ScenarioWall wall{};     ///< the wall rendered in every run

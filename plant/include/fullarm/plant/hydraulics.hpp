@@ -23,7 +23,7 @@ struct ValueSlope {
 /// @rt
 [[nodiscard]] ValueSlope roundedRamp(double s, double w) noexcept;
 
-/// (H3) Effective bulk modulus with entrained air (Simscape / MapleSim form; research/plant.md
+/// (H3) Effective bulk modulus with entrained air (Simscape / MapleSim form; docs/sources.md, Plant
 /// 1.3): E = E_l [1 + a (p_atm/(p_atm+p))^(1/n)] / [1 + a p_atm^(1/n) E_l / (n (p_atm+p)^((n+1)/n))],
 /// p gauge [Pa]. With air_fraction 0 it is the oil modulus. Pressures below 0.9 vacuum
 /// are clamped inside the formula.
@@ -43,7 +43,7 @@ struct ActuatorKinematics {
 };
 
 /// (H4) Stroke, moment arm and its slope at q (cylinder: L = sqrt(r^2 + d^2 - 2 r d cos phi),
-/// R = r d sin(phi) / L; research/plant.md 1.4 and arm/actuator.hpp).
+/// R = r d sin(phi) / L; docs/sources.md, Plant 1.4 and arm/actuator.hpp).
 /// @rt
 [[nodiscard]] ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad) noexcept;
 
@@ -125,7 +125,7 @@ struct StopTorque {
 [[nodiscard]] StopTorque hardStopTorque(const JointParams& p, double q_rad, double qd_radps) noexcept;
 
 /// Linearised figures of merit (Merritt, Hydraulic Control Systems, ch. 2 and 6;
-/// research/plant.md 1.6), for a vane or a cylinder (D = A R(q)) with equal areas.
+/// docs/sources.md, Plant 1.6), for a vane or a cylinder (D = A R(q)) with equal areas.
 /// (H9) hydraulic stiffness K_h = beta D^2 (1/V_a + 1/V_b) [N m/rad] at q, pressures p [Pa].
 /// @rt
 [[nodiscard]] double hydraulicStiffness(const JointParams& p, double q_rad, double pressure_pa) noexcept;

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// Parameters of one servovalve-actuated hydraulic joint of the DTS master arm
-/// (docs/plant.md; equations in research/plant.md section 1). SI units throughout.
+/// (docs/plant.md; equations in docs/sources.md, Plant 1.1-1.6). SI units throughout.
 ///
 /// A JointParams is built by the YAML loader (plant_config.hpp) or in code, then checked
 /// once with validateJointParams(); after that it is treated as constant.
@@ -25,7 +25,7 @@ enum class ActuatorKind {
   kIdealTorque,  ///< no hydraulics: the command is the actuator torque [N m] (for verification)
 };
 
-/// Second-order servovalve spool and its amplifier (research/plant.md section 1.1).
+/// Second-order servovalve spool and its amplifier (docs/sources.md, Plant 1.1).
 struct ValveParams {
   double natural_frequency_hz = 150.0;  ///< spool natural frequency
   double damping_ratio = 0.7;           ///< spool damping ratio
@@ -35,7 +35,7 @@ struct ValveParams {
   double rated_flow_m3ps = 1.0e-5;
   double rated_pressure_drop_pa = 3.5e6;  ///< per metering edge (Moog: 70 bar over two edges)
   /// Laps of the four metering edges P->A, P->B, A->T, B->T: positive = overlap (dead band),
-  /// negative = underlap (null leakage). research/plant.md section 1.2 (Hopsan convention).
+  /// negative = underlap (null leakage). docs/sources.md, Plant 1.2 (Hopsan convention).
   double lap_pa_m = 0.0;
   double lap_pb_m = 0.0;
   double lap_at_m = 0.0;
@@ -44,11 +44,11 @@ struct ValveParams {
   /// continuous); an edge lapped by more than this is exactly closed at null.
   double edge_rounding_m = 5.0e-7;
   /// Pressure drop below which the signed square root of the orifice law is replaced by a
-  /// C1 odd cubic (research/plant.md section 1.2, "numerical must-have").
+  /// C1 odd cubic (docs/sources.md, Plant 1.2, "numerical must-have").
   double linear_region_pa = 1.0e5;
 };
 
-/// Oil (research/plant.md section 1.3).
+/// Oil (docs/sources.md, Plant 1.3).
 struct FluidParams {
   double oil_bulk_modulus_pa = 1.4e9;          ///< pure-oil bulk modulus
   double air_fraction = 0.0;                   ///< entrained air volume fraction at atmospheric pressure
@@ -78,7 +78,7 @@ struct ActuatorParams {
   double inertia_kgm2 = 0.0;                ///< actuator-side inertia between the actuator and the load cell
 };
 
-/// Coulomb + viscous + Stribeck friction with a tanh-smoothed sign (research/plant.md 1.5),
+/// Coulomb + viscous + Stribeck friction with a tanh-smoothed sign (docs/sources.md, Plant 1.5),
 /// acting on the actuator side of the load cell.
 struct FrictionParams {
   double coulomb_nm = 0.0;

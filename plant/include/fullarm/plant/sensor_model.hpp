@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Potentiometer and load-cell models as the DTS reads them (reference sarcos-master-arm.md
+/// Potentiometer and load-cell models as the DTS reads them (docs/dts-reference.md
 /// section 6): analog noise and bias, a first-order analog filter on the load cell, then a
 /// 12-bit ADC with the calibration of the arm model. Seeded, deterministic noise.
 

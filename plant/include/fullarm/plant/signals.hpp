@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Command signals for plant experiments (research/plant.md section 4.2): linear chirp, step,
+/// Command signals for plant experiments (docs/sources.md, Plant 4.2): linear chirp, step,
 /// sine, Schroeder multisine, and a command table read from CSV.
 
 #include <filesystem>
@@ -28,8 +28,8 @@ struct SignalParams {
 [[nodiscard]] double signalValue(const SignalParams& s, double t_s) noexcept;
 
 /// Normalised RMS difference of two equally long responses: RMS(reference - other) over the RMS
-/// spread of `reference` about its mean (dimensionless; the issue's "halving rtol changes the
-/// chirp response by < 0.5 % RMS" is this ratio below 0.005).
+/// spread of `reference` about its mean (dimensionless; the plant tests' "halving rtol changes
+/// the chirp response by < 0.5 % RMS" is this ratio below 0.005).
 /// @throws std::invalid_argument if the lengths differ, are zero, or `reference` is constant
 [[nodiscard]] double normalisedRmsDifference(const std::vector<double>& reference, const std::vector<double>& other);
 
