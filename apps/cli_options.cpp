@@ -102,8 +102,9 @@ CLI::Validator numberListValidator() {
           if (!token.empty()) {
             const std::optional<double> value = parseDouble(token);
             if (!value || !std::isfinite(*value)) {
-              return "expected finite numbers separated by commas or spaces, got '" + input + "' (element " +
-                     std::to_string(count + 1) + " is '" + token + "')";
+              // Elements count from 0, as the joint-range messages (cli_values.hpp) count them.
+              return "element " + std::to_string(count) + " is '" + token +
+                     "': expected finite numbers separated by commas or spaces, got '" + input + "'";
             }
             ++count;
           } else if (end != std::string::npos && input[end] == ',' && (pos == 0 || input[pos - 1] == ',')) {
