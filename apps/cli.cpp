@@ -218,7 +218,10 @@ int dispatch(CommandLine& cli, core::Progress& progress, std::ostream& out) {
   if (cli.demo->parsed()) {
     return runDemo(cli.demo_options, cli.demo_out, cli.demo_validate_samples, progress, out);
   }
-  if (cli.plant_simulate->parsed()) return runPlantSimulate(cli.plant_options);
+  if (cli.plant_simulate->parsed()) {
+    cli.plant_options.progress = &progress;
+    return runPlantSimulate(cli.plant_options);
+  }
   if (cli.validate->parsed()) {
     cli.validate_options.progress = &progress;
     return runValidate(cli.validate_options);

@@ -143,7 +143,7 @@ int runPlantSimulate(const PlantSimulateOptions& o) {
 
   std::cout << "fullarm plant simulate: " << (o.whole_arm ? "whole arm" : joints[0].name) << ", " << description << ", "
             << o.duration_s << " s at " << 1.0 / o.dt_s << " Hz\n";
-  const plant::SimulationResult r = plant::simulate(model, config, joints, command, o.duration_s, o.dt_s);
+  const plant::SimulationResult r = plant::simulate(model, config, joints, command, o.duration_s, o.dt_s, o.progress);
 
   createOutputFolder(o.out_dir);
   reports::Report report("plant simulate",

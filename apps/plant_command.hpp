@@ -8,12 +8,14 @@
 
 #include "cli_options.hpp"
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/core/progress.hpp"
 #include "fullarm/reports/report.hpp"
 
 namespace fullarm::app {
 
 /// Options of `fullarm plant simulate`.
 struct PlantSimulateOptions {
+  core::Progress* progress = nullptr;  ///< where the run reports its progress (null: silent)
   std::string arm_config;       ///< arm model YAML (default: dts_master.yaml)
   std::string plant_config;     ///< plant YAML (default: dts_plant.yaml)
   std::string joint = "EB";     ///< joint to excite (short or model name)

@@ -12,7 +12,8 @@ namespace {
 
 constexpr int kBarWidth = 24;
 constexpr double kBarRedrawS = 0.1;
-constexpr std::size_t kLinesPerTask = 20;  // advance()'s lines in kLines mode
+constexpr std::size_t kLinesPerTask = 20;  // advance()'s lines in kLines mode, at most
+constexpr double kMinLineIntervalS = 2.0;  // and no closer together than this
 
 double steadySeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -60,7 +61,7 @@ void Progress::begin(std::string name, std::size_t total_units) {
   done_ = 0;
   next_line_at_ = total_ > 0 ? (total_ + kLinesPerTask - 1) / kLinesPerTask : 1;
   start_s_ = clock_();
-  last_draw_s_ = -1.0;
+  last_draw_s_ = start_s_;
   last_what_.clear();
   showLocked({}, true);
 }
@@ -78,8 +79,11 @@ void Progress::advance(std::size_t units) {
   done_ += units;
   if (mode_ == ProgressMode::kLines) {
     const std::size_t every = total_ > 0 ? (total_ + kLinesPerTask - 1) / kLinesPerTask : 1;
-    if (done_ < next_line_at_ && done_ != total_) return;
+    if (done_ < next_line_at_) return;
     next_line_at_ = (done_ / every + 1) * every;
+    const double now_s = clock_();
+    if (last_draw_s_ >= 0.0 && now_s - last_draw_s_ < kMinLineIntervalS) return;
+    last_draw_s_ = now_s;
   }
   showLocked(last_what_, mode_ == ProgressMode::kLines);
 }

@@ -74,7 +74,7 @@ CommandFunction makeCommand(const InputSignal& input, const arm::ArmModel& model
 }
 
 SimulationResult simulate(const arm::ArmModel& model, const PlantConfig& config, const std::vector<JointParams>& joints,
-                          const CommandFunction& command, double duration_s, double dt_s) {
+                          const CommandFunction& command, double duration_s, double dt_s, core::Progress* progress) {
   ArmPlant plant;
   plant.configure(model, joints, model.defaultPosture(), config.user_arm, config.solver, config.seed);
   const int n = plant.numJoints();
@@ -83,8 +83,17 @@ SimulationResult simulate(const arm::ArmModel& model, const PlantConfig& config,
   r.traces.resize(static_cast<std::size_t>(n));
   for (int k = 0; k < n; ++k) {
     r.traces[static_cast<std::size_t>(k)].joint = plant.joint(k).name;
-    r.traces[static_cast<std::size_t>(k)].command_unit = commandUnit(plant.joint(k));
+    JointTrace& tr = r.traces[static_cast<std::size_t>(k)];
+    tr.command_unit = commandUnit(plant.joint(k));
+    // The trace's whole memory, up front (no growth by doubling while the run goes on).
+    const auto samples = static_cast<std::size_t>(periods + 1);
+    for (std::vector<double>* column : {&tr.time_s, &tr.command, &tr.q_rad, &tr.qd_radps, &tr.tau_measured_nm,
+                                        &tr.p_a_pa, &tr.p_b_pa, &tr.spool_fraction}) {
+      column->reserve(samples);
+    }
   }
+  core::Progress& report = core::progressOrQuiet(progress);
+  report.begin("plant simulate", static_cast<std::size_t>(periods));
   PlantCommand cmd = PlantCommand::zero(n);
   const auto start = std::chrono::steady_clock::now();
   for (long i = 0; i <= periods; ++i) {
@@ -113,7 +122,9 @@ SimulationResult simulate(const arm::ArmModel& model, const PlantConfig& config,
       r.solver_error = plant.lastError();
       break;
     }
+    report.advance();
   }
+  report.end(r.solver_ok ? "" : "the solver failed");
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.simulated_s = plant.time();
   r.stats = plant.stats();

@@ -72,12 +72,30 @@ TEST(ProgressTest, UnnamedUnitsGiveALinePerTwentiethInLineMode) {
   }
   progress.end();
   const std::vector<std::string> printed = lines(out.str());
-  // The begin line, 20 lines at 10, 20, ..., 200 runs, the end line.
+  // The begin line, 20 lines at 10, 20, ..., 200 runs (5 s apart), the end line.
   ASSERT_EQ(printed.size(), 22U);
   EXPECT_EQ(printed[1], "validate: Monte-Carlo [10/200] (5 s elapsed, about 1 min 35 s left)");
   EXPECT_EQ(printed[20], "validate: Monte-Carlo [200/200] (1 min 40 s elapsed)");
   EXPECT_EQ(printed[21], "validate: Monte-Carlo: done in 1 min 40 s");
   EXPECT_EQ(progress.done(), 200U);
+}
+
+TEST(ProgressTest, QuickUnitsPrintNoCloserThanTwoSeconds) {
+  double now_s = 0.0;
+  std::ostringstream out;
+  Progress progress(out, ProgressMode::kLines, [&] { return now_s; });
+  progress.begin("plant simulate", 2000);
+  for (int i = 0; i < 2000; ++i) {
+    now_s += 0.003;  // 6 s in all, a twentieth every 0.3 s
+    progress.advance();
+  }
+  progress.end();
+  const std::vector<std::string> printed = lines(out.str());
+  // The begin line, one line each 2 s (at 2.1 s and 4.2 s: the first twentieth boundary after
+  // the interval), the end line.
+  ASSERT_EQ(printed.size(), 4U) << out.str();
+  EXPECT_EQ(printed[1], "plant simulate [700/2000] (2 s elapsed, about 4 s left)");
+  EXPECT_EQ(printed[3], "plant simulate: done in 6 s");
 }
 
 TEST(ProgressTest, BarRedrawsOneLineInPlace) {

@@ -22,7 +22,7 @@ namespace fullarm::core {
 /// How a Progress shows itself.
 enum class ProgressMode {
   kQuiet,  ///< nothing at all
-  kLines,  ///< one line per step (and per twentieth of the unnamed units), never redrawn
+  kLines,  ///< one line per step (and per twentieth of the unnamed units, 2 s apart at least), never redrawn
   kBar,    ///< one line redrawn in place (carriage return and erase-to-end), for a terminal
 };
 
@@ -63,7 +63,8 @@ class Progress {
   /// One unit finished, named `what`: a line in kLines mode, a redraw in kBar mode.
   void step(std::string_view what);
   /// `units` unnamed units finished (a Monte-Carlo's runs): in kLines mode a line each time the
-  /// count passes another twentieth of the total; in kBar mode a redraw at most every 0.1 s.
+  /// count passes another twentieth of the total, at most one every 2 s (the end line closes
+  /// the task); in kBar mode a redraw at most every 0.1 s.
   void advance(std::size_t units = 1);
   /// Ends the task with a line of its total time and `summary` (may be empty).
   void end(std::string_view summary = {});

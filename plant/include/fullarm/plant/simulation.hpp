@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/core/progress.hpp"
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/joint_params.hpp"
 #include "fullarm/plant/plant_config.hpp"
@@ -106,10 +107,12 @@ struct SimulationResult {
 /// Runs the plant of `config` on `model` with `joints` active (the others locked at the model's
 /// default posture), from the default posture at rest (ArmPlant::reset), for `duration_s` at the
 /// control period `dt_s`: at each t_i it records the state and the command, then steps one period.
+/// The traces are reserved up front: 8 doubles per sample and joint, (duration / dt + 1) samples.
+/// Reports the periods as units of `progress` (a task "plant simulate") unless it is null.
 /// @throws core::ConfigError for joints the plant cannot configure (ArmPlant::configure)
 [[nodiscard]] SimulationResult simulate(const arm::ArmModel& model, const PlantConfig& config,
                                         const std::vector<JointParams>& joints, const CommandFunction& command,
-                                        double duration_s, double dt_s);
+                                        double duration_s, double dt_s, core::Progress* progress = nullptr);
 
 /// Writes a trace as CSV: a header row `time_s,command_v,q_rad,qd_rad_s,tau_measured_nm,p_a_pa,
 /// p_b_pa,spool_fraction` (`command_nm` for a command in N m), then one row per sample (10
