@@ -1,5 +1,5 @@
-# Script mode: run `fullarm ${ARGS} --out ${OUT_DIR}` (its stdout and exit code are kept in
-# OUT_DIR), then open the report in headless Chromium
+# Script mode: run `fullarm ${ARGS} --out ${OUT_DIR}` (its stdout, stderr and exit code are kept
+# in OUT_DIR), then open the report in headless Chromium
 # with tests/reports/check_report.mjs (fails on console errors, network requests, or fewer than
 # ${MIN_CHARTS} rendered charts) and save a screenshot beside it.
 file(REMOVE_RECURSE ${OUT_DIR})
@@ -8,6 +8,7 @@ execute_process(COMMAND ${FULLARM_EXE} ${args} --out ${OUT_DIR} RESULT_VARIABLE 
                 ERROR_VARIABLE err)
 # Kept for tests that check this run's output (the demo runs once; tests/apps/demo_run_test.cpp).
 file(WRITE ${OUT_DIR}/fullarm_stdout.txt "${stdout}")
+file(WRITE ${OUT_DIR}/fullarm_stderr.txt "${err}")
 file(WRITE ${OUT_DIR}/fullarm_exit_code.txt "${rc}")
 # Exit code 1 is a failing verdict (the report is still written): accepted when ALLOW_FAIL_VERDICT.
 if(NOT rc EQUAL 0 AND NOT (ALLOW_FAIL_VERDICT AND rc EQUAL 1))

@@ -1,5 +1,6 @@
 // `fullarm demo --validate-samples 2`, run once by the report_demo_browser test (a ctest fixture,
-// tests/apps/CMakeLists.txt): its exit code, stdout and summary.json.
+// tests/apps/CMakeLists.txt): its exit code, stdout, progress on stderr, summary.json and the size
+// of its report.
 
 #include <gtest/gtest.h>
 
@@ -19,6 +20,28 @@ std::string readFile(const std::filesystem::path& file) {
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
+}
+
+// The long steps report their progress on stderr (not a terminal here: plain lines), with the
+// elapsed time and an estimate of the time left; stdout keeps the results only.
+TEST(DemoRun, LongStepsReportTheirProgressOnStderr) {
+  const std::string err = readFile(kDemoDir / "fullarm_stderr.txt");
+  const std::string out = readFile(kDemoDir / "fullarm_stdout.txt");
+  for (const char* line : {"demo [2/7] plant chirp", "tune [1/14]", "tune [14/14]", "validate: linear checks [7/7]",
+                           "validate: Monte-Carlo runs", "tune: done in ", "elapsed, about "}) {
+    EXPECT_NE(err.find(line), std::string::npos) << "no '" << line << "' on stderr:\n" << err;
+    EXPECT_EQ(out.find(line), std::string::npos) << "'" << line << "' on stdout";
+  }
+  EXPECT_EQ(err.find('\r'), std::string::npos) << "a bar redrawn in a log";
+}
+
+// The whole report, every chart included, opens from one file of at most 2 MB (the partial
+// plotly.js bundle is about 1.1 MB of it; this run's Monte-Carlo has 2 runs per joint, the
+// default 300 add about 0.1 MB).
+TEST(DemoRun, ReportIsAtMostTwoMegabytes) {
+  const auto size = std::filesystem::file_size(kDemoDir / "report.html");
+  EXPECT_LE(size, 2'000'000U) << size << " bytes";
+  EXPECT_GT(size, 1'000'000U) << "the charting library is missing from the report";
 }
 
 TEST(DemoRun, PassesAndSaysWhatIsNotBuiltYet) {
