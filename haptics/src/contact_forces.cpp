@@ -112,6 +112,7 @@ void resetContactRecords(ContactData& data) noexcept {
   for (auto& r : data.links) r = LinkContactRecord{};
 }
 
+// §3.2.2: contact spring on each minimum below the force threshold (reports/equations.md).
 void computeContactForces(const HapticsParams& params, const arm::ArmModel& model, const arm::ArmData& fk,
                           std::span<const LocalMinimum> minima, double dt_s, ContactData& data) noexcept {
   const std::size_t m = minima.size();
@@ -225,6 +226,8 @@ void computeContactForces(const HapticsParams& params, const arm::ArmModel& mode
   }
 }
 
+// Eq. (1): tailored force Jacobian of the joints that move the contact link; Eq. (2): torque of the contact link's own
+// joint (reports/equations.md).
 void addTailoredJacobianTorques(const arm::ArmModel& model, const arm::ArmData& fk, int link, const Vector3d& p_W,
                                 const Vector3d& f_W, Eigen::Ref<Eigen::VectorXd> tau) noexcept {
   // The contact force moved to the contact link's joint origin o_n: force f_c, moment eta_c.

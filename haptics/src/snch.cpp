@@ -320,6 +320,7 @@ bool isClosedConvex(const TriMesh& mesh) {
 
 }  // namespace
 
+// G6: normal-cone merge (reports/equations.md).
 SnchTree buildSnchTree(const TriMesh& mesh) {
   Builder b{mesh, {}, {}, {}, {}};
   const int nt = mesh.numTriangles();
@@ -465,6 +466,7 @@ bool evaluatePair(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int
 
 }  // namespace
 
+// G5: angle-weighted pseudo-normal (reports/equations.md).
 bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh, int tri_object,
                           const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
   double pair_distance_m = 0.0;
@@ -955,6 +957,8 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
 
 }  // namespace
 
+// §3.2.1: global search within the cutoff, pruning and local descent of the minima; G7: spanning cone of two spheres
+// (reports/equations.md).
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_WL,
                    const SnchTree& obj_tree, const TriMesh& obj_mesh, const Isometry3d& X_WO, double cutoff_m,
                    SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats* stats) {

@@ -36,7 +36,7 @@ const std::vector<Rule>& referenceRules() {
   static const std::vector<Rule> rules = {
       {"a folder beside the repository", std::regex(R"((\.\./|/work/)shared\b)")},
       {"the shared reference folders", std::regex(R"(\bshared/(paper|research|reference|meshes|tools)\b)")},
-      {"a design file outside the repository (docs/architecture.md, docs/house-style.md)",
+      {"a design file outside the repository (docs/architecture.md)",
        std::regex(R"(\bDESIGN\.md\b)")},
       {"research notes outside the repository (docs/sources.md)", std::regex(R"(\bresearch/[A-Za-z_]+\.md\b)")},
       {"the DTS reference outside the repository (docs/dts-reference.md)", std::regex(R"(sarcos-master-arm\.md)")},

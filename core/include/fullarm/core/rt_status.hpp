@@ -6,7 +6,7 @@
 ///
 /// Two contracts of the real-time path, as the headers state them:
 ///  - `@rt`: noexcept, allocates nothing, takes no lock, does no I/O or system call, and has a
-///    bounded run time (docs/house-style.md). Only such a function belongs on the 1 kHz tick.
+///    bounded run time (docs/architecture.md, "House style"). Only such a function belongs on the 1 kHz tick.
 ///  - "Allocation-free, unbounded time": noexcept, allocates nothing, takes no lock, does no I/O
 ///    or system call, but its run time depends on the solution (an adaptive integrator's step:
 ///    ArmPlant::step, RosenbrockIntegrator::advance, CVODES), bounded only by a step budget that
