@@ -2,7 +2,7 @@
 // every file of the source tree (code, comments, docs, configuration, scripts, CI) is scanned
 // for references to files outside the repository and for words that tell how the product was
 // made rather than what it does (history lives in git log). A hit names the file, the line and
-// the rule.
+// the rule. The README's hand build is checked against the quick start's install script.
 
 #include <gtest/gtest.h>
 
@@ -141,6 +141,65 @@ TEST(ProductText, TheRepositoryHoldsEveryFileItRefersTo) {
 TEST(ProductText, NoWordTellsHowTheProductWasMade) {
   const std::vector<std::string> found = hits(historyRules(), false);
   EXPECT_TRUE(found.empty()) << found.size() << " line(s) of history in the product's text:\n" << listed(found);
+}
+
+std::string fileText(const fs::path& file) {
+  std::ifstream in(file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::set<std::string> words(const std::string& text) {
+  std::set<std::string> out;
+  std::istringstream in(text);
+  for (std::string word; in >> word;) out.insert(word);
+  return out;
+}
+
+// The hand build of the README installs what scripts/setup-deps installs (the Debian packages of
+// its list, Node.js and npm), then the npm packages, before it configures.
+TEST(ProductText, TheReadmeHandBuildInstallsWhatSetupDepsInstalls) {
+  const std::string setup = fileText(kRoot / "scripts/setup-deps");
+  const std::size_t list_start = setup.find("packages=(");
+  const std::size_t list_end = setup.find("\n)", list_start);
+  ASSERT_NE(list_start, std::string::npos);
+  ASSERT_NE(list_end, std::string::npos);
+  std::set<std::string> needed = {"nodejs", "npm"};
+  std::istringstream list(setup.substr(list_start + 10, list_end - list_start - 10));
+  for (std::string line; std::getline(list, line);) {
+    line = line.substr(0, line.find('#'));
+    for (const std::string& word : words(line)) needed.insert(word);
+  }
+  ASSERT_GT(needed.size(), 10U);
+
+  const std::string readme = fileText(kRoot / "README.md");
+  const std::size_t section = readme.find("## Building by hand");
+  ASSERT_NE(section, std::string::npos);
+  const std::size_t install = readme.find("apt-get install", section);
+  const std::size_t npm = readme.find("npm ci", section);
+  const std::size_t configure = readme.find("cmake --preset release", section);
+  ASSERT_NE(install, std::string::npos) << "the hand build installs no Debian package";
+  ASSERT_NE(npm, std::string::npos) << "the hand build lacks npm ci, which configure needs";
+  ASSERT_NE(configure, std::string::npos);
+  EXPECT_LT(install, npm);
+  EXPECT_LT(npm, configure) << "npm ci must come before configure";
+  // The install command: its continuation lines up to the first line not ending in a backslash.
+  std::string command;
+  std::istringstream lines(readme.substr(install + 15));
+  for (std::string line; std::getline(lines, line);) {
+    const bool continued = !line.empty() && line.back() == '\\';
+    command += " " + (continued ? line.substr(0, line.size() - 1) : line);
+    if (!continued) break;
+  }
+  const std::set<std::string> listed = words(command);
+  for (const std::string& package : needed) {
+    EXPECT_TRUE(listed.count(package) == 1) << "README's hand build does not install " << package;
+  }
+  for (const std::string& package : listed) {
+    EXPECT_TRUE(needed.count(package) == 1) << "README's hand build installs " << package
+                                            << ", which scripts/setup-deps does not";
+  }
 }
 
 // The rules must be able to fail: each catches the kind of line it exists for, and passes a
