@@ -1,20 +1,17 @@
 #include "fullarm/haptics/collision_world.hpp"
 
-#include "fullarm/haptics/primitives.hpp"
-
 namespace fullarm::haptics {
 
 CollisionWorld::CollisionWorld(const arm::ArmModel& model) : CollisionWorld(model, Options{}) {}
 
-CollisionWorld::CollisionWorld(const arm::ArmModel& model, const Options& options) : model_(&model) {
+CollisionWorld::CollisionWorld(const arm::ArmModel& model, const Options& /*options*/) : model_(&model) {
   links_.resize(static_cast<std::size_t>(model.numJoints()));
   for (int l = 0; l < model.numJoints(); ++l) {
-    if (model.joints[static_cast<std::size_t>(l)].geometry.type != arm::LinkGeometry::Type::kCapsule) continue;
-    auto lm = std::make_shared<LinkMesh>();
-    lm->mesh = makeLinkCapsuleMesh(model, l, options.capsule_segments, options.capsule_rings);
-    lm->tree = buildSnchTree(lm->mesh);
-    lm->cones = computeNeighbourCones(lm->mesh);
-    links_[static_cast<std::size_t>(l)] = std::move(lm);
+    const arm::LinkGeometry& g = model.joints[static_cast<std::size_t>(l)].geometry;
+    if (g.type != arm::LinkGeometry::Type::kCapsule) continue;
+    Link& link = links_[static_cast<std::size_t>(l)];
+    link.shape = LinkShape::kCapsule;
+    link.capsule = {g.from_m, g.to_m, g.radius_m};
   }
 }
 
@@ -33,7 +30,9 @@ void CollisionWorld::setLinkMesh(int link, const TriMesh& mesh, const Eigen::Iso
   lm->mesh = TriMesh::build(mesh.source(), std::move(v), std::move(t));
   lm->tree = buildSnchTree(lm->mesh);
   lm->cones = computeNeighbourCones(lm->mesh);
-  links_[static_cast<std::size_t>(link)] = std::move(lm);
+  Link& entry = links_[static_cast<std::size_t>(link)];
+  entry.shape = LinkShape::kMesh;
+  entry.mesh = std::move(lm);
 }
 
 int CollisionWorld::addObject(std::string name, TriMesh mesh, const Eigen::Isometry3d& X_WO) {
@@ -64,12 +63,19 @@ void SnchGlobalSearch::search(const CollisionWorld& world, const arm::ArmData& f
   stats_ = {};
   SnchQueryStats pair_stats;
   for (int l = 0; l < world.numLinks(); ++l) {
-    if (!world.hasLinkMesh(l)) continue;
+    const LinkShape shape = world.linkShape(l);
+    if (shape == LinkShape::kNone) continue;
+    const Eigen::Isometry3d& X_WL = fk.X_WL[static_cast<std::size_t>(l)];
     for (int o = 0; o < world.numObjects(); ++o) {
       const CollisionObject& obj = world.object(o);
       const std::size_t begin = out.size();
-      querySnchPair(world.linkTree(l), world.linkMesh(l), fk.X_WL[static_cast<std::size_t>(l)], obj.tree, obj.mesh,
-                    obj.X_WO, cutoff_m, scratch_, out, &pair_stats);
+      if (shape == LinkShape::kCapsule) {
+        querySnchCapsule(world.linkCapsule(l), X_WL, obj.tree, obj.mesh, obj.X_WO, cutoff_m, scratch_, out,
+                         &pair_stats);
+      } else {
+        querySnchPair(world.linkTree(l), world.linkMesh(l), X_WL, obj.tree, obj.mesh, obj.X_WO, cutoff_m, scratch_, out,
+                      &pair_stats);
+      }
       for (std::size_t i = begin; i < out.size(); ++i) {
         out[i].link = l;
         out[i].object = o;

@@ -955,6 +955,208 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
 
 }  // namespace
 
+Feature capsuleFeature(double s) noexcept {
+  if (s <= 0.0) return {FeatureKind::kVertex, 0};
+  if (s >= 1.0) return {FeatureKind::kVertex, 1};
+  return {FeatureKind::kEdge, 0};
+}
+
+CapsuleFeaturePair capsuleFeatureClosest(const Vector3d& a_O, const Vector3d& b_O, const TriMesh& mesh,
+                                         const Feature& feature) noexcept {
+  CapsuleFeaturePair r;
+  r.holder = feature;
+  switch (feature.kind) {
+    case FeatureKind::kVertex:
+      r.q_m = mesh.vertex(feature.index);
+      r.s = closestSegmentParameter(a_O, b_O, r.q_m);
+      r.on_segment_m = a_O + r.s * (b_O - a_O);
+      break;
+    case FeatureKind::kEdge: {
+      const auto ev = mesh.edgeVertices(feature.index);
+      const SegmentSegmentResult e = closestPointsSegmentSegment(a_O, b_O, mesh.vertex(ev[0]), mesh.vertex(ev[1]));
+      r.s = e.s;
+      r.on_segment_m = e.p;
+      r.q_m = e.q;
+      if (e.t <= 0.0) r.holder = {FeatureKind::kVertex, ev[0]};
+      if (e.t >= 1.0) r.holder = {FeatureKind::kVertex, ev[1]};
+      break;
+    }
+    case FeatureKind::kFace: {
+      const auto& t = mesh.triangle(feature.index);
+      const SegmentTriangleResult e = closestPointsSegmentTriangle(
+          a_O, b_O, prepareTriangle(mesh.vertex(t[0]), mesh.vertex(t[1]), mesh.vertex(t[2])));
+      r.s = e.s;
+      r.on_segment_m = e.p;
+      r.q_m = e.q;
+      r.holder = meshFeature(mesh, feature.index, e.feature_t);
+      break;
+    }
+  }
+  r.distance_sq = (r.q_m - r.on_segment_m).squaredNorm();
+  return r;
+}
+
+void capsuleMinimumFromPair(const CapsuleFeaturePair& pair, double radius_m, const Isometry3d& X_LO,
+                            const TriMesh& object_mesh, int tri_object, const Feature& feature_object,
+                            LocalMinimum& out) noexcept {
+  const double d_s = std::sqrt(pair.distance_sq);
+  Vector3d u;
+  if (d_s > 0.0) {
+    u = (pair.q_m - pair.on_segment_m) / d_s;
+  } else {
+    const Vector3d& n = object_mesh.featureNormal(feature_object);
+    u = n.squaredNorm() > 0.0 ? Vector3d(-n) : Vector3d(-object_mesh.faceNormal(tri_object));
+  }
+  out.tri_link = -1;
+  out.tri_object = tri_object;
+  out.feature_link = capsuleFeature(pair.s);
+  out.feature_object = feature_object;
+  out.p_L = X_LO * (pair.on_segment_m + radius_m * u);
+  out.p_O = pair.q_m;
+  out.distance_m = std::max(0.0, d_s - radius_m);
+  out.u_W = u;
+  out.previous_distance_m = std::numeric_limits<double>::quiet_NaN();
+}
+
+void capsuleMinimumAtFeature(const Vector3d& a_O, const Vector3d& b_O, double radius_m, const Isometry3d& X_LO,
+                             const TriMesh& object_mesh, int tri_object, const Feature& feature_object,
+                             LocalMinimum& out) noexcept {
+  capsuleMinimumFromPair(capsuleFeatureClosest(a_O, b_O, object_mesh, feature_object), radius_m, X_LO, object_mesh,
+                         tri_object, feature_object, out);
+}
+
+bool evaluateCapsuleTriangle(const Vector3d& a_O, const Vector3d& b_O, double radius_m, const Isometry3d& X_LO,
+                             const TriMesh& object_mesh, int tri_object, double cutoff_m, LocalMinimum& out) noexcept {
+  const auto& tb = object_mesh.triangle(tri_object);
+  const SegmentTriangleResult r = closestPointsSegmentTriangle(
+      a_O, b_O, prepareTriangle(object_mesh.vertex(tb[0]), object_mesh.vertex(tb[1]), object_mesh.vertex(tb[2])));
+  const double reach = cutoff_m + radius_m;
+  if (!(r.distance_sq <= reach * reach)) return false;
+  const Feature fo = meshFeature(object_mesh, tri_object, r.feature_t);
+  if (r.distance_sq > 0.0) {
+    const double d = std::sqrt(r.distance_sq);
+    // Seen from outside, then the local minimum over f_q's neighbourhood (convexity: a
+    // neighbour holds a point closer to the segment iff it holds one closer to s).
+    if ((r.p - r.q).dot(object_mesh.featureNormal(fo)) < -kOutsideCosineTolerance * d) return false;
+    const double accept = d - kLocalMinimumTolerance_m;
+    if (accept > 0.0) {
+      for (int t : object_mesh.featureTriangles(fo)) {
+        if (t == tri_object) continue;
+        const auto& b = object_mesh.triangle(t);
+        if (squaredDistancePointTriangle(r.p, object_mesh.vertex(b[0]), object_mesh.vertex(b[1]),
+                                         object_mesh.vertex(b[2])) < accept * accept) {
+          return false;
+        }
+      }
+    }
+  }
+  capsuleMinimumAtFeature(a_O, b_O, radius_m, X_LO, object_mesh, tri_object, fo, out);
+  return out.distance_m <= cutoff_m;
+}
+
+void querySnchCapsule(const Capsule& capsule, const Isometry3d& X_WL, const SnchTree& obj_tree, const TriMesh& obj_mesh,
+                      const Isometry3d& X_WO, double cutoff_m, SnchQueryScratch& scratch,
+                      std::vector<LocalMinimum>& out, SnchQueryStats* stats) {
+  SnchQueryStats local_stats;
+  SnchQueryStats& st = stats != nullptr ? *stats : local_stats;
+  st = {};
+  const std::size_t begin = out.size();
+  if (obj_tree.nodes.empty()) return;
+  const Isometry3d X_OL = X_WO.inverse() * X_WL;
+  const Isometry3d X_LO = X_OL.inverse();
+  const Vector3d a = X_OL * capsule.a_m;
+  const Vector3d b = X_OL * capsule.b_m;
+  const Vector3d ab = b - a;
+  const double ab_sq = ab.squaredNorm();
+  const double inv_ab_sq = ab_sq > 0.0 ? 1.0 / ab_sq : 0.0;
+  const Vector3d seg_lo = a.cwiseMin(b);
+  const Vector3d seg_hi = a.cwiseMax(b);
+  // Every minimum lies within the cutoff of the capsule: within `reach` of its segment.
+  const double reach = cutoff_m + capsule.radius_m;
+  auto& stack = scratch.stack;
+  stack.clear();
+  stack.emplace_back(0, 0);
+  LocalMinimum m;
+  while (!stack.empty()) {
+    const int j = stack.back().second;
+    stack.pop_back();
+    ++st.node_pairs_visited;
+    const SnchNode& node = obj_tree.nodes[static_cast<std::size_t>(j)];
+    const Vector3d& c = node.centre_m;
+    // The segment's point nearest the node's centre, exactly.
+    const double t = std::clamp((c - a).dot(ab) * inv_ab_sq, 0.0, 1.0);
+    const Vector3d w = c - (a + t * ab);
+    const double dist_sq = w.squaredNorm();
+    const double sphere_reach = node.radius_m + reach;
+    if (dist_sq > sphere_reach * sphere_reach) {
+      ++st.pruned_by_distance;
+      continue;
+    }
+    // Distance lower bounds of the segment and the node: the sphere; the box along the
+    // direction from the segment's nearest point to the centre (that point maximises the
+    // direction over the segment); the box's own axes against the segment's extent.
+    const double dist = std::sqrt(dist_sq);
+    const Vector3d& h = node.box_half_m;
+    double gap = dist - node.radius_m;
+    if (dist > 0.0) gap = std::max(gap, dist - w.cwiseAbs().dot(h) / dist);
+    gap = std::max(gap, std::max((seg_lo - c - h).maxCoeff(), (c - h - seg_hi).maxCoeff()));
+    if (gap > reach) {
+      ++st.pruned_by_distance;
+      continue;
+    }
+    // Normal cones, once the node is proven apart from the segment: a minimum at q has -u =
+    // (s - q)/|s - q| in the node's cone, s the segment's point nearest q.
+    if (gap > kConeTestMinGap_m && node.cone_cos > -1.0) {
+      const Vector3d& axis = node.cone_axis;
+      // Direction: s - q for q within r_B of c lies within asin(r_B / D) of -w (the map
+      // x -> x - P(x), P the projection on the segment, is nonexpansive), D = |w| > r_B.
+      if (node.radius_m < dist) {
+        const double sin_sigma = node.radius_m / dist;
+        const double cos_sigma = std::sqrt(std::max(0.0, 1.0 - sin_sigma * sin_sigma));
+        const double c_axis = -w.dot(axis);
+        if (node.cone_two_sided) {
+          const double cos_open = node.cone_cos * cos_sigma - node.cone_sin * sin_sigma;
+          if (node.cone_cos > 0.0 && cos_open > 0.0 && std::abs(c_axis) < dist * cos_open) {
+            ++st.pruned_by_cone;
+            continue;
+          }
+        } else if (node.cone_cos >= 0.0 || sin_sigma < node.cone_sin) {
+          if (c_axis < dist * (node.cone_cos * cos_sigma - node.cone_sin * sin_sigma)) {
+            ++st.pruned_by_cone;
+            continue;
+          }
+        }
+      }
+      // Support: (s - q) . a_B >= cos(alpha_B) |s - q| >= cos(alpha_B) gap (either sign for a
+      // double cone), against its extreme values over the segment and the box.
+      if (node.cone_cos > 0.0) {
+        const double ea = a.dot(axis);
+        const double eb = b.dot(axis);
+        const double centre = c.dot(axis);
+        const double extent = axis.cwiseAbs().dot(h);
+        const double hi = std::max(ea, eb) - (centre - extent);
+        const double lo = std::min(ea, eb) - (centre + extent);
+        const double need = node.cone_cos * gap;
+        if ((node.cone_two_sided ? std::max(hi, -lo) : hi) < need) {
+          ++st.pruned_by_cone;
+          continue;
+        }
+      }
+    }
+    if (node.isLeaf()) {
+      ++st.triangle_pairs_tested;
+      if (evaluateCapsuleTriangle(a, b, capsule.radius_m, X_LO, obj_mesh, node.triangle, cutoff_m, m)) {
+        m.u_W = X_WO.linear() * m.u_W;
+        out.push_back(m);
+      }
+      continue;
+    }
+    stack.emplace_back(0, node.left);
+    stack.emplace_back(0, node.right);
+  }
+  mergeDuplicateMinima(out, begin);
+}
+
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_WL,
                    const SnchTree& obj_tree, const TriMesh& obj_mesh, const Isometry3d& X_WO, double cutoff_m,
                    SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats* stats) {

@@ -28,27 +28,34 @@ struct CollisionObject {
   NeighbourCones cones;  ///< local descent's neighbour-rejection cones of `mesh`
 };
 
-/// Link meshes and object meshes with their hierarchies. Link meshes are expressed in their
-/// link frame (so X_WL from forward kinematics places them); object meshes in their object
-/// frame. Not thread-safe for mutation; const queries may run concurrently with separate
-/// scratch.
+/// How an arm link takes part in the queries.
+enum class LinkShape {
+  kNone,     ///< no collision geometry: never queried
+  kCapsule,  ///< the exact capsule of its LinkGeometry (segment and radius): linkCapsule()
+  kMesh,     ///< a triangle mesh given with setLinkMesh (for example an imported hand): linkMesh()
+};
+
+/// The arm's link geometry and the environment objects with their hierarchies. A link whose
+/// LinkGeometry is a capsule is queried as that exact capsule (its segment and radius, link
+/// frame): distances equal the true capsule distance. setLinkMesh gives a link a triangle mesh
+/// instead, expressed in the link frame (so X_WL from forward kinematics places it); object
+/// meshes are in their object frame. Not thread-safe for mutation; const queries may run
+/// concurrently with separate scratch.
 ///
 /// Lifetime: a CollisionWorld refers to the arm model it was built for (model()) and keeps no
 /// copy of it; that model must outlive the world and every copy of it.
 class CollisionWorld {
  public:
-  struct Options {
-    int capsule_segments = 16;  ///< around the axis of each link capsule
-    int capsule_rings = 4;      ///< per hemisphere
-  };
+  struct Options {};
 
-  /// Builds a mesh for every link whose geometry is a capsule (other links have none until
-  /// setLinkMesh). Refers to `model`, which must outlive the world (see the class comment).
+  /// Takes every link whose geometry is a capsule as that capsule (other links have no geometry
+  /// until setLinkMesh). Refers to `model`, which must outlive the world (see the class comment).
   explicit CollisionWorld(const arm::ArmModel& model);
   CollisionWorld(const arm::ArmModel& model, const Options& options);
 
-  /// Replaces the mesh of `link` (for example an imported hand mesh). `X_LM` is the mesh
-  /// frame in the link frame; it is baked into the vertices.
+  /// Gives `link` a triangle mesh in place of its capsule or of no geometry (for example an
+  /// imported hand mesh). `X_LM` is the mesh frame in the link frame; it is baked into the
+  /// vertices.
   /// @throws MeshError for a bad link index
   void setLinkMesh(int link, const TriMesh& mesh, const Eigen::Isometry3d& X_LM = Eigen::Isometry3d::Identity());
   /// Adds an object; returns its index.
@@ -58,17 +65,27 @@ class CollisionWorld {
   /// The model the world was built for.
   [[nodiscard]] const arm::ArmModel& model() const noexcept { return *model_; }
   [[nodiscard]] int numLinks() const noexcept { return static_cast<int>(links_.size()); }
-  [[nodiscard]] bool hasLinkMesh(int link) const noexcept { return links_[static_cast<std::size_t>(link)] != nullptr; }
+  /// The link's geometry in the queries.
+  [[nodiscard]] LinkShape linkShape(int link) const noexcept { return links_[static_cast<std::size_t>(link)].shape; }
+  /// The link takes part in the queries (a capsule or a mesh).
+  [[nodiscard]] bool hasLinkGeometry(int link) const noexcept { return linkShape(link) != LinkShape::kNone; }
+  /// The link is queried as a triangle mesh (setLinkMesh).
+  [[nodiscard]] bool hasLinkMesh(int link) const noexcept { return linkShape(link) == LinkShape::kMesh; }
+  /// The link's capsule, link frame. Precondition: linkShape(link) == LinkShape::kCapsule.
+  [[nodiscard]] const Capsule& linkCapsule(int link) const noexcept {
+    return links_[static_cast<std::size_t>(link)].capsule;
+  }
   /// Precondition: hasLinkMesh(link).
   [[nodiscard]] const TriMesh& linkMesh(int link) const noexcept {
-    return links_[static_cast<std::size_t>(link)]->mesh;
+    return links_[static_cast<std::size_t>(link)].mesh->mesh;
   }
+  /// Precondition: hasLinkMesh(link).
   [[nodiscard]] const SnchTree& linkTree(int link) const noexcept {
-    return links_[static_cast<std::size_t>(link)]->tree;
+    return links_[static_cast<std::size_t>(link)].mesh->tree;
   }
   /// Neighbour-rejection cones of the link's mesh (local descent). Precondition: hasLinkMesh(link).
   [[nodiscard]] const NeighbourCones& linkCones(int link) const noexcept {
-    return links_[static_cast<std::size_t>(link)]->cones;
+    return links_[static_cast<std::size_t>(link)].mesh->cones;
   }
   [[nodiscard]] int numObjects() const noexcept { return static_cast<int>(objects_.size()); }
   [[nodiscard]] const CollisionObject& object(int i) const noexcept { return objects_[static_cast<std::size_t>(i)]; }
@@ -86,13 +103,18 @@ class CollisionWorld {
     SnchTree tree;
     NeighbourCones cones;
   };
+  struct Link {
+    LinkShape shape = LinkShape::kNone;
+    Capsule capsule;
+    std::shared_ptr<const LinkMesh> mesh;  // kMesh only
+  };
   const arm::ArmModel* model_;  // not owned: outlives the world
-  std::vector<std::shared_ptr<const LinkMesh>> links_;
+  std::vector<Link> links_;
   std::vector<CollisionObject> objects_;
 };
 
-/// A global search strategy: every local minimum within the cutoff between every link mesh and
-/// every object at the configuration of `fk`, pruned with the endpoint radius. Implementations
+/// A global search strategy: every local minimum within the cutoff between every link with
+/// geometry and every object at the configuration of `fk`, pruned with the endpoint radius. Implementations
 /// are selectable at run time (SNCH here; a Bullet-based one in bullet_search.hpp).
 class GlobalSearch {
  public:
@@ -109,7 +131,8 @@ class GlobalSearch {
   [[nodiscard]] virtual std::string_view name() const noexcept = 0;
 };
 
-/// The SNCH global search (querySnchPair on every link x object pair, then pruneMinima).
+/// The SNCH global search (querySnchCapsule or querySnchPair on every link x object pair, then
+/// pruneMinima).
 class SnchGlobalSearch final : public GlobalSearch {
  public:
   void search(const CollisionWorld& world, const arm::ArmData& fk, double cutoff_m, double prune_radius_m,

@@ -201,6 +201,84 @@ void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Ei
                    const SnchTree& obj_tree, const TriMesh& obj_mesh, const Eigen::Isometry3d& X_WO, double cutoff_m,
                    SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats* stats = nullptr);
 
+/// A capsule: the points within radius_m of the segment [a_m, b_m] (a sphere when the two ends
+/// coincide). The exact geometry of an arm link whose LinkGeometry is a capsule.
+struct Capsule {
+  Eigen::Vector3d a_m = Eigen::Vector3d::Zero();  ///< segment end (LinkGeometry::from_m) [m]
+  Eigen::Vector3d b_m = Eigen::Vector3d::Zero();  ///< other end (LinkGeometry::to_m) [m]
+  double radius_m = 0.0;
+};
+
+/// A capsule's part in LocalMinimum::feature_link: the cap around a_m ({kVertex, 0}), the cap
+/// around b_m ({kVertex, 1}) or the cylinder between them ({kEdge, 0}), from the parameter s of
+/// the segment point that the minimum's direction passes through (s <= 0, s >= 1, between).
+/// @rt
+[[nodiscard]] Feature capsuleFeature(double s) noexcept;
+
+/// The closest pair of a segment [a_O, b_O] and one feature of a mesh (same frame), computed from
+/// the feature alone: a vertex against the segment; an edge (taken from its smaller vertex id)
+/// against the segment (closestPointsSegmentSegment); a face (the triangle f.index) by
+/// closestPointsSegmentTriangle.
+struct CapsuleFeaturePair {
+  double s = 0.0;  ///< parameter of on_segment_m on the segment, in [0, 1]
+  Eigen::Vector3d on_segment_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d q_m = Eigen::Vector3d::Zero();  ///< the feature's point
+  double distance_sq = 0.0;                       ///< |q_m - on_segment_m|^2 [m^2]
+  /// The feature whose relative interior holds q_m: the feature itself, an edge's end vertex, or
+  /// the edge or vertex of a face's triangle.
+  Feature holder;
+};
+
+/// @rt
+[[nodiscard]] CapsuleFeaturePair capsuleFeatureClosest(const Eigen::Vector3d& a_O, const Eigen::Vector3d& b_O,
+                                                       const TriMesh& mesh, const Feature& feature) noexcept;
+
+/// Fills `out` with the minimum of a capsule against the object feature `feature_object`
+/// held by triangle `tri_object`, computed from that feature alone (so every triangle that
+/// finds it, and local descent, report the same points and distance): the closest pair of the
+/// capsule's segment [a_O, b_O] (object frame) and the vertex, the edge (taken from its
+/// smaller vertex id) or the face; with d_s their distance, distance_m = max(0, d_s -
+/// radius_m), u = (q - s)/d_s (minus the feature's pseudo-normal when d_s = 0), p = s +
+/// radius_m u: on the capsule's surface, beyond q when the capsule reaches into the surface
+/// (0 < d_s < radius_m), within the capsule when the segment itself meets it (d_s = 0). u_W is left in the OBJECT
+/// frame; tri_link is -1; link/object untouched.
+/// @param X_LO pose of the object frame in the link frame (p_L = X_LO p)
+/// @rt
+void capsuleMinimumAtFeature(const Eigen::Vector3d& a_O, const Eigen::Vector3d& b_O, double radius_m,
+                             const Eigen::Isometry3d& X_LO, const TriMesh& object_mesh, int tri_object,
+                             const Feature& feature_object, LocalMinimum& out) noexcept;
+
+/// Same with the feature's pair already computed: `pair` = capsuleFeatureClosest(a_O, b_O,
+/// object_mesh, feature_object).
+/// @rt
+void capsuleMinimumFromPair(const CapsuleFeaturePair& pair, double radius_m, const Eigen::Isometry3d& X_LO,
+                            const TriMesh& object_mesh, int tri_object, const Feature& feature_object,
+                            LocalMinimum& out) noexcept;
+
+/// Tests one capsule/triangle pair: the closest pair (s, q) of the capsule's segment and the
+/// triangle is a local minimum of the capsule against the object mesh when d_s - radius <=
+/// cutoff_m, the object side sees it from outside (-u . n(f_q) >= -kOutsideCosineTolerance) and
+/// no triangle incident to q's feature f_q comes closer to s than d_s (within
+/// kLocalMinimumTolerance_m): the distance to the segment is convex with gradient u, so that is
+/// exactly q minimising the distance to the capsule over f_q's neighbourhood, and the capsule's
+/// own side is exact (its point is the projection of q). Fills `out` like
+/// capsuleMinimumAtFeature and returns true.
+/// @param a_O, b_O the capsule's segment in the object frame [m]
+/// @rt
+bool evaluateCapsuleTriangle(const Eigen::Vector3d& a_O, const Eigen::Vector3d& b_O, double radius_m,
+                             const Eigen::Isometry3d& X_LO, const TriMesh& object_mesh, int tri_object, double cutoff_m,
+                             LocalMinimum& out) noexcept;
+
+/// Appends to `out` every local minimum between a capsule (link frame) and an object mesh within
+/// `cutoff_m` (docs/haptics.md, "Capsule links"), merged by feature pair: a traversal of the
+/// object's tree against the capsule's segment with the segment's exact distances (sphere and
+/// box bounds, the normal-cone direction and support tests), then evaluateCapsuleTriangle at
+/// the leaves. The output equals evaluateCapsuleTriangle on every triangle (the brute force).
+/// link/object of the appended minima are -1; u_W is in the world frame.
+void querySnchCapsule(const Capsule& capsule, const Eigen::Isometry3d& X_WL, const SnchTree& obj_tree,
+                      const TriMesh& obj_mesh, const Eigen::Isometry3d& X_WO, double cutoff_m,
+                      SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats* stats = nullptr);
+
 /// Sorts minima[begin, end) by feature pair and removes repeated feature pairs (keeps the
 /// smaller distance, then the smaller triangle ids, so the result does not depend on the input
 /// order); returns the new end. No allocation.
