@@ -4,6 +4,8 @@
 /// the scene-level global search (every link with a mesh x every object, then pruning).
 
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -46,7 +48,12 @@ enum class LinkShape {
 /// copy of it; that model must outlive the world and every copy of it.
 class CollisionWorld {
  public:
-  struct Options {};
+  struct Options {
+    /// When set, addObject reads each object's hierarchy from this folder (hierarchyFromCache:
+    /// keyed by the mesh's content hash and the build versions) and saves it there when it is
+    /// missing or stale; otherwise it is built.
+    std::filesystem::path hierarchy_cache_dir;
+  };
 
   /// Takes every link whose geometry is a capsule as that capsule (other links have no geometry
   /// until setLinkMesh). Refers to `model`, which must outlive the world (see the class comment).
@@ -58,7 +65,9 @@ class CollisionWorld {
   /// vertices.
   /// @throws MeshError for a bad link index
   void setLinkMesh(int link, const TriMesh& mesh, const Eigen::Isometry3d& X_LM = Eigen::Isometry3d::Identity());
-  /// Adds an object; returns its index.
+  /// Adds an object (its hierarchy built, or read from Options::hierarchy_cache_dir); returns its
+  /// index.
+  /// @throws std::runtime_error when the hierarchy cache folder cannot be written
   int addObject(std::string name, TriMesh mesh, const Eigen::Isometry3d& X_WO);
   void setObjectPose(int object, const Eigen::Isometry3d& X_WO);
 
@@ -92,6 +101,11 @@ class CollisionWorld {
   /// Index of the object called `name`, or -1.
   [[nodiscard]] int objectIndex(std::string_view name) const noexcept;
 
+  /// An identifier of the world's geometry, unique in the process: a new world, a copy and
+  /// every setLinkMesh or addObject get a new one (setObjectPose does not: poses are inputs of
+  /// every query). A coherent search keeps what it proved for one revision only.
+  [[nodiscard]] std::uint64_t revision() const noexcept { return revision_.value; }
+
   /// SNCH global search at the link frames of `fk` (a fresh SnchGlobalSearch; keep one
   /// SnchGlobalSearch alive instead to reuse its scratch). See GlobalSearch::search.
   void globalSearch(const arm::ArmData& fk, double cutoff_m, double prune_radius_m,
@@ -108,9 +122,22 @@ class CollisionWorld {
     Capsule capsule;
     std::shared_ptr<const LinkMesh> mesh;  // kMesh only
   };
+  // A process-unique number that copies do not share.
+  struct Revision {
+    std::uint64_t value = next();
+    Revision() = default;
+    Revision(const Revision& /*other*/) noexcept : value(next()) {}
+    Revision& operator=(const Revision& /*other*/) noexcept {
+      value = next();
+      return *this;
+    }
+    static std::uint64_t next() noexcept;
+  };
   const arm::ArmModel* model_;  // not owned: outlives the world
+  Options options_;
   std::vector<Link> links_;
   std::vector<CollisionObject> objects_;
+  Revision revision_;
 };
 
 /// A global search strategy: every local minimum within the cutoff between every link with
@@ -131,18 +158,39 @@ class GlobalSearch {
   [[nodiscard]] virtual std::string_view name() const noexcept = 0;
 };
 
-/// The SNCH global search (querySnchCapsule or querySnchPair on every link x object pair, then
-/// pruneMinima).
+/// How SnchGlobalSearch runs; neither option changes its result (the minima, their order and
+/// their bits), only its time.
+struct SnchSearchOptions {
+  /// Threads that run one search: the calling thread and threads - 1 helper threads that the
+  /// search object starts once and keeps (>= 1). The link x object pairs are shared out, the
+  /// costliest first (by the previous search's times), and their minima joined in pair order.
+  int threads = 1;
+  /// Start every capsule link x object pair from what the previous search of this object proved
+  /// about it (querySnchCapsuleCoherent: the front of its traversal with distance bounds), as
+  /// long as the world's revision and the cutoff are the same.
+  bool coherent = true;
+};
+
+/// The SNCH global search: querySnchCapsule (querySnchCapsuleCoherent) or querySnchPair on every
+/// link x object pair, each pair's minima in the canonical order of mergeDuplicateMinima, the
+/// pairs in (link, object) order, then pruneMinima (whose order-dependent acceptance thus sees
+/// the same sequence whatever the thread count or the coherence).
 class SnchGlobalSearch final : public GlobalSearch {
  public:
+  /// @throws std::invalid_argument when options.threads < 1
+  explicit SnchGlobalSearch(const SnchSearchOptions& options = {});
+  ~SnchGlobalSearch() override;
   void search(const CollisionWorld& world, const arm::ArmData& fk, double cutoff_m, double prune_radius_m,
               std::vector<LocalMinimum>& out) override;
   [[nodiscard]] std::string_view name() const noexcept override { return "snch"; }
   /// Counters summed over the pairs of the last search.
   [[nodiscard]] const SnchQueryStats& lastStats() const noexcept { return stats_; }
+  [[nodiscard]] const SnchSearchOptions& options() const noexcept { return options_; }
 
  private:
-  SnchQueryScratch scratch_;
+  struct Impl;
+  SnchSearchOptions options_;
+  std::unique_ptr<Impl> impl_;
   SnchQueryStats stats_;
 };
 
