@@ -293,9 +293,13 @@ std::optional<MeshHierarchy> loadMeshHierarchy(const TriMesh& mesh, const std::f
     if (why != nullptr) *why = file.string() + ": " + std::move(text);
     return std::nullopt;
   };
-  std::ifstream in(file, std::ios::binary);
+  std::ifstream in(file, std::ios::binary | std::ios::ate);
   if (!in) return fail("no such file");
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::streamoff size = in.tellg();
+  if (size < 0) return fail("cannot read");
+  std::vector<char> bytes(static_cast<std::size_t>(size));
+  in.seekg(0);
+  if (!in.read(bytes.data(), size)) return fail("cannot read");
   if (bytes.size() < sizeof(kMagic) + sizeof(Header) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
     return fail("not a hierarchy file");
   }
