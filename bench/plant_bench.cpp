@@ -12,6 +12,7 @@
 
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/rigid_body_dynamics.hpp"
+#include "fullarm/arm/rigid_body_reduction.hpp"
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/plant_config.hpp"
 #include "fullarm/plant/signals.hpp"

@@ -5,6 +5,7 @@
 
 namespace fullarm::arm {
 
+// A1: cylinder length and moment arm (law of cosines) (reports/equations.md).
 double cylinderLength(const ActuatorGeometry& act, double q_rad) noexcept {
   assert(act.type == ActuatorGeometry::Type::kLinear);
   const double r = act.moment_arm_m;
@@ -14,6 +15,7 @@ double cylinderLength(const ActuatorGeometry& act, double q_rad) noexcept {
   return std::sqrt(r * r + d * d - 2.0 * r * d * std::cos(phi));
 }
 
+// A1: cylinder length and moment arm (law of cosines) (reports/equations.md).
 double actuatorMomentArm(const ActuatorGeometry& act, double q_rad) noexcept {
   const double phi = q_rad + act.lever_angle_offset_rad;
   // dL/dphi: virtual work of the cylinder force equals the joint torque.

@@ -3,8 +3,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "fullarm/arm/kinematics.hpp"
-
 namespace fullarm::arm {
 
 ArmData::ArmData(const ArmModel& model) {

@@ -70,6 +70,7 @@ double ArmModel::totalMass() const noexcept {
   return m;
 }
 
+// K1: modified DH link transforms (reports/equations.md).
 Eigen::Isometry3d dhTransform(const DhParameters& dh) {
   // Modified DH (Craig): Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_offset) Tz(d_i). Rz(q) follows.
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
@@ -80,6 +81,7 @@ Eigen::Isometry3d dhTransform(const DhParameters& dh) {
   return X;
 }
 
+// K2: roll-pitch-yaw rotation (reports/equations.md).
 Eigen::Matrix3d rotationFromRpy(double roll_rad, double pitch_rad, double yaw_rad) {
   return (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) *
           Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()) *
@@ -87,6 +89,7 @@ Eigen::Matrix3d rotationFromRpy(double roll_rad, double pitch_rad, double yaw_ra
       .toRotationMatrix();
 }
 
+// D6: physical consistency of an inertia (reports/equations.md).
 std::string checkInertia(double mass_kg, const Eigen::Matrix3d& I) {
   if (!std::isfinite(mass_kg) || !I.allFinite()) return "mass and inertia must be finite numbers";
   if (mass_kg < 0.0) return "mass must be >= 0 kg, got " + fmt(mass_kg);
@@ -214,6 +217,13 @@ void validateArmModel(const ArmModel& model) {
   };
   check_segment(model.upper_arm_joint, "upper_arm_joint");
   check_segment(model.forearm_joint, "forearm_joint");
+}
+
+bool jointMovesLink(const ArmModel& model, int joint, int link) noexcept {
+  for (int j = link; j >= 0; j = model.joints[static_cast<std::size_t>(j)].parent) {
+    if (j == joint) return true;
+  }
+  return false;
 }
 
 }  // namespace fullarm::arm

@@ -41,6 +41,7 @@ ArmSize armSizeOf(const ArmModel& model) {
   return size;
 }
 
+// §3.2.3: arm size through the DH parameters and the link geometry (reports/equations.md).
 ArmModel scaleArm(const ArmModel& model, const ArmSize& size) {
   requirePositive(size.upper_arm_length_m, "upper_arm_length_m");
   requirePositive(size.forearm_length_m, "forearm_length_m");

@@ -69,6 +69,7 @@ void inverseDynamics(const ArmModel& model, ArmData& data, const Eigen::Ref<cons
 
 }  // namespace
 
+// D2: gravity torques g(q) = ID(q, 0, 0) (reports/equations.md).
 void computeGravityTorquesAtKinematics(const ArmModel& model, ArmData& data) noexcept {
   bodiesAtKinematics(model, data, false);
   computeRigidBodyGravity(data.tree, data.bodies, data.body_vector);
@@ -76,11 +77,13 @@ void computeGravityTorquesAtKinematics(const ArmModel& model, ArmData& data) noe
   ++data.gravity_passes;
 }
 
+// D2: gravity torques g(q) = ID(q, 0, 0) (reports/equations.md).
 void computeGravityTorques(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
   computeForwardKinematics(model, data, q);
   computeGravityTorquesAtKinematics(model, data);
 }
 
+// D1: inverse dynamics, Coriolis torques and mass matrix by the spatial algorithm (reports/equations.md).
 void computeInverseDynamics(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q,
                             const Eigen::Ref<const Eigen::VectorXd>& qd,
                             const Eigen::Ref<const Eigen::VectorXd>& qdd) noexcept {
@@ -88,12 +91,14 @@ void computeInverseDynamics(const ArmModel& model, ArmData& data, const Eigen::R
   inverseDynamics(model, data, q, qd, qdd, true, data.tau);
 }
 
+// D1: inverse dynamics, Coriolis torques and mass matrix by the spatial algorithm (reports/equations.md).
 void computeCoriolisTorques(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q,
                             const Eigen::Ref<const Eigen::VectorXd>& qd) noexcept {
   data.tau_coriolis.setZero();
   inverseDynamics(model, data, q, qd, data.tau_coriolis, false, data.tau_coriolis);
 }
 
+// D1: inverse dynamics, Coriolis torques and mass matrix by the spatial algorithm (reports/equations.md).
 void computeMassMatrix(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
   computeForwardKinematics(model, data, q);
   bodiesAtKinematics(model, data, true);
@@ -101,6 +106,7 @@ void computeMassMatrix(const ArmModel& model, ArmData& data, const Eigen::Ref<co
   data.mass_matrix = data.body_matrix;
 }
 
+// D2: gravity torques g(q) = ID(q, 0, 0) (reports/equations.md).
 double computePotentialEnergy(const ArmModel& model, ArmData& data,
                               const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
   computeForwardKinematics(model, data, q);
@@ -112,6 +118,7 @@ double computePotentialEnergy(const ArmModel& model, ArmData& data,
   return v;
 }
 
+// D3: kinetic energy (reports/equations.md).
 double computeKineticEnergy(const ArmModel& model, ArmData& data, const Eigen::Ref<const Eigen::VectorXd>& q,
                             const Eigen::Ref<const Eigen::VectorXd>& qd) noexcept {
   computeForwardKinematics(model, data, q);
@@ -130,6 +137,7 @@ double computeKineticEnergy(const ArmModel& model, ArmData& data, const Eigen::R
   return 0.5 * energy;
 }
 
+// D4: single-axis load of one joint (reports/equations.md).
 SingleAxisLoad computeSingleAxisLoad(const ArmModel& model, int joint, const Eigen::VectorXd& posture) {
   if (joint < 0 || joint >= model.numJoints())
     throw std::invalid_argument("computeSingleAxisLoad: joint index " + std::to_string(joint) + " out of range");

@@ -4,6 +4,7 @@
 
 namespace fullarm::arm {
 
+// K1: modified DH link transforms (reports/equations.md).
 void computeForwardKinematics(const ArmModel& model, ArmData& data,
                               const Eigen::Ref<const Eigen::VectorXd>& q) noexcept {
   const int n = model.numJoints();
@@ -24,13 +25,7 @@ void computeForwardKinematics(const ArmModel& model, ArmData& data,
   ++data.forward_kinematics_passes;
 }
 
-bool jointMovesLink(const ArmModel& model, int joint, int link) noexcept {
-  for (int j = link; j >= 0; j = model.joints[static_cast<std::size_t>(j)].parent) {
-    if (j == joint) return true;
-  }
-  return false;
-}
-
+// K3: geometric point Jacobian (reports/equations.md).
 void computePointJacobian(const ArmModel& model, const ArmData& data, int link, const Eigen::Vector3d& p_W,
                           PointJacobian& J) noexcept {
   const int n = model.numJoints();

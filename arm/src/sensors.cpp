@@ -11,6 +11,7 @@ int quantizeCode(double counts, int bits) noexcept {
   return static_cast<int>(std::lround(std::clamp(counts, 0.0, top)));
 }
 
+// S1: sensor count conversions (reports/equations.md).
 double potentiometerAngle(const PotentiometerCalibration& cal, double counts) noexcept {
   return cal.polarity * (counts + cal.offset_counts) * cal.slope_rad_per_count - cal.joint_offset_rad;
 }
@@ -19,6 +20,7 @@ double potentiometerCounts(const PotentiometerCalibration& cal, double q_rad) no
   return (q_rad + cal.joint_offset_rad) / (cal.polarity * cal.slope_rad_per_count) - cal.offset_counts;
 }
 
+// S1: sensor count conversions (reports/equations.md).
 double torqueSensorTorque(const TorqueSensorCalibration& cal, double counts) noexcept {
   return (counts + cal.offset_counts) * cal.slope_nm_per_count;
 }
@@ -27,6 +29,7 @@ double torqueSensorCounts(const TorqueSensorCalibration& cal, double tau_nm) noe
   return tau_nm / cal.slope_nm_per_count - cal.offset_counts;
 }
 
+// S1: sensor count conversions (reports/equations.md).
 int torqueCommandCode(const TorqueCommandCalibration& cal, double tau_nm) noexcept {
   return quantizeCode(torqueSensorCounts(cal, tau_nm), cal.bits);
 }

@@ -25,11 +25,13 @@ bool finite(double x) noexcept {
 
 }  // namespace
 
+// Eq. (4): the model torque from the measured, contact and gravity torques (reports/equations.md).
 PaperTorques paperTorques(const JointInput& in) noexcept {
   // Sign conventions: joint_controller.hpp file comment.
   return PaperTorques{-in.tau_load_cell_nm, -in.tau_contact_nm, -in.tau_gravity_nm};
 }
 
+// L1: exact ZOH of the impedance model; L2: first-order low-passes, exact ZOH pole (reports/equations.md).
 JointControllerModel makeJointControllerModel(const JointGains& gains, ControllerKind kind, double dt_s) {
   validateJointGains(gains, dt_s, {}, gains.name);
   JointControllerModel m;
@@ -60,9 +62,11 @@ void resetJointController(const JointControllerModel& /*model*/, JointController
   data.theta_m_rad = q_rad;
   data.q_prev_rad = q_rad;
   data.status.clear();
-  if (!finite(q_rad)) data.status.raise(core::RtCode::kBadInput, kFaultNonFiniteInput, "non-finite joint angle at reset");
+  if (!finite(q_rad))
+    data.status.raise(core::RtCode::kBadInput, kFaultNonFiniteInput, "non-finite joint angle at reset");
 }
 
+// L2: first-order low-passes, exact ZOH pole; L3: passivity observer and controller (reports/equations.md).
 double stepJointController(const JointControllerModel& model, JointControllerData& data,
                            const JointInput& in) noexcept {
   // Safe output first: a latched fault keeps the valve at null.

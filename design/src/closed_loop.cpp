@@ -111,6 +111,7 @@ double trueWallTorque(const JointScenario& sc, double q_wall, const plant::Joint
 
 }  // namespace
 
+// V1: minimum-jerk reference (reports/equations.md).
 MinJerk minimumJerk(double t_s, double duration_s) noexcept {
   if (!(duration_s > 0.0)) return {t_s >= 0.0 ? 1.0 : 0.0, 0.0};
   const double s = std::clamp(t_s / duration_s, 0.0, 1.0);

@@ -13,6 +13,7 @@
 
 namespace fullarm::design {
 
+// C2: the detector's decay rate (reports/equations.md).
 ModeDecay slowestOscillatoryMode(const Eigen::VectorXcd& poles_z, double period_s) {
   if (!(period_s > 0.0) || !std::isfinite(period_s)) {
     throw std::invalid_argument("slowestOscillatoryMode: period_s must be finite and > 0");
@@ -56,6 +57,7 @@ double detectorDecayRate(double window_s, double sustain_ratio) {
   return std::log(1.0 / sustain_ratio) / window_s;
 }
 
+// C1: coupled stability with the validated users (reports/equations.md).
 std::vector<ModelVariation> coupledVariations(const ModelVariation& plant, const UncertaintyRanges& ranges) {
   std::vector<ModelVariation> out;
   const auto at = [](const UniformRange& r, double f) { return r.min + f * (r.max - r.min); };
@@ -76,6 +78,7 @@ std::vector<ModelVariation> coupledVariations(const ModelVariation& plant, const
   return out;
 }
 
+// C1: coupled stability with the validated users (reports/equations.md).
 std::vector<PreparedJoint> prepareCoupledGrid(const JointPlantModel& nominal, double q_rad, const LoopSetup& setup,
                                               const std::vector<ModelVariation>& plants,
                                               const UncertaintyRanges& ranges) {
@@ -99,6 +102,7 @@ DetectorModel detectorModelOf(const JointScenario& sc) noexcept {
   return d;
 }
 
+// C6: contact goal (reports/equations.md).
 DetectorModel contactDetectorModelOf(const JointScenario& sc) noexcept {
   DetectorModel d = detectorModelOf(sc);
   d.hold_s = sc.timing.contact_hold_s;
@@ -158,6 +162,7 @@ Cov2 windowCovariance(double sigma, double w, double T, long begin, long end) {
 
 // Power-of-two diagonal balancing (Parlett & Reinsch 1969, as LAPACK gebal without permutation):
 // d such that diag(d)^-1 A diag(d) has comparable row and column norms; A is balanced in place.
+// T2: diagonal balancing (reports/equations.md).
 Eigen::VectorXd balance(Eigen::MatrixXd& a) {
   const Eigen::Index n = a.rows();
   Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
@@ -200,6 +205,7 @@ constexpr double kUnstableModeScore = 10.0;
 
 }  // namespace
 
+// C3: detector score of a mode (reports/equations.md).
 double detectorModeScore(double sigma, double w, const DetectorModel& d) {
   if (!(d.window_s > 0.0) || !(d.hold_s >= 2.0 * d.window_s) || !(d.threshold_radps > 0.0) ||
       !(d.sustain_ratio > 0.0) || !(d.initial_speed_radps >= 0.0) || !(d.period_s > 0.0)) {
@@ -233,6 +239,7 @@ double detectorModeScore(double sigma, double w, const DetectorModel& d) {
   return worst;
 }
 
+// C5: modal amplitude of the free move (reports/equations.md).
 std::vector<ModalSpeed> modalHoldSpeeds(const PreparedJoint& m, const controllers::JointGains& gains,
                                         const DetectorModel& d) {
   const StateSpace cl = closedLoopSystem(m, gains, VirtualWall{});
@@ -343,6 +350,7 @@ void scorePoles(const Eigen::VectorXcd& z, const std::vector<double>* amplitude,
 
 }  // namespace
 
+// C1: coupled stability with the validated users; C5: modal amplitude of the free move (reports/equations.md).
 CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const controllers::JointGains& gains,
                             const DetectorModel& detector) {
   CoupledGoal g;
@@ -369,6 +377,7 @@ CoupledGoal evaluateCoupled(const std::vector<PreparedJoint>& models, const cont
   return g;
 }
 
+// C6: contact goal (reports/equations.md).
 CoupledGoal evaluateCoupledContact(const std::vector<PreparedJoint>& models, const controllers::JointGains& gains,
                                    const VirtualWall& wall, const DetectorModel& contact_detector) {
   CoupledGoal g;
@@ -381,6 +390,7 @@ CoupledGoal evaluateCoupledContact(const std::vector<PreparedJoint>& models, con
   return g;
 }
 
+// C3: detector score of a mode (reports/equations.md).
 double coupledGoalValue(const CoupledGoal& goal) noexcept {
   return std::max(goal.spectral_radius - kMarginalPoleTolerance, goal.detector_score);
 }

@@ -151,6 +151,7 @@ DiscreteJointPlant discretizeJointPlant(const JointLinearModel& linear, const pl
   return d;
 }
 
+// Eq. (8): the controller's linear form in the boundary layer (reports/equations.md).
 StateSpace controllerLinear(const controllers::JointGains& gains, controllers::ControllerKind kind,
                             const VirtualWall& wall, double gravity_slope_nm_per_rad, const LoopSetup& setup) {
   checkSetup(setup);
@@ -270,11 +271,13 @@ Complex impedanceWith(const PreparedJoint& joint, const StateSpace& ctrl, double
 
 }  // namespace
 
+// T6: rendered impedance of the sampled loop (reports/equations.md).
 std::complex<double> renderedImpedance(const PreparedJoint& joint, const controllers::JointGains& gains,
                                        const VirtualWall& wall, double w) {
   return impedanceWith(joint, controllerFor(joint, gains, wall), w);
 }
 
+// T4: circle criterion for the saturation (reports/equations.md).
 LinearChecks analyzePrepared(const PreparedJoint& joint, const controllers::JointGains& gains, const VirtualWall& wall,
                              bool with_frequency_data, bool with_gain_limits) {
   const LoopSetup& setup = joint.setup;
@@ -361,6 +364,7 @@ std::vector<ZWidthPoint> jointZWidth(const PreparedJoint& joint, const controlle
   return out;
 }
 
+// T5: Colgate-Schenkel passivity of a sampled wall (reports/equations.md).
 double colgateRequiredDamping(const std::function<std::complex<double>(std::complex<double>)>& H, double T,
                               int points) {
   if (!(T > 0.0) || points < 2) throw std::invalid_argument("colgateRequiredDamping: expected T > 0, points >= 2");
@@ -374,6 +378,7 @@ double colgateRequiredDamping(const std::function<std::complex<double>(std::comp
   return worst;
 }
 
+// T5: Colgate-Schenkel passivity of a sampled wall (reports/equations.md).
 std::vector<ZWidthPoint> massDamperZWidth(double b, double T, const std::vector<double>& wall_dampings) {
   if (!(b > 0.0) || !(T > 0.0)) throw std::invalid_argument("massDamperZWidth: expected b > 0 and T > 0");
   std::vector<ZWidthPoint> out;

@@ -16,6 +16,7 @@ namespace {
 // row and column of M comparable in norm (Parlett & Reinsch 1969, as LAPACK dgebal without
 // permutations). The hydraulic joint mixes pressures (1e7 Pa) with a normalised spool, and the
 // exponential of the unbalanced matrix loses digits in its small entries.
+// T2: diagonal balancing (reports/equations.md).
 Eigen::VectorXd balance(Eigen::MatrixXd& M) {
   const Eigen::Index n = M.rows();
   Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
@@ -69,6 +70,7 @@ void checkStateSpace(const StateSpace& sys, const char* what) {
   }
 }
 
+// T1: ZOH discretisation (reports/equations.md).
 StateSpace discretizeZoh(const StateSpace& sys, double dt_s) {
   checkStateSpace(sys, "discretizeZoh");
   if (sys.isDiscrete()) throw std::invalid_argument("discretizeZoh: the system is already discrete");

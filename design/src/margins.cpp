@@ -67,6 +67,7 @@ double phaseMarginDeg(std::complex<double> l) {
 
 }  // namespace
 
+// T3: gain, phase and delay margins, Ms (reports/equations.md).
 LoopMargins computeMargins(const LoopResponse& loop, const MarginOptions& options) {
   double w_max = options.w_max_radps;
   const bool discrete = options.sample_time_s > 0.0;

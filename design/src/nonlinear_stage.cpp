@@ -109,6 +109,7 @@ struct RunSpread {
 
 }  // namespace
 
+// T8: nonlinear stage score over the stress corners and the sample set (reports/equations.md).
 std::vector<ModelVariation> stressCorners(const UncertaintyRanges& r, double user_fraction) {
   const auto weak = [user_fraction](const UniformRange& u) { return u.min + user_fraction * (u.max - u.min); };
   ModelVariation fast;
@@ -133,6 +134,7 @@ std::vector<ModelVariation> stressCorners(const UncertaintyRanges& r, double use
   return {fast, slow, stiff};
 }
 
+// C4: margin of a passed nonlinear run (reports/equations.md).
 double detectorMargin(const ClosedLoopResult& run, double threshold_radps) noexcept {
   const auto hold = [threshold_radps](double late, double early) {
     if (!(late > 0.0)) return 0.0;
@@ -143,6 +145,7 @@ double detectorMargin(const ClosedLoopResult& run, double threshold_radps) noexc
                   hold(run.contact_hold_speed_rms_radps, run.contact_hold_early_speed_rms_radps));
 }
 
+// C4: margin of a passed nonlinear run (reports/equations.md).
 double passedRunMargin(const ClosedLoopResult& run, double threshold_radps) noexcept {
   double m = detectorMargin(run, threshold_radps);
   if (!run.wall_reached && run.sluggish_push_limit_nm > 0.0) {
@@ -175,6 +178,7 @@ std::vector<ModelVariation> stageSamples(const UncertaintyRanges& ranges, std::u
   return out;
 }
 
+// T8: nonlinear stage score over the stress corners and the sample set (reports/equations.md).
 NonlinearScore scoreNonlinear(const JointScenario& scenario, const controllers::JointGains& gains,
                               const std::vector<ModelVariation>& set, const LinearRequirements& req, int max_delay,
                               int failure_cap, const LinearHardGoals* hard_goals, int threads, core::JobPool* pool,

@@ -313,6 +313,7 @@ GoalValues evaluateGoals(const std::vector<PreparedJoint>& models, const control
   return worst;
 }
 
+// T7: systune formulation (reports/equations.md).
 TuningResult tuneJoint(const JointPlantModel& nominal, double q_rad, const controllers::JointGains& initial,
                        const LoopSetup& setup, const TuningGoals& goals, const TuningBounds& bounds,
                        const UncertaintyRanges& ranges, const TunerOptions& options) {

@@ -5,6 +5,7 @@
 
 namespace fullarm::design {
 
+// V2: counter-based random streams (reports/equations.md).
 ModelVariation drawVariation(const UncertaintyRanges& r, std::uint64_t seed, int joint_slot, int index) noexcept {
   core::RandomStream stream(seed, static_cast<std::uint64_t>(joint_slot), static_cast<std::uint64_t>(index));
   ModelVariation s;

@@ -21,6 +21,7 @@ void require(bool ok, const std::filesystem::path& file, const char* key, const 
 
 }  // namespace
 
+// §3.2.1: the look-ahead check L - d_f >= v_max x latency (reports/equations.md).
 void validateHapticsParams(const HapticsParams& p, const std::filesystem::path& file) {
   require(p.stiffness_npm > 0.0 && std::isfinite(p.stiffness_npm), file, "contact.stiffness_npm",
           "expected a finite stiffness > 0 N/m");
@@ -62,6 +63,7 @@ void validateHapticsParams(const HapticsParams& p, const std::filesystem::path& 
   }
 }
 
+// §3.2.1: the smallest safe look-ahead (reports/equations.md).
 double minimumCutoffMargin(const HapticsParams& params) noexcept {
   return params.max_link_speed_mps * 1e-3 * params.search_latency_p99_ms;
 }
@@ -142,6 +144,7 @@ void resetContactRecords(ContactData& data) noexcept {
   for (auto& r : data.links) r = LinkContactRecord{};
 }
 
+// §3.2.2: contact spring on each minimum below the force threshold (reports/equations.md).
 void computeContactForces(const HapticsParams& params, const arm::ArmModel& model, const arm::ArmData& fk,
                           std::span<const LocalMinimum> minima, double dt_s, ContactData& data) noexcept {
   const std::size_t m = minima.size();
@@ -255,6 +258,8 @@ void computeContactForces(const HapticsParams& params, const arm::ArmModel& mode
   }
 }
 
+// Eq. (1): tailored force Jacobian of the joints that move the contact link; Eq. (2): torque of the contact link's own
+// joint (reports/equations.md).
 void addTailoredJacobianTorques(const arm::ArmModel& model, const arm::ArmData& fk, int link, const Vector3d& p_W,
                                 const Vector3d& f_W, Eigen::Ref<Eigen::VectorXd> tau) noexcept {
   // The contact force moved to the contact link's joint origin o_n: force f_c, moment eta_c.

@@ -10,6 +10,7 @@ namespace fullarm::haptics {
 using Eigen::Vector3d;
 using Kind = LocalFeature::Kind;
 
+// G1: closest points by Voronoi regions (reports/equations.md).
 PointTriangleResult closestPointTriangle(const Vector3d& p, const Vector3d& a, const Vector3d& b,
                                          const Vector3d& c) noexcept {
   // Ericson, Real-Time Collision Detection, 5.1.5: test the Voronoi regions in turn.
@@ -55,6 +56,7 @@ PointTriangleResult closestPointTriangle(const Vector3d& p, const Vector3d& a, c
   return done(a + ab * v + ac * w, Kind::kFace, 0);
 }
 
+// G1: closest points by Voronoi regions (reports/equations.md).
 double squaredDistancePointTriangle(const Vector3d& p, const Vector3d& a, const Vector3d& b,
                                     const Vector3d& c) noexcept {
   const Vector3d ab = b - a;
@@ -131,6 +133,7 @@ inline SquaredSegmentResult closestSegmentSegmentSquared(const Vector3d& p0, con
 
 }  // namespace
 
+// G1: closest points by Voronoi regions (reports/equations.md).
 SegmentSegmentResult closestPointsSegmentSegment(const Vector3d& p0, const Vector3d& p1, const Vector3d& q0,
                                                  const Vector3d& q1) noexcept {
   const Vector3d d1 = p1 - p0;
@@ -155,6 +158,7 @@ LocalFeature edgeFeature(int k, double s) noexcept {
 
 }  // namespace
 
+// G2: triangle-triangle distance (reports/equations.md).
 TriangleTriangleResult closestPointsTriangleTriangle(const Vector3d& a0, const Vector3d& a1, const Vector3d& a2,
                                                      const Vector3d& b0, const Vector3d& b1,
                                                      const Vector3d& b2) noexcept {
@@ -259,6 +263,7 @@ double squaredDistancePointTriangle(const Vector3d& p, const PreparedTriangle& t
   return closestPointSquared(p, t).distance_sq;
 }
 
+// G8: segment-triangle closest points, Ericson 5.1.10 (reports/equations.md).
 SegmentTriangleResult closestPointsSegmentTriangle(const Vector3d& p0, const Vector3d& p1,
                                                    const PreparedTriangle& t) noexcept {
   SegmentTriangleResult best;
@@ -476,6 +481,7 @@ bool vertexCandidate(const PreparedTriangle& v_tri, int k, const PreparedTriangl
 
 }  // namespace
 
+// G4: optimality certificate of a closest pair (reports/equations.md).
 bool certifyVertexTriangle(const Vector3d& v, const Vector3d& to_next, const Vector3d& to_prev,
                            const PreparedTriangle& t, Vector3d& q, double& distance_sq,
                            LocalFeature& feature_t) noexcept {
@@ -488,6 +494,7 @@ bool certifyVertexTriangle(const Vector3d& v, const Vector3d& to_next, const Vec
   return true;
 }
 
+// G4: optimality certificate of a closest pair (reports/equations.md).
 bool certifyEdgeEdgePair(const Vector3d& a0, const Vector3d& a1, const Vector3d& inward_a, const Vector3d& b0,
                          const Vector3d& b1, const Vector3d& inward_b, Vector3d& p, Vector3d& q,
                          double& distance_sq) noexcept {
@@ -517,6 +524,7 @@ bool certifyEdgeEdgePair(const Vector3d& a0, const Vector3d& a1, const Vector3d&
   return distance_sq > 0.0 && notTowards(w, inward_a) && notTowards(-w, inward_b);
 }
 
+// G3: segment-triangle distance of a spanning segment (reports/equations.md).
 bool closestPointsSpanningSegmentTriangle(const Vector3d& p0, const Vector3d& d, double d_sq, const PreparedTriangle& t,
                                           SegmentTriangleResult& out) noexcept {
   return closestPointsSpanningSegmentTriangle(p0, d, d_sq, t.v[0], t.v[1], t.v[2], out);
@@ -666,6 +674,7 @@ bool edgeCandidate(const PreparedTriangle& E, int k, const PreparedTriangle& T, 
 
 }  // namespace
 
+// G3: segment-triangle distance of a spanning segment (reports/equations.md).
 bool closestPointsEdgeTriangleSpanning(const PreparedTriangle& E, int k, const Vector3d& t0, const Vector3d& t1,
                                        const Vector3d& t2, TriangleTriangleResult& out) noexcept {
   // edgeCandidate's spanning branch and optimality test, step for step.
@@ -688,6 +697,7 @@ bool closestPointsEdgeTriangleSpanning(const PreparedTriangle& E, int k, const V
   return true;
 }
 
+// G4: optimality certificate of a closest pair (reports/equations.md).
 TriangleTriangleResult closestPointsTriangleTriangleWarm(const PreparedTriangle& A, const PreparedTriangle& B,
                                                          const LocalFeature& guess_a,
                                                          const LocalFeature& guess_b) noexcept {

@@ -196,6 +196,7 @@ void descendCapsuleMinimum(const Vector3d& a, const Vector3d& b, double radius_m
 
 }  // namespace
 
+// §3.2.1: global search within the cutoff, pruning and local descent of the minima (reports/equations.md).
 int updateMinimaLocalDescent(const CollisionWorld& world, const arm::ArmData& fk, std::span<LocalMinimum> minima,
                              const LocalDescentParams& params, LocalDescentStats* stats) noexcept {
   LocalDescentStats st;

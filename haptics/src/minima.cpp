@@ -5,6 +5,7 @@
 
 namespace fullarm::haptics {
 
+// §3.2.1: global search within the cutoff, pruning and local descent of the minima (reports/equations.md).
 void pruneMinima(std::vector<LocalMinimum>& candidates, double radius_m, std::span<const LocalMinimum> baseline) {
   std::stable_sort(candidates.begin(), candidates.end(), [](const LocalMinimum& a, const LocalMinimum& b) {
     return std::tie(a.link, a.object, a.distance_m) < std::tie(b.link, b.object, b.distance_m);
@@ -36,6 +37,7 @@ void pruneMinima(std::vector<LocalMinimum>& candidates, double radius_m, std::sp
   candidates = std::move(accepted);
 }
 
+// §3.2.1: global search within the cutoff, pruning and local descent of the minima (reports/equations.md).
 int adoptGlobalMinima(std::vector<LocalMinimum>& tracked, std::vector<LocalMinimum> fresh, double radius_m) {
   std::erase_if(fresh, [&tracked](const LocalMinimum& f) {
     return std::any_of(tracked.begin(), tracked.end(), [&f](const LocalMinimum& t) { return sameFeaturePair(f, t); });

@@ -371,6 +371,7 @@ bool isClosedConvex(const TriMesh& mesh) {
 
 }  // namespace
 
+// G6: normal-cone merge (reports/equations.md).
 SnchTree buildSnchTree(const TriMesh& mesh) {
   SnchTree tree;
   const int nt = mesh.numTriangles();
@@ -531,6 +532,7 @@ bool evaluatePair(const TriMesh& link_mesh, const LinkVertex& link_vertex_O, int
 
 }  // namespace
 
+// G5: angle-weighted pseudo-normal (reports/equations.md).
 bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh, int tri_object,
                           const Isometry3d& X_OL, double cutoff_m, LocalMinimum& out) noexcept {
   double pair_distance_m = 0.0;
@@ -1062,6 +1064,7 @@ CapsuleFeaturePair capsuleFeatureClosest(const Vector3d& a_O, const Vector3d& b_
   return r;
 }
 
+// G9: the capsule's distance and point from the segment's pair (reports/equations.md).
 void capsuleMinimumFromPair(const CapsuleFeaturePair& pair, double radius_m, const Isometry3d& X_LO,
                             const TriMesh& object_mesh, int tri_object, const Feature& feature_object,
                             LocalMinimum& out) noexcept {
@@ -1129,6 +1132,7 @@ SegmentTriangleResult segmentTriangleOfMesh(const Vector3d& a, const Vector3d& b
 
 }  // namespace
 
+// G9: local minimum of a capsule against a mesh (reports/equations.md).
 bool evaluateCapsuleTriangle(const Vector3d& a_O, const Vector3d& b_O, double radius_m, const Isometry3d& X_LO,
                              const TriMesh& object_mesh, int tri_object, double cutoff_m, LocalMinimum& out) noexcept {
   return evaluateCapsulePair(segmentTriangleOfMesh(a_O, b_O, object_mesh, tri_object), a_O, b_O, radius_m, X_LO,
@@ -1260,6 +1264,8 @@ struct CapsuleTraversal {
 
 }  // namespace
 
+// §3.2.1: global search of a capsule link within the cutoff; G10: the node bounds of the traversal
+// (CapsuleTraversal::run) against the segment (reports/equations.md).
 void querySnchCapsule(const Capsule& capsule, const Isometry3d& X_WL, const SnchTree& obj_tree, const TriMesh& obj_mesh,
                       const Isometry3d& X_WO, double cutoff_m, SnchQueryScratch& scratch,
                       std::vector<LocalMinimum>& out, SnchQueryStats* stats) {
@@ -1284,6 +1290,7 @@ void querySnchCapsule(const Capsule& capsule, const Isometry3d& X_WL, const Snch
   mergeDuplicateMinima(out, begin);
 }
 
+// G11: the front's bounds less the segment's drift (reports/equations.md).
 void querySnchCapsuleCoherent(const Capsule& capsule, const Isometry3d& X_WL, const SnchTree& obj_tree,
                               const TriMesh& obj_mesh, const Isometry3d& X_WO, double cutoff_m,
                               SnchQueryScratch& scratch, CapsuleFront& front, std::vector<LocalMinimum>& out,
@@ -1347,6 +1354,8 @@ void querySnchCapsuleCoherent(const Capsule& capsule, const Isometry3d& X_WL, co
   mergeDuplicateMinima(out, begin);
 }
 
+// §3.2.1: global search within the cutoff, pruning and local descent of the minima; G7: spanning cone of two spheres
+// (reports/equations.md).
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Isometry3d& X_WL,
                    const SnchTree& obj_tree, const TriMesh& obj_mesh, const Isometry3d& X_WO, double cutoff_m,
                    SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats* stats) {

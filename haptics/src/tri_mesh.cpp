@@ -276,6 +276,7 @@ std::span<const int> TriMesh::featureTriangles(const Feature& f) const noexcept 
   return {};
 }
 
+// G5: angle-weighted pseudo-normal (reports/equations.md).
 const Eigen::Vector3d& TriMesh::featureNormal(const Feature& f) const noexcept {
   switch (f.kind) {
     case FeatureKind::kEdge:

@@ -549,8 +549,8 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
       qd_[k] = 0.0;
     }
     arm::computeRigidBodyKinematics(*reduced_, *reduced_data_, q_, qd_);
-    cuff_anchor_W_ =
-        cuff_point_.body < 0 ? cuff_point_.p_B : arm::bodyPointInWorld(*reduced_data_, cuff_point_.body, cuff_point_.p_B);
+    cuff_anchor_W_ = cuff_point_.body < 0 ? cuff_point_.p_B
+                                          : arm::bodyPointInWorld(*reduced_data_, cuff_point_.body, cuff_point_.p_B);
   }
   noise_.reseed(seed_);
   for (JointSensorState& s : sensor_state_) s = {};
@@ -596,6 +596,7 @@ void ArmPlant::singleAxisCuff(double q, double qd, double& tau, double& dtau_dq,
 
 // Rigid-body part: fills mass_ (incl. actuator inertias), mass_inv_, h_ (C qd + g) and
 // tau_cuff_, cuff_jac_ for the state y.
+// H14: joint mechanics (reports/equations.md).
 void ArmPlant::mechanics(const double* y) noexcept {
   const int n = n_;
   if (single_axis_) {
@@ -635,8 +636,8 @@ void ArmPlant::mechanics(const double* y) noexcept {
     const Eigen::Vector3d p = arm::bodyPointInWorld(d, cuff_point_.body, cuff_point_.p_B);
     for (int k = 0; k < n; ++k) {
       const auto kk = static_cast<std::size_t>(k);
-      cuff_jac_.col(k) =
-          reduced_->tree.supports[kk][body] ? Eigen::Vector3d(d.s[kk].top.cross(p - d.o_W[kk])) : Eigen::Vector3d::Zero();
+      cuff_jac_.col(k) = reduced_->tree.supports[kk][body] ? Eigen::Vector3d(d.s[kk].top.cross(p - d.o_W[kk]))
+                                                           : Eigen::Vector3d::Zero();
     }
     const Eigen::Vector3d v = cuff_jac_ * qd_;
     const Eigen::Vector3d f = -user_.stiffness_n_per_m * (p - cuff_anchor_W_) - user_.damping_ns_per_m * v;
@@ -650,6 +651,7 @@ void ArmPlant::mechanics(const double* y) noexcept {
   mechanics_valid_ = true;
 }
 
+// H12: spool dynamics and torque loop; H13: chamber continuity; H15: load-cell torque (reports/equations.md).
 void ArmPlant::evaluateRhs(const double* y, double* ydot) noexcept {
   evaluateTorques(y);
   evaluateRates(y, ydot);
@@ -896,10 +898,12 @@ void ArmPlant::jacobianEntries(const double* y, double* Jdata) noexcept {
 // ld). Rodas3 needs them: without them a Rosenbrock method drops to order one on the arm's slow
 // mechanics and its error estimate no longer sees the error. Uses the kinematics, qdd_ and
 // mass_inv_ of the evaluateRhs() pass at y that jacobianEntries() has just run.
+// R9: rigid-body block of the Newton Jacobian (reports/equations.md).
 void ArmPlant::rigidBodyGradients(const double* /*y*/, double* Jdata, int ld) noexcept {
   const int n = n_;
   if (rigid_derivatives_stale_ || !options_.rigid_derivatives_once_per_period) {
-    arm::computeRigidBodyInverseDynamicsDerivatives(reduced_->tree, *reduced_data_, qdd_, rigid_tau_, rigid_dq_, rigid_dqd_);
+    arm::computeRigidBodyInverseDynamicsDerivatives(reduced_->tree, *reduced_data_, qdd_, rigid_tau_, rigid_dq_,
+                                                    rigid_dqd_);
     rigid_derivatives_stale_ = false;
   }
   // J(qd rows, q and qd columns) -= M^-1 [d ID/dq, d ID/dqd] (plain loops: at n = 7 a general

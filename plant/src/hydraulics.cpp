@@ -34,10 +34,12 @@ namespace {
 
 }  // namespace
 
+// H1: C1 signed square root (reports/equations.md).
 ValueSlope regularizedSignedSqrt(double x, double x0) noexcept {
   return signedSqrtInline(x, x0);
 }
 
+// H2: C1 rounded edge opening (reports/equations.md).
 ValueSlope roundedRamp(double s, double w) noexcept {
   return roundedRampInline(s, w);
 }
@@ -84,6 +86,7 @@ ActuatorKinematics cylinderKinematics(const ActuatorParams& a, double c, double 
 
 }  // namespace
 
+// H4: cylinder on lever kinematics (reports/equations.md).
 ActuatorKinematics actuatorKinematics(const ActuatorParams& a, double q_rad) noexcept {
   if (a.kind != ActuatorKind::kCylinder) return {q_rad, 1.0, 0.0};
   const double phi = q_rad + a.lever.lever_angle_offset_rad;
@@ -140,6 +143,7 @@ ChamberVolumes volumesFrom(const JointParams& p, const StrokeRange& range, const
 
 }  // namespace
 
+// H5: chamber volumes (reports/equations.md).
 ChamberVolumes chamberVolumes(const JointParams& p, const StrokeRange& range, double q_rad) noexcept {
   return volumesFrom(p, range, actuatorKinematics(p.actuator, q_rad));
 }

@@ -5,7 +5,6 @@
 #include <sstream>
 
 #include "fullarm/core/config_error.hpp"
-#include "fullarm/plant/hydraulics.hpp"
 
 namespace fullarm::plant {
 namespace {

@@ -273,6 +273,7 @@ bool luFactorFixed(double* a, int* piv) noexcept {
 // D = [A 0; C E] in 2 x 2 blocks (the plant's spool states do not depend on its pressures), by the
 // 2 x 2 cofactor inverses, D^-1 = [A^-1 0; -E^-1 C A^-1 E^-1]; otherwise by Eigen's 4 x 4
 // cofactor inverse. Both are invariant under the rows' very different scales.
+// R10: block elimination with a Schur complement on the border (reports/equations.md).
 bool invertBlock(const Eigen::Matrix4d& dk, Eigen::Matrix4d& inv) noexcept {
   if (dk(0, 2) == 0.0 && dk(0, 3) == 0.0 && dk(1, 2) == 0.0 && dk(1, 3) == 0.0) {
     const double det_a = dk(0, 0) * dk(1, 1) - dk(0, 1) * dk(1, 0);
@@ -344,6 +345,7 @@ bool RosenbrockIntegrator::factorG(double d) noexcept {
 }
 
 template <int M>
+// R10: block elimination with a Schur complement on the border (reports/equations.md).
 bool RosenbrockIntegrator::factorBlocks(double d) noexcept {
   // G = [D B; C E] with D block diagonal: invert each D_k, W = D^-1 B, S = E - C W. B_k (the
   // border columns of block k's rows) and C (the block columns of the border rows) are mostly
@@ -483,6 +485,7 @@ void RosenbrockIntegrator::solve(const Vector& b, Vector& x) noexcept {
 }
 
 template <int P>
+// R10: block elimination with a Schur complement on the border (reports/equations.md).
 void RosenbrockIntegrator::solveHalvedBorder(double* xm) const noexcept {
   // Second-order border [x; v] (see factorG): C reaches the v rows only; the v rows are then the
   // half-size system. In a local array of the p velocities, which the compiler keeps in registers

@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include "fullarm/arm/sensors.hpp"
+#include "fullarm/core/random.hpp"
 
 namespace fullarm::plant {
 namespace {
@@ -12,18 +13,11 @@ std::uint64_t rotl(std::uint64_t x, int k) noexcept {
   return (x << k) | (x >> (64 - k));
 }
 
-std::uint64_t splitMix64(std::uint64_t& x) noexcept {
-  std::uint64_t z = (x += 0x9e3779b97f4a7c15ULL);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
 }  // namespace
 
 void GaussianNoise::reseed(std::uint64_t seed) noexcept {
   std::uint64_t x = seed;
-  for (std::uint64_t& s : s_) s = splitMix64(x);
+  for (std::uint64_t& s : s_) s = core::splitMix64(x);
   has_spare_ = false;
 }
 

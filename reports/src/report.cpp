@@ -6,7 +6,6 @@
 #include <system_error>
 #include <utility>
 
-#include "html_page.hpp"
 #include "text.hpp"
 
 #ifndef FULLARM_VERSION
@@ -177,11 +176,6 @@ nlohmann::ordered_json Report::summary() const {
   summary["results"] = nlohmann::ordered_json(results_);
   summary["files"] = std::move(files_json);
   return summary;
-}
-
-std::string Report::html() const {
-  checkWritable();
-  return detail::renderHtml(*this);
 }
 
 std::vector<std::filesystem::path> Report::write(const std::filesystem::path& out_dir) const {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <stdexcept>
 
 namespace fullarm::reports::detail {
 
@@ -114,6 +115,41 @@ std::string encodeUrlPath(std::string_view path) {
     }
   }
   return out;
+}
+
+std::string describe(std::string_view kind, std::string_view title) {
+  std::string out(kind);
+  if (title.empty()) {
+    out += " (untitled)";
+  } else {
+    out += " \"";
+    out += title;
+    out += '"';
+  }
+  return out;
+}
+
+void failInput(const std::string& what, const Text& problem) {
+  throw std::invalid_argument((Text() << what << ": " << problem.str()).str());
+}
+
+void requireTitle(const std::string& what, const std::string& title) {
+  if (title.empty()) {
+    failInput(what, Text() << "a title is required");
+  }
+}
+
+void checkValue(const std::string& what, const std::string& where, double value, bool log_axis, char axis_name) {
+  if (std::isnan(value)) {
+    return;
+  }
+  if (std::isinf(value)) {
+    failInput(what, Text() << where << " is " << value << " (expected a finite value, or NaN for a missing value)");
+  }
+  if (log_axis && value <= 0.0) {
+    failInput(what,
+              Text() << where << " = " << value << " is not > 0, but the " << axis_name << " axis is logarithmic");
+  }
 }
 
 }  // namespace fullarm::reports::detail

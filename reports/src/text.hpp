@@ -52,4 +52,13 @@ std::string formatUtc(std::chrono::system_clock::time_point time);
 // Percent-encodes a relative path for an href attribute (keeps unreserved characters and '/').
 std::string encodeUrlPath(std::string_view path);
 
+// Input checks of charts and tables: `kind "title"` for messages (e.g. line chart "Bode
+// magnitude"), and the std::invalid_argument they throw ("<what>: <problem>").
+std::string describe(std::string_view kind, std::string_view title);
+[[noreturn]] void failInput(const std::string& what, const Text& problem);
+// Throws unless `title` is set.
+void requireTitle(const std::string& what, const std::string& title);
+// One value of a series axis: NaN (missing) is fine, infinity is not, and on a logarithmic
+// axis the value must be > 0. `where` says which value, `axis_name` which axis ('x', 'y').
+void checkValue(const std::string& what, const std::string& where, double value, bool log_axis, char axis_name);
 }  // namespace fullarm::reports::detail

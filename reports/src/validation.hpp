@@ -11,9 +11,6 @@
 
 namespace fullarm::reports::detail {
 
-// `kind "title"` for messages, e.g. line chart "Bode magnitude".
-std::string describe(std::string_view kind, std::string_view title);
-
 // `kind` is "line chart" or "scatter chart".
 void validateXyChart(const XyChart& chart, std::string_view kind);
 void validateHeatMap(const HeatMap& heat_map);

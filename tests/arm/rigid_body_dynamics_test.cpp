@@ -10,11 +10,12 @@
 
 #include "alloc_guard.hpp"
 #include "arm_test_util.hpp"
-#include "world_frame_dynamics.hpp"
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/arm/rigid_body_dynamics.hpp"
+#include "fullarm/arm/rigid_body_reduction.hpp"
+#include "world_frame_dynamics.hpp"
 
 namespace fullarm::arm {
 namespace {
@@ -40,8 +41,8 @@ Sample randomSample(int n, std::mt19937& rng) {
 // World-frame inverse dynamics of the whole model (locked joints at the posture, at rest),
 // read at the active joints.
 BodyVector armInverseDynamics(const ArmModel& model, ArmData& data, const std::vector<int>& active,
-                                 const Eigen::VectorXd& posture, const BodyVector& q, const BodyVector& qd,
-                                 const BodyVector& qdd) {
+                              const Eigen::VectorXd& posture, const BodyVector& q, const BodyVector& qd,
+                              const BodyVector& qdd) {
   Eigen::VectorXd q_full = posture;
   Eigen::VectorXd qd_full = Eigen::VectorXd::Zero(model.numJoints());
   Eigen::VectorXd qdd_full = Eigen::VectorXd::Zero(model.numJoints());

@@ -12,8 +12,7 @@ namespace {
 struct Scratch {
   std::vector<Eigen::Vector3d> omega, omega_dot, accel_origin, force, moment;
   std::vector<Eigen::Matrix3d> inertia_W;  // link inertia about its COM in the world
-  explicit Scratch(std::size_t n)
-      : omega(n), omega_dot(n), accel_origin(n), force(n), moment(n), inertia_W(n) {}
+  explicit Scratch(std::size_t n) : omega(n), omega_dot(n), accel_origin(n), force(n), moment(n), inertia_W(n) {}
 };
 
 // Recursive Newton-Euler on the link tree, in world coordinates, after forward kinematics.
@@ -79,6 +78,7 @@ Eigen::VectorXd newtonEuler(const ArmModel& model, const Eigen::VectorXd& q, con
 
 }  // namespace
 
+// D5: world-frame Newton-Euler (test oracle) (reports/equations.md).
 Eigen::VectorXd worldFrameInverseDynamics(const ArmModel& model, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                                           const Eigen::VectorXd& qdd) {
   return newtonEuler(model, q, qd, qdd, 1.0);

@@ -16,6 +16,8 @@
 #include <string_view>
 #include <vector>
 
+#include "fullarm/arm/sensors.hpp"
+
 namespace fullarm::arm {
 
 /// Upper bound on joints (7 arm + 3 hand); lets the 1 kHz path use fixed-capacity storage.
@@ -68,27 +70,6 @@ struct ActuatorGeometry {
   double mount_distance_m = 0.0;
   double lever_angle_offset_rad = 0.0;
 };
-
-/// Potentiometer read through an ADC: q = polarity * (counts + offset_counts) * slope - joint_offset.
-struct PotentiometerCalibration {
-  double slope_rad_per_count = 0.0;
-  double offset_counts = 0.0;
-  int polarity = 1;
-  double joint_offset_rad = 0.0;
-  int bits = 12;
-};
-
-/// Joint torque sensor (load cell) read through an ADC: tau = (counts + offset_counts) * slope.
-/// The same rule describes the desired-torque DAC (TorqueCommandCalibration).
-struct TorqueSensorCalibration {
-  double slope_nm_per_count = 0.0;
-  double offset_counts = 0.0;
-  int bits = 12;
-};
-
-/// The desired-torque DAC of a joint card: tau = (code + offset_counts) * slope. Its slope may
-/// differ in sign from the load cell's (the DTS finger joints, reference section 6.1).
-using TorqueCommandCalibration = TorqueSensorCalibration;
 
 /// One joint and the link it moves.
 struct Joint {
@@ -147,5 +128,9 @@ void validateArmModel(const ArmModel& model);
 /// symmetric, positive definite (or zero for a massless link), principal moments obeying
 /// the triangle inequality. Returns an empty string when valid, else what is wrong.
 [[nodiscard]] std::string checkInertia(double mass_kg, const Eigen::Matrix3d& inertia_com_kgm2);
+
+/// True when joint `joint` moves link `link` (it is the link's joint or an ancestor).
+/// @rt
+[[nodiscard]] bool jointMovesLink(const ArmModel& model, int joint, int link) noexcept;
 
 }  // namespace fullarm::arm

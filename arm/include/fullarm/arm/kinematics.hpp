@@ -42,8 +42,4 @@ void computePointJacobian(const ArmModel& model, const ArmData& data, int link, 
   return data.X_WL[static_cast<std::size_t>(link)] * p_L;
 }
 
-/// True when joint `joint` moves link `link` (it is the link's joint or an ancestor).
-/// @rt
-[[nodiscard]] bool jointMovesLink(const ArmModel& model, int joint, int link) noexcept;
-
 }  // namespace fullarm::arm

@@ -62,25 +62,6 @@ struct RigidBodyModel {
   Eigen::Vector3d gravity_W_mps2 = Eigen::Vector3d(0.0, 0.0, -9.81);
 };
 
-/// Builds the reduced model: active[k] is the arm-model index of body k's joint; locked joints
-/// stay at `posture` (size model.numJoints()). Links that no active joint moves are dropped
-/// (they cannot load an active joint).
-/// @throws std::invalid_argument for an empty, repeated or out-of-range active list or a
-/// posture of the wrong size.
-[[nodiscard]] RigidBodyModel reduceArmModel(const ArmModel& model, const std::vector<int>& active,
-                                            const Eigen::VectorXd& posture);
-
-/// Body k's point `p_L` given in arm-model link `link`'s frame, in body frame coordinates, and the
-/// body that carries it (-1: no active joint moves that link; the point is then fixed).
-struct BodyPoint {
-  int body = -1;
-  Eigen::Vector3d p_B = Eigen::Vector3d::Zero();
-};
-/// Locates an arm-model link point on the reduced model (same `active` and `posture` as
-/// reduceArmModel). @throws std::invalid_argument for a bad link index.
-[[nodiscard]] BodyPoint reducePoint(const ArmModel& model, const std::vector<int>& active,
-                                    const Eigen::VectorXd& posture, int link, const Eigen::Vector3d& p_L);
-
 /// A spatial motion vector (omega, v_O) or force vector (n_O, f), world coordinates.
 struct SpatialVector {
   Eigen::Vector3d top = Eigen::Vector3d::Zero();

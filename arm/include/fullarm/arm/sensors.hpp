@@ -3,9 +3,30 @@
 /// Count <-> SI conversion of the potentiometers and joint torque sensors, following the
 /// SL translation rule restated in reference sarcos-master-arm.md section 6.1.
 
-#include "fullarm/arm/arm_model.hpp"
+#include <utility>
 
 namespace fullarm::arm {
+
+/// Potentiometer read through an ADC: q = polarity * (counts + offset_counts) * slope - joint_offset.
+struct PotentiometerCalibration {
+  double slope_rad_per_count = 0.0;
+  double offset_counts = 0.0;
+  int polarity = 1;
+  double joint_offset_rad = 0.0;
+  int bits = 12;
+};
+
+/// Joint torque sensor (load cell) read through an ADC: tau = (counts + offset_counts) * slope.
+/// The same rule describes the desired-torque DAC (TorqueCommandCalibration).
+struct TorqueSensorCalibration {
+  double slope_nm_per_count = 0.0;
+  double offset_counts = 0.0;
+  int bits = 12;
+};
+
+/// The desired-torque DAC of a joint card: tau = (code + offset_counts) * slope. Its slope may
+/// differ in sign from the load cell's (the DTS finger joints, reference section 6.1).
+using TorqueCommandCalibration = TorqueSensorCalibration;
 
 /// Largest ADC/DAC code for `bits` bits (4095 for 12 bits).
 /// @rt

@@ -25,9 +25,10 @@
 #include "fullarm/arm/arm_model.hpp"
 #include "fullarm/arm/joint_selection.hpp"
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/arm/rigid_body_dynamics.hpp"
+#include "fullarm/arm/rigid_body_reduction.hpp"
 #include "fullarm/plant/hydraulics.hpp"
 #include "fullarm/plant/joint_params.hpp"
-#include "fullarm/arm/rigid_body_dynamics.hpp"
 #include "fullarm/plant/rosenbrock.hpp"
 #include "fullarm/plant/sensor_model.hpp"
 
@@ -121,8 +122,8 @@ struct RigidLoad {
 /// joint in ArmPlant::selection() order (arm/joint_selection.hpp). All torques about the joint
 /// axis, positive toward +q.
 struct PlantCommand {
-  JointVector command;         ///< valve voltage [V], desired torque [N m] or ideal torque [N m]
-  JointVector tau_user_nm;     ///< torque the user applies at each joint [N m]
+  JointVector command;      ///< valve voltage [V], desired torque [N m] or ideal torque [N m]
+  JointVector tau_user_nm;  ///< torque the user applies at each joint [N m]
   /// Contact torque [N m]: the torque the environment applies to the link, positive toward +q
   /// (the same quantity and sign as fullarm::haptics' ContactData::tau_contact_nm, gathered at
   /// the active joints).

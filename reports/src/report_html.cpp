@@ -1,4 +1,5 @@
-#include "html_page.hpp"
+// Report::html(): the report as one self-contained HTML page.
+#include "fullarm/reports/report.hpp"
 
 #include <cmath>
 #include <string_view>
@@ -140,8 +141,7 @@ class PageBuilder {
   json charts_ = json::object();
 };
 
-}  // namespace
-
+// The caller has checked that the report has a verdict.
 std::string renderHtml(const Report& report) {
   const Verdict& verdict = *report.verdict();
   const std::string_view plotly = plotlyJs();
@@ -265,4 +265,14 @@ std::string renderHtml(const Report& report) {
   return html;
 }
 
+}  // namespace
 }  // namespace fullarm::reports::detail
+
+namespace fullarm::reports {
+
+std::string Report::html() const {
+  checkWritable();
+  return detail::renderHtml(*this);
+}
+
+}  // namespace fullarm::reports
