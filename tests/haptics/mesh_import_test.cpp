@@ -450,9 +450,9 @@ TEST(MeshImportDrcTest, EveryDaeOfTheRepositoryDrcFolderLoads) {
   EXPECT_EQ(checkDrcFolder(repoMesh("")), 3);
 }
 
-// The whole shared DRC folder (nine models) where the development machines have it; the three the
-// project uses are checked above everywhere.
-TEST(MeshImportDrcTest, EveryDaeOfTheSharedDrcFolderLoads) {
+// The whole DRC folder (nine models) when FULLARM_DRC_MESH_DIR names it; the three the project
+// uses are checked above everywhere.
+TEST(MeshImportDrcTest, EveryDaeOfTheFullDrcFolderLoads) {
   const fs::path dir = FULLARM_DRC_MESH_DIR;
   if (!fs::is_directory(dir)) GTEST_SKIP() << "DRC mesh folder not found: " << dir;
   EXPECT_EQ(checkDrcFolder(dir), 9);
