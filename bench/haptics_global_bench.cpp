@@ -6,18 +6,29 @@
 // (by distance, cone, and for the convex link capsules the per-triangle bound or GJK axis), and
 // the GJK calls of the convex-link path.
 //
+// Hierarchies at scale (BM_Hierarchy_*): the DRC truss subdivided four times (1,123,072
+// triangles, an open CAD mesh with rims), its SNCH tree built, tree and neighbour-rejection cones
+// built, and both loaded from a saved file (hierarchy_cache.hpp); the peer builds FCL's OBBRSS
+// BVH of the same mesh.
+//
 // build/release/bench/haptics_global_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// build/release/bench/haptics_global_bench --benchmark_filter='Hierarchy|FclBvh' --benchmark_repetitions=3
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
+#include "fcl_mesh.hpp"  // tests/haptics: the FCL peer's mesh
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/haptics/bullet_search.hpp"
 #include "fullarm/haptics/contact_forces.hpp"
+#include "fullarm/haptics/hierarchy_cache.hpp"
+#include "fullarm/haptics/mesh_import.hpp"
 #include "fullarm/haptics/mesh_subdivision.hpp"
 #include "fullarm/haptics/scene.hpp"
 
@@ -148,6 +159,57 @@ BENCHMARK(BM_GlobalSearch_Bullet_Subdivided)
     ->Args({3, 3})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2);
+
+// The DRC truss subdivided four times: 1,123,072 triangles.
+const haptics::TriMesh& millionTriangleMesh() {
+  static const haptics::TriMesh mesh = haptics::subdivideMidpoint(
+      haptics::importMesh(sourceFile("scenes/meshes/gazebo-drc/drc_practice_truss/truss.dae")), 4);
+  return mesh;
+}
+
+void BM_Hierarchy_BuildTree_1M(benchmark::State& state) {
+  const haptics::TriMesh& mesh = millionTriangleMesh();
+  for (auto _ : state) {
+    const haptics::SnchTree tree = haptics::buildSnchTree(mesh);
+    benchmark::DoNotOptimize(tree.nodes.data());
+  }
+  state.counters["triangles"] = mesh.numTriangles();
+}
+
+void BM_Hierarchy_BuildTreeAndCones_1M(benchmark::State& state) {
+  const haptics::TriMesh& mesh = millionTriangleMesh();
+  for (auto _ : state) {
+    const haptics::MeshHierarchy h = haptics::buildMeshHierarchy(mesh);
+    benchmark::DoNotOptimize(h.tree.nodes.data());
+  }
+  state.counters["triangles"] = mesh.numTriangles();
+}
+
+void BM_Hierarchy_Load_1M(benchmark::State& state) {
+  const haptics::TriMesh& mesh = millionTriangleMesh();
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / "fullarm_bench_hierarchy.snch";
+  haptics::saveMeshHierarchy(haptics::buildMeshHierarchy(mesh), mesh, file);
+  for (auto _ : state) {
+    const std::optional<haptics::MeshHierarchy> h = haptics::loadMeshHierarchy(mesh, file);
+    if (!h) throw std::runtime_error("the saved hierarchy did not load");
+    benchmark::DoNotOptimize(h->tree.nodes.data());
+  }
+  state.counters["file_MB"] = static_cast<double>(std::filesystem::file_size(file)) / 1e6;
+  std::filesystem::remove(file);
+}
+
+void BM_Peer_FclBvhBuild_1M(benchmark::State& state) {
+  const haptics::TriMesh& mesh = millionTriangleMesh();
+  for (auto _ : state) {
+    const auto model = haptics::test::fclModel(mesh);
+    benchmark::DoNotOptimize(model.get());
+  }
+}
+
+BENCHMARK(BM_Hierarchy_BuildTree_1M)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_Hierarchy_BuildTreeAndCones_1M)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_Hierarchy_Load_1M)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_Peer_FclBvhBuild_1M)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 

@@ -1,7 +1,9 @@
 // The 1 kHz haptic tick for 64 tracked minima: forward kinematics, local descent, contact
 // springs and tailored-Jacobian torques (+ gravity), side by side with two peers on the same
-// scene and configuration: a fresh SNCH global search, and FCL's mesh-mesh distance (global
-// minimum only) on the same link x object pairs.
+// scene and configuration: a fresh SNCH global search, and FCL's capsule-mesh distance (global
+// minimum only) on the same link x object pairs. The links are the arm model's exact capsules;
+// BM_Haptics_LocalTick64FacetedLinks runs the same tick with the links as 16 x 4 faceted meshes
+// (the mesh-link path).
 //
 // Scene: the default DTS arm at its default posture resting on three ledges: dense boxes
 // (1 cm triangles, +-1.5 mm random relief) whose top faces run parallel to the upper arm, forearm and hand capsules,
@@ -34,6 +36,7 @@ namespace {
 
 using namespace fullarm;
 using namespace fullarm::haptics;
+using fullarm::haptics::test::fclCapsule;
 using fullarm::haptics::test::fclModel;
 
 constexpr std::size_t kMinima = 64;
@@ -65,11 +68,29 @@ TriMesh roughBox(const Eigen::Vector3d& size_m, std::mt19937& rng) {
   return TriMesh::build("rough ledge", std::move(v), std::move(t));
 }
 
+// The 64 minima spread over the fresh search's set of `world` at fk.
+std::vector<LocalMinimum> baselineMinima(const CollisionWorld& world, const arm::ArmData& fk) {
+  std::vector<LocalMinimum> all;
+  globalSearch(world, fk, 0.06, kPruneRadius_m, all);
+  if (all.size() < kMinima) throw std::runtime_error("bench scene has too few minima: " + std::to_string(all.size()));
+  for (const auto& m : all) {
+    if (m.distance_m <= 0.0) {
+      throw std::runtime_error("bench scene: link " + std::to_string(m.link) + " touches object " +
+                               std::to_string(m.object));
+    }
+  }
+  std::vector<LocalMinimum> baseline;
+  for (std::size_t i = 0; i < kMinima; ++i) baseline.push_back(all[i * all.size() / kMinima]);
+  return baseline;
+}
+
 struct Scene {
   arm::ArmModel model = arm::loadArmModel(arm::defaultArmModelPath());
   CollisionWorld world{model};
+  CollisionWorld faceted{model};  // the same objects, the links as 16 x 4 meshes
   Eigen::VectorXd q0 = model.defaultPosture();
   std::vector<LocalMinimum> baseline;
+  std::vector<LocalMinimum> faceted_baseline;
   HapticsParams params;
 
   Scene() {
@@ -94,21 +115,16 @@ struct Scene {
         X_WO.linear().col(1) = n.cross(axis);
         X_WO.linear().col(2) = n;
         X_WO.translation() = 0.5 * (a + b) - (g.radius_m + 0.006 + 0.01) * n;
-        world.addObject("ledge_" + std::to_string(l),
-                        roughBox({std::max(0.06, (b - a).norm() - 0.06), 0.08, 0.02}, rng), X_WO);
+        const TriMesh ledge = roughBox({std::max(0.06, (b - a).norm() - 0.06), 0.08, 0.02}, rng);
+        world.addObject("ledge_" + std::to_string(l), ledge, X_WO);
+        faceted.addObject("ledge_" + std::to_string(l), ledge, X_WO);
       }
     }
-    std::vector<LocalMinimum> all;
-    globalSearch(world, fk, 0.06, kPruneRadius_m, all);
-    if (all.size() < kMinima) throw std::runtime_error("bench scene has too few minima: " + std::to_string(all.size()));
-    for (const auto& m : all) {
-      if (m.distance_m <= 0.0) {
-        throw std::runtime_error("bench scene: link " + std::to_string(m.link) + " touches object " +
-                                 std::to_string(m.object));
-      }
+    for (int l = 0; l < model.numJoints(); ++l) {
+      if (faceted.linkShape(l) == LinkShape::kCapsule) faceted.setLinkMesh(l, makeLinkCapsuleMesh(model, l, 16, 4));
     }
-    // 64 minima spread over the whole set.
-    for (std::size_t i = 0; i < kMinima; ++i) baseline.push_back(all[i * all.size() / kMinima]);
+    baseline = baselineMinima(world, fk);
+    faceted_baseline = baselineMinima(faceted, fk);
   }
 };
 
@@ -124,21 +140,23 @@ void reportPercentiles(benchmark::State& state, std::vector<double>& us) {
   state.counters["p99_us"] = us[std::min(us.size() - 1, us.size() * 99 / 100)];
 }
 
-void localTick64(benchmark::State& state, const LocalDescentParams& descent) {
+void localTick64(benchmark::State& state, const LocalDescentParams& descent, bool faceted = false) {
   Scene& s = scene();
+  const CollisionWorld& world = faceted ? s.faceted : s.world;
+  const std::vector<LocalMinimum>& baseline = faceted ? s.faceted_baseline : s.baseline;
   arm::ArmData fk(s.model);
   ContactData data(s.model, static_cast<int>(kMinima));
-  std::vector<LocalMinimum> minima(s.baseline);
+  std::vector<LocalMinimum> minima(baseline);
   const Eigen::VectorXd q1 = motion(s.q0, state);
   std::vector<double> us;
   us.reserve(1 << 20);
   int kept = 0;
   LocalDescentStats stats;
   for (auto _ : state) {
-    std::copy(s.baseline.begin(), s.baseline.end(), minima.begin());
+    std::copy(baseline.begin(), baseline.end(), minima.begin());
     const auto t0 = std::chrono::steady_clock::now();
     arm::computeForwardKinematics(s.model, fk, q1);
-    kept = updateMinimaLocalDescent(s.world, fk, minima, descent, &stats);
+    kept = updateMinimaLocalDescent(world, fk, minima, descent, &stats);
     const std::span<const LocalMinimum> live(minima.data(), static_cast<std::size_t>(kept));
     computeContactForces(s.params, s.model, fk, live, 1e-3, data);
     computeContactTorques(s.model, fk, live, data);
@@ -161,6 +179,12 @@ void BM_Haptics_LocalTick64(benchmark::State& state) {
   localTick64(state, scene().params.descent);
 }
 BENCHMARK(BM_Haptics_LocalTick64)->Arg(57)->Arg(200);
+
+// The same tick with the links as faceted 16 x 4 capsule meshes (the mesh-link path).
+void BM_Haptics_LocalTick64FacetedLinks(benchmark::State& state) {
+  localTick64(state, scene().params.descent, true);
+}
+BENCHMARK(BM_Haptics_LocalTick64FacetedLinks)->Arg(57)->Arg(200);
 
 // Peer: the same tick with the neighbour-rejection cones off (every neighbour of a closest
 // vertex or edge screened one by one): the path before the cones, same minima.
@@ -236,11 +260,12 @@ void BM_Peer_FclDistanceSamePairs(benchmark::State& state) {
   for (const auto& m : s.baseline) pairs.emplace_back(m.link, m.object);
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  std::vector<std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>>> links(static_cast<std::size_t>(s.model.numJoints()));
+  std::vector<test::FclCapsule> links(static_cast<std::size_t>(s.model.numJoints()));
   std::vector<std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>>> objects;
   for (int o = 0; o < s.world.numObjects(); ++o) objects.push_back(fclModel(s.world.object(o).mesh));
   for (const auto& [l, o] : pairs) {
-    if (!links[static_cast<std::size_t>(l)]) links[static_cast<std::size_t>(l)] = fclModel(s.world.linkMesh(l));
+    if (!links[static_cast<std::size_t>(l)].shape)
+      links[static_cast<std::size_t>(l)] = fclCapsule(s.world.linkCapsule(l));
   }
   std::vector<double> us;
   us.reserve(1 << 16);
@@ -248,7 +273,8 @@ void BM_Peer_FclDistanceSamePairs(benchmark::State& state) {
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
     for (const auto& [l, o] : pairs) {
-      fcl::CollisionObjectd a(links[static_cast<std::size_t>(l)], fk.X_WL[static_cast<std::size_t>(l)]);
+      const test::FclCapsule& c = links[static_cast<std::size_t>(l)];
+      fcl::CollisionObjectd a(c.shape, fk.X_WL[static_cast<std::size_t>(l)] * c.X_LC);
       fcl::CollisionObjectd b(objects[static_cast<std::size_t>(o)], s.world.object(o).X_WO);
       fcl::DistanceRequestd req;
       fcl::DistanceResultd res;

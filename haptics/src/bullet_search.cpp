@@ -57,6 +57,7 @@ std::unique_ptr<btConvexHullShape> convexHull(const TriMesh& mesh) {
 // Collects one entry per reported (link triangle, object triangle) pair.
 struct PairCollector : btCollisionWorld::ContactResultCallback {
   const btCollisionObject* link_object = nullptr;
+  bool capsule = false;  // the link is one convex shape: no link triangle
   std::vector<TrianglePairPoints>* out = nullptr;
 
   btScalar addSingleResult(btManifoldPoint& cp, const btCollisionObjectWrapper* w0, int /*part0*/, int index0,
@@ -64,7 +65,7 @@ struct PairCollector : btCollisionWorld::ContactResultCallback {
     const bool link_is_a = w0->getCollisionObject() == link_object;
     (void)w1;
     TrianglePairPoints r;
-    r.tri_link = link_is_a ? index0 : index1;
+    r.tri_link = capsule ? -1 : (link_is_a ? index0 : index1);
     r.tri_object = link_is_a ? index1 : index0;
     const Eigen::Vector3d a = toEigen(cp.getPositionWorldOnA());
     const Eigen::Vector3d b = toEigen(cp.getPositionWorldOnB());
@@ -74,6 +75,12 @@ struct PairCollector : btCollisionWorld::ContactResultCallback {
     out->push_back(r);
     return 0;
   }
+};
+
+// Collects the indices of the triangles Bullet's BVH reports.
+struct TriangleIndexCollector : btTriangleCallback {
+  std::vector<int>* out = nullptr;
+  void processTriangle(btVector3* /*triangle*/, int /*part*/, int index) override { out->push_back(index); }
 };
 
 // Deepest reported penetration (negative distance) of a convex-shape pair query.
@@ -104,7 +111,10 @@ struct BulletGlobalSearch::Impl {
     int num_triangles = 0;
     std::vector<std::unique_ptr<btTriangleShape>> triangles;
     std::unique_ptr<btCompoundShape> compound;
-    std::unique_ptr<btConvexShape> convex;                   // capsule of the arm model, or the mesh's hull
+    bool capsule = false;                                    // the exact capsule (no triangles)
+    double radius_m = 0.0;                                   // capsule only
+    double length_m = 0.0;                                   // capsule only: its segment's length
+    std::unique_ptr<btConvexShape> convex;                   // the capsule, or the mesh's hull
     Eigen::Isometry3d X_LC = Eigen::Isometry3d::Identity();  // pose of `convex` in the link frame
     btCollisionObject mesh_object;
     btCollisionObject convex_object;
@@ -128,32 +138,41 @@ struct BulletGlobalSearch::Impl {
   std::vector<std::unique_ptr<ObjectShape>> objects;
 
   void addLink(const CollisionWorld& cw, int l) {
-    if (!cw.hasLinkMesh(l)) {
+    if (!cw.hasLinkGeometry(l)) {
       links.push_back(nullptr);
       return;
     }
-    const TriMesh& mesh = cw.linkMesh(l);
     auto link = std::make_unique<LinkShape>();
-    link->num_triangles = mesh.numTriangles();
-    link->compound = std::make_unique<btCompoundShape>(true, mesh.numTriangles());
-    for (int t = 0; t < mesh.numTriangles(); ++t) {
-      const Eigen::Vector3i& tri = mesh.triangle(t);
-      auto shape = std::make_unique<btTriangleShape>(toBullet(mesh.vertex(tri[0])), toBullet(mesh.vertex(tri[1])),
-                                                     toBullet(mesh.vertex(tri[2])));
-      shape->setMargin(0.0);  // exact distances: no rounded skin around the triangle
-      link->compound->addChildShape(btTransform::getIdentity(), shape.get());
-      link->triangles.push_back(std::move(shape));
-    }
-    link->compound->setMargin(0.0);
-    link->mesh_object.setCollisionShape(link->compound.get());
-    const arm::LinkGeometry& g = cw.model().joints[static_cast<std::size_t>(l)].geometry;
-    if (g.type == arm::LinkGeometry::Type::kCapsule && (g.to_m - g.from_m).norm() > 0.0) {
-      // btCapsuleShape runs along its y axis, centred; the capsule's core segment is its height.
-      link->convex = std::make_unique<btCapsuleShape>(g.radius_m, (g.to_m - g.from_m).norm());
-      link->X_LC.translation() = 0.5 * (g.from_m + g.to_m);
-      link->X_LC.linear() =
-          Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), g.to_m - g.from_m).toRotationMatrix();
+    if (cw.linkShape(l) == fullarm::haptics::LinkShape::kCapsule) {
+      // The exact capsule: Bullet's GJK runs on its core segment with the radius as margin.
+      const Capsule& c = cw.linkCapsule(l);
+      const double length = (c.b_m - c.a_m).norm();
+      if (length > 0.0) {
+        // btCapsuleShape runs along its y axis, centred; the capsule's core segment is its height.
+        link->convex = std::make_unique<btCapsuleShape>(c.radius_m, length);
+        link->X_LC.linear() =
+            Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(), c.b_m - c.a_m).toRotationMatrix();
+      } else {
+        link->convex = std::make_unique<btSphereShape>(c.radius_m);
+      }
+      link->X_LC.translation() = 0.5 * (c.a_m + c.b_m);
+      link->capsule = true;
+      link->radius_m = c.radius_m;
+      link->length_m = length;
     } else {
+      const TriMesh& mesh = cw.linkMesh(l);
+      link->num_triangles = mesh.numTriangles();
+      link->compound = std::make_unique<btCompoundShape>(true, mesh.numTriangles());
+      for (int t = 0; t < mesh.numTriangles(); ++t) {
+        const Eigen::Vector3i& tri = mesh.triangle(t);
+        auto shape = std::make_unique<btTriangleShape>(toBullet(mesh.vertex(tri[0])), toBullet(mesh.vertex(tri[1])),
+                                                       toBullet(mesh.vertex(tri[2])));
+        shape->setMargin(0.0);  // exact distances: no rounded skin around the triangle
+        link->compound->addChildShape(btTransform::getIdentity(), shape.get());
+        link->triangles.push_back(std::move(shape));
+      }
+      link->compound->setMargin(0.0);
+      link->mesh_object.setCollisionShape(link->compound.get());
       link->convex = convexHull(mesh);
     }
     link->convex_object.setCollisionShape(link->convex.get());
@@ -189,9 +208,9 @@ BulletGlobalSearch::BulletGlobalSearch(const CollisionWorld& world) : impl_(std:
   bool any_link = false;
   for (int l = 0; l < world.numLinks(); ++l) {
     impl_->addLink(world, l);
-    any_link = any_link || world.hasLinkMesh(l);
+    any_link = any_link || world.hasLinkGeometry(l);
   }
-  if (!any_link) throw std::invalid_argument("BulletGlobalSearch: the collision world has no link mesh");
+  if (!any_link) throw std::invalid_argument("BulletGlobalSearch: the collision world has no link geometry");
   for (int o = 0; o < world.numObjects(); ++o) impl_->addObject(world.object(o).mesh);
 }
 
@@ -202,14 +221,16 @@ void BulletGlobalSearch::closestTrianglePairs(int link, const Eigen::Isometry3d&
                                               std::vector<TrianglePairPoints>& out) {
   Impl::LinkShape& l = *impl_->links.at(static_cast<std::size_t>(link));
   Impl::ObjectShape& o = *impl_->objects.at(static_cast<std::size_t>(object));
-  l.mesh_object.setWorldTransform(toBullet(X_WL));
+  btCollisionObject& link_object = l.capsule ? l.convex_object : l.mesh_object;
+  link_object.setWorldTransform(toBullet(l.capsule ? X_WL * l.X_LC : X_WL));
   o.mesh_object.setWorldTransform(toBullet(X_WO));
   const std::size_t begin = out.size();
   PairCollector collector;
-  collector.link_object = &l.mesh_object;
+  collector.link_object = &link_object;
+  collector.capsule = l.capsule;
   collector.out = &out;
   collector.m_closestDistanceThreshold = cutoff_m;
-  impl_->world.contactPairTest(&l.mesh_object, &o.mesh_object, collector);
+  impl_->world.contactPairTest(&link_object, &o.mesh_object, collector);
   // One entry per triangle pair (the closest, should Bullet report a pair twice), within L.
   std::sort(out.begin() + static_cast<std::ptrdiff_t>(begin), out.end(),
             [](const TrianglePairPoints& a, const TrianglePairPoints& b) {
@@ -225,6 +246,27 @@ void BulletGlobalSearch::closestTrianglePairs(int link, const Eigen::Isometry3d&
             out.end());
 }
 
+void BulletGlobalSearch::capsuleCandidateTriangles(int link, const Eigen::Isometry3d& X_WL, int object,
+                                                   const Eigen::Isometry3d& X_WO, double cutoff_m,
+                                                   std::vector<int>& out) const {
+  const Impl::LinkShape& l = *impl_->links.at(static_cast<std::size_t>(link));
+  const Impl::ObjectShape& o = *impl_->objects.at(static_cast<std::size_t>(object));
+  if (!l.capsule) throw std::invalid_argument("capsuleCandidateTriangles: link " + std::to_string(link) + " is not a capsule");
+  // The capsule's box in the object frame (where Bullet holds the object's vertices), grown by
+  // the radius and the cutoff.
+  const Eigen::Isometry3d X_OC = X_WO.inverse() * X_WL * l.X_LC;
+  const Eigen::Vector3d half_axis = X_OC.linear() * Eigen::Vector3d(0.0, 0.5 * l.length_m, 0.0);
+  const Eigen::Vector3d grow = Eigen::Vector3d::Constant(l.radius_m + cutoff_m);
+  const Eigen::Vector3d lo = X_OC.translation() - half_axis.cwiseAbs() - grow;
+  const Eigen::Vector3d hi = X_OC.translation() + half_axis.cwiseAbs() + grow;
+  const std::size_t begin = out.size();
+  TriangleIndexCollector collector;
+  collector.out = &out;
+  o.shape->processAllTriangles(&collector, toBullet(lo), toBullet(hi));
+  std::sort(out.begin() + static_cast<std::ptrdiff_t>(begin), out.end());
+  out.erase(std::unique(out.begin() + static_cast<std::ptrdiff_t>(begin), out.end()), out.end());
+}
+
 void BulletGlobalSearch::search(const CollisionWorld& world, const arm::ArmData& fk, double cutoff_m,
                                 double prune_radius_m, std::vector<LocalMinimum>& out) {
   if (world.numLinks() != static_cast<int>(impl_->links.size()) ||
@@ -234,26 +276,47 @@ void BulletGlobalSearch::search(const CollisionWorld& world, const arm::ArmData&
   out.clear();
   last_pairs_ = 0;
   for (int l = 0; l < world.numLinks(); ++l) {
-    if (!world.hasLinkMesh(l)) continue;
-    const TriMesh& link_mesh = world.linkMesh(l);
-    if (impl_->links[static_cast<std::size_t>(l)]->num_triangles != link_mesh.numTriangles()) {
-      throw std::invalid_argument("BulletGlobalSearch::search: link meshes changed since the search was built");
+    if (!world.hasLinkGeometry(l)) continue;
+    const Impl::LinkShape* shape = impl_->links[static_cast<std::size_t>(l)].get();
+    const bool capsule = world.linkShape(l) == LinkShape::kCapsule;
+    if (shape == nullptr || shape->capsule != capsule ||
+        (!capsule && shape->num_triangles != world.linkMesh(l).numTriangles())) {
+      throw std::invalid_argument("BulletGlobalSearch::search: link geometry changed since the search was built");
     }
     const Eigen::Isometry3d& X_WL = fk.X_WL[static_cast<std::size_t>(l)];
     for (int o = 0; o < world.numObjects(); ++o) {
       const CollisionObject& obj = world.object(o);
-      pairs_.clear();
-      closestTrianglePairs(l, X_WL, o, obj.X_WO, cutoff_m, pairs_);
-      last_pairs_ += static_cast<long>(pairs_.size());
       const Eigen::Isometry3d X_OL = obj.X_WO.inverse() * X_WL;
       const std::size_t begin = out.size();
-      for (const TrianglePairPoints& pair : pairs_) {
-        LocalMinimum m;
-        if (evaluateTrianglePair(link_mesh, pair.tri_link, obj.mesh, pair.tri_object, X_OL, cutoff_m, m)) {
-          m.link = l;
-          m.object = o;
-          m.u_W = obj.X_WO.linear() * m.u_W;
-          out.push_back(m);
+      LocalMinimum m;
+      if (capsule) {
+        // Bullet's BVH picks the candidates; every one gets the exact test.
+        triangles_.clear();
+        capsuleCandidateTriangles(l, X_WL, o, obj.X_WO, cutoff_m, triangles_);
+        last_pairs_ += static_cast<long>(triangles_.size());
+        const Capsule& c = world.linkCapsule(l);
+        const Eigen::Vector3d a = X_OL * c.a_m;
+        const Eigen::Vector3d b = X_OL * c.b_m;
+        const Eigen::Isometry3d X_LO = X_OL.inverse();
+        for (const int t : triangles_) {
+          if (evaluateCapsuleTriangle(a, b, c.radius_m, X_LO, obj.mesh, t, cutoff_m, m)) {
+            m.link = l;
+            m.object = o;
+            m.u_W = obj.X_WO.linear() * m.u_W;
+            out.push_back(m);
+          }
+        }
+      } else {
+        pairs_.clear();
+        closestTrianglePairs(l, X_WL, o, obj.X_WO, cutoff_m, pairs_);
+        last_pairs_ += static_cast<long>(pairs_.size());
+        for (const TrianglePairPoints& pair : pairs_) {
+          if (evaluateTrianglePair(world.linkMesh(l), pair.tri_link, obj.mesh, pair.tri_object, X_OL, cutoff_m, m)) {
+            m.link = l;
+            m.object = o;
+            m.u_W = obj.X_WO.linear() * m.u_W;
+            out.push_back(m);
+          }
         }
       }
       mergeDuplicateMinima(out, begin);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/core/config_error.hpp"
@@ -20,6 +21,7 @@ void require(bool ok, const std::filesystem::path& file, const char* key, const 
 
 }  // namespace
 
+// §3.2.1: the look-ahead check L - d_f >= v_max x latency (reports/equations.md).
 void validateHapticsParams(const HapticsParams& p, const std::filesystem::path& file) {
   require(p.stiffness_npm > 0.0 && std::isfinite(p.stiffness_npm), file, "contact.stiffness_npm",
           "expected a finite stiffness > 0 N/m");
@@ -40,6 +42,30 @@ void validateHapticsParams(const HapticsParams& p, const std::filesystem::path& 
   require(p.descent.min_decrease_m >= 0.0 && std::isfinite(p.descent.min_decrease_m), file,
           "local_descent.min_decrease_m", "expected a finite value >= 0 m");
   require(p.descent.drop_beyond_m > 0.0, file, "local_descent.drop_beyond_m", "expected a value > 0 m");
+  require(p.search_latency_p99_ms > 0.0 && std::isfinite(p.search_latency_p99_ms), file,
+          "global_search.latency_p99_ms", "expected a finite latency > 0 ms");
+  require(p.max_link_speed_mps > 0.0 && std::isfinite(p.max_link_speed_mps), file, "global_search.max_link_speed_mps",
+          "expected a finite speed > 0 m/s");
+  // §3.2.1: the look-ahead must cover the distance a link travels while its new minima are on
+  // their way: L - d_f >= v_max x latency.
+  const double margin_m = p.cutoff_m - p.force_threshold_m;
+  const double needed_m = minimumCutoffMargin(p);
+  if (!(margin_m >= needed_m)) {
+    std::ostringstream text;
+    text.precision(3);
+    text << "the look-ahead L - d_f = " << 1e3 * margin_m << " mm (cutoff_m " << p.cutoff_m << " - force_threshold_m "
+         << p.force_threshold_m << ") is shorter than the distance a link covers before the global search's minima "
+         << "arrive: max_link_speed_mps " << p.max_link_speed_mps << " m/s x latency_p99_ms "
+         << p.search_latency_p99_ms << " ms = " << 1e3 * needed_m
+         << " mm (global_search); raise cutoff_m to at least " << p.force_threshold_m + needed_m
+         << " m, or measure a shorter latency";
+    throw core::ConfigError(file, "contact.cutoff_m", text.str());
+  }
+}
+
+// §3.2.1: the smallest safe look-ahead (reports/equations.md).
+double minimumCutoffMargin(const HapticsParams& params) noexcept {
+  return params.max_link_speed_mps * 1e-3 * params.search_latency_p99_ms;
 }
 
 namespace {
@@ -72,6 +98,12 @@ HapticsParams readHapticsParams(const core::YamlMap& root) {
   p.descent.min_decrease_m = d.number("min_decrease_m", "metres");
   if (const auto drop = d.optionalNumber("drop_beyond_m", "metres")) p.descent.drop_beyond_m = *drop;
   d.finish();
+  if (root.has("global_search")) {
+    const core::YamlMap g = root.map("global_search");
+    p.search_latency_p99_ms = g.number("latency_p99_ms", "milliseconds");
+    p.max_link_speed_mps = g.number("max_link_speed_mps", "m/s");
+    g.finish();
+  }
   root.finish();
   validateHapticsParams(p, file);
   return p;

@@ -263,6 +263,70 @@ double squaredDistancePointTriangle(const Vector3d& p, const PreparedTriangle& t
   return closestPointSquared(p, t).distance_sq;
 }
 
+// G8: segment-triangle closest points, Ericson 5.1.10 (reports/equations.md).
+SegmentTriangleResult closestPointsSegmentTriangle(const Vector3d& p0, const Vector3d& p1,
+                                                   const PreparedTriangle& t) noexcept {
+  SegmentTriangleResult best;
+  const Vector3d d = p1 - p0;
+  const double d_sq = d.squaredNorm();
+  // Heights of the ends over the plane (times |n|).
+  const double h0 = t.normal.dot(p0 - t.v[0]);
+  const double h1 = t.normal.dot(p1 - t.v[0]);
+  if (d_sq > 0.0) {
+    double s = 0.0;
+    if (segmentCrossesPrepared(p0, p1, t, s)) {
+      const Vector3d x = p0 + s * d;
+      best.s = s;
+      best.p = x;
+      best.q = x;
+      best.distance_sq = 0.0;
+      best.feature_t = closestPointSquared(x, t).feature;
+      return best;
+    }
+  }
+  const double inv_n = t.normal_sq > 0.0 ? 1.0 / t.normal_sq : 0.0;  // 0: no bound
+  double best_sq = std::numeric_limits<double>::infinity();
+  const auto beyond = [&best_sq](double lower_bound_sq) noexcept {
+    return lower_bound_sq > best_sq * (1.0 + kBoundSlack);
+  };
+  const auto endpoint = [&](const Vector3d& x, double s, double h) noexcept {
+    if (beyond(h * h * inv_n)) return;
+    const SquaredPointResult r = closestPointSquared(x, t);
+    if (r.distance_sq < best_sq) {
+      best_sq = r.distance_sq;
+      best.s = s;
+      best.p = x;
+      best.q = r.point;
+      best.feature_t = r.feature;
+    }
+  };
+  endpoint(p0, 0.0, h0);
+  if (!(d_sq > 0.0)) {
+    best.distance_sq = best_sq;
+    return best;
+  }
+  endpoint(p1, 1.0, h1);
+  // The segment against the edges: below both the segment's plane bound (its end nearer to the
+  // plane, both ends on one side; not crossing) and each edge lies in the plane.
+  const double h_min = (h0 > 0.0) == (h1 > 0.0) && h0 != 0.0 && h1 != 0.0 ? std::min(std::abs(h0), std::abs(h1)) : 0.0;
+  if (beyond(h_min * h_min * inv_n)) {
+    best.distance_sq = best_sq;
+    return best;
+  }
+  for (int j = 0; j < 3; ++j) {
+    const SquaredSegmentResult r = closestSegmentSegmentSquared(p0, d, d_sq, t.v[j], t.edge[j], t.edge_sq[j]);
+    if (r.distance_sq < best_sq) {
+      best_sq = r.distance_sq;
+      best.s = r.s;
+      best.p = r.p;
+      best.q = r.q;
+      best.feature_t = edgeFeature(j, r.t);
+    }
+  }
+  best.distance_sq = best_sq;
+  return best;
+}
+
 PointTriangleResult closestPointTriangle(const Vector3d& p, const PreparedTriangle& t) noexcept {
   const SquaredPointResult r = closestPointSquared(p, t);
   PointTriangleResult out;

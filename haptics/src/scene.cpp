@@ -63,6 +63,11 @@ class SceneReader {
     }
     scene.name = root.string("name");
     scene.description = root.optionalString("description").value_or("");
+    if (const std::optional<std::string> cache = root.optionalString("hierarchy_cache")) {
+      if (cache->empty()) root.fail("hierarchy_cache", "expected a folder (relative to the scene file)");
+      const std::filesystem::path base = file_.empty() ? std::filesystem::current_path() : file_.parent_path();
+      scene.hierarchy_cache_dir = std::filesystem::absolute((base / *cache).lexically_normal());
+    }
     readArm(root.map("arm"), scene);
     const core::YamlList objects = root.list("objects");
     if (objects.size() == 0) root.fail("objects", "expected at least one object");
@@ -250,7 +255,9 @@ Eigen::Isometry3d armBasePose(const Scene& scene, const arm::ArmModel& model) {
 
 CollisionWorld makeCollisionWorld(const Scene& scene, const arm::ArmModel& model,
                                   const CollisionWorld::Options& options) {
-  CollisionWorld world(model, options);
+  CollisionWorld::Options o = options;
+  if (o.hierarchy_cache_dir.empty()) o.hierarchy_cache_dir = scene.hierarchy_cache_dir;
+  CollisionWorld world(model, o);
   const Eigen::Isometry3d X_WS = armBasePose(scene, model).inverse();
   for (const SceneObject& object : scene.objects) world.addObject(object.name, object.mesh, X_WS * object.X_SO);
   return world;

@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <thread>
 #include <tuple>
 
 namespace fullarm::haptics {
@@ -217,74 +218,124 @@ void setConeTrig(SnchNode& node) noexcept {
   node.cone_sin = open < kPi ? std::sin(open) : 0.0;
 }
 
+// One triangle during the build: its vertex box, centroid and id.
+struct BuildPrim {
+  Vector3d lo;
+  Vector3d hi;
+  Vector3d centroid;
+  int triangle;
+};
+
+// Top-down build into preallocated nodes: a range of n triangles becomes a subtree of exactly
+// 2n - 1 nodes (median splits, one triangle per leaf) stored depth first from its root's id, so
+// every subtree's ids are known before it is built and subtrees can be built on separate
+// threads with the same result as on one.
 struct Builder {
   const TriMesh& mesh;
-  std::vector<Vector3d> centroid;
-  std::vector<Cone> leaf_cone;
-  std::vector<int> tris;
-  SnchTree tree;
+  const std::vector<Cone>& leaf_cone;
+  std::vector<BuildPrim>& prims;
+  std::vector<SnchNode>& nodes;
+  int parallel_depth = 0;  // subtrees above this depth split their left half onto a new thread
 
-  int build(int begin, int end) {
-    const int id = static_cast<int>(tree.nodes.size());
-    tree.nodes.emplace_back();
-    // Bounding sphere: centre of the vertex box, radius to the farthest vertex.
+  void build(int begin, int end, int id, int depth) {
+    // Bounding box of the vertices (the union of the triangles' boxes), then the sphere around
+    // its centre through the farthest vertex.
     Vector3d lo = Vector3d::Constant(std::numeric_limits<double>::infinity());
     Vector3d hi = -lo;
     for (int i = begin; i < end; ++i) {
-      const auto& t = mesh.triangle(tris[static_cast<std::size_t>(i)]);
-      for (int k = 0; k < 3; ++k) {
-        lo = lo.cwiseMin(mesh.vertex(t[k]));
-        hi = hi.cwiseMax(mesh.vertex(t[k]));
-      }
+      const BuildPrim& p = prims[static_cast<std::size_t>(i)];
+      lo = lo.cwiseMin(p.lo);
+      hi = hi.cwiseMax(p.hi);
     }
     const Vector3d c = 0.5 * (lo + hi);
-    double r = 0.0;
+    double r_sq = 0.0;
     for (int i = begin; i < end; ++i) {
-      const auto& t = mesh.triangle(tris[static_cast<std::size_t>(i)]);
-      for (int k = 0; k < 3; ++k) r = std::max(r, (mesh.vertex(t[k]) - c).norm());
+      const auto& t = mesh.triangle(prims[static_cast<std::size_t>(i)].triangle);
+      for (int k = 0; k < 3; ++k) r_sq = std::max(r_sq, (mesh.vertex(t[k]) - c).squaredNorm());
     }
-    SnchNode node;
+    SnchNode& node = nodes[static_cast<std::size_t>(id)];
     node.centre_m = c;
-    node.radius_m = r * (1.0 + 1e-12) + 1e-15;
+    node.radius_m = std::sqrt(r_sq) * (1.0 + 1e-12) + 1e-15;
     // Half extents grown like the radius, so rounding in the query never cuts a vertex off.
     node.box_half_m = (0.5 * (hi - lo)).cwiseMax(Vector3d::Zero()) * (1.0 + 1e-12) + Vector3d::Constant(1e-15);
     if (end - begin == 1) {
-      const int t = tris[static_cast<std::size_t>(begin)];
+      const int t = prims[static_cast<std::size_t>(begin)].triangle;
+      const Cone& cone = leaf_cone[static_cast<std::size_t>(t)];
       node.triangle = t;
-      node.cone_axis = leaf_cone[static_cast<std::size_t>(t)].axis;
-      node.cone_half_angle_rad = leaf_cone[static_cast<std::size_t>(t)].half_angle;
-      node.cone_two_sided = leaf_cone[static_cast<std::size_t>(t)].two_sided;
+      node.left = -1;
+      node.right = -1;
+      node.cone_axis = cone.axis;
+      node.cone_half_angle_rad = cone.half_angle;
+      node.cone_two_sided = cone.two_sided;
       setConeTrig(node);
-      tree.nodes[static_cast<std::size_t>(id)] = node;
-      return id;
+      return;
     }
     // Median split along the longest extent of the centroids.
     Vector3d clo = Vector3d::Constant(std::numeric_limits<double>::infinity());
     Vector3d chi = -clo;
     for (int i = begin; i < end; ++i) {
-      clo = clo.cwiseMin(centroid[static_cast<std::size_t>(tris[static_cast<std::size_t>(i)])]);
-      chi = chi.cwiseMax(centroid[static_cast<std::size_t>(tris[static_cast<std::size_t>(i)])]);
+      clo = clo.cwiseMin(prims[static_cast<std::size_t>(i)].centroid);
+      chi = chi.cwiseMax(prims[static_cast<std::size_t>(i)].centroid);
     }
     int axis = 0;
     (chi - clo).maxCoeff(&axis);
     const int mid = begin + (end - begin) / 2;
-    std::nth_element(tris.begin() + begin, tris.begin() + mid, tris.begin() + end, [&](int x, int y) {
-      return centroid[static_cast<std::size_t>(x)][axis] < centroid[static_cast<std::size_t>(y)][axis];
-    });
-    node.left = build(begin, mid);
-    node.right = build(mid, end);
-    const SnchNode& l = tree.nodes[static_cast<std::size_t>(node.left)];
-    const SnchNode& rn = tree.nodes[static_cast<std::size_t>(node.right)];
+    std::nth_element(prims.begin() + begin, prims.begin() + mid, prims.begin() + end,
+                     [axis](const BuildPrim& x, const BuildPrim& y) {
+                       return x.centroid[axis] < y.centroid[axis] ||
+                              (x.centroid[axis] == y.centroid[axis] && x.triangle < y.triangle);
+                     });
+    const int left = id + 1;
+    const int right = id + 2 * (mid - begin);
+    if (depth < parallel_depth) {
+      std::thread helper([&] { build(begin, mid, left, depth + 1); });
+      build(mid, end, right, depth + 1);
+      helper.join();
+    } else {
+      build(begin, mid, left, depth + 1);
+      build(mid, end, right, depth + 1);
+    }
+    const SnchNode& l = nodes[static_cast<std::size_t>(left)];
+    const SnchNode& rn = nodes[static_cast<std::size_t>(right)];
     const Cone merged = mergeCones({l.cone_axis, l.cone_half_angle_rad, l.cone_two_sided},
                                    {rn.cone_axis, rn.cone_half_angle_rad, rn.cone_two_sided});
+    node.left = left;
+    node.right = right;
+    node.triangle = -1;
     node.cone_axis = merged.axis;
     node.cone_half_angle_rad = merged.half_angle;
     node.cone_two_sided = merged.two_sided;
     setConeTrig(node);
-    tree.nodes[static_cast<std::size_t>(id)] = node;
-    return id;
   }
 };
+
+// Runs body(i) for i in [0, n) on `threads` threads (contiguous blocks; each i is independent).
+template <class Body>
+void parallelFor(int n, int threads, const Body& body) {
+  if (threads <= 1 || n < 4096) {
+    for (int i = 0; i < n; ++i) body(i);
+    return;
+  }
+  std::vector<std::thread> pool;
+  for (int k = 1; k < threads; ++k) {
+    pool.emplace_back([&, k] {
+      for (int i = static_cast<int>(static_cast<long>(n) * k / threads);
+           i < static_cast<int>(static_cast<long>(n) * (k + 1) / threads); ++i) {
+        body(i);
+      }
+    });
+  }
+  for (int i = 0; i < static_cast<int>(static_cast<long>(n) / threads); ++i) body(i);
+  for (std::thread& t : pool) t.join();
+}
+
+// Adds direction n to one-sided cone `c`: nothing when n already lies in it (one dot product;
+// a rounding-level miss is far inside the query's kConeSlack_rad), else the tight merge.
+void addNormal(Cone& c, double& cos_half, const Vector3d& n) noexcept {
+  if (c.half_angle >= kPi || n.dot(c.axis) >= cos_half) return;
+  c = mergeOneSided(c, {n, 0.0});
+  cos_half = c.half_angle < kPi ? std::cos(c.half_angle) : -1.0;
+}
 
 // SnchTree::convex: closed (every edge has exactly two triangles) and every vertex on or
 // behind every face plane within kConvexTolerance x the box diagonal. Every locally convex
@@ -322,52 +373,67 @@ bool isClosedConvex(const TriMesh& mesh) {
 
 // G6: normal-cone merge (reports/equations.md).
 SnchTree buildSnchTree(const TriMesh& mesh) {
-  Builder b{mesh, {}, {}, {}, {}};
+  SnchTree tree;
   const int nt = mesh.numTriangles();
-  b.centroid.resize(static_cast<std::size_t>(nt));
-  b.leaf_cone.resize(static_cast<std::size_t>(nt));
+  const int nv = mesh.numVertices();
+  const int threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1U, 2U));
   // Vertices on a boundary or non-manifold edge: their normal cone (the directions u with
   // u . e <= 0 for every edge e leaving the vertex) is not bounded by the one-ring normals. At a
   // boundary edge it reaches the in-plane direction away from the face (an open sheet's rim is
   // approached edge-on), so a triangle touching such a vertex gets a full cone.
-  std::vector<char> irregular_vertex(static_cast<std::size_t>(mesh.numVertices()), 0);
+  std::vector<char> irregular_vertex(static_cast<std::size_t>(nv), 0);
   for (int e = 0; e < mesh.numEdges(); ++e) {
     if (mesh.edgeTriangles(e).size() == 2) continue;
     for (int v : mesh.edgeVertices(e)) irregular_vertex[static_cast<std::size_t>(v)] = 1;
   }
-  VertexConeCache vertex_cones{std::vector<signed char>(static_cast<std::size_t>(mesh.numVertices()), -1),
-                               std::vector<std::vector<Vector3d>>(static_cast<std::size_t>(mesh.numVertices()))};
-  for (int t = 0; t < nt; ++t) {
+  // Leaf cone: the face normal and the normals of the one-rings of its three vertices (so edge
+  // and vertex minima are covered); full at an irregular vertex.
+  std::vector<Cone> leaf_cone(static_cast<std::size_t>(nt));
+  std::vector<BuildPrim> prims(static_cast<std::size_t>(nt));
+  std::vector<char> void_cone(static_cast<std::size_t>(nt), 0);
+  parallelFor(nt, threads, [&](int t) {
     const auto& tri = mesh.triangle(t);
-    b.centroid[static_cast<std::size_t>(t)] = (mesh.vertex(tri[0]) + mesh.vertex(tri[1]) + mesh.vertex(tri[2])) / 3.0;
-    // Leaf cone: the face normal and the normals of the one-rings of its three vertices.
+    const Vector3d& v0 = mesh.vertex(tri[0]);
+    const Vector3d& v1 = mesh.vertex(tri[1]);
+    const Vector3d& v2 = mesh.vertex(tri[2]);
+    prims[static_cast<std::size_t>(t)] = {v0.cwiseMin(v1).cwiseMin(v2), v0.cwiseMax(v1).cwiseMax(v2),
+                                          (v0 + v1 + v2) / 3.0, t};
     Cone cone{mesh.faceNormal(t), 0.0};
-    for (int k = 0; k < 3; ++k) {
-      if (irregular_vertex[static_cast<std::size_t>(tri[k])] != 0) cone.half_angle = kPi;
-      for (int s : mesh.vertexTriangles(tri[k])) cone = mergeCones(cone, {mesh.faceNormal(s), 0.0});
+    double cos_half = 1.0;
+    for (int k = 0; k < 3 && cone.half_angle < kPi; ++k) {
+      if (irregular_vertex[static_cast<std::size_t>(tri[k])] != 0) {
+        cone.half_angle = kPi;
+        break;
+      }
+      for (const int s : mesh.vertexTriangles(tri[k])) addNormal(cone, cos_half, mesh.faceNormal(s));
     }
-    // Where the one-ring bound is void (double-sided surfaces, whose one-rings hold opposite
-    // normals; rims; thin parts), bound the features' exact normal cones instead.
-    if (cone.half_angle >= kPi) cone = exactFeatureCone(mesh, t, vertex_cones);
-    b.leaf_cone[static_cast<std::size_t>(t)] = cone;
+    leaf_cone[static_cast<std::size_t>(t)] = cone;
+    void_cone[static_cast<std::size_t>(t)] = cone.half_angle >= kPi ? 1 : 0;
+  });
+  // Where the one-ring bound is void (double-sided surfaces, whose one-rings hold opposite
+  // normals; rims; thin parts), bound the features' exact normal cones instead.
+  VertexConeCache vertex_cones{std::vector<signed char>(static_cast<std::size_t>(nv), -1),
+                               std::vector<std::vector<Vector3d>>(static_cast<std::size_t>(nv))};
+  for (int t = 0; t < nt; ++t) {
+    if (void_cone[static_cast<std::size_t>(t)] != 0)
+      leaf_cone[static_cast<std::size_t>(t)] = exactFeatureCone(mesh, t, vertex_cones);
   }
-  b.tris.resize(static_cast<std::size_t>(nt));
-  std::iota(b.tris.begin(), b.tris.end(), 0);
-  b.tree.nodes.reserve(static_cast<std::size_t>(2 * nt));
-  b.build(0, nt);
-  b.tree.convex = isClosedConvex(mesh);
-  if (b.tree.convex) {
-    b.tree.vertex_graph = buildVertexGraph(mesh);
-    b.tree.support_start_vertex = mesh.triangle(0)[0];
-    b.tree.bracket = buildConvexBracket(mesh);
-    b.tree.support_table = buildSupportTable(mesh, kSupportTableCells);
+  tree.nodes.resize(static_cast<std::size_t>(2 * nt - 1));
+  Builder b{mesh, leaf_cone, prims, tree.nodes, threads > 1 && nt >= 4096 ? 1 : 0};
+  b.build(0, nt, 0, 0);
+  tree.convex = isClosedConvex(mesh);
+  if (tree.convex) {
+    tree.vertex_graph = buildVertexGraph(mesh);
+    tree.support_start_vertex = mesh.triangle(0)[0];
+    tree.bracket = buildConvexBracket(mesh);
+    tree.support_table = buildSupportTable(mesh, kSupportTableCells);
   }
-  b.tree.leaf_of_triangle.assign(static_cast<std::size_t>(nt), -1);
-  for (int i = 0; i < static_cast<int>(b.tree.nodes.size()); ++i) {
-    const SnchNode& node = b.tree.nodes[static_cast<std::size_t>(i)];
-    if (node.isLeaf()) b.tree.leaf_of_triangle[static_cast<std::size_t>(node.triangle)] = i;
+  tree.leaf_of_triangle.assign(static_cast<std::size_t>(nt), -1);
+  for (int i = 0; i < static_cast<int>(tree.nodes.size()); ++i) {
+    const SnchNode& node = tree.nodes[static_cast<std::size_t>(i)];
+    if (node.isLeaf()) tree.leaf_of_triangle[static_cast<std::size_t>(node.triangle)] = i;
   }
-  return std::move(b.tree);
+  return tree;
 }
 
 TriangleTriangleResult closestPointsInObjectFrame(const TriMesh& link_mesh, int tri_link, const TriMesh& object_mesh,
@@ -956,6 +1022,337 @@ void queryConvexLink(const SnchTree& link_tree, const TriMesh& link_mesh, const 
 }
 
 }  // namespace
+
+Feature capsuleFeature(double s) noexcept {
+  if (s <= 0.0) return {FeatureKind::kVertex, 0};
+  if (s >= 1.0) return {FeatureKind::kVertex, 1};
+  return {FeatureKind::kEdge, 0};
+}
+
+CapsuleFeaturePair capsuleFeatureClosest(const Vector3d& a_O, const Vector3d& b_O, const TriMesh& mesh,
+                                         const Feature& feature) noexcept {
+  CapsuleFeaturePair r;
+  r.holder = feature;
+  switch (feature.kind) {
+    case FeatureKind::kVertex:
+      r.q_m = mesh.vertex(feature.index);
+      r.s = closestSegmentParameter(a_O, b_O, r.q_m);
+      r.on_segment_m = a_O + r.s * (b_O - a_O);
+      break;
+    case FeatureKind::kEdge: {
+      const auto ev = mesh.edgeVertices(feature.index);
+      const SegmentSegmentResult e = closestPointsSegmentSegment(a_O, b_O, mesh.vertex(ev[0]), mesh.vertex(ev[1]));
+      r.s = e.s;
+      r.on_segment_m = e.p;
+      r.q_m = e.q;
+      if (e.t <= 0.0) r.holder = {FeatureKind::kVertex, ev[0]};
+      if (e.t >= 1.0) r.holder = {FeatureKind::kVertex, ev[1]};
+      break;
+    }
+    case FeatureKind::kFace: {
+      const auto& t = mesh.triangle(feature.index);
+      const SegmentTriangleResult e = closestPointsSegmentTriangle(
+          a_O, b_O, prepareTriangle(mesh.vertex(t[0]), mesh.vertex(t[1]), mesh.vertex(t[2])));
+      r.s = e.s;
+      r.on_segment_m = e.p;
+      r.q_m = e.q;
+      r.holder = meshFeature(mesh, feature.index, e.feature_t);
+      break;
+    }
+  }
+  r.distance_sq = (r.q_m - r.on_segment_m).squaredNorm();
+  return r;
+}
+
+// G9: the capsule's distance and point from the segment's pair (reports/equations.md).
+void capsuleMinimumFromPair(const CapsuleFeaturePair& pair, double radius_m, const Isometry3d& X_LO,
+                            const TriMesh& object_mesh, int tri_object, const Feature& feature_object,
+                            LocalMinimum& out) noexcept {
+  const double d_s = std::sqrt(pair.distance_sq);
+  Vector3d u;
+  if (d_s > 0.0) {
+    u = (pair.q_m - pair.on_segment_m) / d_s;
+  } else {
+    const Vector3d& n = object_mesh.featureNormal(feature_object);
+    u = n.squaredNorm() > 0.0 ? Vector3d(-n) : Vector3d(-object_mesh.faceNormal(tri_object));
+  }
+  out.tri_link = -1;
+  out.tri_object = tri_object;
+  out.feature_link = capsuleFeature(pair.s);
+  out.feature_object = feature_object;
+  out.p_L = X_LO * (pair.on_segment_m + radius_m * u);
+  out.p_O = pair.q_m;
+  out.distance_m = std::max(0.0, d_s - radius_m);
+  out.u_W = u;
+  out.previous_distance_m = std::numeric_limits<double>::quiet_NaN();
+}
+
+void capsuleMinimumAtFeature(const Vector3d& a_O, const Vector3d& b_O, double radius_m, const Isometry3d& X_LO,
+                             const TriMesh& object_mesh, int tri_object, const Feature& feature_object,
+                             LocalMinimum& out) noexcept {
+  capsuleMinimumFromPair(capsuleFeatureClosest(a_O, b_O, object_mesh, feature_object), radius_m, X_LO, object_mesh,
+                         tri_object, feature_object, out);
+}
+
+namespace {
+
+// evaluateCapsuleTriangle with the segment-triangle pair `r` already computed.
+bool evaluateCapsulePair(const SegmentTriangleResult& r, const Vector3d& a_O, const Vector3d& b_O, double radius_m,
+                         const Isometry3d& X_LO, const TriMesh& object_mesh, int tri_object, double cutoff_m,
+                         LocalMinimum& out) noexcept {
+  const double reach = cutoff_m + radius_m;
+  if (!(r.distance_sq <= reach * reach)) return false;
+  const Feature fo = meshFeature(object_mesh, tri_object, r.feature_t);
+  if (r.distance_sq > 0.0) {
+    const double d = std::sqrt(r.distance_sq);
+    // Seen from outside, then the local minimum over f_q's neighbourhood (convexity: a
+    // neighbour holds a point closer to the segment iff it holds one closer to s).
+    if ((r.p - r.q).dot(object_mesh.featureNormal(fo)) < -kOutsideCosineTolerance * d) return false;
+    const double accept = d - kLocalMinimumTolerance_m;
+    if (accept > 0.0) {
+      for (int t : object_mesh.featureTriangles(fo)) {
+        if (t == tri_object) continue;
+        const auto& b = object_mesh.triangle(t);
+        if (squaredDistancePointTriangle(r.p, object_mesh.vertex(b[0]), object_mesh.vertex(b[1]),
+                                         object_mesh.vertex(b[2])) < accept * accept) {
+          return false;
+        }
+      }
+    }
+  }
+  capsuleMinimumAtFeature(a_O, b_O, radius_m, X_LO, object_mesh, tri_object, fo, out);
+  return out.distance_m <= cutoff_m;
+}
+
+SegmentTriangleResult segmentTriangleOfMesh(const Vector3d& a, const Vector3d& b, const TriMesh& mesh,
+                                            int tri) noexcept {
+  const auto& t = mesh.triangle(tri);
+  return closestPointsSegmentTriangle(a, b, prepareTriangle(mesh.vertex(t[0]), mesh.vertex(t[1]), mesh.vertex(t[2])));
+}
+
+}  // namespace
+
+// G9: local minimum of a capsule against a mesh (reports/equations.md).
+bool evaluateCapsuleTriangle(const Vector3d& a_O, const Vector3d& b_O, double radius_m, const Isometry3d& X_LO,
+                             const TriMesh& object_mesh, int tri_object, double cutoff_m, LocalMinimum& out) noexcept {
+  return evaluateCapsulePair(segmentTriangleOfMesh(a_O, b_O, object_mesh, tri_object), a_O, b_O, radius_m, X_LO,
+                             object_mesh, tri_object, cutoff_m, out);
+}
+
+namespace {
+
+// The traversal of an object tree against a capsule's segment (querySnchCapsule), from given
+// start nodes. With `front` set, every node where the traversal stops (pruned, or a leaf
+// tested) is recorded with a lower bound on the distance from the segment to its triangles,
+// minus `drift` (the bound then holds for the segment at the front's reference pose).
+struct CapsuleTraversal {
+  const SnchTree& tree;
+  const TriMesh& mesh;
+  Vector3d a;
+  Vector3d b;
+  double radius_m;
+  double cutoff_m;
+  Isometry3d X_LO;
+  Eigen::Matrix3d R_WO;
+  SnchQueryScratch& scratch;
+  std::vector<LocalMinimum>& out;
+  SnchQueryStats& st;
+  CapsuleFront* front = nullptr;
+  double drift_m = 0.0;
+
+  Vector3d ab = b - a;
+  double inv_ab_sq = ab.squaredNorm() > 0.0 ? 1.0 / ab.squaredNorm() : 0.0;
+  Vector3d seg_lo = a.cwiseMin(b);
+  Vector3d seg_hi = a.cwiseMax(b);
+  // Every minimum lies within the cutoff of the capsule: within `reach` of its segment.
+  double reach = cutoff_m + radius_m;
+
+  void record(int node, double bound_m) const {
+    if (front == nullptr) return;
+    front->next_node.push_back(node);
+    front->next_bound_m.push_back(bound_m - drift_m);
+  }
+
+  void run(int start) {
+    auto& stack = scratch.stack;
+    stack.clear();
+    stack.emplace_back(0, start);
+    LocalMinimum m;
+    while (!stack.empty()) {
+      const int j = stack.back().second;
+      stack.pop_back();
+      ++st.node_pairs_visited;
+      const SnchNode& node = tree.nodes[static_cast<std::size_t>(j)];
+      const Vector3d& c = node.centre_m;
+      // The segment's point nearest the node's centre, exactly.
+      const double t = std::clamp((c - a).dot(ab) * inv_ab_sq, 0.0, 1.0);
+      const Vector3d w = c - (a + t * ab);
+      const double dist_sq = w.squaredNorm();
+      const double sphere_reach = node.radius_m + reach;
+      if (dist_sq > sphere_reach * sphere_reach) {
+        ++st.pruned_by_distance;
+        if (front != nullptr) record(j, std::sqrt(dist_sq) - node.radius_m);
+        continue;
+      }
+      // Distance lower bounds of the segment and the node: the sphere; the box along the
+      // direction from the segment's nearest point to the centre (that point maximises the
+      // direction over the segment); the box's own axes against the segment's extent.
+      const double dist = std::sqrt(dist_sq);
+      const Vector3d& h = node.box_half_m;
+      double gap = dist - node.radius_m;
+      if (dist > 0.0) gap = std::max(gap, dist - w.cwiseAbs().dot(h) / dist);
+      gap = std::max(gap, std::max((seg_lo - c - h).maxCoeff(), (c - h - seg_hi).maxCoeff()));
+      if (gap > reach) {
+        ++st.pruned_by_distance;
+        record(j, gap);
+        continue;
+      }
+      // Normal cones, once the node is proven apart from the segment: a minimum at q has -u =
+      // (s - q)/|s - q| in the node's cone, s the segment's point nearest q.
+      if (gap > kConeTestMinGap_m && node.cone_cos > -1.0) {
+        const Vector3d& axis = node.cone_axis;
+        // Direction: s - q for q within r_B of c lies within asin(r_B / D) of -w (the map
+        // x -> x - P(x), P the projection on the segment, is nonexpansive), D = |w| > r_B.
+        if (node.radius_m < dist) {
+          const double sin_sigma = node.radius_m / dist;
+          const double cos_sigma = std::sqrt(std::max(0.0, 1.0 - sin_sigma * sin_sigma));
+          const double c_axis = -w.dot(axis);
+          bool pruned = false;
+          if (node.cone_two_sided) {
+            const double cos_open = node.cone_cos * cos_sigma - node.cone_sin * sin_sigma;
+            pruned = node.cone_cos > 0.0 && cos_open > 0.0 && std::abs(c_axis) < dist * cos_open;
+          } else if (node.cone_cos >= 0.0 || sin_sigma < node.cone_sin) {
+            pruned = c_axis < dist * (node.cone_cos * cos_sigma - node.cone_sin * sin_sigma);
+          }
+          if (pruned) {
+            ++st.pruned_by_cone;
+            record(j, gap);
+            continue;
+          }
+        }
+        // Support: (s - q) . a_B >= cos(alpha_B) |s - q| >= cos(alpha_B) gap (either sign for a
+        // double cone), against its extreme values over the segment and the box.
+        if (node.cone_cos > 0.0) {
+          const double ea = a.dot(axis);
+          const double eb = b.dot(axis);
+          const double centre = c.dot(axis);
+          const double extent = axis.cwiseAbs().dot(h);
+          const double hi = std::max(ea, eb) - (centre - extent);
+          const double lo = std::min(ea, eb) - (centre + extent);
+          if ((node.cone_two_sided ? std::max(hi, -lo) : hi) < node.cone_cos * gap) {
+            ++st.pruned_by_cone;
+            record(j, gap);
+            continue;
+          }
+        }
+      }
+      if (node.isLeaf()) {
+        ++st.triangle_pairs_tested;
+        const SegmentTriangleResult r = segmentTriangleOfMesh(a, b, mesh, node.triangle);
+        if (front != nullptr) record(j, std::sqrt(r.distance_sq));
+        if (evaluateCapsulePair(r, a, b, radius_m, X_LO, mesh, node.triangle, cutoff_m, m)) {
+          m.u_W = R_WO * m.u_W;
+          out.push_back(m);
+        }
+        continue;
+      }
+      stack.emplace_back(0, node.left);
+      stack.emplace_back(0, node.right);
+    }
+  }
+};
+
+}  // namespace
+
+// §3.2.1: global search of a capsule link within the cutoff; G10: the node bounds of the traversal
+// (CapsuleTraversal::run) against the segment (reports/equations.md).
+void querySnchCapsule(const Capsule& capsule, const Isometry3d& X_WL, const SnchTree& obj_tree, const TriMesh& obj_mesh,
+                      const Isometry3d& X_WO, double cutoff_m, SnchQueryScratch& scratch,
+                      std::vector<LocalMinimum>& out, SnchQueryStats* stats) {
+  SnchQueryStats local_stats;
+  SnchQueryStats& st = stats != nullptr ? *stats : local_stats;
+  st = {};
+  const std::size_t begin = out.size();
+  if (obj_tree.nodes.empty()) return;
+  const Isometry3d X_OL = X_WO.inverse() * X_WL;
+  CapsuleTraversal traversal{obj_tree,
+                             obj_mesh,
+                             X_OL * capsule.a_m,
+                             X_OL * capsule.b_m,
+                             capsule.radius_m,
+                             cutoff_m,
+                             X_OL.inverse(),
+                             X_WO.linear(),
+                             scratch,
+                             out,
+                             st};
+  traversal.run(0);
+  mergeDuplicateMinima(out, begin);
+}
+
+// G11: the front's bounds less the segment's drift (reports/equations.md).
+void querySnchCapsuleCoherent(const Capsule& capsule, const Isometry3d& X_WL, const SnchTree& obj_tree,
+                              const TriMesh& obj_mesh, const Isometry3d& X_WO, double cutoff_m,
+                              SnchQueryScratch& scratch, CapsuleFront& front, std::vector<LocalMinimum>& out,
+                              SnchQueryStats* stats) {
+  SnchQueryStats local_stats;
+  SnchQueryStats& st = stats != nullptr ? *stats : local_stats;
+  st = {};
+  const std::size_t begin = out.size();
+  if (obj_tree.nodes.empty()) {
+    front = {};
+    return;
+  }
+  const Isometry3d X_OL = X_WO.inverse() * X_WL;
+  CapsuleTraversal traversal{obj_tree,
+                             obj_mesh,
+                             X_OL * capsule.a_m,
+                             X_OL * capsule.b_m,
+                             capsule.radius_m,
+                             cutoff_m,
+                             X_OL.inverse(),
+                             X_WO.linear(),
+                             scratch,
+                             out,
+                             st,
+                             &front};
+  // Every point of the segment has moved by at most the larger move of its two ends (it is their
+  // affine combination), so every distance lower bound of the reference pose holds now less that.
+  const double drift = std::max((traversal.a - front.a_ref_m).norm(), (traversal.b - front.b_ref_m).norm());
+  const bool rebuild = !front.valid || front.tree != &obj_tree || front.tree_nodes != obj_tree.nodes.size() ||
+                       front.reach_m != traversal.reach || !(drift <= kCoherenceRebuildDrift_m) ||
+                       front.node.size() > kCoherenceFrontGrowth * front.rebuilt_size + 64;
+  front.next_node.clear();
+  front.next_bound_m.clear();
+  if (rebuild) {
+    front.a_ref_m = traversal.a;
+    front.b_ref_m = traversal.b;
+    front.reach_m = traversal.reach;
+    front.tree = &obj_tree;
+    front.tree_nodes = obj_tree.nodes.size();
+    traversal.drift_m = 0.0;
+    traversal.run(0);
+    front.rebuilt_size = front.next_node.size();
+    ++st.coherence_rebuilds;
+  } else {
+    traversal.drift_m = drift;
+    for (std::size_t i = 0; i < front.node.size(); ++i) {
+      // A node proven farther than the reach at the reference pose by more than the drift is
+      // still: kept without a test. Every other node is traversed as in a fresh query.
+      if (front.bound_m[i] - drift > traversal.reach) {
+        front.next_node.push_back(front.node[i]);
+        front.next_bound_m.push_back(front.bound_m[i]);
+        ++st.coherence_kept;
+        continue;
+      }
+      traversal.run(front.node[i]);
+    }
+  }
+  front.node.swap(front.next_node);
+  front.bound_m.swap(front.next_bound_m);
+  front.valid = true;
+  mergeDuplicateMinima(out, begin);
+}
 
 // §3.2.1: global search within the cutoff, pruning and local descent of the minima; G7: spanning cone of two spheres
 // (reports/equations.md).

@@ -1,13 +1,14 @@
 // The Bullet alternative search against SNCH and exact geometry: every SNCH minimum within L
-// appears among Bullet's per-triangle closest points (same triangle pair or feature pair), the
-// distances Bullet reports equal the exact triangle-triangle distances, the whole Bullet search
-// returns SNCH's minima on the valve scene, and GJK/EPA penetration depths equal the analytic
-// depths of a capsule in a box.
+// appears among Bullet's per-triangle closest points (for capsule links, Bullet's capsule against
+// each object triangle; for mesh links, the same triangle pair or feature pair), the distances
+// Bullet reports are never below the exact ones, the whole Bullet search returns SNCH's minima on
+// the valve scene, and GJK/EPA penetration depths equal the analytic depths of a capsule in a box.
 #include "fullarm/haptics/bullet_search.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <random>
 
@@ -18,6 +19,7 @@
 #include "fullarm/haptics/primitives.hpp"
 #include "fullarm/haptics/scene.hpp"
 #include "fullarm/haptics/snch.hpp"
+#include "haptics_test_util.hpp"
 
 namespace fullarm::haptics {
 namespace {
@@ -50,11 +52,32 @@ Eigen::Isometry3d nearPose(const TriMesh& link_mesh, const TriMesh& object, std:
   return X;
 }
 
+// The link capsule `c` placed by a random rotation so that its point nearest the outside of a
+// random vertex of `object` lies `0.001 + spread u` from it along the vertex's pseudo-normal.
+Eigen::Isometry3d nearCapsulePose(const Capsule& c, const TriMesh& object, std::mt19937& rng, double spread) {
+  std::uniform_int_distribution<int> ov(0, object.numVertices() - 1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g(0.0, 1.0);
+  int v = ov(rng);
+  while (object.vertexTriangles(v).empty()) v = ov(rng);
+  const Eigen::Vector3d n = object.featureNormal({FeatureKind::kVertex, v});
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().toRotationMatrix();
+  // The end of the segment lowest along n, and the capsule's surface point below it.
+  const Eigen::Vector3d a = X.linear() * c.a_m;
+  const Eigen::Vector3d b = X.linear() * c.b_m;
+  const Eigen::Vector3d low = a.dot(n) <= b.dot(n) ? a : b;
+  X.translation() = object.vertex(v) + (0.001 + spread * u(rng) + c.radius_m) * n - low;
+  return X;
+}
+
 struct Fixture {
   const arm::ArmModel& model = arm::test::defaultModel();
   CollisionWorld world{model};
-  std::vector<int> links;  // links with a mesh
-  Fixture() {
+  std::vector<int> links;  // links with geometry
+  /// With `faceted`, the capsule links as their 16 x 4 meshes (the mesh-link path).
+  explicit Fixture(bool faceted = false) {
+    if (faceted) test::facetCapsuleLinks(world, 16, 4);
     world.addObject(
         "wheel", importMesh(arm::test::sourcePath("scenes/meshes/gazebo-drc/drc_practice_wheel_valve/valve_wheel.dae")),
         Eigen::Isometry3d::Identity());
@@ -62,13 +85,82 @@ struct Fixture {
     world.addObject("box", makeBox({0.4, 0.4, 0.4}, 0.1), Eigen::Isometry3d::Identity());
     world.addObject("wide_frame", makeRectangularFrame(1.2, 1.2, 0.4, 0.05, 0.1), Eigen::Isometry3d::Identity());
     for (int l = 0; l < world.numLinks(); ++l) {
-      if (world.hasLinkMesh(l)) links.push_back(l);
+      if (world.hasLinkGeometry(l)) links.push_back(l);
     }
   }
 };
 
-TEST(BulletSearchTest, EverySnchMinimumIsAmongBulletsTrianglePairs) {
+TEST(BulletSearchTest, EverySnchCapsuleMinimumIsAmongBulletsTriangles) {
   Fixture f;
+  BulletGlobalSearch bullet(f.world);
+  std::mt19937 rng(4321);
+  constexpr double kCutoff = 0.03;
+  SnchQueryScratch scratch;
+  int queries_with_minima = 0;
+  long minima_checked = 0;
+  long triangles_checked = 0;
+  double max_gjk_error = 0.0;
+  for (int c = 0; c < 200; ++c) {
+    const int link = f.links[static_cast<std::size_t>(c) % f.links.size()];
+    const int object = (c / 2) % f.world.numObjects();
+    const Capsule& capsule = f.world.linkCapsule(link);
+    const CollisionObject& obj = f.world.object(object);
+    const Eigen::Isometry3d X_WL = nearCapsulePose(capsule, obj.mesh, rng, 0.03);
+    std::vector<LocalMinimum> snch;
+    querySnchCapsule(capsule, X_WL, obj.tree, obj.mesh, obj.X_WO, kCutoff, scratch, snch);
+    std::vector<TrianglePairPoints> pairs;
+    bullet.closestTrianglePairs(link, X_WL, object, obj.X_WO, kCutoff, pairs);
+    const Eigen::Isometry3d X_OL = obj.X_WO.inverse() * X_WL;
+    const Eigen::Vector3d a = X_OL * capsule.a_m;
+    const Eigen::Vector3d b = X_OL * capsule.b_m;
+    // Bullet's capsule-triangle GJK distances are upper bounds of the exact ones
+    // (segment-triangle distance minus the radius), not always tight: the search does not use
+    // them to discard triangles.
+    for (const TrianglePairPoints& p : pairs) {
+      EXPECT_EQ(p.tri_link, -1);
+      const auto& t = obj.mesh.triangle(p.tri_object);
+      const SegmentTriangleResult exact = closestPointsSegmentTriangle(
+          a, b, prepareTriangle(obj.mesh.vertex(t[0]), obj.mesh.vertex(t[1]), obj.mesh.vertex(t[2])));
+      const double d = std::max(0.0, std::sqrt(exact.distance_sq) - capsule.radius_m);
+      if (p.distance_m >= 0.0) {
+        EXPECT_GE(p.distance_m, d - kRounding) << "case " << c;
+        max_gjk_error = std::max(max_gjk_error, p.distance_m - d);
+      }
+      ++triangles_checked;
+    }
+    // Every SNCH minimum's triangle is among the candidates of Bullet's BVH, and the exact test
+    // on the candidates gives exactly SNCH's minima.
+    std::vector<int> candidates;
+    bullet.capsuleCandidateTriangles(link, X_WL, object, obj.X_WO, kCutoff, candidates);
+    std::vector<LocalMinimum> from_bullet;
+    LocalMinimum e;
+    for (const int t : candidates) {
+      if (evaluateCapsuleTriangle(a, b, capsule.radius_m, X_OL.inverse(), obj.mesh, t, kCutoff, e)) {
+        from_bullet.push_back(e);
+      }
+    }
+    mergeDuplicateMinima(from_bullet, 0);
+    EXPECT_EQ(from_bullet.size(), snch.size()) << "case " << c;
+    for (const LocalMinimum& m : snch) {
+      EXPECT_TRUE(std::binary_search(candidates.begin(), candidates.end(), m.tri_object))
+          << "case " << c << ": SNCH minimum at " << m.distance_m << " m (triangle " << m.tri_object
+          << ") missing from Bullet's " << candidates.size() << " candidates";
+      EXPECT_TRUE(std::any_of(
+          from_bullet.begin(), from_bullet.end(),
+          [&](const LocalMinimum& x) { return x.feature_object == m.feature_object && x.distance_m == m.distance_m; }))
+          << "case " << c;
+      ++minima_checked;
+    }
+    queries_with_minima += snch.empty() ? 0 : 1;
+  }
+  EXPECT_GT(queries_with_minima, 150);
+  EXPECT_GT(minima_checked, 200);
+  EXPECT_GT(triangles_checked, 1000);
+  std::cout << "max Bullet GJK - exact = " << max_gjk_error << " m over " << triangles_checked << " triangles\n";
+}
+
+TEST(BulletSearchTest, EverySnchMinimumIsAmongBulletsTrianglePairs) {
+  Fixture f(true);
   BulletGlobalSearch bullet(f.world);
   std::mt19937 rng(1234);
   constexpr double kCutoff = 0.03;

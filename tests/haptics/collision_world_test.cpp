@@ -1,6 +1,7 @@
 // Scene-level global search: every arm link x every object at a real arm configuration equals
-// brute force over all triangle pairs of every link/object pair, with link/object indices set,
-// and the pruned result is the pruning of that set.
+// brute force over every triangle (capsule links) or every triangle pair (mesh links) of every
+// link/object pair, with link/object indices set, and the pruned result is the pruning of that
+// set.
 #include "fullarm/haptics/collision_world.hpp"
 
 #include <gtest/gtest.h>
@@ -12,12 +13,10 @@
 namespace fullarm::haptics {
 namespace {
 
-TEST(CollisionWorldTest, GlobalSearchEqualsBruteForceOverAllLinkObjectPairs) {
-  const arm::ArmModel& model = arm::test::defaultModel();
-  CollisionWorld world(model, {8, 2});
-  int links_with_mesh = 0;
-  for (int l = 0; l < world.numLinks(); ++l) links_with_mesh += world.hasLinkMesh(l) ? 1 : 0;
-  EXPECT_GE(links_with_mesh, 3);  // upper arm, forearm, hand (+ fingers)
+// The search of `world` against brute force at 4 random configurations with two objects
+// near the forearm and the hand; returns the number of minima compared.
+int compareWithBruteForce(const CollisionWorld& world) {
+  const arm::ArmModel& model = world.model();
   arm::ArmData fk(model);
   std::mt19937 rng(77);
   int total = 0;
@@ -36,38 +35,61 @@ TEST(CollisionWorldTest, GlobalSearchEqualsBruteForceOverAllLinkObjectPairs) {
     constexpr double kCutoff = 0.08;
     std::vector<LocalMinimum> snch;
     w.globalSearch(fk, kCutoff, 0.0, snch);
-    std::vector<LocalMinimum> brute;
-    for (int l = 0; l < w.numLinks(); ++l) {
-      if (!w.hasLinkMesh(l)) continue;
-      for (int o = 0; o < w.numObjects(); ++o) {
-        auto pair = test::bruteForceMinima(w.linkMesh(l), fk.X_WL[static_cast<std::size_t>(l)], w.object(o).mesh,
-                                           w.object(o).X_WO, kCutoff);
-        for (auto& m : pair) {
-          m.link = l;
-          m.object = o;
-        }
-        brute.insert(brute.end(), pair.begin(), pair.end());
-      }
-    }
-    ASSERT_EQ(snch.size(), brute.size()) << "trial " << trial;
+    std::vector<LocalMinimum> brute = test::bruteForceWorldMinima(w, fk, kCutoff);
+    EXPECT_EQ(snch.size(), brute.size()) << "trial " << trial;
+    if (snch.size() != brute.size()) return 0;
     for (const auto& m : snch) {
       const auto it =
           std::find_if(brute.begin(), brute.end(), [&](const LocalMinimum& b) { return sameFeaturePair(b, m); });
-      ASSERT_NE(it, brute.end());
+      EXPECT_NE(it, brute.end());
+      if (it == brute.end()) return 0;
       EXPECT_NEAR(it->distance_m, m.distance_m, 1e-12);
-      // Endpoints in the local frames map to world points the reported distance apart.
-      EXPECT_NEAR((fk.X_WL[static_cast<std::size_t>(m.link)] * m.p_L - w.object(m.object).X_WO * m.p_O).norm(),
-                  m.distance_m, 1e-12);
+      // Endpoints in the local frames map to world points the reported distance apart (a
+      // capsule's point lies beyond the object's when the capsule reaches into it).
+      const double gap = (fk.X_WL[static_cast<std::size_t>(m.link)] * m.p_L - w.object(m.object).X_WO * m.p_O).norm();
+      if (m.distance_m > 0.0 || w.linkShape(m.link) == LinkShape::kMesh) {
+        EXPECT_NEAR(gap, m.distance_m, 1e-12);
+      }
     }
     total += static_cast<int>(snch.size());
     // Pruned search = pruning of the full set.
     std::vector<LocalMinimum> pruned;
     w.globalSearch(fk, kCutoff, 0.02, pruned);
     pruneMinima(brute, 0.02);
-    ASSERT_EQ(pruned.size(), brute.size());
+    EXPECT_EQ(pruned.size(), brute.size());
+    if (pruned.size() != brute.size()) return 0;
     for (std::size_t i = 0; i < pruned.size(); ++i) EXPECT_TRUE(sameFeaturePair(pruned[i], brute[i]));
   }
-  EXPECT_GT(total, 5);
+  return total;
+}
+
+TEST(CollisionWorldTest, CapsuleLinksAreQueriedAsExactCapsules) {
+  const arm::ArmModel& model = arm::test::defaultModel();
+  const CollisionWorld world(model);
+  int capsules = 0;
+  for (int l = 0; l < world.numLinks(); ++l) {
+    const arm::LinkGeometry& g = model.joints[static_cast<std::size_t>(l)].geometry;
+    EXPECT_EQ(world.linkShape(l) == LinkShape::kCapsule, g.type == arm::LinkGeometry::Type::kCapsule) << l;
+    if (world.linkShape(l) != LinkShape::kCapsule) continue;
+    ++capsules;
+    EXPECT_EQ(world.linkCapsule(l).a_m, g.from_m);
+    EXPECT_EQ(world.linkCapsule(l).b_m, g.to_m);
+    EXPECT_EQ(world.linkCapsule(l).radius_m, g.radius_m);
+    EXPECT_FALSE(world.hasLinkMesh(l));
+    EXPECT_TRUE(world.hasLinkGeometry(l));
+  }
+  EXPECT_GE(capsules, 3);  // upper arm, forearm, hand (+ fingers)
+}
+
+TEST(CollisionWorldTest, GlobalSearchEqualsBruteForceOverAllLinkObjectPairs) {
+  const CollisionWorld world(arm::test::defaultModel());
+  EXPECT_GT(compareWithBruteForce(world), 5);
+}
+
+TEST(CollisionWorldTest, GlobalSearchEqualsBruteForceWithMeshLinks) {
+  CollisionWorld world(arm::test::defaultModel());
+  EXPECT_GE(test::facetCapsuleLinks(world, 8, 2), 3);
+  EXPECT_GT(compareWithBruteForce(world), 5);
 }
 
 }  // namespace

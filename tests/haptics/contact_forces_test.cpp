@@ -12,6 +12,7 @@
 
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "alloc_guard.hpp"
 #include "arm_test_util.hpp"
@@ -242,6 +243,49 @@ TEST(HapticsParamsTest, BadValuesNameTheKey) {
   expectError("max_iterations: 16", "max_iterations: 0", "local_descent.max_iterations");
   expectError("damping_nspm: 0.0", "damping_nspm: 0.0\n  spring_colour: red", "spring_colour");
   expectError("  prune_radius_m: 0.02", "", "prune_radius_m");
+}
+
+// L - d_f >= max_link_speed_mps x latency_p99_ms: the shipped 20 mm look-ahead covers 1.5 m/s x
+// 2 ms = 3 mm; at 2 m/s x 12 ms = 24 mm it does not, and the error names both figures and the
+// keys they come from; without the optional section the defaults apply.
+TEST(HapticsParamsTest, LookAheadMustCoverTheLinkSpeedTimesTheSearchLatency) {
+  const std::string text = readText(arm::test::sourcePath("config/haptics.yaml"));
+  const HapticsParams shipped = parseHapticsParams(text, "haptics.yaml");
+  EXPECT_DOUBLE_EQ(minimumCutoffMargin(shipped), shipped.max_link_speed_mps * 1e-3 * shipped.search_latency_p99_ms);
+  EXPECT_GE(shipped.cutoff_m - shipped.force_threshold_m, minimumCutoffMargin(shipped));
+  std::string slow = text;
+  slow.replace(slow.find("latency_p99_ms: 2.0"), 19, "latency_p99_ms: 12.0");
+  slow.replace(slow.find("max_link_speed_mps: 1.5"), 23, "max_link_speed_mps: 2.0");
+  try {
+    (void)parseHapticsParams(slow, "haptics.yaml");
+    FAIL() << "a look-ahead of 20 mm against 24 mm must be rejected";
+  } catch (const core::ConfigError& e) {
+    const std::string what = e.what();
+    for (const char* part : {"haptics.yaml", "contact.cutoff_m", "20 mm", "max_link_speed_mps 2 m/s",
+                             "latency_p99_ms 12 ms", "= 24 mm", "at least 0.034 m"}) {
+      EXPECT_NE(what.find(part), std::string::npos) << part << " in: " << what;
+    }
+  }
+  // The same figures with L raised to 34 mm load.
+  std::string raised = slow;
+  raised.replace(raised.find("cutoff_m: 0.03"), 14, "cutoff_m: 0.034");
+  EXPECT_NO_THROW((void)parseHapticsParams(raised, "haptics.yaml"));
+  // Without the section: the defaults (1.5 m/s x 2 ms).
+  const HapticsParams defaults = parseHapticsParams(text.substr(0, text.find("\n# Optional")), "haptics.yaml");
+  EXPECT_EQ(defaults.search_latency_p99_ms, HapticsParams{}.search_latency_p99_ms);
+  EXPECT_EQ(defaults.max_link_speed_mps, HapticsParams{}.max_link_speed_mps);
+  for (const auto& [from, to, key] : {std::tuple{"latency_p99_ms: 2.0", "latency_p99_ms: 0", "global_search.latency_p99_ms"},
+                                      std::tuple{"max_link_speed_mps: 1.5", "max_link_speed_mps: -1",
+                                                 "global_search.max_link_speed_mps"}}) {
+    std::string bad = text;
+    bad.replace(bad.find(from), std::string(from).size(), to);
+    try {
+      (void)parseHapticsParams(bad, "haptics.yaml");
+      ADD_FAILURE() << to;
+    } catch (const core::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(HapticsParamsTest, MutatedAndTruncatedTextGivesConfigError) {

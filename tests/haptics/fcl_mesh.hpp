@@ -1,10 +1,12 @@
 #pragma once
 /// @file
-/// The FCL peer's view of a fullarm mesh, shared by the haptics tests (FCL as the distance
+/// The FCL peer's view of a fullarm mesh or link capsule, shared by the haptics tests (FCL as the distance
 /// oracle) and bench/haptics_local_bench.cpp (FCL as the timed peer). FCL is never linked into
 /// fullarm::haptics; only targets that link `fcl` include this header.
 
 #include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/sphere.h>
 #include <fcl/math/bv/OBBRSS.h>
 
 #include <cstddef>
@@ -12,6 +14,7 @@
 #include <vector>
 
 #include "fullarm/haptics/primitives.hpp"
+#include "fullarm/haptics/snch.hpp"
 
 namespace fullarm::haptics::test {
 
@@ -30,6 +33,26 @@ inline std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> fclModel(const TriMesh& mesh
   model->addSubModel(v, t);
   model->endModel();
   return model;
+}
+
+/// FCL's shape of a link capsule and its pose in the link frame: fcl::Capsuled runs along its
+/// z axis, centred (a sphere when the segment has zero length).
+struct FclCapsule {
+  std::shared_ptr<fcl::CollisionGeometryd> shape;
+  Eigen::Isometry3d X_LC = Eigen::Isometry3d::Identity();
+};
+
+inline FclCapsule fclCapsule(const Capsule& c) {
+  FclCapsule out;
+  const Eigen::Vector3d axis = c.b_m - c.a_m;
+  out.X_LC.translation() = 0.5 * (c.a_m + c.b_m);
+  if (axis.norm() > 0.0) {
+    out.X_LC.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), axis).toRotationMatrix();
+    out.shape = std::make_shared<fcl::Capsuled>(c.radius_m, axis.norm());
+  } else {
+    out.shape = std::make_shared<fcl::Sphered>(c.radius_m);
+  }
+  return out;
 }
 
 }  // namespace fullarm::haptics::test

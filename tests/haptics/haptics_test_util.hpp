@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "fullarm/arm/arm_data.hpp"
+#include "fullarm/haptics/collision_world.hpp"
 #include "fullarm/haptics/minima.hpp"
 #include "fullarm/haptics/primitives.hpp"
 #include "fullarm/haptics/snch.hpp"
@@ -32,6 +34,64 @@ inline std::vector<LocalMinimum> bruteForceMinima(const TriMesh& link_mesh, cons
   }
   mergeDuplicateMinima(out, 0);
   return out;
+}
+
+/// Every local minimum within cutoff between a capsule and a mesh by testing ALL triangles
+/// (evaluateCapsuleTriangle on each, no hierarchy, no cones), merged by feature pair. u_W in
+/// the world frame.
+inline std::vector<LocalMinimum> bruteForceCapsuleMinima(const Capsule& capsule, const Eigen::Isometry3d& X_WL,
+                                                         const TriMesh& obj_mesh, const Eigen::Isometry3d& X_WO,
+                                                         double cutoff_m) {
+  std::vector<LocalMinimum> out;
+  const Eigen::Isometry3d X_OL = X_WO.inverse() * X_WL;
+  const Eigen::Vector3d a = X_OL * capsule.a_m;
+  const Eigen::Vector3d b = X_OL * capsule.b_m;
+  LocalMinimum m;
+  for (int t = 0; t < obj_mesh.numTriangles(); ++t) {
+    if (evaluateCapsuleTriangle(a, b, capsule.radius_m, X_OL.inverse(), obj_mesh, t, cutoff_m, m)) {
+      m.u_W = X_WO.linear() * m.u_W;
+      out.push_back(m);
+    }
+  }
+  mergeDuplicateMinima(out, 0);
+  return out;
+}
+
+/// The brute-force minima of every link with geometry (capsule or mesh) against every object
+/// of `world` at the link frames of `fk`, link/object set, in (link, object) order.
+inline std::vector<LocalMinimum> bruteForceWorldMinima(const CollisionWorld& world, const arm::ArmData& fk,
+                                                       double cutoff_m) {
+  std::vector<LocalMinimum> all;
+  for (int l = 0; l < world.numLinks(); ++l) {
+    if (!world.hasLinkGeometry(l)) continue;
+    const Eigen::Isometry3d& X_WL = fk.X_WL[static_cast<std::size_t>(l)];
+    for (int o = 0; o < world.numObjects(); ++o) {
+      const CollisionObject& obj = world.object(o);
+      std::vector<LocalMinimum> pair =
+          world.linkShape(l) == LinkShape::kCapsule
+              ? bruteForceCapsuleMinima(world.linkCapsule(l), X_WL, obj.mesh, obj.X_WO, cutoff_m)
+              : bruteForceMinima(world.linkMesh(l), X_WL, obj.mesh, obj.X_WO, cutoff_m);
+      for (LocalMinimum& m : pair) {
+        m.link = l;
+        m.object = o;
+      }
+      all.insert(all.end(), pair.begin(), pair.end());
+    }
+  }
+  return all;
+}
+
+/// Replaces every capsule link of `world` by its faceted mesh (makeLinkCapsuleMesh: `segments`
+/// around the axis, `rings` per hemisphere), so the world's queries run the mesh-link path.
+/// Returns the number of links replaced.
+inline int facetCapsuleLinks(CollisionWorld& world, int segments, int rings) {
+  int n = 0;
+  for (int l = 0; l < world.numLinks(); ++l) {
+    if (world.linkShape(l) != LinkShape::kCapsule) continue;
+    world.setLinkMesh(l, makeLinkCapsuleMesh(world.model(), l, segments, rings));
+    ++n;
+  }
+  return n;
 }
 
 /// Minimum over all triangle pairs of the triangle-triangle distance (plain global minimum).

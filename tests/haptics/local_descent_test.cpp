@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <iostream>
 #include <optional>
 
 #include "alloc_guard.hpp"
@@ -376,10 +377,11 @@ TEST(LocalDescentTest, IterationCapBoundsTheWalk) {
   EXPECT_LE(stats.steps, 2 * static_cast<int>(minima.size()));
 }
 
-TEST(LocalDescentTest, UpdateDoesNotAllocate) {
+// The allocation test on the world's links as exact capsules and as faceted meshes.
+void expectUpdateDoesNotAllocate(bool faceted) {
   const arm::ArmModel& model = arm::test::defaultModel();
   WorldFixture s(model);
-  std::mt19937 rng(8);
+  if (faceted) test::facetCapsuleLinks(s.world, 16, 4);
   s.world.addObject("beam", makeIBeam(0.2, 0.1, 0.02, 0.01, 1.0, 0.02), Eigen::Isometry3d::Identity());
   arm::computeForwardKinematics(model, s.fk, model.defaultPosture());
   // Put every link mesh near the beam by moving the beam next to the forearm.
@@ -397,6 +399,159 @@ TEST(LocalDescentTest, UpdateDoesNotAllocate) {
   int kept = 0;
   EXPECT_NO_HEAP_ALLOCATION(kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{}, &stats));
   EXPECT_GT(kept, 0);
+}
+
+TEST(LocalDescentTest, UpdateDoesNotAllocate) {
+  expectUpdateDoesNotAllocate(false);
+}
+
+TEST(LocalDescentTest, UpdateOfMeshLinksDoesNotAllocate) {
+  expectUpdateDoesNotAllocate(true);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Exact capsule links.
+
+// Fresh capsule minima of kLink (the model's forearm capsule) against object 0, tagged.
+std::vector<LocalMinimum> seedCapsuleMinima(const WorldFixture& s, double cutoff_m) {
+  const CollisionObject& obj = s.world.object(0);
+  std::vector<LocalMinimum> minima;
+  SnchQueryScratch scratch;
+  querySnchCapsule(s.world.linkCapsule(kLink), s.fk.X_WL[kLink], obj.tree, obj.mesh, obj.X_WO, cutoff_m, scratch,
+                   minima);
+  for (auto& m : minima) {
+    m.link = kLink;
+    m.object = 0;
+  }
+  return minima;
+}
+
+// The exact capsule under motion: 150 random objects (random primitives and the relief box),
+// the capsule 2-6 cm from them, then 12 small random motions in a row, local descent after each.
+// After every motion, each tracked minimum that is still a local minimum at its triangle (the
+// exact test) is found by a fresh global search with the same feature pair and bit for bit the
+// same distance and points (both fill a capsule minimum from its feature alone), and the
+// reference path of the descent (no rejection cones, no re-screening) gives the same minima bit
+// for bit.
+TEST(LocalDescentTest, CapsuleMinimaStayExactUnderMotion) {
+  const arm::ArmModel& model = arm::test::defaultModel();
+  std::mt19937 rng(41);
+  int tracked_total = 0;
+  int confirmed = 0;
+  int steps = 0;
+  int skipped = 0;  // neighbours or neighbourhoods skipped by re-screening or a rejection cone
+  for (int trial = 0; trial < 150; ++trial) {
+    WorldFixture s(model);
+    ASSERT_EQ(s.world.linkShape(kLink), LinkShape::kCapsule);
+    const Capsule& c = s.world.linkCapsule(kLink);
+    s.world.addObject("obj", trial % 3 == 0 ? randomSmallMesh(rng) : roughBox(rng), randomPose(rng, 0.3));
+    const CollisionObject& obj = s.world.object(0);
+    // The capsule's middle 2-6 cm + radius + object size from the object's centre.
+    Eigen::Isometry3d X_WL = randomPose(rng, 0.0);
+    std::normal_distribution<double> n(0.0, 1.0);
+    const Eigen::Vector3d dir = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+    X_WL.translation() = obj.X_WO.translation() +
+                         (std::uniform_real_distribution<double>(0.08, 0.2)(rng) + c.radius_m) * dir -
+                         X_WL.linear() * (0.5 * (c.a_m + c.b_m));
+    s.fk.X_WL[kLink] = X_WL;
+    std::vector<LocalMinimum> minima = seedCapsuleMinima(s, kCutoff_m);
+    if (minima.empty()) continue;
+    // The reference path (every neighbour screened one by one, none skipped by re-screening)
+    // on a copy: the same minima bit for bit.
+    std::vector<LocalMinimum> reference = minima;
+    LocalDescentParams reference_params;
+    reference_params.rescreen_neighbours = false;
+    reference_params.cone_screening = false;
+    for (int motion = 0; motion < 12; ++motion) {
+      s.fk.X_WL[kLink] = s.fk.X_WL[kLink] * smallMotion(rng);
+      LocalDescentStats stats;
+      const int kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{}, &stats);
+      minima.resize(static_cast<std::size_t>(kept));
+      steps += stats.steps;
+      skipped += stats.rescreened + stats.cone_rejected;
+      const int kept_reference = updateMinimaLocalDescent(s.world, s.fk, reference, reference_params);
+      reference.resize(static_cast<std::size_t>(kept_reference));
+      ASSERT_EQ(reference.size(), minima.size());
+      for (std::size_t i = 0; i < minima.size(); ++i) {
+        EXPECT_TRUE(sameFeaturePair(reference[i], minima[i]));
+        EXPECT_EQ(reference[i].distance_m, minima[i].distance_m);
+        EXPECT_EQ(reference[i].p_L, minima[i].p_L);
+      }
+      const std::vector<LocalMinimum> fresh = seedCapsuleMinima(s, kCutoff_m + 0.05);
+      const Eigen::Isometry3d X_OL = obj.X_WO.inverse() * s.fk.X_WL[kLink];
+      for (const LocalMinimum& m : minima) {
+        ++tracked_total;
+        EXPECT_EQ(m.tri_link, -1);
+        LocalMinimum e;
+        if (!evaluateCapsuleTriangle(X_OL * c.a_m, X_OL * c.b_m, c.radius_m, X_OL.inverse(), obj.mesh, m.tri_object,
+                                     1.0, e) ||
+            e.feature_object != m.feature_object) {
+          continue;
+        }
+        ++confirmed;
+        const auto it =
+            std::find_if(fresh.begin(), fresh.end(), [&](const LocalMinimum& f) { return sameFeaturePair(f, m); });
+        ASSERT_NE(it, fresh.end()) << "trial " << trial << ", motion " << motion;
+        EXPECT_EQ(it->distance_m, m.distance_m);
+        EXPECT_EQ(it->p_L, m.p_L);
+        EXPECT_EQ(it->p_O, m.p_O);
+        EXPECT_LT((it->u_W - m.u_W).norm(), 1e-15);
+        // The link point lies on the capsule (within it when the segment itself meets the
+        // object), the distance apart from the object point.
+        const double s_param = closestSegmentParameter(c.a_m, c.b_m, m.p_L);
+        const double from_axis = (m.p_L - (c.a_m + s_param * (c.b_m - c.a_m))).norm();
+        if (m.distance_m > 0.0) {
+          EXPECT_NEAR(from_axis, c.radius_m, 1e-12);
+          EXPECT_NEAR((s.fk.X_WL[kLink] * m.p_L - obj.X_WO * m.p_O).norm(), m.distance_m, 1e-12);
+        } else {
+          EXPECT_LE(from_axis, c.radius_m + 1e-12);
+        }
+      }
+    }
+  }
+  std::cout << tracked_total << " tracked minima, " << confirmed << " confirmed, " << steps << " walk steps, "
+            << skipped << " neighbours or neighbourhoods skipped\n";
+  EXPECT_GT(tracked_total, 1000);
+  EXPECT_GT(steps, 100);  // the walk was exercised (203 steps)
+  EXPECT_GT(skipped, 500);  // 887
+  EXPECT_GE(confirmed, static_cast<int>(0.9 * tracked_total));
+  RecordProperty("tracked", tracked_total);
+  RecordProperty("confirmed", confirmed);
+}
+
+// A tilted capsule (the forearm's) sliding 10 cm over a wall of 1 cm triangles: its lower end
+// cap stays 5 mm above the wall, and descent keeps exactly that distance while it walks.
+TEST(LocalDescentTest, CapsuleWalksAcrossAFlatWall) {
+  const arm::ArmModel& model = arm::test::defaultModel();
+  WorldFixture s(model);
+  const Capsule& c = s.world.linkCapsule(kLink);
+  Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
+  X_WO.translation() = Eigen::Vector3d(0, 0, -0.01);  // top face at z = 0
+  s.world.addObject("wall", makeBox({0.6, 0.6, 0.02}, 0.01), X_WO);
+  Eigen::Isometry3d X_WL = Eigen::Isometry3d::Identity();
+  X_WL.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Vector3d a = X_WL.linear() * c.a_m;
+  const Eigen::Vector3d b = X_WL.linear() * c.b_m;
+  const Eigen::Vector3d low = a.z() < b.z() ? a : b;
+  X_WL.translation() = Eigen::Vector3d(0.0013, 0.0021, 0.005 + c.radius_m) - low;
+  s.fk.X_WL[kLink] = X_WL;
+  std::vector<LocalMinimum> minima;
+  globalSearch(s.world, s.fk, 0.02, 0.0, minima);
+  ASSERT_EQ(minima.size(), 1U);
+  LocalDescentStats stats;
+  int walked = 0;
+  for (int step = 0; step < 100; ++step) {
+    X_WL.translation().x() += 0.001;
+    s.fk.X_WL[kLink] = X_WL;
+    const int before = minima[0].tri_object;
+    const int kept = updateMinimaLocalDescent(s.world, s.fk, minima, LocalDescentParams{}, &stats);
+    ASSERT_EQ(kept, 1);
+    EXPECT_NEAR(minima[0].distance_m, 0.005, 1e-15) << "step " << step;
+    EXPECT_NEAR(minima[0].u_W.z(), -1.0, 1e-15);
+    EXPECT_EQ(stats.minima_at_iteration_cap, 0);
+    walked += minima[0].tri_object != before ? 1 : 0;
+  }
+  EXPECT_GT(walked, 10);
 }
 
 }  // namespace

@@ -37,6 +37,14 @@ struct HapticsParams {
   bool normalise_per_patch = false;
   double patch_radius_m = 0.05;            ///< minima whose link points are this close share a patch [m]
   double max_force_per_minimum_n = 200.0;  ///< saturation of each spring [N]
+  /// p99 of the time from a posture to its minima reaching the tick [ms]: the global search's
+  /// start period plus its p99 duration, as measured on the machine that runs it (the motion
+  /// benchmark, BENCHMARKS.md) (YAML global_search.latency_p99_ms).
+  double search_latency_p99_ms = 2.0;
+  /// Largest speed of any point of any link while the arm is in use [m/s] (YAML
+  /// global_search.max_link_speed_mps). With the latency it sets the smallest safe look-ahead:
+  /// L - d_f >= max_link_speed_mps x search_latency_p99_ms (see minimumCutoffMargin).
+  double max_link_speed_mps = 1.5;
   RenderMode mode = RenderMode::kFullArm;
   LocalDescentParams descent;
 };
@@ -48,8 +56,15 @@ struct HapticsParams {
 [[nodiscard]] std::filesystem::path defaultHapticsParamsPath();
 /// Same from text; `file` is only used in error messages.
 [[nodiscard]] HapticsParams parseHapticsParams(std::string_view yaml_text, const std::filesystem::path& file);
-/// @throws core::ConfigError for non-positive stiffness, d_f >= L, negative damping, ...
+/// @throws core::ConfigError for non-positive stiffness, d_f >= L, negative damping, a
+///   look-ahead L - d_f below minimumCutoffMargin (the message names both figures), ...
 void validateHapticsParams(const HapticsParams& params, const std::filesystem::path& file);
+
+/// The smallest safe look-ahead L - d_f [m]: the distance a link covers at max_link_speed_mps
+/// during search_latency_p99_ms, so that a new minimum reaches the tick before the link, coming
+/// from beyond the cutoff, closes in to the force threshold (DTS paper §3.2.1: the global search
+/// must deliver minima before penetration).
+[[nodiscard]] double minimumCutoffMargin(const HapticsParams& params) noexcept;
 
 /// Contact statistics of one link (for the visual cue and the study statistics). "Contact"
 /// means a minimum closer than d_f (inside the rendered skin); "penetration" means the link

@@ -107,8 +107,36 @@ struct SegmentTriangleResult {
   Eigen::Vector3d p;         ///< closest point on the segment [m]
   Eigen::Vector3d q;         ///< closest point on the triangle [m]
   double distance_sq = 0.0;  ///< |p - q|^2 [m^2]
-  LocalFeature feature_t;    ///< closest feature of the triangle: a vertex or an edge
+  /// Closest feature of the triangle (the face only from closestPointsSegmentTriangle).
+  LocalFeature feature_t;
 };
+
+/// Exact closest points of the segment [p0, p1] and triangle t, with t's closest feature and the
+/// segment parameter s of p (Ericson, "Real-Time Collision Detection" 5.1.10). A segment
+/// crossing t gives distance 0 at the crossing point (t's feature there, the face inside).
+/// Otherwise the minimum of a segment and a triangle is attained by an end of the segment
+/// against the triangle or by the segment against one of its edges: the five candidates are
+/// compared in that order (p0, p1, edges 0, 1, 2), the first strictly smallest wins, so
+/// parallel configurations are deterministic. A candidate whose lower bound (its distance to
+/// the triangle's plane, or the distance of the segment's end nearer to that plane when both
+/// lie on one side) exceeds the best so far is skipped. A segment of zero length is a point.
+/// The distance of a capsule (radius r around the segment) to the triangle is
+/// max(0, sqrt(distance_sq) - r).
+/// @rt
+[[nodiscard]] SegmentTriangleResult closestPointsSegmentTriangle(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                                                                 const PreparedTriangle& t) noexcept;
+
+/// Parameter s in [0, 1] of the point p0 + s (p1 - p0) of the segment [p0, p1] closest to x (0
+/// for a segment of zero length).
+/// @rt
+[[nodiscard]] inline double closestSegmentParameter(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                                                    const Eigen::Vector3d& x) noexcept {
+  const Eigen::Vector3d d = p1 - p0;
+  const double d_sq = d.squaredNorm();
+  if (!(d_sq > 0.0)) return 0.0;
+  const double s = (x - p0).dot(d) / d_sq;
+  return s <= 0.0 ? 0.0 : (s >= 1.0 ? 1.0 : s);
+}
 
 /// Exact closest points of the segment [p0, p0 + d] and triangle t when the segment spans the
 /// triangle along its direction (every vertex of t projects onto the segment: 0 <= (v - p0) . d

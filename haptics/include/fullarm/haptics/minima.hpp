@@ -20,11 +20,13 @@ namespace fullarm::haptics {
 struct LocalMinimum {
   int link = -1;        ///< arm-model link index
   int object = -1;      ///< scene object index
-  int tri_link = -1;    ///< triangle of the link mesh holding p_L
+  int tri_link = -1;    ///< triangle of the link mesh holding p_L; -1 for a capsule link
   int tri_object = -1;  ///< triangle of the object mesh holding p_O
+  /// The link's feature: of its mesh, or for a capsule link its part (capsuleFeature: a cap or
+  /// the cylinder).
   Feature feature_link;
   Feature feature_object;
-  Eigen::Vector3d p_L = Eigen::Vector3d::Zero();  ///< closest point on the link, link-mesh frame [m]
+  Eigen::Vector3d p_L = Eigen::Vector3d::Zero();  ///< closest point on the link, link frame [m]
   Eigen::Vector3d p_O = Eigen::Vector3d::Zero();  ///< closest point on the object, object frame [m]
   double distance_m = 0.0;
   /// Unit direction from the link point to the object point, world frame. When the meshes

@@ -49,6 +49,9 @@ struct Scene {
   double heading_rad = 0.0;
   std::vector<SceneObject> objects;
   std::vector<ScenePosture> postures;
+  /// Folder where the objects' hierarchies are saved and reloaded (hierarchy_cache.hpp), from
+  /// the optional key `hierarchy_cache` (relative to the scene file); empty: none.
+  std::filesystem::path hierarchy_cache_dir;
 
   /// Index of the object called `name`, or -1.
   [[nodiscard]] int objectIndex(std::string_view name) const noexcept;
@@ -72,8 +75,11 @@ struct Scene {
 /// DH frame 0 origin (model.X_WB) on the scene's shoulder, and the heading about z.
 [[nodiscard]] Eigen::Isometry3d armBasePose(const Scene& scene, const arm::ArmModel& model);
 
-/// A CollisionWorld with the model's link meshes and every scene object at
-/// X_WO = X_SW^-1 X_SO (object indices equal scene object indices).
+/// A CollisionWorld with the model's link geometry and every scene object at
+/// X_WO = X_SW^-1 X_SO (object indices equal scene object indices). The objects' hierarchies
+/// come from `options.hierarchy_cache_dir`, else from the scene's hierarchy_cache_dir, when
+/// either is set (saved there when missing or stale).
+/// @throws std::runtime_error when the hierarchy cache folder cannot be written
 [[nodiscard]] CollisionWorld makeCollisionWorld(const Scene& scene, const arm::ArmModel& model,
                                                 const CollisionWorld::Options& options = {});
 

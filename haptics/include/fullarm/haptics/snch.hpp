@@ -45,26 +45,32 @@ inline constexpr double kConeTestMinGap_m = 1e-5;
 /// The sphere and the box share their centre (the centre of the vertex box). The box bounds
 /// thin and sliver-shaped nodes far more tightly than the sphere: the query takes the larger of
 /// the two distance lower bounds.
-struct SnchNode {
+///
+/// Layout: 128 bytes, aligned to a 64-byte cache line; the first line holds what every visit
+/// reads (centre, radius, box, children), the second what only the nodes that pass the distance
+/// bounds read (the cone and the leaf's triangle). Nodes are stored depth first (a node's left
+/// child follows it).
+struct alignas(64) SnchNode {
   Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();  ///< sphere and box centre [m]
   double radius_m = 0.0;
-  Eigen::Vector3d cone_axis = Eigen::Vector3d::UnitZ();  ///< unit
-  double cone_half_angle_rad = 0.0;                      ///< in [0, pi]; pi = every direction
-  int left = -1;                                         ///< child nodes (-1 for a leaf)
-  int right = -1;
-  int triangle = -1;  ///< the leaf's triangle
   /// Half extents of the axis-aligned box around the vertices, mesh frame [m].
   Eigen::Vector3d box_half_m = Eigen::Vector3d::Zero();
+  int left = -1;  ///< child nodes (-1 for a leaf)
+  int right = -1;
+  Eigen::Vector3d cone_axis = Eigen::Vector3d::UnitZ();  ///< unit
+  double cone_half_angle_rad = 0.0;                      ///< in [0, pi]; pi = every direction
   /// cos and sin of cone_half_angle_rad + kConeSlack_rad (cos = -1, sin = 0 when that reaches
   /// pi): the query's cone tests use them instead of trigonometric calls.
   double cone_cos = -1.0;
   double cone_sin = 0.0;
+  int triangle = -1;  ///< the leaf's triangle
   /// The normals are bounded by the double cone +-cone_axis (half angle below pi/2), not by the
   /// cone: set on leaves of double-sided surfaces (each triangle also present with the opposite
   /// winding, as the DRC CAD exports are) and on every node above one.
   bool cone_two_sided = false;
   [[nodiscard]] bool isLeaf() const noexcept { return left < 0; }
 };
+static_assert(sizeof(SnchNode) == 128, "two cache lines per node");
 
 /// The hierarchy of one mesh: a binary tree with one triangle per leaf, root at index 0.
 /// Leaf cones bound the normals of the triangle and of every triangle in its vertices'
@@ -168,6 +174,8 @@ struct SnchQueryStats {
   /// convex link: GJK calls (object nodes and triangles against the whole link body)
   long convex_hull_tests = 0;
   long triangle_pairs_tested = 0;  ///< leaf pairs given to the exact test (evaluateTrianglePair)
+  long coherence_kept = 0;         ///< coherent capsule query: front nodes kept without a test
+  long coherence_rebuilds = 0;     ///< coherent capsule query: fronts rebuilt from the root
 };
 
 /// Closest points of link triangle `tri_link` and object triangle `tri_object`, computed in
@@ -200,6 +208,126 @@ bool evaluateTrianglePair(const TriMesh& link_mesh, int tri_link, const TriMesh&
 void querySnchPair(const SnchTree& link_tree, const TriMesh& link_mesh, const Eigen::Isometry3d& X_WL,
                    const SnchTree& obj_tree, const TriMesh& obj_mesh, const Eigen::Isometry3d& X_WO, double cutoff_m,
                    SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats* stats = nullptr);
+
+/// A capsule: the points within radius_m of the segment [a_m, b_m] (a sphere when the two ends
+/// coincide). The exact geometry of an arm link whose LinkGeometry is a capsule.
+struct Capsule {
+  Eigen::Vector3d a_m = Eigen::Vector3d::Zero();  ///< segment end (LinkGeometry::from_m) [m]
+  Eigen::Vector3d b_m = Eigen::Vector3d::Zero();  ///< other end (LinkGeometry::to_m) [m]
+  double radius_m = 0.0;
+};
+
+/// A capsule's part in LocalMinimum::feature_link: the cap around a_m ({kVertex, 0}), the cap
+/// around b_m ({kVertex, 1}) or the cylinder between them ({kEdge, 0}), from the parameter s of
+/// the segment point that the minimum's direction passes through (s <= 0, s >= 1, between).
+/// @rt
+[[nodiscard]] Feature capsuleFeature(double s) noexcept;
+
+/// The closest pair of a segment [a_O, b_O] and one feature of a mesh (same frame), computed from
+/// the feature alone: a vertex against the segment; an edge (taken from its smaller vertex id)
+/// against the segment (closestPointsSegmentSegment); a face (the triangle f.index) by
+/// closestPointsSegmentTriangle.
+struct CapsuleFeaturePair {
+  double s = 0.0;  ///< parameter of on_segment_m on the segment, in [0, 1]
+  Eigen::Vector3d on_segment_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d q_m = Eigen::Vector3d::Zero();  ///< the feature's point
+  double distance_sq = 0.0;                       ///< |q_m - on_segment_m|^2 [m^2]
+  /// The feature whose relative interior holds q_m: the feature itself, an edge's end vertex, or
+  /// the edge or vertex of a face's triangle.
+  Feature holder;
+};
+
+/// @rt
+[[nodiscard]] CapsuleFeaturePair capsuleFeatureClosest(const Eigen::Vector3d& a_O, const Eigen::Vector3d& b_O,
+                                                       const TriMesh& mesh, const Feature& feature) noexcept;
+
+/// Fills `out` with the minimum of a capsule against the object feature `feature_object`
+/// held by triangle `tri_object`, computed from that feature alone (so every triangle that
+/// finds it, and local descent, report the same points and distance): the closest pair of the
+/// capsule's segment [a_O, b_O] (object frame) and the vertex, the edge (taken from its
+/// smaller vertex id) or the face; with d_s their distance, distance_m = max(0, d_s -
+/// radius_m), u = (q - s)/d_s (minus the feature's pseudo-normal when d_s = 0), p = s +
+/// radius_m u: on the capsule's surface, beyond q when the capsule reaches into the surface
+/// (0 < d_s < radius_m), within the capsule when the segment itself meets it (d_s = 0). u_W is left in the OBJECT
+/// frame; tri_link is -1; link/object untouched.
+/// @param X_LO pose of the object frame in the link frame (p_L = X_LO p)
+/// @rt
+void capsuleMinimumAtFeature(const Eigen::Vector3d& a_O, const Eigen::Vector3d& b_O, double radius_m,
+                             const Eigen::Isometry3d& X_LO, const TriMesh& object_mesh, int tri_object,
+                             const Feature& feature_object, LocalMinimum& out) noexcept;
+
+/// Same with the feature's pair already computed: `pair` = capsuleFeatureClosest(a_O, b_O,
+/// object_mesh, feature_object).
+/// @rt
+void capsuleMinimumFromPair(const CapsuleFeaturePair& pair, double radius_m, const Eigen::Isometry3d& X_LO,
+                            const TriMesh& object_mesh, int tri_object, const Feature& feature_object,
+                            LocalMinimum& out) noexcept;
+
+/// Tests one capsule/triangle pair: the closest pair (s, q) of the capsule's segment and the
+/// triangle is a local minimum of the capsule against the object mesh when d_s - radius <=
+/// cutoff_m, the object side sees it from outside (-u . n(f_q) >= -kOutsideCosineTolerance) and
+/// no triangle incident to q's feature f_q comes closer to s than d_s (within
+/// kLocalMinimumTolerance_m): the distance to the segment is convex with gradient u, so that is
+/// exactly q minimising the distance to the capsule over f_q's neighbourhood, and the capsule's
+/// own side is exact (its point is the projection of q). Fills `out` like
+/// capsuleMinimumAtFeature and returns true.
+/// @param a_O, b_O the capsule's segment in the object frame [m]
+/// @rt
+bool evaluateCapsuleTriangle(const Eigen::Vector3d& a_O, const Eigen::Vector3d& b_O, double radius_m,
+                             const Eigen::Isometry3d& X_LO, const TriMesh& object_mesh, int tri_object, double cutoff_m,
+                             LocalMinimum& out) noexcept;
+
+/// Appends to `out` every local minimum between a capsule (link frame) and an object mesh within
+/// `cutoff_m` (docs/haptics.md, "Capsule links"), merged by feature pair: a traversal of the
+/// object's tree against the capsule's segment with the segment's exact distances (sphere and
+/// box bounds, the normal-cone direction and support tests), then evaluateCapsuleTriangle at
+/// the leaves. The output equals evaluateCapsuleTriangle on every triangle (the brute force).
+/// link/object of the appended minima are -1; u_W is in the world frame.
+void querySnchCapsule(const Capsule& capsule, const Eigen::Isometry3d& X_WL, const SnchTree& obj_tree,
+                      const TriMesh& obj_mesh, const Eigen::Isometry3d& X_WO, double cutoff_m,
+                      SnchQueryScratch& scratch, std::vector<LocalMinimum>& out, SnchQueryStats* stats = nullptr);
+
+/// What a capsule query proved about one object tree, kept for the next query of the same pair
+/// (temporal coherence, querySnchCapsuleCoherent): the cut of the tree where the traversal
+/// stopped (the front: nodes pruned by distance or by a cone, leaves tested), each with a lower
+/// bound on the distance from the capsule's segment to its triangles at a reference pose of the
+/// segment. Between two queries at 100 Hz the arm moves millimetres, so most front nodes are
+/// still farther than the cutoff and need no test. Default-constructed: empty (the first query
+/// builds it).
+struct CapsuleFront {
+  bool valid = false;
+  Eigen::Vector3d a_ref_m = Eigen::Vector3d::Zero();  ///< segment ends at the reference pose, object frame
+  Eigen::Vector3d b_ref_m = Eigen::Vector3d::Zero();
+  double reach_m = 0.0;            ///< cutoff + radius the front was built for
+  const SnchTree* tree = nullptr;  ///< the tree it was built on, and its size
+  std::size_t tree_nodes = 0;
+  std::vector<int> node;         ///< front nodes
+  std::vector<double> bound_m;   ///< per node: distance lower bound at the reference pose [m]
+  std::size_t rebuilt_size = 0;  ///< front size after the last rebuild from the root
+  std::vector<int> next_node;    ///< scratch of the next front
+  std::vector<double> next_bound_m;
+};
+
+/// A coherent query rebuilds its front from the root once either end of the capsule's segment
+/// has moved this far from the reference pose (object frame) [m]: the bounds kept lose that much.
+inline constexpr double kCoherenceRebuildDrift_m = 0.05;
+/// ... or once the front has grown this many times beyond its size after the last rebuild (a
+/// front only refines; it is never coarsened).
+inline constexpr std::size_t kCoherenceFrontGrowth = 4;
+
+/// querySnchCapsule started from `front` instead of the tree's root: every front node whose
+/// bound, less the drift of the segment since the reference pose (the larger move of its two
+/// ends), still exceeds cutoff + radius is kept without a test; every other node is traversed
+/// as in a fresh query and replaced by the nodes where that traversal stops. The front is a cut
+/// of the tree, each pruning test is a necessary condition for a minimum, and the merge puts
+/// the minima in canonical order, so the appended minima are exactly querySnchCapsule's (a
+/// test replays a recorded motion). The front is rebuilt from the root on the first query,
+/// when the tree, cutoff or radius changed, after kCoherenceRebuildDrift_m of drift, or after
+/// kCoherenceFrontGrowth times growth. Not @rt (the front grows).
+void querySnchCapsuleCoherent(const Capsule& capsule, const Eigen::Isometry3d& X_WL, const SnchTree& obj_tree,
+                              const TriMesh& obj_mesh, const Eigen::Isometry3d& X_WO, double cutoff_m,
+                              SnchQueryScratch& scratch, CapsuleFront& front, std::vector<LocalMinimum>& out,
+                              SnchQueryStats* stats = nullptr);
 
 /// Sorts minima[begin, end) by feature pair and removes repeated feature pairs (keeps the
 /// smaller distance, then the smaller triangle ids, so the result does not depend on the input
