@@ -32,7 +32,12 @@ inline const DaqConfig& daqConfig() {
   return config;
 }
 
-/// The plant's active joints in model order: the simulated devices' joints.
+/// The seven arm joints, the simulated devices' joints.
+inline arm::JointSelection armJoints() {
+  return arm::JointSelection(model().numJoints(), {0, 1, 2, 3, 4, 5, 6});
+}
+
+/// A posture inside every limit.
 inline Eigen::VectorXd restPosture() {
   Eigen::VectorXd q = model().defaultPosture();
   q[3] = 1.2;  // elbow bent, well inside every limit
