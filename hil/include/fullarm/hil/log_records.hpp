@@ -206,6 +206,12 @@ void fillMinima(std::span<const haptics::LocalMinimum> minima, MinimaSetRecord& 
 /// @throws RecordError if index is out of range
 [[nodiscard]] fullarm_lcm::minima_set_t toFragment(const MinimaSetRecord& set, int index, std::int64_t seq);
 
+/// Checks one fragment on its own: counts within their bounds, fragment_count matching
+/// num_minima_total, fragment_index within it, and the fragment carrying exactly its share of
+/// the minima.
+/// @throws RecordError naming the set, the fragment and the field
+void checkFragment(const fullarm_lcm::minima_set_t& fragment);
+
 /// Reassembles minima sets from their fragments, in the order they arrive. Fragments of one
 /// set may come in any order; a fragment of a newer set abandons an incomplete older one
 /// (counted), and a fragment of an older set than the one in progress is ignored (counted).

@@ -153,7 +153,9 @@ class RunLogWriter {
   template <class Record>
   struct RingSource;
 
+  // The two below expect file_mutex_ held; noteError takes it.
   void writeEncoded(const std::string& channel, std::int64_t utime_us, const void* data, int size);
+  void noteErrorLocked(const std::string& what, bool encode);
   void noteError(const std::string& what, bool encode);
   void run();
   std::size_t drainAll();
@@ -223,6 +225,8 @@ class LcmLogReader {
  private:
   [[noreturn]] void corrupt(std::int64_t offset, const std::string& channel, const std::string& what) const;
   void markTruncated(std::int64_t offset, const std::string& what);
+  /// Offset of the first plausible header of event `event_number` + 1 at or after `from`; -1.
+  std::int64_t findNextEventHeader(std::int64_t from, std::int64_t event_number);
 
   std::filesystem::path file_;
   std::FILE* f_ = nullptr;
@@ -289,7 +293,13 @@ struct RunLogWriter::RingSource final : RunLogWriter::Source {
   RingSource(SpscRing<Record>& r, std::function<void(const Record&, RunLogWriter&)> e)
       : ring(r), encode(std::move(e)) {}
   std::size_t drain(RunLogWriter& writer) override {
-    return ring.consumeAll([&](const Record& record) { encode(record, writer); });
+    return ring.consumeAll([&](const Record& record) {
+      try {
+        encode(record, writer);
+      } catch (const std::exception& e) {
+        writer.noteError(e.what(), true);  // the record is skipped; the ring moves on
+      }
+    });
   }
   [[nodiscard]] std::uint64_t dropped() const noexcept override { return ring.dropped(); }
   SpscRing<Record>& ring;
@@ -315,7 +325,7 @@ void RunLogWriter::writeMessage(const std::string& channel, std::int64_t utime_u
   std::lock_guard lock(file_mutex_);
   if (buffer_.size() < static_cast<std::size_t>(size)) buffer_.resize(static_cast<std::size_t>(size));
   if (message.encode(buffer_.data(), 0, size) != size) {
-    noteError(channel + ": a " + Message::getTypeName() + " message did not encode", true);
+    noteErrorLocked(channel + ": a " + std::string(Message::getTypeName()) + " message did not encode", true);
     return;
   }
   writeEncoded(channel, utime_us, buffer_.data(), size);
