@@ -53,7 +53,7 @@ struct RunOptions {
   std::filesystem::path scene;  ///< default scenes/valve_wall.yaml
   std::filesystem::path user;   ///< default config/user_reach_valve.yaml
   std::filesystem::path arm_config, plant_config, gains_config, haptics_config, hil_config, daq_config;
-  std::string start_posture = "rest";  ///< a posture of the scene
+  std::string start_posture = "ready";  ///< a posture of the scene
   std::uint64_t seed = 1;              ///< the plant's sensor noise
   /// Lockstep: run the missed-contact oracle on every tick.
   bool oracle = true;
@@ -154,7 +154,8 @@ struct RunResult {
 /// @throws core::ConfigError / std::runtime_error for bad files or a missing device
 class HilSession {
  public:
-  explicit HilSession(const RunOptions& options);
+  /// @param build_device false: only the tick's model (for replay), no device or plant
+  explicit HilSession(const RunOptions& options, bool build_device = true);
   ~HilSession();
   HilSession(const HilSession&) = delete;
   HilSession& operator=(const HilSession&) = delete;

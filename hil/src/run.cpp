@@ -1,0 +1,354 @@
+#include "fullarm/hil/run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <stdexcept>
+
+#include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/arm/kinematics.hpp"
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/core/data_paths.hpp"
+#include "fullarm/hil/sim_io.hpp"
+#include "run_devices.hpp"
+
+namespace fullarm::hil {
+
+const char* ioKindName(IoKind io) noexcept {
+  switch (io) {
+    case IoKind::kSim:
+      return "sim";
+    case IoKind::kFakeDaq:
+      return "fakedaq";
+    case IoKind::kComedi:
+      return "comedi";
+  }
+  return "unknown";
+}
+
+const char* clockKindName(ClockKind clock) noexcept {
+  return clock == ClockKind::kLockstep ? "lockstep" : "realtime";
+}
+
+Percentiles percentiles(std::vector<double> values) {
+  Percentiles p;
+  if (values.empty()) return p;
+  std::sort(values.begin(), values.end());
+  const auto at = [&](double q) {
+    const std::size_t i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size()))) - 1;
+    return values[std::min(i, values.size() - 1)];
+  };
+  p.p50_s = at(0.50);
+  p.p99_s = at(0.99);
+  p.max_s = values.back();
+  return p;
+}
+
+namespace {
+
+std::filesystem::path orDefault(const std::filesystem::path& given, const std::filesystem::path& fallback) {
+  return given.empty() ? fallback : given;
+}
+
+}  // namespace
+
+HilSession::HilSession(const RunOptions& options, bool build_device) : options_(options) {
+  if (!(options.duration_s > 0.0) || !std::isfinite(options.duration_s)) {
+    throw core::ConfigError({}, "--duration", "expected a positive duration in seconds");
+  }
+  options_.scene = orDefault(options.scene, core::defaultScenePath("valve_wall.yaml"));
+  options_.user = orDefault(options.user, defaultScriptedUserPath());
+  options_.arm_config = orDefault(options.arm_config, arm::defaultArmModelPath());
+  options_.plant_config = orDefault(options.plant_config, plant::defaultPlantConfigPath());
+  options_.gains_config = orDefault(options.gains_config, controllers::defaultGainsConfigPath());
+  options_.haptics_config = orDefault(options.haptics_config, haptics::defaultHapticsParamsPath());
+  options_.hil_config = orDefault(options.hil_config, defaultHilConfigPath());
+  options_.daq_config = orDefault(options.daq_config, defaultDaqConfigPath());
+
+  model_ = std::make_unique<arm::ArmModel>(arm::loadArmModel(options_.arm_config));
+  scene_ = std::make_unique<haptics::Scene>(haptics::loadScene(options_.scene));
+  world_ = std::make_unique<haptics::CollisionWorld>(haptics::makeCollisionWorld(*scene_, *model_));
+  config_ = loadHilConfig(options_.hil_config);
+  if (options.delivery_delay_ticks) {
+    if (*options.delivery_delay_ticks < 1) throw core::ConfigError({}, "delivery delay", "expected >= 1 tick");
+    config_.delivery_delay_ticks = *options.delivery_delay_ticks;
+  }
+  if (options.global_period_ticks) {
+    if (*options.global_period_ticks < 1) throw core::ConfigError({}, "global period", "expected >= 1 tick");
+    config_.global_period_ticks = *options.global_period_ticks;
+    config_.supervisor.global_period_s = config_.global_period_ticks * config_.control_period_s;
+  }
+  haptics_ = haptics::loadHapticsParams(options_.haptics_config);
+  haptics_.mode = options.mode;
+  gains_ = controllers::loadGainsConfig(options_.gains_config, *model_);
+  if (std::abs(gains_.control_period_s - config_.control_period_s) > 1e-12) {
+    throw core::ConfigError(config_.source, "control_period_s",
+                            "is " + std::to_string(config_.control_period_s) + " s but the gains file " +
+                                gains_.source.string() + " was designed for " +
+                                std::to_string(gains_.control_period_s) + " s");
+  }
+  plant_ = plant::loadPlantConfig(options_.plant_config, *model_);
+  plant_.solver.integrator = config_.sim_integrator;
+  plant_.seed = options.seed;
+  posture_ = haptics::scenePosture(*scene_, options.start_posture, *model_);
+
+  // The device's joints: the plant's joints for the simulated back-ends, the channel map's for
+  // comedi.
+  arm::JointSelection joints;
+  if (options.io == IoKind::kComedi || options.io == IoKind::kFakeDaq) daq_ = loadDaqConfig(options_.daq_config, *model_);
+  if (options.io == IoKind::kComedi) {
+    std::vector<int> indices;
+    for (const DaqJoint& j : daq_.joints) indices.push_back(model_->jointIndex(j.name));
+    joints = arm::JointSelection(model_->numJoints(), indices);
+  } else {
+    std::vector<int> indices;
+    for (const plant::JointParams& j : plant_.joints) indices.push_back(model_->jointIndex(j.name));
+    joints = arm::JointSelection(model_->numJoints(), indices);
+  }
+  tick_ = makeTickModel(*model_, *world_, haptics_, gains_, config_.supervisor, joints, posture_);
+  if (!build_device) return;
+
+  if (options.io != IoKind::kComedi) {
+    arm_ = std::make_unique<SimulatedArm>(*model_, plant_, posture_, config_.control_period_s, config_.latency_samples);
+    user_ = std::make_unique<ScriptedUser>(loadScriptedUser(options_.user), *model_, haptics::armBasePose(*scene_, *model_));
+    arm_->setUser(user_.get());
+  }
+  device_ = makeRunDevice(options.io, arm_.get(), daq_, *model_, config_);
+  if (device_->joints().modelIndices() != joints.modelIndices()) {
+    throw std::runtime_error("the I/O device's joints differ from the tick's");
+  }
+}
+
+HilSession::~HilSession() = default;
+
+RunResult HilSession::run(const RunHooks& hooks) {
+  if (!device_) throw std::logic_error("HilSession: built without a device (replay only)");
+  if (ran_) throw std::logic_error("HilSession: a session runs once");
+  ran_ = true;
+  return options_.clock == ClockKind::kLockstep ? runLockstep(hooks) : runRealtime(hooks);
+}
+
+RunResult HilSession::startResult() const {
+  RunResult r;
+  r.options = options_;
+  r.io_name = ioKindName(options_.io);
+  for (int k = 0; k < tick_.device_joints.size(); ++k) {
+    r.joint_names.push_back(model_->joints[static_cast<std::size_t>(tick_.device_joints.modelIndex(k))].name);
+  }
+  for (const arm::Joint& j : model_->joints) r.link_names.push_back(j.name);
+  return r;
+}
+
+void HilSession::finishResult(RunResult& r) const {
+  for (const TickTelemetry& t : r.telemetry) {
+    for (int e = 0; e < t.num_events; ++e) r.events.push_back(t.events[static_cast<std::size_t>(e)]);
+    if (t.sweep_exceeded_mask != 0) ++r.sweep_exceeded_ticks;
+  }
+  if (!r.telemetry.empty()) {
+    r.tripped = r.telemetry.back().supervisor_state == SupervisorState::kTripped;
+    r.trip_cause = r.telemetry.back().trip_cause;
+  }
+  for (const double f : r.user_force_n) r.max_user_force_n = std::max(r.max_user_force_n, f);
+  if (user_ && !r.hand_W_m.empty()) r.hand_to_target_m = (r.hand_W_m.back() - user_->pathPoint(1e9)).norm();
+}
+
+namespace {
+
+// Lockstep: a search result waiting for its delivery tick.
+struct PendingSet {
+  std::uint64_t deliver_tick = 0;
+  std::size_t set_index = 0;
+};
+
+// The loop's monitor of consecutive overruns.
+struct OverrunMonitor {
+  int limit = 10;
+  int consecutive = 0;
+  int max_consecutive = 0;
+  std::uint64_t total = 0;
+  bool fault = false;
+  void add(bool overrun) noexcept {
+    if (overrun) {
+      ++total;
+      ++consecutive;
+      max_consecutive = std::max(max_consecutive, consecutive);
+      if (consecutive >= limit) fault = true;
+    } else {
+      consecutive = 0;
+    }
+  }
+};
+
+}  // namespace
+
+RunResult HilSession::runLockstep(const RunHooks& hooks) {
+  using Clock = std::chrono::steady_clock;
+  RunResult r = startResult();
+  const double period = config_.control_period_s;
+  const std::uint64_t ticks = static_cast<std::uint64_t>(std::llround(options_.duration_s / period));
+  r.telemetry.reserve(ticks);
+  r.inputs.reserve(ticks);
+  r.user_force_n.reserve(ticks);
+  r.hand_W_m.reserve(ticks);
+
+  GlobalSearchRunner search(*model_, *world_, haptics_);
+  std::unique_ptr<MissedContactOracle> oracle;
+  if (options_.oracle) oracle = std::make_unique<MissedContactOracle>(*model_, *world_, haptics_.force_threshold_m);
+  std::deque<PendingSet> pending;
+  TickData data(tick_);
+  OverrunMonitor overruns;
+  overruns.limit = config_.overrun_limit;
+  std::vector<double> compute_s;
+  compute_s.reserve(ticks);
+
+  device_->configure();
+  device_->activate();
+  JointSample sample;
+  IoVector valve;
+  TickTelemetry telemetry;
+  std::uint64_t heartbeat = 0;
+  arm::ArmData hand_fk(*model_);
+  const auto loop_start = Clock::now();
+  for (std::uint64_t k = 1; k <= ticks; ++k) {
+    const auto t0 = Clock::now();
+    const core::RtStatus read_status = device_->read(sample);
+    const auto t1 = Clock::now();
+
+    SupervisorRequests requests;
+    // The supervising side beats every heartbeat_period_s of simulated time.
+    heartbeat = static_cast<std::uint64_t>(std::floor(static_cast<double>(k) * period / config_.heartbeat_period_s));
+    requests.heartbeat = heartbeat;
+    requests.heartbeat_enabled = true;
+    requests.overrun_fault = overruns.fault;
+    if (hooks.before_tick) hooks.before_tick(k, sample, requests);
+
+    MinimaDelivery delivery;
+    const MinimaDelivery* delivered = nullptr;
+    RecordedTick recorded{sample, read_status, requests, -1};
+    if (!pending.empty() && pending.front().deliver_tick == k) {
+      RecordedSet& set = r.sets[pending.front().set_index];
+      pending.pop_front();
+      set.adopted_tick = static_cast<std::int64_t>(k);
+      delivery.set_id = set.id;
+      delivery.minima = set.minima;
+      delivery.query_q_rad = set.query_q_rad;
+      delivered = &delivery;
+      recorded.adopted_set = set.id;
+    }
+    r.inputs.push_back(recorded);
+
+    TickInputs in;
+    in.sample = &sample;
+    in.device_status = read_status;
+    in.minima = delivered;
+    in.requests = requests;
+    stepTick(tick_, data, in, valve, telemetry);
+    const auto t2 = Clock::now();
+    if (hooks.after_tick) {
+      hooks.after_tick(k, valve);
+      // The output limits again, on what reaches the device.
+      data.supervisor.num_events = 0;
+      supervisorLimitOutputs(tick_.supervisor, data.supervisor, valve);
+      for (int e = 0; e < data.supervisor.num_events && telemetry.num_events < kMaxEventsPerTick; ++e) {
+        telemetry.events[static_cast<std::size_t>(telemetry.num_events++)] =
+            data.supervisor.events[static_cast<std::size_t>(e)];
+      }
+      telemetry.supervisor_state = data.supervisor.state;
+      telemetry.trip_cause = data.supervisor.trip_cause;
+      for (int j = 0; j < valve.size(); ++j) telemetry.valve_v[static_cast<std::size_t>(j)] = valve[j];
+    }
+    if (data.supervisor.state == SupervisorState::kTripped && device_->state() != IoState::kFault) {
+      device_->fault(supervisorCauseName(data.supervisor.trip_cause));
+    }
+    (void)device_->write(valve);
+    const auto t3 = Clock::now();
+    r.telemetry.push_back(telemetry);
+    if (arm_) {
+      arm::computeForwardKinematics(*model_, hand_fk, arm_->trueConfiguration());
+      r.hand_W_m.push_back(hand_fk.X_WT.translation());
+      r.user_force_n.push_back(user_ ? user_->lastForce().norm() : 0.0);
+    }
+
+    // The global search, synchronous every period_ticks, delivered delivery_delay_ticks later.
+    double search_s = 0.0;
+    if (k % static_cast<std::uint64_t>(config_.global_period_ticks) == 0 &&
+        !(hooks.search_stalled && hooks.search_stalled(k))) {
+      RecordedSet set;
+      set.id = static_cast<std::int64_t>(r.sets.size()) + 1;
+      set.query_tick = k;
+      set.query_q_rad.assign(data.q.data(), data.q.data() + data.q.size());
+      set.found = search.run(data.q, set.minima);
+      search_s = search.lastSeconds();
+      r.sets.push_back(std::move(set));
+      pending.push_back({k + static_cast<std::uint64_t>(config_.delivery_delay_ticks), r.sets.size() - 1});
+      ++r.timing.searches;
+    }
+    const auto t4 = Clock::now();
+    if (oracle) {
+      oracle->check(k, data.q,
+                    std::span<const haptics::LocalMinimum>(data.tracked.data(), static_cast<std::size_t>(data.num_tracked)));
+    }
+    const auto t5 = Clock::now();
+
+    const double tick_compute = std::chrono::duration<double>((t1 - t0) + (t3 - t2) + (t2 - t1)).count();
+    compute_s.push_back(tick_compute);
+    r.timing.plant_s += std::chrono::duration<double>((t1 - t0) + (t3 - t2)).count();
+    r.timing.tick_s += std::chrono::duration<double>(t2 - t1).count();
+    r.timing.search_s += search_s;
+    r.timing.oracle_s += std::chrono::duration<double>(t5 - t4).count();
+    // Lockstep has no deadline: an overrun is only what a test injects.
+    const double extra = hooks.extra_compute_s ? hooks.extra_compute_s(k) : 0.0;
+    overruns.add(extra > period);
+  }
+  r.timing.wall_s = std::chrono::duration<double>(Clock::now() - loop_start).count();
+  device_->deactivate();
+  r.timing.ticks = ticks;
+  r.timing.simulated_s = static_cast<double>(ticks) * period;
+  r.timing.compute = percentiles(compute_s);
+  r.timing.overruns = overruns.total;
+  r.timing.max_consecutive_overruns = overruns.max_consecutive;
+  if (oracle) {
+    r.oracle_ran = true;
+    r.oracle_ticks = oracle->checkedTicks();
+    r.missed_contact_ticks = oracle->missedTicks();
+    r.missed_contacts = oracle->missed();
+    r.link_min_distance_m = oracle->minDistance();
+    r.link_max_penetration_m = oracle->maxPenetration();
+    for (const std::uint64_t n : oracle->penetrationTicks()) r.link_penetration_s.push_back(static_cast<double>(n) * period);
+  }
+  finishResult(r);
+  return r;
+}
+
+std::vector<TickTelemetry> HilSession::replay(const RunResult& recorded) const {
+  std::vector<TickTelemetry> out;
+  out.reserve(recorded.inputs.size());
+  TickData data(tick_);
+  IoVector valve;
+  TickTelemetry telemetry;
+  for (const RecordedTick& in : recorded.inputs) {
+    MinimaDelivery delivery;
+    TickInputs inputs;
+    inputs.sample = &in.sample;
+    inputs.device_status = in.device_status;
+    inputs.requests = in.requests;
+    if (in.adopted_set >= 0) {
+      const RecordedSet& set = recorded.sets.at(static_cast<std::size_t>(in.adopted_set - 1));
+      delivery.set_id = set.id;
+      delivery.minima = set.minima;
+      delivery.query_q_rad = set.query_q_rad;
+      inputs.minima = &delivery;
+    }
+    stepTick(tick_, data, inputs, valve, telemetry);
+    out.push_back(telemetry);
+  }
+  return out;
+}
+
+RunResult runHil(const RunOptions& options, const RunHooks& hooks) {
+  HilSession session(options);
+  return session.run(hooks);
+}
+
+}  // namespace fullarm::hil
