@@ -10,6 +10,7 @@
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/core/data_paths.hpp"
+#include "fullarm/hil/run_recording.hpp"
 #include "fullarm/hil/sim_io.hpp"
 #include "run_devices.hpp"
 
@@ -202,6 +203,10 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
   std::vector<double> compute_s;
   compute_s.reserve(ticks);
 
+  std::unique_ptr<RunRecorder> recorder;
+  if (!options_.log.empty()) recorder = std::make_unique<RunRecorder>(options_.log, *this, options_.command_line, false);
+  MinimaSetRecord set_record;
+
   device_->configure();
   device_->activate();
   JointSample sample;
@@ -235,6 +240,10 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
       delivery.query_q_rad = set.query_q_rad;
       delivered = &delivery;
       recorded.adopted_set = set.id;
+      if (recorder) {
+        toSetRecord(set, period, set_record);
+        recorder->recordAdoptedSet(set_record);
+      }
     }
     r.inputs.push_back(recorded);
 
@@ -264,6 +273,11 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
     (void)device_->write(valve);
     const auto t3 = Clock::now();
     r.telemetry.push_back(telemetry);
+    if (recorder) {
+      recorder->recordTick(r.inputs.back(), telemetry, device_->appliedCommand(), device_->state() != IoState::kActive,
+                           static_cast<std::int64_t>(std::llround(telemetry.t_s * 1e6)));
+      if (k % 256 == 0) recorder->pump();
+    }
     if (arm_) {
       arm::computeForwardKinematics(*model_, hand_fk, arm_->trueConfiguration());
       r.hand_W_m.push_back(hand_fk.X_WT.translation());
@@ -303,6 +317,11 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
   }
   r.timing.wall_s = std::chrono::duration<double>(Clock::now() - loop_start).count();
   device_->deactivate();
+  if (recorder) {
+    const RunLogStats stats = recorder->finish();
+    r.log_events = stats.events_written;
+    r.log_records_dropped = stats.records_dropped;
+  }
   r.timing.ticks = ticks;
   r.timing.simulated_s = static_cast<double>(ticks) * period;
   r.timing.compute = percentiles(compute_s);

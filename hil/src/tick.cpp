@@ -148,6 +148,10 @@ void fillTelemetry(const TickModel& tick, const TickData& data, const TickInputs
     t.link_min_distance_m[i] = r.min_distance_m;
     t.link_depth_m[i] = r.depth_m;
     t.link_sweep_m[i] = data.sweep_m[i];
+    const Eigen::Vector3d& f = data.contact.link_force_W[i];
+    t.link_force_W_n[i] = {f.x(), f.y(), f.z()};
+    t.link_contact_s[i] = r.contact_duration_s;
+    t.link_penetration_s[i] = r.total_penetration_s;
     if (r.in_contact) t.link_contact_mask |= 1u << l;
     if (r.penetrating) t.link_penetration_mask |= 1u << l;
     if (data.sweep_m[i] > tick.sweep_limit_m) t.sweep_exceeded_mask |= 1u << l;

@@ -60,6 +60,9 @@ struct RunOptions {
   /// Overrides of the loop configuration.
   std::optional<int> delivery_delay_ticks;
   std::optional<int> global_period_ticks;
+  /// The run's LCM log (empty: none) and the command line its header records.
+  std::filesystem::path log;
+  std::string command_line;
 };
 
 /// Hooks of the tests' fault injection, called on the loop's thread (empty in normal runs).
@@ -148,6 +151,10 @@ struct RunResult {
   double max_user_force_n = 0.0;
   std::vector<double> user_force_n;      ///< per tick
   std::vector<Eigen::Vector3d> hand_W_m;  ///< true hand point per tick (simulated back-ends)
+  // The LCM log.
+  std::uint64_t log_events = 0;
+  std::uint64_t log_records_dropped = 0;
+  std::string log_error;
 };
 
 /// Everything a run is built from, loaded and checked.

@@ -102,6 +102,10 @@ struct TickTelemetry {
   std::array<double, arm::kMaxJoints> link_min_distance_m{};
   std::array<double, arm::kMaxJoints> link_depth_m{};
   std::array<double, arm::kMaxJoints> link_sweep_m{};  ///< sweep since the last query [m]
+  /// Per link: the summed rendered contact force, world frame [N] (before the fade).
+  std::array<std::array<double, 3>, arm::kMaxJoints> link_force_W_n{};
+  std::array<double, arm::kMaxJoints> link_contact_s{};      ///< length of the current contact [s]
+  std::array<double, arm::kMaxJoints> link_penetration_s{};  ///< summed penetration time [s]
   std::uint32_t link_contact_mask = 0;      ///< links closer than d_f
   std::uint32_t link_penetration_mask = 0;  ///< links touching an object (distance 0)
   std::uint32_t sweep_exceeded_mask = 0;    ///< links whose sweep exceeds L - d_f
