@@ -15,6 +15,7 @@
 #include "fullarm/reports/report.hpp"
 #include "haptics_command.hpp"
 #include "plant_command.hpp"
+#include "run_command.hpp"
 #include "tune_command.hpp"
 #include "validate_command.hpp"
 
@@ -193,6 +194,10 @@ int runMain(int argc, char** argv) {
   CLI::App* validate = app::addValidateCommand(app, validate_options);
   app::HapticsQueryOptions haptics_options;
   CLI::App* haptics_query = app::addHapticsCommand(app, haptics_options);
+  app::RunCommandOptions run_options;
+  CLI::App* run = app::addRunCommand(app, run_options);
+  app::ReplayCommandOptions replay_options;
+  CLI::App* replay = app::addReplayCommand(app, replay_options);
 
   try {
     app.parse(argc, argv);
@@ -207,6 +212,12 @@ int runMain(int argc, char** argv) {
     if (validate->parsed()) return app::runValidate(validate_options);
     if (tune->parsed()) return app::runTune(tune_options);
     if (haptics_query->parsed()) return app::runHapticsQuery(haptics_options);
+    if (run->parsed()) {
+      std::string command_line = "fullarm";
+      for (int i = 1; i < argc; ++i) command_line.append(" ").append(argv[i]);
+      return app::runRun(run_options, command_line);
+    }
+    if (replay->parsed()) return app::runReplay(replay_options);
   } catch (const core::ConfigError& e) {
     std::cerr << "fullarm: error: " << e.what() << "\n";
     return app::kExitBadInput;

@@ -273,7 +273,9 @@ ReplayReport replayLog(const std::filesystem::path& log) {
   bool have_header = false;
   fullarm_lcm::run_header_t header;
   std::vector<LoggedTick> ticks;
-  std::map<std::int64_t, std::size_t> tick_index;
+  // The writer drains its rings one after the other while the tick runs on: a tick's haptic
+  // status may precede its joint state in the log. They are joined by tick once all is read.
+  std::map<std::int64_t, fullarm_lcm::haptic_status_t> statuses;
   std::map<std::int64_t, MinimaSetRecord> adopted;  // by adopted tick
   auto assembler = std::make_unique<MinimaSetAssembler>();
   while (reader.next(entry)) {
@@ -281,18 +283,19 @@ ReplayReport replayLog(const std::filesystem::path& log) {
       header = *h;
       have_header = true;
     } else if (const auto* j = std::get_if<fullarm_lcm::joint_state_t>(&entry.message)) {
-      tick_index[j->tick] = ticks.size();
       ticks.push_back({*j, false, {}});
     } else if (const auto* s = std::get_if<fullarm_lcm::haptic_status_t>(&entry.message)) {
-      const auto it = tick_index.find(s->tick);
-      if (it != tick_index.end()) {
-        ticks[it->second].haptics = *s;
-        ticks[it->second].have_haptics = true;
-      }
+      statuses[s->tick] = *s;
     } else if (const auto* m = std::get_if<fullarm_lcm::minima_set_t>(&entry.message)) {
       if (assembler->add(*m) && assembler->set().adopted_tick >= 0) {
         adopted[assembler->set().adopted_tick] = assembler->set();
       }
+    }
+  }
+  for (LoggedTick& lt : ticks) {
+    if (const auto it = statuses.find(lt.joints.tick); it != statuses.end()) {
+      lt.haptics = it->second;
+      lt.have_haptics = true;
     }
   }
   report.truncated = reader.truncated();
