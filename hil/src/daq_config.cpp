@@ -134,6 +134,10 @@ DaqConfig readDaqConfig(const core::YamlMap& root, const arm::ArmModel& model) {
   c.fake_dio_channels = fake.integer("digital_channels");
   if (c.fake_ai_channels <= 0) fake.fail("analog_input_channels", "expected a positive count");
   if (c.fake_ao_channels <= 0) fake.fail("analog_output_channels", "expected a positive count");
+  c.fake_watchdog_timeout_s = fake.number("watchdog_timeout_s", "s");
+  if (!(c.fake_watchdog_timeout_s > 0.0) || !std::isfinite(c.fake_watchdog_timeout_s)) {
+    fake.fail("watchdog_timeout_s", "expected a timeout > 0 s");
+  }
   if (c.fake_dio_channels <= c.enable_channel) {
     fake.fail("digital_channels", "expected more lines than board.enable_channel");
   }

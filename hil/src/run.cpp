@@ -12,7 +12,7 @@
 #include "fullarm/core/data_paths.hpp"
 #include "fullarm/hil/run_recording.hpp"
 #include "fullarm/hil/sim_io.hpp"
-#include "run_devices.hpp"
+#include "fullarm/hil/fake_daq.hpp"
 
 namespace fullarm::hil {
 
@@ -67,6 +67,9 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
   options_.hil_config = orDefault(options.hil_config, defaultHilConfigPath());
   options_.daq_config = orDefault(options.daq_config, defaultDaqConfigPath());
 
+  if (build_device && options.io == IoKind::kComedi && options.clock == ClockKind::kLockstep) {
+    throw core::ConfigError({}, "--clock", "lockstep runs in simulated time: the real board (--io comedi) needs --clock realtime");
+  }
   model_ = std::make_unique<arm::ArmModel>(arm::loadArmModel(options_.arm_config));
   scene_ = std::make_unique<haptics::Scene>(haptics::loadScene(options_.scene));
   world_ = std::make_unique<haptics::CollisionWorld>(haptics::makeCollisionWorld(*scene_, *model_));
@@ -115,9 +118,28 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
     user_ = std::make_unique<ScriptedUser>(loadScriptedUser(options_.user), *model_, haptics::armBasePose(*scene_, *model_));
     arm_->setUser(user_.get());
   }
-  device_ = makeRunDevice(options.io, arm_.get(), daq_, *model_, config_);
+  switch (options.io) {
+    case IoKind::kSim: {
+      SimIoOptions sim;
+      if (options.sim_uses_daq_converters) {
+        daq_ = loadDaqConfig(options_.daq_config, *model_);
+        sim.converters = &daq_;
+      }
+      device_ = std::make_unique<SimIoDevice>(*arm_, sim, config_.io_safety);
+      break;
+    }
+    case IoKind::kFakeDaq:
+      board_ = std::make_unique<FakeDaqBoard>(daq_, options.fakedaq_state_file);
+      rig_ = std::make_unique<FakeDaqRig>(*board_, *arm_, daq_, daq_.fake_watchdog_timeout_s);
+      device_ = makeFakeDaqIoDevice(daq_, *model_, config_.control_period_s, config_.io_safety, rig_.get());
+      break;
+    case IoKind::kComedi:
+      device_ = makeComediIoDevice(daq_, *model_, config_.control_period_s, config_.io_safety);
+      break;
+  }
   if (device_->joints().modelIndices() != joints.modelIndices()) {
-    throw std::runtime_error("the I/O device's joints differ from the tick's");
+    throw std::runtime_error("the I/O device's joints differ from the tick's: check the channel map " +
+                             daq_.source.string() + " against the plant file " + plant_.source.string());
   }
 }
 

@@ -62,7 +62,13 @@ core::RtStatus SimIoDevice::onRead(JointSample& sample) noexcept {
   return s;
 }
 
-core::RtStatus SimIoDevice::onWrite(const IoVector& valve_v, bool /*toggle_enable*/) noexcept {
+core::RtStatus SimIoDevice::onWrite(const IoVector& valve_v, bool toggle_enable) noexcept {
+  // The valve amplifiers are enabled only by a write that beats the enable line; otherwise
+  // their output is exactly 0 V (the DAC's code for 0 V is half an LSB off).
+  if (!toggle_enable) {
+    held_v_.setZero();
+    return {};
+  }
   for (int k = 0; k < held_v_.size(); ++k) {
     if (options_.converters != nullptr) {
       const DaqJoint& map = options_.converters->joints[static_cast<std::size_t>(k)];

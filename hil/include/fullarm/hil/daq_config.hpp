@@ -76,6 +76,9 @@ struct DaqConfig {
   int fake_ai_channels = 16;
   int fake_ao_channels = 8;
   int fake_dio_channels = 8;
+  /// The rig's hardware watchdog: the amplifiers are enabled while the enable line changed
+  /// within this time [s] (fake DAQ model; the real rig's is set in its hardware).
+  double fake_watchdog_timeout_s = 0.05;
 };
 
 /// Reads and checks a channel map for `model` (strict: unknown and missing keys are errors; a

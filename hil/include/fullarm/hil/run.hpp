@@ -26,6 +26,7 @@
 #include "fullarm/haptics/contact_forces.hpp"
 #include "fullarm/haptics/scene.hpp"
 #include "fullarm/hil/daq_config.hpp"
+#include "fullarm/hil/fake_daq.hpp"
 #include "fullarm/hil/global_search.hpp"
 #include "fullarm/hil/hil_config.hpp"
 #include "fullarm/hil/io_device.hpp"
@@ -60,6 +61,12 @@ struct RunOptions {
   /// Overrides of the loop configuration.
   std::optional<int> delivery_delay_ticks;
   std::optional<int> global_period_ticks;
+  /// fakedaq: keep the fake board's state in this file (empty: in memory), so that another
+  /// process can look at the board after this one died.
+  std::filesystem::path fakedaq_state_file;
+  /// sim: read and write through the channel map's converters and calibrations (those of the
+  /// fake DAQ), for a bit-for-bit comparison of the two back-ends.
+  bool sim_uses_daq_converters = false;
   /// The run's LCM log (empty: none) and the command line its header records.
   std::filesystem::path log;
   std::string command_line;
@@ -204,6 +211,8 @@ class HilSession {
   Eigen::VectorXd posture_;
   std::unique_ptr<SimulatedArm> arm_;
   std::unique_ptr<ScriptedUser> user_;
+  std::unique_ptr<FakeDaqBoard> board_;
+  std::unique_ptr<FakeDaqRig> rig_;
   std::unique_ptr<IoDevice> device_;
   TickModel tick_;
   bool ran_ = false;
