@@ -129,6 +129,9 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
 
   std::unique_ptr<RunRecorder> recorder;
   if (!options_.log.empty()) recorder = std::make_unique<RunRecorder>(options_.log, *this, options_.command_line, true);
+  // The device first: a missing board ends the run before any thread starts.
+  device_->configure();
+  device_->activate();
 
   // The global search: every global period, on the newest joint angles the tick sent.
   std::thread search_thread([&] {
@@ -181,8 +184,6 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
   std::uint64_t ticks_run = 0;
   double wall_s = 0.0;
 
-  device_->configure();
-  device_->activate();
   std::thread tick_thread([&] {
     tick_note = "tick thread: " + makeRealtime(config_.realtime_priority, config_.tick_cpu, tick_fifo);
     TickData data(tick_);
