@@ -156,7 +156,7 @@ TEST(RunLog, LcmLogplayerPlaysTheWholeLog) {
   const auto file = dir / "run.lcmlog";
   const auto played = dir / "played.lcmlog";
   writeSampleLog(file, 300);
-  const std::string command = std::string(FULLARM_LCM_LOGPLAYER) + " -s 1000 -l 'file://" + played.string() +
+  const std::string command = std::string(FULLARM_LCM_LOGPLAYER) + " -s 0 -l 'file://" + played.string() +
                               "?mode=w' '" + file.string() + "' > '" + (dir / "out.txt").string() + "' 2>&1";
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   const std::vector<LcmLogEvent> original = readWithLcm(file);
@@ -178,7 +178,7 @@ constexpr bool kForkTests = false;  // ThreadSanitizer does not support threads 
 #endif
 
 TEST(RunLog, FlushedEventsSurviveAKill) {
-  if (!kForkTests) GTEST_SKIP() << "fork-based test skipped under sanitizers";
+  if (!kForkTests) GTEST_SKIP() << "fork-based test skipped under ThreadSanitizer";
   const auto dir = fullarm::test::scratchDir("hil_run_log_kill");
   const auto file = dir / "killed.lcmlog";
   constexpr int kRecords = 500;
@@ -210,7 +210,7 @@ TEST(RunLog, FlushedEventsSurviveAKill) {
 }
 
 TEST(RunLog, KilledMidRunGivesACompleteOrTruncatedLog) {
-  if (!kForkTests) GTEST_SKIP() << "fork-based test skipped under sanitizers";
+  if (!kForkTests) GTEST_SKIP() << "fork-based test skipped under ThreadSanitizer";
   const auto dir = fullarm::test::scratchDir("hil_run_log_midkill");
   for (int attempt = 0; attempt < 3; ++attempt) {
     const auto file = dir / ("killed_" + std::to_string(attempt) + ".lcmlog");

@@ -128,10 +128,9 @@ template <class T>
 template <class Visit>
 std::size_t SpscRing<T>::consumeAll(Visit&& visit, std::size_t max_records) {
   const std::uint64_t head = head_.load(std::memory_order_relaxed);
-  if (tail_cache_ == head) tail_cache_ = tail_.load(std::memory_order_acquire);
   std::uint64_t available = tail_cache_ - head;
   if (available < max_records) {
-    // Look again for records pushed since the cached view.
+    // The cached view of the producer may be old: look for records pushed since.
     tail_cache_ = tail_.load(std::memory_order_acquire);
     available = tail_cache_ - head;
   }
