@@ -37,7 +37,7 @@ class SupervisorTest : public ::testing::Test {
   }
   bool step(const JointSample& sample, const SupervisorRequests& requests = {}, core::RtStatus device = {}) {
     ++tick_;
-    return supervisorCheckInputs(model_, data_, tick_, tick_ * kPeriod_s, sample, device, requests);
+    return supervisorCheckInputs(model_, data_, tick_, static_cast<double>(tick_) * kPeriod_s, sample, device, requests);
   }
   void expectTrip(SupervisorCause cause, int joint) {
     EXPECT_EQ(data_.state, SupervisorState::kTripped);
@@ -49,7 +49,7 @@ class SupervisorTest : public ::testing::Test {
         logged = true;
         EXPECT_EQ(e.joint, joint);
         EXPECT_EQ(e.tick, tick_);
-        EXPECT_DOUBLE_EQ(e.t_s, tick_ * kPeriod_s);
+        EXPECT_DOUBLE_EQ(e.t_s, static_cast<double>(tick_) * kPeriod_s);
       }
     }
     EXPECT_TRUE(logged) << "no trip event with cause " << supervisorCauseName(cause);
@@ -191,7 +191,9 @@ TEST_F(SupervisorTest, LostHeartbeatTrips) {
   for (int i = 0; i < 100; ++i) {
     r.heartbeat = static_cast<std::uint64_t>(i / 10);  // changes every 10 ms: alive
     const bool running = run(1, r);
-    if (i < 8 || i > 12) ASSERT_EQ(running, i >= 10) << i;
+    if (i < 8 || i > 12) {
+      ASSERT_EQ(running, i >= 10) << i;
+    }
   }
   // It stops: trips once heartbeat_timeout_s has passed, not before.
   const int timeout_ticks = static_cast<int>(params_.heartbeat_timeout_s / kPeriod_s);
@@ -255,7 +257,7 @@ TEST_F(SupervisorTest, StepsDoNotAllocate) {
   IoVector valves = IoVector::Constant(7, 1.0);
   for (int i = 0; i < 50; ++i) {
     ++tick_;
-    EXPECT_NO_HEAP_ALLOCATION(supervisorCheckInputs(model_, data_, tick_, tick_ * kPeriod_s, s, {}, {}));
+    EXPECT_NO_HEAP_ALLOCATION(supervisorCheckInputs(model_, data_, tick_, static_cast<double>(tick_) * kPeriod_s, s, {}, {}));
     EXPECT_NO_HEAP_ALLOCATION(supervisorFadeContact(model_, data_, i * 1e-3, tau));
     EXPECT_NO_HEAP_ALLOCATION(supervisorLimitOutputs(model_, data_, valves));
   }
