@@ -38,6 +38,14 @@ extern "C" void onStopSignal(int /*signal*/) {
 
 constexpr std::int64_t kNsPerS = 1'000'000'000;
 
+// A sanitizer reserves terabytes of shadow memory: locking every mapped page is not possible
+// there (and would not be real time anyway).
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kSanitizerBuild = true;
+#else
+constexpr bool kSanitizerBuild = false;
+#endif
+
 timespec toTimespec(std::int64_t ns) noexcept {
   return {static_cast<time_t>(ns / kNsPerS), static_cast<long>(ns % kNsPerS)};
 }
@@ -111,7 +119,11 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
   std::vector<double> compute_s(ticks, 0.0);
   std::vector<double> jitter_s(ticks, 0.0);
 
-  if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+  bool locked = false;
+  if (kSanitizerBuild) {
+    r.timing.realtime_notes.push_back("WARNING: memory not locked: a sanitizer build cannot lock its shadow memory");
+  } else if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+    locked = true;
     r.timing.realtime_notes.push_back("memory locked (mlockall)");
   } else {
     r.timing.realtime_notes.push_back(std::string("WARNING: mlockall refused (") + std::strerror(errno) +
@@ -302,7 +314,7 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
   stop_search.store(true);
   search_thread.join();
   device_->deactivate();
-  munlockall();
+  if (locked) munlockall();
 
   r.telemetry.resize(ticks_run);
   r.inputs.resize(ticks_run);
