@@ -1,5 +1,6 @@
 // Fault injection on lockstep runs of the simulated DTS: each fault ends in its documented safe
-// state (docs/hil.md, "Safety") with its cause and time in the run's events: a latched trip puts
+// state (docs/hil.md, "Safety") with its cause and time in the run's events and in its LCM log
+// (read back from the file): a latched trip puts
 // every valve at null from that tick on and the device in its fault state with the enable line
 // still; a stalled global search fades the contact torques to zero no faster than the
 // configured rate.
@@ -7,9 +8,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
+#include <string>
+#include <variant>
+#include <vector>
 
+#include "fullarm/hil/log_records.hpp"
+#include "fullarm/hil/run_log.hpp"
 #include "hil_fixture.hpp"
 #include "run_fixture.hpp"
 #include "scratch_dir.hpp"
@@ -25,10 +32,30 @@ RunOptions faultRun(double duration_s = 1.0) {
   return o;
 }
 
+// The same run, writing its LCM log into a fresh scratch folder.
+RunOptions logged(RunOptions o, const std::string& name) {
+  o.log = fullarm::test::scratchDir("hil_fault_" + name) / "run.lcmlog";
+  return o;
+}
+
+// The supervisor events of a run's LCM log, read back from the file.
+std::vector<fullarm_lcm::supervisor_event_t> loggedEvents(const std::filesystem::path& log) {
+  std::vector<fullarm_lcm::supervisor_event_t> events;
+  RunLogReader reader(log);
+  RunLogEntry entry;
+  while (reader.next(entry)) {
+    if (const auto* e = std::get_if<fullarm_lcm::supervisor_event_t>(&entry.message)) events.push_back(*e);
+  }
+  EXPECT_FALSE(reader.truncated()) << reader.warning();
+  return events;
+}
+
 // Runs `options` with `hooks`; checks the latched trip with `cause` no earlier than `earliest`
 // and the safe state from that tick on.
-void expectLatchedTrip(const RunOptions& options, const RunHooks& hooks, SupervisorCause cause,
+void expectLatchedTrip(const RunOptions& unlogged, const RunHooks& hooks, SupervisorCause cause,
                        std::uint64_t earliest = kFaultTick) {
+  const RunOptions options =
+      logged(unlogged, ::testing::UnitTest::GetInstance()->current_test_info()->name());
   HilSession session(options);
   const RunResult r = session.run(hooks);
   ASSERT_TRUE(r.tripped);
@@ -43,6 +70,18 @@ void expectLatchedTrip(const RunOptions& options, const RunHooks& hooks, Supervi
     }
   }
   ASSERT_GE(trip_tick, earliest);
+  // The log holds the same trip: its cause, its tick and a fault (or E-stop) severity.
+  bool trip_logged = false;
+  for (const fullarm_lcm::supervisor_event_t& e : loggedEvents(options.log)) {
+    if (e.severity >= static_cast<std::int8_t>(EventSeverity::kFault)) {
+      EXPECT_EQ(e.cause_code, static_cast<int>(cause)) << e.message;
+      EXPECT_EQ(static_cast<std::uint64_t>(e.tick), trip_tick);
+      EXPECT_FALSE(e.message.empty());
+      trip_logged = true;
+      break;
+    }
+  }
+  EXPECT_TRUE(trip_logged) << "the trip is in the LCM log";
   // Forces were on before the fault ...
   bool driven_before = false;
   for (std::uint64_t k = 300; k + 1 < trip_tick; ++k) {
@@ -146,6 +185,7 @@ TEST(FaultInjection, SearchStalledMidContactFadesTheForcesWithinTheRate) {
   const std::uint64_t kStall = stall;
   RunHooks hooks;
   hooks.search_stalled = [kStall](std::uint64_t k) { return k > kStall; };
+  o = logged(o, "stall");
   HilSession session(o);
   const RunResult r = session.run(hooks);
   EXPECT_FALSE(r.tripped) << supervisorCauseName(r.trip_cause);
@@ -164,6 +204,12 @@ TEST(FaultInjection, SearchStalledMidContactFadesTheForcesWithinTheRate) {
     }
   }
   EXPECT_TRUE(stale_logged);
+  bool stale_in_log = false;
+  for (const fullarm_lcm::supervisor_event_t& e : loggedEvents(o.log)) {
+    stale_in_log = stale_in_log || e.cause_code == static_cast<int>(SupervisorCause::kMinimaStale);
+    EXPECT_LT(e.severity, static_cast<std::int8_t>(EventSeverity::kFault)) << e.message;
+  }
+  EXPECT_TRUE(stale_in_log) << "the stale minima are in the LCM log";
   for (std::size_t k = kStall; k < r.telemetry.size(); ++k) {
     for (int l = 0; l < r.telemetry[k].num_config; ++l) {
       const double step = std::abs(r.telemetry[k].tau_contact_nm[l] - r.telemetry[k - 1].tau_contact_nm[l]);
