@@ -40,9 +40,8 @@ Sample randomSample(int n, std::mt19937& rng) {
 
 // World-frame inverse dynamics of the whole model (locked joints at the posture, at rest),
 // read at the active joints.
-BodyVector armInverseDynamics(const ArmModel& model, ArmData& data, const std::vector<int>& active,
-                              const Eigen::VectorXd& posture, const BodyVector& q, const BodyVector& qd,
-                              const BodyVector& qdd) {
+BodyVector armInverseDynamics(const ArmModel& model, const std::vector<int>& active, const Eigen::VectorXd& posture,
+                              const BodyVector& q, const BodyVector& qd, const BodyVector& qdd) {
   Eigen::VectorXd q_full = posture;
   Eigen::VectorXd qd_full = Eigen::VectorXd::Zero(model.numJoints());
   Eigen::VectorXd qdd_full = Eigen::VectorXd::Zero(model.numJoints());
@@ -91,7 +90,7 @@ TEST(RigidBodyDynamics, InverseDynamicsAndMassMatrixMatchUnreducedArm) {
       computeRigidBodyKinematics(reduced, data, s.q, s.qd);
       BodyVector tau;
       computeRigidBodyInverseDynamics(reduced.tree, data, s.qdd, tau);
-      const BodyVector expected = armInverseDynamics(model, arm_data, active, posture, s.q, s.qd, s.qdd);
+      const BodyVector expected = armInverseDynamics(model, active, posture, s.q, s.qd, s.qdd);
       EXPECT_LE((tau - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff())
           << "n = " << n << "\n"
           << tau.transpose() << "\n"
@@ -127,7 +126,6 @@ TEST(RigidBodyDynamics, InverseDynamicsAndMassMatrixMatchUnreducedArm) {
 TEST(RigidBodyDynamics, AnalyticDerivativesMatchCentralDifferencesOfArmInverseDynamics) {
   const ArmModel& model = test::defaultModel();
   const Eigen::VectorXd posture = testPosture(model);
-  ArmData arm_data(model);
   std::mt19937 rng(5);
   for (const std::vector<int>& active : activeSets(model)) {
     const RigidBodyModel reduced = reduceArmModel(model, active, posture);
@@ -148,14 +146,14 @@ TEST(RigidBodyDynamics, AnalyticDerivativesMatchCentralDifferencesOfArmInverseDy
         Sample minus = s;
         plus.q[j] += h;
         minus.q[j] -= h;
-        fd_q.col(j) = (armInverseDynamics(model, arm_data, active, posture, plus.q, plus.qd, plus.qdd) -
-                       armInverseDynamics(model, arm_data, active, posture, minus.q, minus.qd, minus.qdd)) /
+        fd_q.col(j) = (armInverseDynamics(model, active, posture, plus.q, plus.qd, plus.qdd) -
+                       armInverseDynamics(model, active, posture, minus.q, minus.qd, minus.qdd)) /
                       (2.0 * h);
         plus = minus = s;
         plus.qd[j] += h;
         minus.qd[j] -= h;
-        fd_qd.col(j) = (armInverseDynamics(model, arm_data, active, posture, plus.q, plus.qd, plus.qdd) -
-                        armInverseDynamics(model, arm_data, active, posture, minus.q, minus.qd, minus.qdd)) /
+        fd_qd.col(j) = (armInverseDynamics(model, active, posture, plus.q, plus.qd, plus.qdd) -
+                        armInverseDynamics(model, active, posture, minus.q, minus.qd, minus.qdd)) /
                        (2.0 * h);
       }
       // One scale for both (one joint turning about a fixed axis has d ID / d qd = 0 exactly).
@@ -167,7 +165,7 @@ TEST(RigidBodyDynamics, AnalyticDerivativesMatchCentralDifferencesOfArmInverseDy
                                                                    << dqd << "\nfd\n"
                                                                    << fd_qd;
       // The pass also returns the inverse dynamics itself.
-      const BodyVector expected = armInverseDynamics(model, arm_data, active, posture, s.q, s.qd, s.qdd);
+      const BodyVector expected = armInverseDynamics(model, active, posture, s.q, s.qd, s.qdd);
       EXPECT_LE((tau - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());
     }
   }
