@@ -2,7 +2,7 @@
 // gravity, stale-minima fade, admittance controller, output limits, telemetry) with 64 tracked
 // minima, side by side in the same run with the local tick alone (FK, local descent, springs,
 // tailored-Jacobian torques, gravity: bench/haptics_local_bench.cpp's BM_Haptics_LocalTick64)
-// on the same scene, minima and motion. The bound: the whole tick at most 1.3x the local
+// on the same scene, minima and motion. The speed target: the whole tick at most 1.3x the local
 // tick, and its p99 under 10 % of the 1 ms period.
 //
 // Scene (as haptics_local_bench): the default DTS arm resting 6 mm above rough ledges (1 cm
