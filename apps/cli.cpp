@@ -19,6 +19,7 @@
 #include "haptics_command.hpp"
 #include "output_files.hpp"
 #include "plant_command.hpp"
+#include "run_command.hpp"
 #include "tune_command.hpp"
 #include "validate_command.hpp"
 
@@ -182,6 +183,10 @@ struct CommandLine {
   ValidateOptions validate_options;
   CLI::App* haptics_query = nullptr;
   HapticsQueryOptions haptics_options;
+  CLI::App* run = nullptr;
+  RunCommandOptions run_options;
+  CLI::App* replay = nullptr;
+  ReplayCommandOptions replay_options;
 
   CommandLine() {
     app.set_version_flag("--version", std::string(reports::fullarmVersion()));
@@ -210,10 +215,12 @@ struct CommandLine {
     plant_simulate = addPlantCommand(app, plant_options, table);
     validate = addValidateCommand(app, validate_options, table);
     haptics_query = addHapticsCommand(app, haptics_options, table);
+    run = addRunCommand(app, run_options, table);
+    replay = addReplayCommand(app, replay_options, table);
   }
 };
 
-int dispatch(CommandLine& cli, core::Progress& progress, std::ostream& out) {
+int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progress& progress, std::ostream& out) {
   if (cli.show->parsed()) return runArmShow(cli.arm_options, cli.q_text, cli.show_out, out);
   if (cli.demo->parsed()) {
     return runDemo(cli.demo_options, cli.demo_out, cli.demo_validate_samples, progress, out);
@@ -231,6 +238,12 @@ int dispatch(CommandLine& cli, core::Progress& progress, std::ostream& out) {
     return runTune(cli.tune_options);
   }
   if (cli.haptics_query->parsed()) return runHapticsQuery(cli.haptics_options);
+  if (cli.run->parsed()) {
+    std::string command_line = "fullarm";
+    for (const std::string& arg : args) command_line.append(" ").append(arg);
+    return runRun(cli.run_options, command_line);
+  }
+  if (cli.replay->parsed()) return runReplay(cli.replay_options);
   return kExitBadInput;
 }
 
@@ -249,7 +262,7 @@ int runFullarm(const std::vector<std::string>& args, std::ostream& out, std::ost
     // Progress on stderr: a live bar on a terminal, plain lines in a log.
     const bool err_is_stderr = &err == &std::cerr;
     core::Progress progress(err, core::progressModeFor(err_is_stderr ? 2 : -1, cli.quiet));
-    return dispatch(cli, progress, out);
+    return dispatch(cli, args, progress, out);
   } catch (...) {
     return exitCodeForException(std::current_exception(), err);
   }

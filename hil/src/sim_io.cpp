@@ -1,0 +1,85 @@
+#include "fullarm/hil/sim_io.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "fullarm/arm/sensors.hpp"
+
+namespace fullarm::hil {
+
+SimIoDevice::SimIoDevice(SimulatedArm& arm, const SimIoOptions& options, const IoSafetyParams& safety)
+    : IoDevice(arm.joints(), arm.period(), safety), arm_(arm), options_(options) {
+  held_v_ = IoVector::Zero(arm.numJoints());
+  if (options.converters != nullptr) {
+    const DaqConfig& map = *options.converters;
+    if (static_cast<int>(map.joints.size()) != arm.numJoints()) {
+      throw std::invalid_argument("sim I/O: the channel map " + map.source.string() + " lists " +
+                                  std::to_string(map.joints.size()) + " joints, the plant has " +
+                                  std::to_string(arm.numJoints()));
+    }
+    for (int k = 0; k < arm.numJoints(); ++k) {
+      const std::string& expected = arm.model().joints[static_cast<std::size_t>(arm.joints().modelIndex(k))].name;
+      if (map.joints[static_cast<std::size_t>(k)].name != expected) {
+        throw std::invalid_argument("sim I/O: joint " + std::to_string(k) + " of the channel map " +
+                                    map.source.string() + " is " + map.joints[static_cast<std::size_t>(k)].name +
+                                    ", the plant's is " + expected);
+      }
+    }
+  }
+}
+
+void SimIoDevice::onConfigure() {
+  arm_.reset();
+  held_v_.setZero();
+}
+
+core::RtStatus SimIoDevice::onRead(JointSample& sample) noexcept {
+  const core::RtStatus s = arm_.advance(held_v_);
+  const int n = arm_.numJoints();
+  sample.q_rad.resize(n);
+  sample.tau_load_cell_nm.resize(n);
+  sample.out_of_range_mask = 0;
+  sample.t_s = arm_.readingTime();
+  for (int k = 0; k < n; ++k) {
+    const plant::JointMeasurement& m = arm_.reading(k);
+    if (options_.converters != nullptr) {
+      const DaqJoint& map = options_.converters->joints[static_cast<std::size_t>(k)];
+      const ConverterRange& range = options_.converters->fake_ai;
+      sample.q_rad[k] = channelToPhysical(map.potentiometer.calibration, static_cast<std::uint32_t>(m.q_counts), range);
+      sample.tau_load_cell_nm[k] =
+          channelToPhysical(map.load_cell.calibration, static_cast<std::uint32_t>(m.tau_counts), range);
+    } else {
+      // The DTS ADC: a code at either end of the 12-bit range is a saturated, invalid reading.
+      const auto at_end = [](int code, int bits) { return code <= 0 || code >= arm::maxCode(bits); };
+      const plant::JointParams& p = arm_.plant().joint(k);
+      sample.q_rad[k] = at_end(m.q_counts, p.potentiometer.bits) ? std::numeric_limits<double>::quiet_NaN() : m.q_rad;
+      sample.tau_load_cell_nm[k] =
+          at_end(m.tau_counts, p.torque_sensor.bits) ? std::numeric_limits<double>::quiet_NaN() : m.tau_nm;
+    }
+    if (std::isnan(sample.q_rad[k]) || std::isnan(sample.tau_load_cell_nm[k])) sample.out_of_range_mask |= 1u << k;
+  }
+  return s;
+}
+
+core::RtStatus SimIoDevice::onWrite(const IoVector& valve_v, bool toggle_enable) noexcept {
+  // The valve amplifiers are enabled only by a write that beats the enable line; otherwise
+  // their output is exactly 0 V (the DAC's code for 0 V is half an LSB off).
+  if (!toggle_enable) {
+    held_v_.setZero();
+    return {};
+  }
+  for (int k = 0; k < held_v_.size(); ++k) {
+    if (options_.converters != nullptr) {
+      const DaqJoint& map = options_.converters->joints[static_cast<std::size_t>(k)];
+      const ConverterRange& range = options_.converters->fake_ao;
+      const std::uint32_t code = voltsToCode(physicalToChannelVolts(map.valve.calibration, valve_v[k]), range);
+      held_v_[k] = codeToVolts(code, range, false);
+    } else {
+      held_v_[k] = codeToVolts(voltsToCode(valve_v[k], options_.dac), options_.dac, false);
+    }
+  }
+  return {};
+}
+
+}  // namespace fullarm::hil
