@@ -15,6 +15,9 @@
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/core/progress.hpp"
 #include "fullarm/haptics/tri_mesh.hpp"
+#include "fullarm/hil/io_device.hpp"
+#include "fullarm/hil/log_records.hpp"
+#include "fullarm/hil/run_log.hpp"
 #include "fullarm/reports/report.hpp"
 #include "haptics_command.hpp"
 #include "output_files.hpp"
@@ -278,6 +281,15 @@ int exitCodeForException(const std::exception_ptr& error, std::ostream& err) {
     err << "fullarm: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const OutputError& e) {
+    err << "fullarm: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const hil::DeviceError& e) {
+    err << "fullarm: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const hil::RunLogError& e) {
+    err << "fullarm: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const hil::RecordError& e) {
     err << "fullarm: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const std::filesystem::filesystem_error& e) {

@@ -5,7 +5,6 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
-#include <limits>
 #include <sstream>
 
 #include "fullarm/core/config_error.hpp"
@@ -207,8 +206,7 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
       ->capture_default_str();
   declare.file("--user", o.user, "Scripted user YAML (default: config/user_reach_valve.yaml)");
   declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
-  declare.integer("--seed", o.seed, "Seed of the simulated sensors' noise", 0,
-                  std::numeric_limits<std::int64_t>::max());
+  declare.integer("--seed", o.seed, "Seed of the simulated sensors' noise", 0, 2147483647);
   declare.name("--start-posture", o.start_posture, "Scene posture the simulated arm starts in")->capture_default_str();
   declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
   declare.file("--plant-config", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)");

@@ -46,7 +46,7 @@ class ComediBackend final : public IoDevice {
 
   [[noreturn]] void fail(const std::string& what) const {
     const int e = api::comedi_errno();
-    throw std::runtime_error(map_.device + " (channel map " + map_.source.string() + "): " + what +
+    throw DeviceError(map_.device + " (channel map " + map_.source.string() + "): " + what +
                              (e != 0 ? std::string(": ") + api::comedi_strerror(e) : std::string()));
   }
 

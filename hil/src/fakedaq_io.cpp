@@ -50,7 +50,7 @@ FakeDaqBoard::FakeDaqBoard(const DaqConfig& map, const std::filesystem::path& st
     : device_(map.device), file_(state_file) {
   if (map.fake_ai_channels > kFakeDaqMaxAnalogInputs || map.fake_ao_channels > kFakeDaqMaxAnalogOutputs ||
       map.fake_dio_channels > kFakeDaqMaxDigitalLines) {
-    throw std::runtime_error(map.source.string() + ": fake_board has more channels than the fake DAQ offers");
+    throw DeviceError(map.source.string() + ": fake_board has more channels than the fake DAQ offers");
   }
   if (file_.empty()) {
     memory_ = std::make_unique<FakeDaqState>();

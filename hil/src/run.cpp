@@ -136,7 +136,7 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
       break;
   }
   if (device_->joints().modelIndices() != joints.modelIndices()) {
-    throw std::runtime_error("the I/O device's joints differ from the tick's: check the channel map " +
+    throw DeviceError("the I/O device's joints differ from the tick's: check the channel map " +
                              daq_.source.string() + " against the plant file " + plant_.source.string());
   }
 }

@@ -19,6 +19,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <stdexcept>
 #include <string_view>
 
 #include "fullarm/arm/arm_model.hpp"
@@ -39,6 +40,14 @@ enum HilFault : std::uint32_t {
   kFaultDeviceWrite = 1u << 17,   ///< the device could not write its outputs
   kFaultDeviceState = 1u << 18,   ///< read or write in a lifecycle state that does not allow it
   kFaultDeviceLatched = 1u << 19, ///< the device was put in its fault state (fault())
+};
+
+/// A device that cannot be opened or does not match its channel map (a missing board, a channel
+/// or range the board does not have, a map that serves other joints than the tick's): bad input
+/// to a run, reported before the device is activated.
+class DeviceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 /// One reading of every joint of a device, after calibration.

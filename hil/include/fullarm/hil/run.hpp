@@ -177,7 +177,7 @@ class HilSession {
   /// Runs once (a session runs at most once: the device and plant are not rewound).
   RunResult run(const RunHooks& hooks = {});
 
-  /// Feeds the recorded inputs of `recorded` through a fresh tick of this session's model and
+  /// Feeds the recorded inputs of `recorded` through a fresh tick of this run's model and
   /// returns its telemetry (equal, bit for bit, to the recorded run's).
   [[nodiscard]] std::vector<TickTelemetry> replay(const RunResult& recorded) const;
 
