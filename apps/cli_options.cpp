@@ -56,8 +56,7 @@ CLI::Validator numberValidator(double min, double max, const std::string& unit) 
 }
 
 CLI::Validator integerValidator(std::int64_t min, std::int64_t max) {
-  const std::string expected =
-      "an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
+  const std::string expected = "an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
   return CLI::Validator(
       [=](std::string& input) -> std::string {
         const std::string t = trim(input);
@@ -82,8 +81,7 @@ CLI::Validator listValidator() {
                    std::to_string(i + 1) + " is empty)";
           }
           if (!seen.insert(items[i]).second) {
-            return "expected comma-separated names with none repeated, got '" + input + "' ('" + items[i] +
-                   "' twice)";
+            return "expected comma-separated names with none repeated, got '" + input + "' ('" + items[i] + "' twice)";
           }
         }
         return {};
@@ -231,8 +229,8 @@ CLI::Option* OptionDeclarer::integer(const std::string& name, int& value, const 
       ->capture_default_str();
 }
 
-CLI::Option* OptionDeclarer::integer(const std::string& name, std::optional<int>& value,
-                                     const std::string& description, std::int64_t min, std::int64_t max) {
+CLI::Option* OptionDeclarer::integer(const std::string& name, std::optional<int>& value, const std::string& description,
+                                     std::int64_t min, std::int64_t max) {
   return addInteger(command_, record(name, OptionKind::kInteger), name, value, description, min, max);
 }
 

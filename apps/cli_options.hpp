@@ -32,9 +32,9 @@ struct OptionSpec {
   std::string command;  ///< the subcommand path, e.g. "plant simulate"
   std::string name;     ///< the long name, e.g. "--duration"
   OptionKind kind = OptionKind::kFlag;
-  double min = 0.0;  ///< kNumber, kInteger: the smallest valid value
-  double max = 0.0;  ///< kNumber, kInteger: the largest valid value
-  std::string unit;  ///< kNumber: the unit, as the help shows it ("s", "Hz"; may be empty)
+  double min = 0.0;                  ///< kNumber, kInteger: the smallest valid value
+  double max = 0.0;                  ///< kNumber, kInteger: the largest valid value
+  std::string unit;                  ///< kNumber: the unit, as the help shows it ("s", "Hz"; may be empty)
   std::vector<std::string> choices;  ///< kChoice
 };
 
@@ -75,12 +75,12 @@ class OptionDeclarer {
                        std::int64_t max);
   CLI::Option* integer(const std::string& name, std::optional<int>& value, const std::string& description,
                        std::int64_t min, std::int64_t max);
-  CLI::Option* integer(const std::string& name, std::int64_t& value, const std::string& description,
-                       std::int64_t min, std::int64_t max);
+  CLI::Option* integer(const std::string& name, std::int64_t& value, const std::string& description, std::int64_t min,
+                       std::int64_t max);
   CLI::Option* integer(const std::string& name, std::optional<std::int64_t>& value, const std::string& description,
                        std::int64_t min, std::int64_t max);
-  CLI::Option* integer(const std::string& name, std::uint64_t& value, const std::string& description,
-                       std::int64_t min, std::int64_t max);
+  CLI::Option* integer(const std::string& name, std::uint64_t& value, const std::string& description, std::int64_t min,
+                       std::int64_t max);
   /// Comma-separated names (joints): at least one, none empty, none repeated.
   CLI::Option* list(const std::string& name, std::vector<std::string>& values, const std::string& description);
   /// The same kept as the text given (checked the same way).

@@ -1,9 +1,9 @@
 #include "cli_values.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <algorithm>
 #include <vector>
 
 #include "fullarm/core/config_error.hpp"

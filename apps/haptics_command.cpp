@@ -9,13 +9,13 @@
 #include <vector>
 
 #include "cli_values.hpp"
-#include "output_files.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/core/data_paths.hpp"
 #include "fullarm/haptics/contact_forces.hpp"
 #include "fullarm/haptics/query.hpp"
 #include "fullarm/haptics/scene.hpp"
 #include "fullarm/reports/report.hpp"
+#include "output_files.hpp"
 #include "result_tables.hpp"
 
 namespace fullarm::app {
@@ -120,13 +120,15 @@ int runHapticsQuery(const HapticsQueryOptions& o) {
               << query.tau_gravity_nm[j] << std::setw(10) << rendering.tau_total_nm[j] << "\n";
   }
   std::cout << "\nLinks in contact (d < d_f): " << linksInContactText(model, contact) << "\n";
-  if (!contact.status.ok()) std::cout << "FAULT: the contact computation rejected its input; contact torques are zero\n";
+  if (!contact.status.ok())
+    std::cout << "FAULT: the contact computation rejected its input; contact torques are zero\n";
 
   if (!o.out_dir.empty()) {
     reports::Report report("haptics query", "Haptic query: " + scene.name);
-    report.setVerdict(contact.status.ok(), !contact.status.ok() ? "The contact computation flagged a fault"
-                                                    : std::to_string(minima.size()) + " minima, " +
-                                                          std::to_string(contact.active_springs) + " active springs");
+    report.setVerdict(contact.status.ok(), !contact.status.ok()
+                                               ? "The contact computation flagged a fault"
+                                               : std::to_string(minima.size()) + " minima, " +
+                                                     std::to_string(contact.active_springs) + " active springs");
     report.addHeadlineNumber("minima", "Minima within L", static_cast<double>(minima.size()), "");
     report.addHeadlineNumber("active_springs", "Active springs", contact.active_springs, "");
     report.addHeadlineNumber("search_ms", "Global search", search_ms, "ms");

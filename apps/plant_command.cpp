@@ -8,12 +8,12 @@
 #include <sstream>
 
 #include "cli_values.hpp"
-#include "output_files.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/plant/arm_plant.hpp"
 #include "fullarm/plant/plant_config.hpp"
 #include "fullarm/plant/simulation.hpp"
+#include "output_files.hpp"
 #include "result_tables.hpp"
 
 namespace fullarm::app {

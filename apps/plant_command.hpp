@@ -16,11 +16,11 @@ namespace fullarm::app {
 /// Options of `fullarm plant simulate`.
 struct PlantSimulateOptions {
   core::Progress* progress = nullptr;  ///< where the run reports its progress (null: silent)
-  std::string arm_config;       ///< arm model YAML (default: dts_master.yaml)
-  std::string plant_config;     ///< plant YAML (default: dts_plant.yaml)
-  std::string joint = "EB";     ///< joint to excite (short or model name)
-  bool whole_arm = false;       ///< --arm: all 7 joints, the same command on each
-  std::string input = "chirp";  ///< chirp | step | sine | multisine | <file>.csv
+  std::string arm_config;              ///< arm model YAML (default: dts_master.yaml)
+  std::string plant_config;            ///< plant YAML (default: dts_plant.yaml)
+  std::string joint = "EB";            ///< joint to excite (short or model name)
+  bool whole_arm = false;              ///< --arm: all 7 joints, the same command on each
+  std::string input = "chirp";         ///< chirp | step | sine | multisine | <file>.csv
   double duration_s = 5.0;
   std::optional<double> amplitude;  ///< command units; default full scale
   double frequency_hz = 1.0;        ///< sine

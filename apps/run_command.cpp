@@ -57,8 +57,11 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
     report.addHeadlineNumber("overruns", "Overruns", static_cast<double>(tm.overruns), "");
   }
   report.addHeadlineNumber("supervisor_trips", "Supervisor trips", r.tripped ? 1.0 : 0.0, "");
-  if (r.oracle_ran) report.addHeadlineNumber("missed_contact_ticks", "Missed-contact ticks", static_cast<double>(r.missed_contact_ticks), "");
-  if (!r.hand_W_m.empty()) report.addHeadlineNumber("hand_to_target_m", "Hand to the path's end", r.hand_to_target_m, "m");
+  if (r.oracle_ran)
+    report.addHeadlineNumber("missed_contact_ticks", "Missed-contact ticks",
+                             static_cast<double>(r.missed_contact_ticks), "");
+  if (!r.hand_W_m.empty())
+    report.addHeadlineNumber("hand_to_target_m", "Hand to the path's end", r.hand_to_target_m, "m");
 
   nlohmann::json& results = report.results();
   results["run"] = {{"io", r.io_name},
@@ -93,14 +96,19 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
     const std::string joint = e.joint >= 0 && e.joint < static_cast<int>(r.joint_names.size())
                                   ? r.joint_names[static_cast<std::size_t>(e.joint)]
                                   : "";
-    events.push_back({{"tick", e.tick}, {"t_s", e.t_s}, {"trip", e.trip}, {"cause", hil::supervisorCauseName(e.cause)},
-                      {"joint", joint}, {"value", e.value}});
+    events.push_back({{"tick", e.tick},
+                      {"t_s", e.t_s},
+                      {"trip", e.trip},
+                      {"cause", hil::supervisorCauseName(e.cause)},
+                      {"joint", joint},
+                      {"value", e.value}});
     if (event_table.rows.size() < 200) {
       event_table.rows.push_back({static_cast<double>(e.tick), e.t_s, e.trip ? "trip" : "info",
                                   hil::supervisorCauseName(e.cause), joint, e.value});
     }
   }
-  results["supervisor"] = {{"tripped", r.tripped}, {"trip_cause", hil::supervisorCauseName(r.trip_cause)}, {"events", events}};
+  results["supervisor"] = {
+      {"tripped", r.tripped}, {"trip_cause", hil::supervisorCauseName(r.trip_cause)}, {"events", events}};
   nlohmann::json links = nlohmann::json::array();
   for (std::size_t l = 0; l < r.link_min_distance_m.size(); ++l) {
     links.push_back({{"link", r.link_names[l]},
@@ -108,8 +116,11 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
                      {"max_penetration_m", r.link_max_penetration_m[l]},
                      {"penetration_s", r.link_penetration_s[l]}});
   }
-  results["oracle"] = {{"ran", r.oracle_ran}, {"checked_ticks", r.oracle_ticks}, {"missed_contact_ticks", r.missed_contact_ticks},
-                       {"sweep_exceeded_ticks", r.sweep_exceeded_ticks}, {"links", links}};
+  results["oracle"] = {{"ran", r.oracle_ran},
+                       {"checked_ticks", r.oracle_ticks},
+                       {"missed_contact_ticks", r.missed_contact_ticks},
+                       {"sweep_exceeded_ticks", r.sweep_exceeded_ticks},
+                       {"links", links}};
   results["user"] = {{"hand_to_target_m", r.hand_to_target_m}, {"max_force_n", r.max_user_force_n}};
   results["log"] = {{"file", "run.lcmlog"}, {"events", r.log_events}, {"records_dropped", r.log_records_dropped}};
 
@@ -118,7 +129,8 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
   tt.caption = lockstep ? "Lockstep run: simulated time, as fast as the machine allows"
                         : "Real-time run: the 1 kHz tick on an absolute-time clock";
   tt.columns = {"Quantity", "p50", "p99", "max"};
-  tt.rows.push_back({"Tick compute time (read, tick, write)", us(tm.compute.p50_s), us(tm.compute.p99_s), us(tm.compute.max_s)});
+  tt.rows.push_back(
+      {"Tick compute time (read, tick, write)", us(tm.compute.p50_s), us(tm.compute.p99_s), us(tm.compute.max_s)});
   if (!lockstep) {
     tt.rows.push_back({"Period jitter |wake-up - deadline|", us(tm.period_jitter.p50_s), us(tm.period_jitter.p99_s),
                        us(tm.period_jitter.max_s)});
@@ -129,8 +141,8 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
        << tm.overruns << " overruns (longest run " << tm.max_consecutive_overruns << "); " << tm.searches
        << " global searches.";
   if (lockstep) {
-    text << " Wall time by part: plant " << tm.plant_s << " s, tick " << tm.tick_s << " s, global search " << tm.search_s
-         << " s, missed-contact oracle " << tm.oracle_s << " s.";
+    text << " Wall time by part: plant " << tm.plant_s << " s, tick " << tm.tick_s << " s, global search "
+         << tm.search_s << " s, missed-contact oracle " << tm.oracle_s << " s.";
   }
   for (const std::string& note : tm.realtime_notes) text << "\n" << note;
   timing.addParagraph(text.str());
@@ -146,9 +158,10 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
   valves.x_axis = {"Time", "s"};
   valves.y_axis = {"Command", "V"};
   for (std::size_t k = 0; k < r.joint_names.size(); ++k) {
-    valves.series.push_back(seriesOf(r.joint_names[k], r.telemetry,
-                                     [](const hil::TickTelemetry& t, int j) { return t.valve_v[static_cast<std::size_t>(j)]; },
-                                     static_cast<int>(k)));
+    valves.series.push_back(seriesOf(
+        r.joint_names[k], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) { return t.valve_v[static_cast<std::size_t>(j)]; },
+        static_cast<int>(k)));
   }
   forces.addLineChart(std::move(valves));
   reports::XyChart torques;
@@ -156,11 +169,10 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
   torques.x_axis = {"Time", "s"};
   torques.y_axis = {"Torque", "N·m"};
   for (std::size_t k = 0; k < r.joint_names.size(); ++k) {
-    torques.series.push_back(seriesOf(r.joint_names[k], r.telemetry,
-                                      [](const hil::TickTelemetry& t, int j) {
-                                        return t.tau_contact_nm[static_cast<std::size_t>(j)];
-                                      },
-                                      session.tickModel().device_joints.modelIndex(static_cast<int>(k))));
+    torques.series.push_back(seriesOf(
+        r.joint_names[k], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) { return t.tau_contact_nm[static_cast<std::size_t>(j)]; },
+        session.tickModel().device_joints.modelIndex(static_cast<int>(k))));
   }
   forces.addLineChart(std::move(torques));
   reports::XyChart distance;
@@ -168,13 +180,15 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
   distance.x_axis = {"Time", "s"};
   distance.y_axis = {"Distance", "m"};
   for (std::size_t l = 0; l < r.link_names.size(); ++l) {
-    reports::Series s = seriesOf(r.link_names[l], r.telemetry,
-                                 [](const hil::TickTelemetry& t, int j) {
-                                   const double d = t.link_min_distance_m[static_cast<std::size_t>(j)];
-                                   return std::isfinite(d) ? d : std::nan("");
-                                 },
-                                 static_cast<int>(l));
-    if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v); })) distance.series.push_back(std::move(s));
+    reports::Series s = seriesOf(
+        r.link_names[l], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) {
+          const double d = t.link_min_distance_m[static_cast<std::size_t>(j)];
+          return std::isfinite(d) ? d : std::nan("");
+        },
+        static_cast<int>(l));
+    if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v); }))
+      distance.series.push_back(std::move(s));
   }
   if (!distance.series.empty()) forces.addLineChart(std::move(distance));
   if (r.oracle_ran) {
@@ -182,7 +196,8 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
     lt.caption = "Each link against the scene (exact, every tick): the missed-contact oracle";
     lt.columns = {"Link", "Smallest distance [m]", "Deepest penetration [m]", "Time touching [s]"};
     for (std::size_t l = 0; l < r.link_min_distance_m.size(); ++l) {
-      lt.rows.push_back({r.link_names[l], r.link_min_distance_m[l], r.link_max_penetration_m[l], r.link_penetration_s[l]});
+      lt.rows.push_back(
+          {r.link_names[l], r.link_min_distance_m[l], r.link_max_penetration_m[l], r.link_penetration_s[l]});
     }
     forces.addTable(std::move(lt));
   }
@@ -191,8 +206,9 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
 }  // namespace
 
 CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table) {
-  CLI::App* cmd = app.add_subcommand("run", "Run the 1 kHz haptic loop on a simulated, fake-DAQ or real DTS; write an "
-                                            "LCM log, summary.json and report.html");
+  CLI::App* cmd = app.add_subcommand("run",
+                                     "Run the 1 kHz haptic loop on a simulated, fake-DAQ or real DTS; write an "
+                                     "LCM log, summary.json and report.html");
   OptionDeclarer declare(*cmd, table);
   declare.choice("--io", o.io, "I/O back-end", {"sim", "fakedaq", "comedi"})->capture_default_str();
   declare.choice("--mode", o.mode, "Haptic rendering", {"full-arm", "hand-only"})->capture_default_str();
@@ -201,8 +217,9 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
   // LCM log holds them too): the duration is bounded before the run starts.
   declare.number("--duration", o.duration_s, "Run time (every tick is kept in memory: at most 600 s)",
                  {0.001, kMaxRunDuration_s, "s"});
-  declare.choice("--clock", o.clock, "realtime: the 1 kHz wall clock; lockstep: simulated time, deterministic",
-                 {"realtime", "lockstep"})
+  declare
+      .choice("--clock", o.clock, "realtime: the 1 kHz wall clock; lockstep: simulated time, deterministic",
+              {"realtime", "lockstep"})
       ->capture_default_str();
   declare.file("--user", o.user, "Scripted user YAML (default: config/user_reach_valve.yaml)");
   declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
@@ -215,8 +232,8 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
   declare.file("--hil-config", o.hil_config, "Loop YAML (default: config/hil.yaml)");
   declare.file("--daq-config", o.daq_config, "Channel map YAML (default: config/dts_daq.yaml)");
   declare.integer("--delivery-delay-ticks", o.delivery_delay_ticks,
-                  "Lockstep: ticks between a global query and the adoption of its result (default: the loop YAML's)",
-                  1, 1000000);
+                  "Lockstep: ticks between a global query and the adoption of its result (default: the loop YAML's)", 1,
+                  1000000);
   declare.flag("--no-oracle", o.no_oracle, "Lockstep: skip the missed-contact oracle");
   return cmd;
 }
@@ -249,19 +266,23 @@ int runRun(const RunCommandOptions& o, const std::string& command_line) {
   const hil::RunResult r = session.run();
   const hil::RunTiming& tm = r.timing;
   for (const std::string& note : tm.realtime_notes) std::cout << "  " << note << "\n";
-  std::cout << std::fixed << std::setprecision(1) << "  " << tm.ticks << " ticks in " << std::setprecision(3) << tm.wall_s
-            << " s wall; tick compute p50 " << us(tm.compute.p50_s) << ", p99 " << us(tm.compute.p99_s) << ", max "
-            << us(tm.compute.max_s) << "\n";
+  std::cout << std::fixed << std::setprecision(1) << "  " << tm.ticks << " ticks in " << std::setprecision(3)
+            << tm.wall_s << " s wall; tick compute p50 " << us(tm.compute.p50_s) << ", p99 " << us(tm.compute.p99_s)
+            << ", max " << us(tm.compute.max_s) << "\n";
   if (ro.clock == hil::ClockKind::kRealtime) {
-    std::cout << "  period jitter p50 " << us(tm.period_jitter.p50_s) << ", p99 " << us(tm.period_jitter.p99_s) << ", max "
-              << us(tm.period_jitter.max_s) << "; " << tm.overruns << " overruns\n";
+    std::cout << "  period jitter p50 " << us(tm.period_jitter.p50_s) << ", p99 " << us(tm.period_jitter.p99_s)
+              << ", max " << us(tm.period_jitter.max_s) << "; " << tm.overruns << " overruns\n";
   } else {
     std::cout << "  " << std::setprecision(2) << tm.simulated_s / tm.wall_s << "x real time (plant " << tm.plant_s
-              << " s, tick " << tm.tick_s << " s, global search " << tm.search_s << " s, oracle " << tm.oracle_s << " s)\n";
+              << " s, tick " << tm.tick_s << " s, global search " << tm.search_s << " s, oracle " << tm.oracle_s
+              << " s)\n";
   }
-  if (r.oracle_ran) std::cout << "  missed-contact ticks: " << r.missed_contact_ticks << " of " << r.oracle_ticks << "\n";
-  if (!r.hand_W_m.empty()) std::cout << std::setprecision(3) << "  hand to the path's end: " << r.hand_to_target_m << " m\n";
-  std::cout << "  supervisor: " << (r.tripped ? std::string("TRIPPED (") + hil::supervisorCauseName(r.trip_cause) + ")" : "no trip")
+  if (r.oracle_ran)
+    std::cout << "  missed-contact ticks: " << r.missed_contact_ticks << " of " << r.oracle_ticks << "\n";
+  if (!r.hand_W_m.empty())
+    std::cout << std::setprecision(3) << "  hand to the path's end: " << r.hand_to_target_m << " m\n";
+  std::cout << "  supervisor: "
+            << (r.tripped ? std::string("TRIPPED (") + hil::supervisorCauseName(r.trip_cause) + ")" : "no trip")
             << "\n";
 
   const bool pass = !r.tripped && r.missed_contact_ticks == 0;
@@ -273,14 +294,15 @@ int runRun(const RunCommandOptions& o, const std::string& command_line) {
   report.addFile("run.lcmlog");
   addRunReport(r, session, report);
   writeReport(report, o.out_dir);
-  std::cout << "  log: " << std::filesystem::absolute(ro.log).string() << "\nReport: "
-            << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
+  std::cout << "  log: " << std::filesystem::absolute(ro.log).string()
+            << "\nReport: " << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
   return pass ? 0 : 1;
 }
 
 CLI::App* addReplayCommand(CLI::App& app, ReplayCommandOptions& o, OptionTable& table) {
-  CLI::App* cmd = app.add_subcommand("replay", "Feed a run's LCM log through the same tick; check every force, torque and "
-                                               "valve command bit for bit");
+  CLI::App* cmd = app.add_subcommand("replay",
+                                     "Feed a run's LCM log through the same tick; check every force, torque and "
+                                     "valve command bit for bit");
   cmd->add_option("log", o.log, "The run's LCM log (run.lcmlog)")->required()->check(CLI::ExistingFile);
   OptionDeclarer declare(*cmd, table);
   declare.folder("--out", o.out_dir, "Write summary.json and report.html to this folder");
@@ -303,7 +325,8 @@ int runReplay(const ReplayCommandOptions& o) {
     report.setVerdict(pass, pass ? "Every force, torque and valve command reproduced bit for bit"
                                  : "Not reproduced: " + r.first_mismatch);
     report.addHeadlineNumber("ticks", "Ticks replayed", static_cast<double>(r.ticks), "");
-    report.addHeadlineNumber("valve_mismatches", "Ticks with a different valve command", static_cast<double>(r.valve_mismatches), "");
+    report.addHeadlineNumber("valve_mismatches", "Ticks with a different valve command",
+                             static_cast<double>(r.valve_mismatches), "");
     report.results()["replay"] = {{"log", std::filesystem::absolute(o.log).string()},
                                   {"clock", r.clock},
                                   {"ticks", r.ticks},

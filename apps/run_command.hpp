@@ -16,9 +16,9 @@ inline constexpr double kMaxRunDuration_s = 600.0;
 
 /// Options of `fullarm run`.
 struct RunCommandOptions {
-  std::string io = "sim";          ///< sim | fakedaq | comedi
-  std::string mode = "full-arm";   ///< full-arm | hand-only
-  std::string scene;               ///< scene YAML (default scenes/valve_wall.yaml)
+  std::string io = "sim";         ///< sim | fakedaq | comedi
+  std::string mode = "full-arm";  ///< full-arm | hand-only
+  std::string scene;              ///< scene YAML (default scenes/valve_wall.yaml)
   double duration_s = 10.0;
   std::string clock = "realtime";  ///< realtime | lockstep
   std::string user;                ///< scripted user YAML (default config/user_reach_valve.yaml)

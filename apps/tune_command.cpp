@@ -11,12 +11,12 @@
 
 #include "cli_values.hpp"
 #include "exit_codes.hpp"
-#include "output_files.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/design/linear_analysis.hpp"
 #include "fullarm/design/tune_arm.hpp"
 #include "fullarm/plant/plant_config.hpp"
+#include "output_files.hpp"
 
 namespace fullarm::app {
 namespace {
@@ -269,7 +269,6 @@ void addToReport(const design::ArmTuningResult& run, reports::Report& report, co
   section.addLineChart(std::move(impedance));
 }
 
-
 }  // namespace
 
 CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o, OptionTable& table) {
@@ -279,7 +278,8 @@ CLI::App* addTuneCommand(CLI::App& app, TuneOptions& o, OptionTable& table) {
   declare.file("--plant", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)");
   declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
   declare.file("--gains", o.gains, "Starting gains YAML (default: config/dts_tune_start.yaml); B_o is kept");
-  declare.file("--ranges", o.validation_config, "User model and uncertainty ranges (default: config/dts_validation.yaml)");
+  declare.file("--ranges", o.validation_config,
+               "User model and uncertainty ranges (default: config/dts_validation.yaml)");
   declare.list("--joints", o.tuning.joints, "Joints to tune, e.g. EB,WR (default: all)");
   declare.integer("--global-evals", o.tuning.global_evaluations, "Global-stage evaluations per round", 1, 100000);
   declare.integer("--local-evals", o.tuning.local_evaluations, "Local (COBYLA) evaluations per round", 0, 100000);
@@ -337,8 +337,8 @@ int runTune(const TuneOptions& o) {
   return run.pass ? kExitPass : kExitInconclusive;
 }
 
-TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir,
-                             reports::Report& report, core::Progress& progress) {
+TuneDemoStep runTuneDemoStep(const arm::ArmModel& model, const std::filesystem::path& out_dir, reports::Report& report,
+                             core::Progress& progress) {
   const plant::PlantConfig plant_config = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
   const GainsConfig gains = controllers::loadGainsConfig(controllers::defaultTuneStartGainsPath(), model);
   const design::ValidationConfig validation = design::loadValidationConfig(design::defaultValidationConfigPath());

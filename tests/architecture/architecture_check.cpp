@@ -74,14 +74,14 @@ std::vector<Include> quotedIncludes(const fs::path& file) {
 std::set<std::string> reachable(const std::string& name,
                                 const std::map<std::string, const DocumentedModule*>& by_name) {
   std::set<std::string> seen;
-  std::vector<std::string> todo{name};
-  while (!todo.empty()) {
-    const std::string m = todo.back();
-    todo.pop_back();
+  std::vector<std::string> pending{name};
+  while (!pending.empty()) {
+    const std::string m = pending.back();
+    pending.pop_back();
     if (!seen.insert(m).second) continue;
     const auto it = by_name.find(m);
     if (it == by_name.end()) continue;
-    for (const std::string& d : it->second->depends_on) todo.push_back(d);
+    for (const std::string& d : it->second->depends_on) pending.push_back(d);
   }
   return seen;
 }
