@@ -31,6 +31,7 @@
 #include "fullarm/haptics/geometry.hpp"
 #include "fullarm/haptics/local_descent.hpp"
 #include "fullarm/haptics/primitives.hpp"
+#include "resting_arm_scene.hpp"
 
 namespace {
 
@@ -38,51 +39,7 @@ using namespace fullarm;
 using namespace fullarm::haptics;
 using fullarm::haptics::test::fclCapsule;
 using fullarm::haptics::test::fclModel;
-
-constexpr std::size_t kMinima = 64;
-constexpr double kPruneRadius_m = 0.002;
-
-// q1 = q0 + (state.range(0) millidegrees) on every joint: one 1 ms tick of motion.
-Eigen::VectorXd motion(const Eigen::VectorXd& q0, const benchmark::State& state) {
-  Eigen::VectorXd q1 = q0;
-  q1.array() += static_cast<double>(state.range(0)) * 1e-3 * 3.14159265358979 / 180.0;
-  return q1;
-}
-
-// A box whose top face (1 cm triangles) carries +-1.5 mm of seeded random relief: every bump
-// under a link is a separate local minimum in general position (a flat parallel face would be
-// the degenerate case where all minima slide together).
-TriMesh roughBox(const Eigen::Vector3d& size_m, std::mt19937& rng) {
-  const TriMesh box = makeBox(size_m, 0.01);
-  std::vector<Eigen::Vector3d> v;
-  std::vector<Eigen::Vector3i> t;
-  std::uniform_real_distribution<double> bump(-0.0015, 0.0015);
-  for (int i = 0; i < box.numVertices(); ++i) {
-    Eigen::Vector3d p = box.vertex(i);
-    const bool interior_top =
-        p.z() > 0.0 && std::abs(p.x()) < 0.5 * size_m.x() - 1e-9 && std::abs(p.y()) < 0.5 * size_m.y() - 1e-9;
-    if (interior_top) p.z() += bump(rng);
-    v.push_back(p);
-  }
-  for (int i = 0; i < box.numTriangles(); ++i) t.push_back(box.triangle(i));
-  return TriMesh::build("rough ledge", std::move(v), std::move(t));
-}
-
-// The 64 minima spread over the fresh search's set of `world` at fk.
-std::vector<LocalMinimum> baselineMinima(const CollisionWorld& world, const arm::ArmData& fk) {
-  std::vector<LocalMinimum> all;
-  globalSearch(world, fk, 0.06, kPruneRadius_m, all);
-  if (all.size() < kMinima) throw std::runtime_error("bench scene has too few minima: " + std::to_string(all.size()));
-  for (const auto& m : all) {
-    if (m.distance_m <= 0.0) {
-      throw std::runtime_error("bench scene: link " + std::to_string(m.link) + " touches object " +
-                               std::to_string(m.object));
-    }
-  }
-  std::vector<LocalMinimum> baseline;
-  for (std::size_t i = 0; i < kMinima; ++i) baseline.push_back(all[i * all.size() / kMinima]);
-  return baseline;
-}
+using namespace fullarm::bench;
 
 struct Scene {
   arm::ArmModel model = arm::loadArmModel(arm::defaultArmModelPath());
@@ -96,30 +53,7 @@ struct Scene {
   Scene() {
     arm::ArmData fk(model);
     arm::computeForwardKinematics(model, fk, q0);
-    std::mt19937 rng(42);
-    // A ledge under the upper arm and one under the forearm: dense flat boxes (1 cm triangles)
-    // whose top face runs parallel to the link capsule, 6 mm below it (a resting contact), and
-    // a third under the hand.
-    for (const int l : {2, 4, 6}) {
-      const arm::LinkGeometry& g = model.joints[static_cast<std::size_t>(l)].geometry;
-      const Eigen::Isometry3d& X = fk.X_WL[static_cast<std::size_t>(l)];
-      const Eigen::Vector3d a = X * g.from_m;
-      const Eigen::Vector3d b = X * g.to_m;
-      const Eigen::Vector3d axis = (b - a).normalized();
-      Eigen::Vector3d up = Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitZ().dot(axis) * axis;
-      up.normalize();
-      // One ledge below the link and one beside it (normals perpendicular to the link).
-      for (const Eigen::Vector3d& n : {up, Eigen::Vector3d(up.cross(axis))}) {
-        Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
-        X_WO.linear().col(0) = axis;
-        X_WO.linear().col(1) = n.cross(axis);
-        X_WO.linear().col(2) = n;
-        X_WO.translation() = 0.5 * (a + b) - (g.radius_m + 0.006 + 0.01) * n;
-        const TriMesh ledge = roughBox({std::max(0.06, (b - a).norm() - 0.06), 0.08, 0.02}, rng);
-        world.addObject("ledge_" + std::to_string(l), ledge, X_WO);
-        faceted.addObject("ledge_" + std::to_string(l), ledge, X_WO);
-      }
-    }
+    addLedges(model, fk, {&world, &faceted});
     for (int l = 0; l < model.numJoints(); ++l) {
       if (faceted.linkShape(l) == LinkShape::kCapsule) faceted.setLinkMesh(l, makeLinkCapsuleMesh(model, l, 16, 4));
     }
@@ -131,13 +65,6 @@ struct Scene {
 Scene& scene() {
   static Scene s;
   return s;
-}
-
-void reportPercentiles(benchmark::State& state, std::vector<double>& us) {
-  if (us.empty()) return;
-  std::sort(us.begin(), us.end());
-  state.counters["median_us"] = us[us.size() / 2];
-  state.counters["p99_us"] = us[std::min(us.size() - 1, us.size() * 99 / 100)];
 }
 
 void localTick64(benchmark::State& state, const LocalDescentParams& descent, bool faceted = false) {

@@ -5,10 +5,8 @@
 // on the same scene, minima and motion. The speed target: the whole tick at most 1.3x the local
 // tick, and its p99 under 10 % of the 1 ms period.
 //
-// Scene (as haptics_local_bench): the default DTS arm resting 6 mm above rough ledges (1 cm
-// triangles, +-1.5 mm relief) under and beside the upper arm, forearm and hand; 64 tracked
-// minima found at q0 (cutoff 6 cm, pruning radius 2 mm); each iteration updates them at
-// q1 = q0 + delta on every joint (Arg: delta in millidegrees; 57 = one 1 ms tick at 1 rad/s).
+// Scene: bench/resting_arm_scene.hpp, as haptics_local_bench (64 tracked minima found at q0,
+// updated at q1 = q0 + delta on every joint; Arg: delta in millidegrees).
 // Each iteration starts from the same 64 minima (restored outside the timed section); the
 // median and p99 of the per-iteration time are reported as counters (median_us, p99_us).
 
@@ -28,36 +26,13 @@
 #include "fullarm/haptics/local_descent.hpp"
 #include "fullarm/haptics/primitives.hpp"
 #include "fullarm/hil/tick.hpp"
+#include "resting_arm_scene.hpp"
 
 namespace {
 
 using namespace fullarm;
 using namespace fullarm::haptics;
-
-constexpr std::size_t kMinima = 64;
-constexpr double kPruneRadius_m = 0.002;
-
-Eigen::VectorXd motion(const Eigen::VectorXd& q0, const benchmark::State& state) {
-  Eigen::VectorXd q1 = q0;
-  q1.array() += static_cast<double>(state.range(0)) * 1e-3 * 3.14159265358979 / 180.0;
-  return q1;
-}
-
-TriMesh roughBox(const Eigen::Vector3d& size_m, std::mt19937& rng) {
-  const TriMesh box = makeBox(size_m, 0.01);
-  std::vector<Eigen::Vector3d> v;
-  std::vector<Eigen::Vector3i> t;
-  std::uniform_real_distribution<double> bump(-0.0015, 0.0015);
-  for (int i = 0; i < box.numVertices(); ++i) {
-    Eigen::Vector3d p = box.vertex(i);
-    const bool interior_top =
-        p.z() > 0.0 && std::abs(p.x()) < 0.5 * size_m.x() - 1e-9 && std::abs(p.y()) < 0.5 * size_m.y() - 1e-9;
-    if (interior_top) p.z() += bump(rng);
-    v.push_back(p);
-  }
-  for (int i = 0; i < box.numTriangles(); ++i) t.push_back(box.triangle(i));
-  return TriMesh::build("rough ledge", std::move(v), std::move(t));
-}
+using namespace fullarm::bench;
 
 struct Scene {
   arm::ArmModel model = arm::loadArmModel(arm::defaultArmModelPath());
@@ -70,42 +45,14 @@ struct Scene {
   Scene() {
     arm::ArmData fk(model);
     arm::computeForwardKinematics(model, fk, q0);
-    std::mt19937 rng(42);
-    for (const int l : {2, 4, 6}) {
-      const arm::LinkGeometry& g = model.joints[static_cast<std::size_t>(l)].geometry;
-      const Eigen::Isometry3d& X = fk.X_WL[static_cast<std::size_t>(l)];
-      const Eigen::Vector3d a = X * g.from_m;
-      const Eigen::Vector3d b = X * g.to_m;
-      const Eigen::Vector3d axis = (b - a).normalized();
-      Eigen::Vector3d up = Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitZ().dot(axis) * axis;
-      up.normalize();
-      for (const Eigen::Vector3d& n : {up, Eigen::Vector3d(up.cross(axis))}) {
-        Eigen::Isometry3d X_WO = Eigen::Isometry3d::Identity();
-        X_WO.linear().col(0) = axis;
-        X_WO.linear().col(1) = n.cross(axis);
-        X_WO.linear().col(2) = n;
-        X_WO.translation() = 0.5 * (a + b) - (g.radius_m + 0.006 + 0.01) * n;
-        world.addObject("ledge_" + std::to_string(l),
-                        roughBox({std::max(0.06, (b - a).norm() - 0.06), 0.08, 0.02}, rng), X_WO);
-      }
-    }
-    std::vector<LocalMinimum> all;
-    globalSearch(world, fk, 0.06, kPruneRadius_m, all);
-    if (all.size() < kMinima) throw std::runtime_error("bench scene has too few minima: " + std::to_string(all.size()));
-    for (std::size_t i = 0; i < kMinima; ++i) baseline.push_back(all[i * all.size() / kMinima]);
+    addLedges(model, fk, {&world});
+    baseline = baselineMinima(world, fk);
   }
 };
 
 Scene& scene() {
   static Scene s;
   return s;
-}
-
-void reportPercentiles(benchmark::State& state, std::vector<double>& us) {
-  if (us.empty()) return;
-  std::sort(us.begin(), us.end());
-  state.counters["median_us"] = us[us.size() / 2];
-  state.counters["p99_us"] = us[std::min(us.size() - 1, us.size() * 99 / 100)];
 }
 
 void BM_Peer_LocalTick64(benchmark::State& state) {
