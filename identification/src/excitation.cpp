@@ -92,6 +92,7 @@ SampledSignal prbs(double amplitude_v, int order, int clock_samples, int periods
   const std::size_t n = length * static_cast<std::size_t>(clock_samples) * static_cast<std::size_t>(periods);
   SampledSignal s = emptySignal(n, sample_period_s);
   const auto& taps = kPrbsTaps[static_cast<std::size_t>(order)];
+  // I4: Fibonacci LFSR, x_{k+n} = XOR of the tapped bits; period 2^n - 1 for primitive taps.
   std::uint32_t reg = (1u << order) - 1u;  // any non-zero state
   std::size_t k = 0;
   for (std::size_t bit = 0; bit < length * static_cast<std::size_t>(periods); ++bit) {
@@ -138,7 +139,7 @@ Multisine schroederMultisine(double amplitude_v, double low_hz, double high_hz, 
   std::vector<double> one(static_cast<std::size_t>(m.samples_per_period), 0.0);
   for (std::size_t i = 0; i < m.harmonics.size(); ++i) {
     const double j = static_cast<double>(i + 1);
-    const double phase = -std::numbers::pi * j * (j - 1.0) / count;  // Schroeder 1970
+    const double phase = -std::numbers::pi * j * (j - 1.0) / count;  // I3: Schroeder 1970
     const double w = 2.0 * std::numbers::pi * m.harmonics[i] / m.samples_per_period;
     for (std::size_t n = 0; n < one.size(); ++n) one[n] += std::cos(w * static_cast<double>(n) + phase);
   }

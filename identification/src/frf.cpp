@@ -48,6 +48,7 @@ FrfEstimate estimateFrf(const std::vector<double>& r, const std::vector<double>&
     fft.fwd(out, seg);
   };
   FrfEstimate e;
+  // I5: Welch-averaged cross spectra; H1 = S_uy / S_uu, instrument estimate S_ry / S_ru.
   for (std::size_t start = 0; start + n <= r.size(); start += step) {
     transform(r, start, fr);
     transform(u, start, fu);

@@ -22,7 +22,7 @@ struct State {
   double q = 0.0, w = 0.0, th = 0.0;
 };
 
-// (G1)-(G2): the reduced joint's right-hand side.
+// The reduced joint's right-hand side, (I1)-(I2) of grey_box.hpp.
 State rhs(const GreyModel& m, const State& x, double u) noexcept {
   const auto& p = m.value;
   State d;
@@ -261,6 +261,7 @@ Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data
   const std::size_t d = static_cast<std::size_t>(std::max(0, model.delay_samples));
   std::vector<double> out_q(n), out_tau(n);
   const double h = data.sample_period_s / kSubsteps;
+  // (I1)-(I2) in closed loop: the hold law on the delayed reading, the command held over the sample.
   for (std::size_t k = 0; k < n; ++k) {
     out_q[k] = x.q + p[kAngleOffset];
     out_tau[k] = measuredTorque(model, x);
@@ -428,6 +429,7 @@ double fitPercent(const std::vector<double>& measured, const std::vector<double>
     throw std::invalid_argument("fit percentage: " + std::to_string(measured.size()) + " measured and " +
                                 std::to_string(modelled.size()) + " modelled samples");
   }
+  // I6: fit = 100 (1 - |y - y_hat| / |y - mean(y)|).
   double mean = 0.0;
   for (double v : measured) mean += v;
   mean /= static_cast<double>(measured.size());

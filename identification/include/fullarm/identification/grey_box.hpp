@@ -5,8 +5,8 @@
 /// The model is the joint reduced to the groups the data can determine (Merritt's linearised
 /// valve-cylinder with the load, docs/identification.md), in joint units:
 ///
-///   tau_h' = K_h (a (u + u_0) - w - c tau_h)                 hydraulic torque D p_L   (G1)
-///   J w'   = tau_h - b w - tau_c tanh(w / w_eps) - tau_g     link                     (G2)
+///   tau_h' = K_h (a (u + u_0) - w - c tau_h)                 hydraulic torque D p_L   (I1)
+///   J w'   = tau_h - b w - tau_c tanh(w / w_eps) - tau_g     link                     (I2)
 ///   q'     = w
 ///   q_meas = q + q_off,   tau_meas = tau_h - b w - tau_c tanh(w / w_eps) + tau_off
 ///
