@@ -66,6 +66,10 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
                            std::to_string(options.min_rad) + ".." + std::to_string(options.max_rad) + " rad";
       return result;
     }
+    if (!std::isfinite(sample.tau_load_cell_nm[j])) {
+      result.stop_reason = "joint " + std::to_string(j) + ": load-cell reading out of range";
+      return result;
+    }
     for (int k = 0; k < n; ++k) {
       if (k == j) continue;
       if (!std::isfinite(sample.q_rad[k]) ||

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -20,24 +21,39 @@ constexpr double kDivergedResidual = 1.0e3;
 
 struct State {
   double q = 0.0, w = 0.0, th = 0.0;
+  double x = 0.0, xd = 0.0;  // spool position (in volts of command) and its rate
+  double tf = 0.0;           // filtered load-cell torque
 };
 
 // The reduced joint's right-hand side, (I1)-(I2) of grey_box.hpp.
+double cellTorque(const GreyModel& m, const State& x) noexcept {
+  const auto& p = m.value;
+  return x.th - p[kViscous] * x.w - p[kCoulomb] * std::tanh(x.w / m.coulomb_smoothing_radps);
+}
+
 State rhs(const GreyModel& m, const State& x, double u) noexcept {
   const auto& p = m.value;
   State d;
+  double drive = u;
+  if (m.spool_hz > 0.0) {
+    const double wn = 2.0 * std::numbers::pi * m.spool_hz;
+    d.x = x.xd;
+    d.xd = wn * wn * (u - x.x) - 2.0 * m.spool_damping * wn * x.xd;
+    drive = x.x;
+  }
   d.q = x.w;
-  d.w = (x.th - p[kViscous] * x.w - p[kCoulomb] * std::tanh(x.w / m.coulomb_smoothing_radps) - p[kLoadTorque]) /
-        p[kInertia];
-  d.th = p[kStiffness] * (p[kFlowGain] * (u + p[kValveOffset]) - x.w - p[kLeakage] * x.th);
+  d.w = (cellTorque(m, x) - p[kLoadTorque]) / p[kInertia];
+  d.th = p[kStiffness] * (p[kFlowGain] * (drive + p[kValveOffset]) - x.w - p[kLeakage] * x.th);
+  if (m.torque_filter_hz > 0.0) d.tf = 2.0 * std::numbers::pi * m.torque_filter_hz * (cellTorque(m, x) - x.tf);
   return d;
 }
 
-State axpy(const State& x, double h, const State& d) noexcept { return {x.q + h * d.q, x.w + h * d.w, x.th + h * d.th}; }
+State axpy(const State& x, double h, const State& d) noexcept {
+  return {x.q + h * d.q, x.w + h * d.w, x.th + h * d.th, x.x + h * d.x, x.xd + h * d.xd, x.tf + h * d.tf};
+}
 
 double measuredTorque(const GreyModel& m, const State& x) noexcept {
-  const auto& p = m.value;
-  return x.th - p[kViscous] * x.w - p[kCoulomb] * std::tanh(x.w / m.coulomb_smoothing_radps) + p[kTorqueOffset];
+  return (m.torque_filter_hz > 0.0 ? x.tf : cellTorque(m, x)) + m.value[kTorqueOffset];
 }
 
 double spread(const std::vector<double>& v) {
@@ -111,8 +127,10 @@ class Problem {
       const ExperimentData& x = experiments_[e];
       const Simulation s = simulateClosedLoop(m, x);
       for (std::size_t k = 0; k < x.q_rad.size(); ++k) {
-        r[at++] = s.ok ? (s.q_rad[k] - x.q_rad[k]) / q_scale_[e] : kDivergedResidual;
-        r[at++] = s.ok ? (s.tau_nm[k] - x.tau_nm[k]) / tau_scale_[e] : kDivergedResidual;
+        const double rq = (s.q_rad[k] - x.q_rad[k]) / q_scale_[e];
+        const double rt = (s.tau_nm[k] - x.tau_nm[k]) / tau_scale_[e];
+        r[at++] = s.ok && std::isfinite(rq) ? rq : kDivergedResidual;
+        r[at++] = s.ok && std::isfinite(rt) ? rt : kDivergedResidual;
       }
     }
   }
@@ -216,6 +234,13 @@ ExperimentData experimentFromLog(const SignalTable& log) {
   ExperimentData d;
   const auto& t = log.column("time_s");
   if (t.size() < 3) throw std::invalid_argument("experiment log: fewer than three rows");
+  for (const auto& column : log.columns) {
+    for (std::size_t k = 0; k < column.size(); ++k) {
+      if (!std::isfinite(column[k])) {
+        throw std::invalid_argument("experiment log: a non-finite value at row " + std::to_string(k + 1));
+      }
+    }
+  }
   d.sample_period_s = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
   for (std::size_t k = 1; k < t.size(); ++k) {
     if (std::abs(t[k] - t[k - 1] - d.sample_period_s) > 1e-6 * d.sample_period_s + 1e-9) {
@@ -257,10 +282,16 @@ Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data
   s.tau_nm.resize(n);
   s.command_v.resize(n);
   const auto& p = model.value;
-  State x{n > 0 ? data.q_rad[0] - p[kAngleOffset] : 0.0, 0.0, p[kLoadTorque]};
+  State x;
+  x.q = n > 0 ? data.q_rad[0] - p[kAngleOffset] : 0.0;
+  x.th = p[kLoadTorque];
+  x.tf = p[kLoadTorque];
+  // At rest the spool sits where the leakage flow balances: a (x + u_0) = c tau_g.
+  x.x = p[kLeakage] * p[kLoadTorque] / p[kFlowGain] - p[kValveOffset];
   const std::size_t d = static_cast<std::size_t>(std::max(0, model.delay_samples));
   std::vector<double> out_q(n), out_tau(n);
-  const double h = data.sample_period_s / kSubsteps;
+  const int substeps = model.spool_hz > 0.0 ? 2 * kSubsteps : kSubsteps;
+  const double h = data.sample_period_s / substeps;
   // (I1)-(I2) in closed loop: the hold law on the delayed reading, the command held over the sample.
   for (std::size_t k = 0; k < n; ++k) {
     out_q[k] = x.q + p[kAngleOffset];
@@ -270,14 +301,12 @@ Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data
     s.tau_nm[k] = out_tau[seen];
     const double u = data.hold_gain_v_per_rad * (data.hold_rad - s.q_rad[k]) + data.excitation_v[k];
     s.command_v[k] = u;
-    for (int i = 0; i < kSubsteps; ++i) {
+    for (int i = 0; i < substeps; ++i) {
       const State k1 = rhs(model, x, u);
       const State k2 = rhs(model, axpy(x, 0.5 * h, k1), u);
       const State k3 = rhs(model, axpy(x, 0.5 * h, k2), u);
       const State k4 = rhs(model, axpy(x, h, k3), u);
-      x.q += h / 6.0 * (k1.q + 2.0 * k2.q + 2.0 * k3.q + k4.q);
-      x.w += h / 6.0 * (k1.w + 2.0 * k2.w + 2.0 * k3.w + k4.w);
-      x.th += h / 6.0 * (k1.th + 2.0 * k2.th + 2.0 * k3.th + k4.th);
+      x = axpy(axpy(axpy(axpy(x, h / 6.0, k1), h / 3.0, k2), h / 3.0, k3), h / 6.0, k4);
     }
     if (!std::isfinite(x.q) || !std::isfinite(x.w) || !std::isfinite(x.th) || std::abs(x.q) > 1e3) {
       s.ok = false;

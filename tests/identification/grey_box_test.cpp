@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
 #include "fullarm/identification/excitation.hpp"
 
@@ -34,12 +35,24 @@ GreyModel truth() {
 /// the reduced joint, integrated with 40 RK4 sub-steps per sample.
 SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double hold_gain, double start_rad) {
   const auto& p = m.value;
-  auto f = [&](const std::array<double, 3>& x, double u) {
-    const double fr = p[kViscous] * x[1] + p[kCoulomb] * std::tanh(x[1] / m.coulomb_smoothing_radps);
-    return std::array<double, 3>{x[1], (x[2] - fr - p[kLoadTorque]) / p[kInertia],
-                                 p[kStiffness] * (p[kFlowGain] * (u + p[kValveOffset]) - x[1] - p[kLeakage] * x[2])};
+  // State: angle, speed, hydraulic torque, spool, spool rate, filtered load cell.
+  using X = std::array<double, 6>;
+  const double wn = 2.0 * std::numbers::pi * m.spool_hz;
+  const double wf = 2.0 * std::numbers::pi * m.torque_filter_hz;
+  auto cell = [&](const X& x) {
+    return x[2] - p[kViscous] * x[1] - p[kCoulomb] * std::tanh(x[1] / m.coulomb_smoothing_radps);
   };
-  std::array<double, 3> x{start_rad - p[kAngleOffset], 0.0, p[kLoadTorque]};
+  auto f = [&](const X& x, double u) {
+    const double drive = m.spool_hz > 0.0 ? x[3] : u;
+    return X{x[1],
+             (cell(x) - p[kLoadTorque]) / p[kInertia],
+             p[kStiffness] * (p[kFlowGain] * (drive + p[kValveOffset]) - x[1] - p[kLeakage] * x[2]),
+             x[4],
+             wn * wn * (u - x[3]) - 2.0 * m.spool_damping * wn * x[4],
+             wf * (cell(x) - x[5])};
+  };
+  X x{start_rad - p[kAngleOffset], 0.0, p[kLoadTorque],
+      p[kLeakage] * p[kLoadTorque] / p[kFlowGain] - p[kValveOffset], 0.0, p[kLoadTorque]};
   SignalTable t;
   t.names = kExperimentColumns;
   t.columns.assign(5, {});
@@ -48,8 +61,7 @@ SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double 
   const double h = kT / kSub;
   for (std::size_t k = 0; k < r.size(); ++k) {
     q_out.push_back(x[0] + p[kAngleOffset]);
-    tau_out.push_back(x[2] - p[kViscous] * x[1] - p[kCoulomb] * std::tanh(x[1] / m.coulomb_smoothing_radps) +
-                      p[kTorqueOffset]);
+    tau_out.push_back((m.torque_filter_hz > 0.0 ? x[5] : cell(x)) + p[kTorqueOffset]);
     const std::size_t seen = k >= static_cast<std::size_t>(m.delay_samples) ? k - static_cast<std::size_t>(m.delay_samples) : 0;
     const double u = hold_gain * (start_rad - q_out[seen]) + r[k];
     t.columns[0].push_back(static_cast<double>(k) * kT);
@@ -58,17 +70,16 @@ SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double 
     t.columns[3].push_back(q_out[seen]);
     t.columns[4].push_back(tau_out[seen]);
     for (int i = 0; i < kSub; ++i) {
-      auto add = [](const std::array<double, 3>& a, double s, const std::array<double, 3>& b) {
-        return std::array<double, 3>{a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]};
+      auto add = [](const X& a, double s, const X& b) {
+        X out{};
+        for (std::size_t j = 0; j < out.size(); ++j) out[j] = a[j] + s * b[j];
+        return out;
       };
       const auto k1 = f(x, u);
       const auto k2 = f(add(x, 0.5 * h, k1), u);
       const auto k3 = f(add(x, 0.5 * h, k2), u);
       const auto k4 = f(add(x, h, k3), u);
-      for (int j = 0; j < 3; ++j) {
-        x[static_cast<std::size_t>(j)] += h / 6.0 * (k1[static_cast<std::size_t>(j)] + 2.0 * k2[static_cast<std::size_t>(j)] +
-                                                     2.0 * k3[static_cast<std::size_t>(j)] + k4[static_cast<std::size_t>(j)]);
-      }
+      for (std::size_t j = 0; j < x.size(); ++j) x[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
     }
   }
   return t;
@@ -101,6 +112,30 @@ TEST(GreyBoxTest, HoldLawIsRecoveredFromTheLog) {
   ASSERT_TRUE(s.ok);
   EXPECT_GT(fitPercent(data[0].q_rad, s.q_rad), 99.9);
   EXPECT_GT(fitPercent(data[0].tau_nm, s.tau_nm), 99.9);
+}
+
+TEST(GreyBoxTest, SpoolAndLoadCellFilterMatchAnIndependentIntegration) {
+  GreyModel m = truth();
+  m.spool_hz = 150.0;
+  m.spool_damping = 0.7;
+  m.torque_filter_hz = 200.0;
+  const auto data = twoExperiments(m);
+  const Simulation with = simulateClosedLoop(m, data[1]);
+  ASSERT_TRUE(with.ok);
+  EXPECT_GT(fitPercent(data[1].q_rad, with.q_rad), 99.9);
+  EXPECT_GT(fitPercent(data[1].tau_nm, with.tau_nm), 99.5);
+  // And the channel dynamics matter: the model without them fits the same data visibly worse.
+  GreyModel bare = m;
+  bare.spool_hz = 0.0;
+  bare.torque_filter_hz = 0.0;
+  const Simulation without = simulateClosedLoop(bare, data[1]);
+  EXPECT_LT(fitPercent(data[1].tau_nm, without.tau_nm), fitPercent(data[1].tau_nm, with.tau_nm) - 1.0);
+}
+
+TEST(GreyBoxTest, ALogWithANonFiniteValueIsRefused) {
+  SignalTable log = experiment(truth(), prbs(1.0, 6, 1, 1, kT).value_v, 10.0, 0.0);
+  log.columns[4][10] = std::nan("");
+  EXPECT_THROW((void)experimentFromLog(log), std::invalid_argument);
 }
 
 TEST(GreyBoxTest, NoiseFreeFitRecoversTheParametersAndTheDelayFromEveryStart) {

@@ -8,8 +8,9 @@
 /// when the experiment started, and the excitation r is added to the driven joint's valve
 /// command: u = K (q_hold - q) + r. The device first ramps its outputs in (its safety policy);
 /// the excitation starts after a settling time. The run stops early, with the outputs at their
-/// safe value (valve null), when the driven joint comes within a margin of its limits, a held
-/// joint drifts too far from its hold, or the device reports a fault.
+/// safe value (valve null), when the driven joint comes within a margin of its limits, its load
+/// cell reads out of range, a held joint drifts too far from its hold, or the device reports a
+/// fault.
 ///
 /// The log has one row per control period of the excitation: `time_s` (the reading's device
 /// time), `excitation_v`, `command_v` (what the device put out after its clamp, held over the

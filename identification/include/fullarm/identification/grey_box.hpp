@@ -59,6 +59,12 @@ struct GreyModel {
   std::array<double, kGreyParams> value{0.5, 1.0e4, 1.0e-4, 0.05, 0.5, 0.5, 0.0, 0.0, 0.0, 0.0};
   int delay_samples = 1;
   double coulomb_smoothing_radps = 0.05;  ///< w_eps (fixed)
+  /// Known channel dynamics (fixed, not fitted; 0 = none): the servovalve spool as a second-order
+  /// lag of the command (natural frequency, damping ratio) and the load cell's first-order
+  /// analog low-pass.
+  double spool_hz = 0.0;
+  double spool_damping = 0.7;
+  double torque_filter_hz = 0.0;
 };
 
 /// One experiment as the fit sees it.
@@ -82,7 +88,8 @@ struct Simulation {
 };
 
 /// Simulates the closed loop of `data` (its hold law and excitation) with `model`, from rest at
-/// the first logged angle; 4 RK4 sub-steps per sample, the command held over each sample.
+/// the first logged angle; 4 RK4 sub-steps per sample (8 with a spool), the command held over
+/// each sample, through the spool and the load-cell filter when the model has them.
 [[nodiscard]] Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data);
 
 /// One parameter's treatment in the fit.
