@@ -1,5 +1,5 @@
 // One joint identified from two 20 s closed-loop experiments at 1 kHz (a PRBS and a Schroeder
-// multisine on the reduced joint model with known parameters), from a corner of a x3 box: the
+// multisine on the reduced joint model with known parameters), from a corner of a x3 box on 2 threads: the
 // wall time of the global stage and of the Levenberg-Marquardt polish side by side, the
 // simulations each ran, and the recovered parameters against the truth (BENCHMARKS.md).
 //
@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
   id::FitOptions options = id::defaultFitOptions(truth, 3.0);
   options.global_samples = argc > 1 ? std::atoi(argv[1]) : 100;
   options.polished_candidates = 2;
+  options.threads = 2;
   id::GreyModel start = truth;
   for (int i : {id::kFlowGain, id::kStiffness, id::kLeakage, id::kInertia, id::kViscous, id::kCoulomb}) {
     start.value[static_cast<std::size_t>(i)] *= (i % 2 == 0) ? 2.9 : 1.0 / 2.9;

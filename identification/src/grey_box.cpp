@@ -4,6 +4,7 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -11,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "fullarm/core/job_pool.hpp"
 #include "fullarm/core/random.hpp"
 
 namespace fullarm::identification {
@@ -18,6 +20,7 @@ namespace {
 
 constexpr int kSubsteps = 4;
 constexpr double kDivergedResidual = 1.0e3;
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 struct State {
   double q = 0.0, w = 0.0, th = 0.0;
@@ -117,8 +120,9 @@ class Problem {
     }
   }
   [[nodiscard]] Eigen::Index residualCount() const noexcept { return residual_count_; }
-  int evaluations = 0;
+  std::atomic<int> evaluations{0};
 
+  /// Thread-safe: each call simulates on its own.
   void residuals(const GreyModel& m, Eigen::VectorXd& r) {
     ++evaluations;
     r.resize(residual_count_);
@@ -152,24 +156,29 @@ struct Polished {
   Eigen::MatrixXd jacobian;
 };
 
+// Central differences, the 2 p simulations spread over the pool.
 void jacobian(Problem& problem, const Coordinates& c, const GreyModel& base, const Eigen::VectorXd& z,
-              Eigen::MatrixXd& jac) {
+              Eigen::MatrixXd& jac, core::JobPool& pool) {
   const auto p = z.size();
   jac.resize(problem.residualCount(), p);
-  Eigen::VectorXd rp, rm;
+  std::vector<Eigen::VectorXd> r(static_cast<std::size_t>(2 * p));
+  auto step = [&](Eigen::Index k) {
+    return c.log_scaled[static_cast<std::size_t>(k)] ? 1e-5 : 1e-5 * std::max(1.0, c.hi[k] - c.lo[k]);
+  };
+  pool.run(static_cast<int>(2 * p), [&](int task) {
+    const Eigen::Index k = task / 2;
+    Eigen::VectorXd zk = z;
+    zk[k] += (task % 2 == 0 ? 1.0 : -1.0) * step(k);
+    problem.residuals(c.fromZ(base, zk), r[static_cast<std::size_t>(task)]);
+  });
   for (Eigen::Index k = 0; k < p; ++k) {
-    const double h = c.log_scaled[static_cast<std::size_t>(k)] ? 1e-5 : 1e-5 * std::max(1.0, c.hi[k] - c.lo[k]);
-    Eigen::VectorXd zp = z, zm = z;
-    zp[k] += h;
-    zm[k] -= h;
-    problem.residuals(c.fromZ(base, zp), rp);
-    problem.residuals(c.fromZ(base, zm), rm);
-    jac.col(k) = (rp - rm) / (2.0 * h);
+    jac.col(k) = (r[static_cast<std::size_t>(2 * k)] - r[static_cast<std::size_t>(2 * k + 1)]) / (2.0 * step(k));
   }
 }
 
 // Projected Levenberg-Marquardt (Marquardt's diagonal scaling) inside the box.
-Polished polish(Problem& problem, const Coordinates& c, const GreyModel& start, int max_iterations) {
+Polished polish(Problem& problem, const Coordinates& c, const GreyModel& start, int max_iterations,
+                core::JobPool& pool) {
   Eigen::VectorXd z = c.clamp(c.toZ(start));
   Eigen::VectorXd r;
   problem.residuals(c.fromZ(start, z), r);
@@ -177,7 +186,7 @@ Polished polish(Problem& problem, const Coordinates& c, const GreyModel& start, 
   double mu = 1e-3;
   Eigen::MatrixXd jac;
   for (int it = 0; it < max_iterations && z.size() > 0; ++it) {
-    jacobian(problem, c, start, z, jac);
+    jacobian(problem, c, start, z, jac, pool);
     const Eigen::MatrixXd jtj = jac.transpose() * jac;
     const Eigen::VectorXd g = jac.transpose() * r;
     bool improved = false;
@@ -207,7 +216,7 @@ Polished polish(Problem& problem, const Coordinates& c, const GreyModel& start, 
   Polished out;
   out.model = c.fromZ(start, z);
   out.cost = cost;
-  jacobian(problem, c, start, z, jac);
+  jacobian(problem, c, start, z, jac, pool);
   out.jacobian = jac;
   return out;
 }
@@ -358,26 +367,34 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
   // Global stage: the start and a seeded sample of the box, at every delay.
   const auto t0 = Clock::now();
   struct Candidate {
-    double cost;
+    double cost = kInf;
     GreyModel model;
   };
-  std::vector<Candidate> candidates;
-  for (int sample = 0; sample < std::max(1, options.global_samples); ++sample) {
-    Eigen::VectorXd z = c.toZ(start);
-    if (sample > 0) {
-      core::RandomStream rng(options.seed, 0x6772657962ULL, static_cast<std::uint64_t>(sample));
-      for (Eigen::Index k = 0; k < z.size(); ++k) z[k] = rng.uniform(c.lo[k], c.hi[k]);
-    }
-    for (int delay = 0; delay <= options.max_delay_samples; ++delay) {
+  core::JobPool pool(std::max(1, options.threads));
+  const int samples = std::max(1, options.global_samples);
+  const int delays = options.max_delay_samples + 1;
+  std::vector<Candidate> candidates(static_cast<std::size_t>(samples * delays));
+  constexpr int kBlock = 25;  // points per progress line
+  for (int first = 0; first < samples; first += kBlock) {
+    const int count = std::min(kBlock, samples - first);
+    pool.run(count * delays, [&](int task) {
+      const int sample = first + task / delays;
+      Eigen::VectorXd z = c.toZ(start);
+      if (sample > 0) {
+        core::RandomStream rng(options.seed, 0x6772657962ULL, static_cast<std::uint64_t>(sample));
+        for (Eigen::Index k = 0; k < z.size(); ++k) z[k] = rng.uniform(c.lo[k], c.hi[k]);
+      }
       GreyModel m = c.fromZ(start, z);
-      m.delay_samples = delay;
-      candidates.push_back({problem.cost(m), m});
-    }
-    if (options.progress && (sample + 1) % 50 == 0) {
-      say("global stage: " + std::to_string(sample + 1) + "/" + std::to_string(options.global_samples) + " points");
-    }
+      m.delay_samples = task % delays;
+      const double cost = problem.cost(m);
+      candidates[static_cast<std::size_t>(sample * delays + task % delays)] = {std::isfinite(cost) ? cost : kInf, m};
+    });
+    say("global stage: " + std::to_string(first + count) + "/" + std::to_string(samples) + " points x " +
+        std::to_string(delays) + " delays");
   }
-  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  // Ties keep the sampling order, so the result does not depend on the thread count.
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
   FitResult result;
   result.global_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
 
@@ -387,7 +404,7 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
   best.cost = std::numeric_limits<double>::infinity();
   const std::size_t count = std::min(candidates.size(), static_cast<std::size_t>(std::max(1, options.polished_candidates)));
   for (std::size_t i = 0; i < count; ++i) {
-    Polished p = polish(problem, c, candidates[i].model, options.max_iterations);
+    Polished p = polish(problem, c, candidates[i].model, options.max_iterations, pool);
     std::ostringstream line;
     line << "polish " << i + 1 << "/" << count << ": delay " << p.model.delay_samples << " samples, cost "
          << candidates[i].cost << " -> " << p.cost;
@@ -398,7 +415,7 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
     GreyModel m = best.model;
     m.delay_samples += step;
     if (m.delay_samples < 0 || m.delay_samples > options.max_delay_samples) continue;
-    Polished p = polish(problem, c, m, options.max_iterations);
+    Polished p = polish(problem, c, m, options.max_iterations, pool);
     say("delay " + std::to_string(m.delay_samples) + " samples: cost " + std::to_string(p.cost));
     if (p.cost < best.cost) best = std::move(p);
   }
@@ -406,7 +423,7 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
 
   result.model = best.model;
   result.cost = best.cost;
-  result.evaluations = problem.evaluations;
+  result.evaluations = problem.evaluations.load();
   result.free_params = c.index;
   // Covariance of the fit coordinates: s^2 (J^T J)^+, s^2 the residual variance.
   const Eigen::Index np = best.jacobian.cols();

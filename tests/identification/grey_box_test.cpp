@@ -147,6 +147,7 @@ TEST(GreyBoxTest, NoiseFreeFitRecoversTheParametersAndTheDelayFromEveryStart) {
   FitOptions options = defaultFitOptions(nominal, 3.0);
   options.global_samples = 60;
   options.polished_candidates = 2;
+  options.threads = 2;
   // Starts: the box's low corner, high corner, and a mixed corner (slightly inside).
   std::vector<GreyModel> starts;
   for (int corner = 0; corner < 3; ++corner) {
@@ -210,6 +211,25 @@ TEST(GreyBoxTest, NoisyFitStandardErrorsCoverTheTruth) {
   }
   ASSERT_EQ(fit.correlation.rows(), static_cast<Eigen::Index>(fit.free_params.size()));
   for (Eigen::Index k = 0; k < fit.correlation.rows(); ++k) EXPECT_NEAR(fit.correlation(k, k), 1.0, 1e-9);
+}
+
+TEST(GreyBoxTest, TheResultDoesNotDependOnTheThreadCount) {
+  const GreyModel want = truth();
+  const auto data = twoExperiments(want);
+  GreyModel start = want;
+  start.value[kFlowGain] *= 1.5;
+  start.value[kInertia] /= 1.5;
+  FitOptions options = defaultFitOptions(want, 3.0);
+  options.global_samples = 8;
+  options.polished_candidates = 1;
+  options.max_iterations = 4;
+  const FitResult one = fitGreyModel(data, start, options);
+  options.threads = 2;
+  const FitResult two = fitGreyModel(data, start, options);
+  EXPECT_EQ(one.model.value, two.model.value);
+  EXPECT_EQ(one.model.delay_samples, two.model.delay_samples);
+  EXPECT_EQ(one.cost, two.cost);
+  EXPECT_EQ(one.evaluations, two.evaluations);
 }
 
 TEST(GreyBoxTest, FitPercentMatchesItsDefinition) {

@@ -108,6 +108,9 @@ struct FitOptions {
   int polished_candidates = 3;    ///< best global points polished
   int max_iterations = 60;        ///< Levenberg-Marquardt iterations per polish
   std::uint64_t seed = 1;         ///< the global stage's sampling
+  /// Threads running the simulations (the global stage's points, the Jacobian's columns); the
+  /// result does not depend on it.
+  int threads = 1;
   /// Progress lines while fitting (nullptr: silent).
   std::function<void(const std::string&)> progress;
 };
