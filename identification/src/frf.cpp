@@ -2,6 +2,7 @@
 
 #include <unsupported/Eigen/FFT>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>

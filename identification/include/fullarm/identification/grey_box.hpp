@@ -26,6 +26,7 @@
 /// Jacobian at the optimum; directions whose singular value is negligible are named.
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
