@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
   id::GreyModel truth;
   truth.value = {0.4, 8.0e3, 5.0e-4, 0.06, 0.8, 0.6, 4.0, 0.0, 0.0, 0.0};
   truth.delay_samples = 2;
-  const id::SampledSignal prbs = id::prbs(1.5, 12, 5, 1, kT);  // 20.5 s
+  const id::SampledSignal prbs = id::prbs(1.5, 12, 5, 1, kT);                    // 20.5 s
   const id::Multisine ms = id::schroederMultisine(2.0, 0.5, 120.0, 4.0, 5, kT);  // 20 s
   const std::vector<id::ExperimentData> data{experiment(truth, prbs.value_v, 10.0),
                                              experiment(truth, ms.signal.value_v, 15.0)};

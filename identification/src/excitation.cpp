@@ -43,11 +43,10 @@ SampledSignal emptySignal(std::size_t n, double sample_period_s) {
 // Feedback taps (1-based register positions) of a maximum-length Fibonacci LFSR per order
 // (primitive trinomials and pentanomials; Xilinx XAPP052 table). Unused entries are 0.
 constexpr std::array<std::array<int, 4>, 25> kPrbsTaps{{
-    {0, 0, 0, 0},     {0, 0, 0, 0},      {2, 1, 0, 0},      {3, 2, 0, 0},      {4, 3, 0, 0},
-    {5, 3, 0, 0},     {6, 5, 0, 0},      {7, 6, 0, 0},      {8, 6, 5, 4},      {9, 5, 0, 0},
-    {10, 7, 0, 0},    {11, 9, 0, 0},     {12, 6, 4, 1},     {13, 4, 3, 1},     {14, 5, 3, 1},
-    {15, 14, 0, 0},   {16, 15, 13, 4},   {17, 14, 0, 0},    {18, 11, 0, 0},    {19, 6, 2, 1},
-    {20, 17, 0, 0},   {21, 19, 0, 0},    {22, 21, 0, 0},    {23, 18, 0, 0},    {24, 23, 22, 17},
+    {0, 0, 0, 0},   {0, 0, 0, 0},   {2, 1, 0, 0},    {3, 2, 0, 0},     {4, 3, 0, 0},   {5, 3, 0, 0},  {6, 5, 0, 0},
+    {7, 6, 0, 0},   {8, 6, 5, 4},   {9, 5, 0, 0},    {10, 7, 0, 0},    {11, 9, 0, 0},  {12, 6, 4, 1}, {13, 4, 3, 1},
+    {14, 5, 3, 1},  {15, 14, 0, 0}, {16, 15, 13, 4}, {17, 14, 0, 0},   {18, 11, 0, 0}, {19, 6, 2, 1}, {20, 17, 0, 0},
+    {21, 19, 0, 0}, {22, 21, 0, 0}, {23, 18, 0, 0},  {24, 23, 22, 17},
 }};
 
 }  // namespace
@@ -64,8 +63,7 @@ SampledSignal linearChirp(double amplitude_v, double start_hz, double stop_hz, d
   return s;
 }
 
-SampledSignal logChirp(double amplitude_v, double start_hz, double stop_hz, double duration_s,
-                       double sample_period_s) {
+SampledSignal logChirp(double amplitude_v, double start_hz, double stop_hz, double duration_s, double sample_period_s) {
   requireChirpBand(start_hz, stop_hz, duration_s, sample_period_s);
   if (!(stop_hz > start_hz)) {
     throw std::invalid_argument("a logarithmic chirp needs stop frequency > start frequency, got " +
@@ -129,7 +127,8 @@ Multisine schroederMultisine(double amplitude_v, double low_hz, double high_hz, 
   if (m.samples_per_period < 2) throw std::invalid_argument("multisine period shorter than two samples");
   m.fundamental_hz = 1.0 / (m.samples_per_period * sample_period_s);
   const int k_lo = std::max(1, static_cast<int>(std::ceil(low_hz / m.fundamental_hz - 1e-9)));
-  const int k_hi = std::min(static_cast<int>(std::floor(high_hz / m.fundamental_hz + 1e-9)), (m.samples_per_period - 1) / 2);
+  const int k_hi =
+      std::min(static_cast<int>(std::floor(high_hz / m.fundamental_hz + 1e-9)), (m.samples_per_period - 1) / 2);
   if (k_hi < k_lo) {
     throw std::invalid_argument("no harmonic of " + std::to_string(m.fundamental_hz) + " Hz lies in " +
                                 std::to_string(low_hz) + ".." + std::to_string(high_hz) + " Hz");

@@ -41,7 +41,8 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   for (auto& c : result.log.columns) c.reserve(excitation.value_v.size());
 
   hil::JointSample sample;
-  if (!device.read(sample).ok()) throw std::runtime_error(std::string("experiment: the device could not be read: ") + device.status().message);
+  if (!device.read(sample).ok())
+    throw std::runtime_error(std::string("experiment: the device could not be read: ") + device.status().message);
   result.hold_rad.assign(sample.q_rad.data(), sample.q_rad.data() + n);
   if (!(sample.q_rad[j] >= lo && sample.q_rad[j] <= hi)) {
     throw std::invalid_argument("experiment: joint " + std::to_string(j) + " starts at " +

@@ -17,10 +17,11 @@ FrfEstimate estimateFrf(const std::vector<double>& r, const std::vector<double>&
     throw std::invalid_argument("FRF: excitation, command and output differ in length (" + std::to_string(r.size()) +
                                 ", " + std::to_string(u.size()) + ", " + std::to_string(y.size()) + ")");
   }
-  if (n < 8) throw std::invalid_argument("FRF: segment of " + std::to_string(options.segment_samples) + " samples, need >= 8");
+  if (n < 8)
+    throw std::invalid_argument("FRF: segment of " + std::to_string(options.segment_samples) + " samples, need >= 8");
   if (r.size() < n) {
-    throw std::invalid_argument("FRF: record of " + std::to_string(r.size()) + " samples is shorter than one segment (" +
-                                std::to_string(n) + ")");
+    throw std::invalid_argument("FRF: record of " + std::to_string(r.size()) +
+                                " samples is shorter than one segment (" + std::to_string(n) + ")");
   }
   if (!(options.overlap >= 0.0 && options.overlap < 1.0)) {
     throw std::invalid_argument("FRF: overlap " + std::to_string(options.overlap) + " outside [0, 1)");
@@ -33,7 +34,8 @@ FrfEstimate estimateFrf(const std::vector<double>& r, const std::vector<double>&
       window[k] = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(k) / static_cast<double>(n));
     }
   }
-  const std::size_t step = std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(static_cast<double>(n) * (1.0 - options.overlap))));
+  const std::size_t step =
+      std::max<std::size_t>(1, static_cast<std::size_t>(std::floor(static_cast<double>(n) * (1.0 - options.overlap))));
   const std::size_t bins = n / 2;  // k = 1 .. n/2 - 1 kept
   using C = std::complex<double>;
   std::vector<double> s_rr(bins, 0.0), s_uu(bins, 0.0), s_yy(bins, 0.0);
@@ -65,7 +67,9 @@ FrfEstimate estimateFrf(const std::vector<double>& r, const std::vector<double>&
     ++e.segments;
   }
   const double df = 1.0 / (static_cast<double>(n) * sample_period_s);
-  auto coherence = [](C sxy, double sxx, double syy) { return sxx > 0.0 && syy > 0.0 ? std::norm(sxy) / (sxx * syy) : 0.0; };
+  auto coherence = [](C sxy, double sxx, double syy) {
+    return sxx > 0.0 && syy > 0.0 ? std::norm(sxy) / (sxx * syy) : 0.0;
+  };
   // The Hann window's main lobe spans three bins: bin 1 shares it with DC, which the mean
   // removal has altered, so a windowed estimate starts at bin 2.
   const std::size_t first_bin = options.hann_window ? 2 : 1;
@@ -80,6 +84,8 @@ FrfEstimate estimateFrf(const std::vector<double>& r, const std::vector<double>&
   return e;
 }
 
-double magnitudeDb(std::complex<double> h) noexcept { return 20.0 * std::log10(std::abs(h)); }
+double magnitudeDb(std::complex<double> h) noexcept {
+  return 20.0 * std::log10(std::abs(h));
+}
 
 }  // namespace fullarm::identification

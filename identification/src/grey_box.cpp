@@ -225,17 +225,28 @@ Polished polish(Problem& problem, const Coordinates& c, const GreyModel& start, 
 
 const char* greyParamName(int index) noexcept {
   switch (index) {
-    case kFlowGain: return "flow_gain_radps_per_v";
-    case kStiffness: return "hydraulic_stiffness_nm_per_rad";
-    case kLeakage: return "leakage_radps_per_nm";
-    case kInertia: return "inertia_kgm2";
-    case kViscous: return "viscous_nms_per_rad";
-    case kCoulomb: return "coulomb_nm";
-    case kLoadTorque: return "load_torque_nm";
-    case kValveOffset: return "valve_offset_v";
-    case kAngleOffset: return "angle_offset_rad";
-    case kTorqueOffset: return "torque_offset_nm";
-    default: return "unknown";
+    case kFlowGain:
+      return "flow_gain_radps_per_v";
+    case kStiffness:
+      return "hydraulic_stiffness_nm_per_rad";
+    case kLeakage:
+      return "leakage_radps_per_nm";
+    case kInertia:
+      return "inertia_kgm2";
+    case kViscous:
+      return "viscous_nms_per_rad";
+    case kCoulomb:
+      return "coulomb_nm";
+    case kLoadTorque:
+      return "load_torque_nm";
+    case kValveOffset:
+      return "valve_offset_v";
+    case kAngleOffset:
+      return "angle_offset_rad";
+    case kTorqueOffset:
+      return "torque_offset_nm";
+    default:
+      return "unknown";
   }
 }
 
@@ -402,7 +413,8 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
   const auto t1 = Clock::now();
   Polished best;
   best.cost = std::numeric_limits<double>::infinity();
-  const std::size_t count = std::min(candidates.size(), static_cast<std::size_t>(std::max(1, options.polished_candidates)));
+  const std::size_t count =
+      std::min(candidates.size(), static_cast<std::size_t>(std::max(1, options.polished_candidates)));
   for (std::size_t i = 0; i < count; ++i) {
     Polished p = polish(problem, c, candidates[i].model, options.max_iterations, pool);
     std::ostringstream line;
@@ -449,8 +461,9 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
           if (std::abs(weight) < 0.2) continue;
           std::ostringstream term;
           term.precision(2);
-          term << (direction.empty() ? "" : (weight > 0 ? " + " : " - ")) << (direction.empty() && weight < 0 ? "-" : "")
-               << std::abs(weight) << " " << greyParamName(c.index[static_cast<std::size_t>(j)]);
+          term << (direction.empty() ? "" : (weight > 0 ? " + " : " - "))
+               << (direction.empty() && weight < 0 ? "-" : "") << std::abs(weight) << " "
+               << greyParamName(c.index[static_cast<std::size_t>(j)]);
           direction += term.str();
         }
         result.unidentifiable.push_back(direction);

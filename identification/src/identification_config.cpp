@@ -93,6 +93,8 @@ IdentificationConfig loadIdentificationConfig(const std::filesystem::path& file)
   return parseIdentificationConfig(text.str(), file);
 }
 
-std::filesystem::path defaultIdentificationConfigPath() { return core::defaultConfigPath("identification.yaml"); }
+std::filesystem::path defaultIdentificationConfigPath() {
+  return core::defaultConfigPath("identification.yaml");
+}
 
 }  // namespace fullarm::identification

@@ -90,8 +90,7 @@ void writeSignalCsv(const std::filesystem::path& file, const SignalTable& table)
   if (!out) throw std::runtime_error(file.string() + ": write failed");
 }
 
-SignalTable parseSignalCsv(std::string_view text, const std::string& source,
-                           const std::vector<std::string>& required) {
+SignalTable parseSignalCsv(std::string_view text, const std::string& source, const std::vector<std::string>& required) {
   std::vector<std::string_view> lines;
   {
     std::size_t start = 0;

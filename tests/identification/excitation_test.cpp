@@ -165,7 +165,8 @@ TEST(ExcitationTest, StepsHoldEachLevel) {
 
 TEST(ExcitationTest, CrestFactorOfASineIsRootTwo) {
   std::vector<double> v(1000);
-  for (std::size_t k = 0; k < v.size(); ++k) v[k] = std::sin(2.0 * std::numbers::pi * 7.0 * static_cast<double>(k) / 1000.0 + 0.3);
+  for (std::size_t k = 0; k < v.size(); ++k)
+    v[k] = std::sin(2.0 * std::numbers::pi * 7.0 * static_cast<double>(k) / 1000.0 + 0.3);
   const double peak_ratio = crestFactor(v);
   EXPECT_NEAR(peak_ratio, std::sqrt(2.0), 1e-3);
   EXPECT_EQ(crestFactor({}), 0.0);

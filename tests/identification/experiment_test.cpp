@@ -9,7 +9,6 @@
 #include <cmath>
 #include <memory>
 
-
 namespace fullarm::identification {
 namespace {
 
@@ -19,11 +18,12 @@ constexpr double kT = 1.0e-3;
 class IntegratorDevice final : public hil::IoDevice {
  public:
   IntegratorDevice(int joints, double ramp_in_s)
-      : hil::IoDevice(arm::JointSelection(joints, [joints] {
-                        std::vector<int> all;
-                        for (int k = 0; k < joints; ++k) all.push_back(k);
-                        return all;
-                      }()),
+      : hil::IoDevice(arm::JointSelection(joints,
+                                          [joints] {
+                                            std::vector<int> all;
+                                            for (int k = 0; k < joints; ++k) all.push_back(k);
+                                            return all;
+                                          }()),
                       kT, hil::IoSafetyParams{ramp_in_s, 10.0}),
         q_(hil::IoVector::Constant(joints, 0.2)),
         held_(hil::IoVector::Zero(joints)) {}

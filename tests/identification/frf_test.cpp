@@ -7,8 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdio>
 #include <complex>
+#include <cstdio>
 #include <numbers>
 
 #include "fullarm/core/random.hpp"
@@ -42,7 +42,8 @@ struct IntegratingPlant {
 /// A stable FIR filter (exact response, no transient beyond its length).
 std::complex<double> firResponse(const std::vector<double>& b, double f_hz) {
   std::complex<double> h{};
-  for (std::size_t k = 0; k < b.size(); ++k) h += b[k] * std::polar(1.0, -2.0 * std::numbers::pi * f_hz * kT * static_cast<double>(k));
+  for (std::size_t k = 0; k < b.size(); ++k)
+    h += b[k] * std::polar(1.0, -2.0 * std::numbers::pi * f_hz * kT * static_cast<double>(k));
   return h;
 }
 
@@ -109,7 +110,8 @@ TEST(FrfTest, UnderFeedbackWithSensorNoiseH1IsBiasedAndTheInstrumentEstimateIsNo
     h1_bias_sum_db += magnitudeDb(e.h1[i] / truth);
   }
   // The coherent band is a few hertz wide at this noise level (|G| falls as 1 / f).
-  std::printf("coherent bins %d, worst instrument %.3f dB, mean H1 bias %.3f dB\n", coherent, worst_instrument_db, h1_bias_sum_db / std::max(coherent, 1));
+  std::printf("coherent bins %d, worst instrument %.3f dB, mean H1 bias %.3f dB\n", coherent, worst_instrument_db,
+              h1_bias_sum_db / std::max(coherent, 1));
   ASSERT_GE(coherent, 10);
   EXPECT_LT(worst_instrument_db, 1.0);
   // H1 ~ (G - K s_n^2 / S_rr) / (1 + K^2 s_n^2 / S_rr): 1 + 0.36 alone is -2.7 dB.
@@ -121,8 +123,8 @@ TEST(FrfTest, UnderFeedbackWithSensorNoiseH1IsBiasedAndTheInstrumentEstimateIsNo
   for (std::size_t i = 0; i < e.frequency_hz.size(); ++i) {
     if (e.coherence_ry[i] <= 0.9) continue;
     const auto g = plant.response(e.frequency_hz[i]);
-    const auto h1 = (g - gain_v_per_rad * noise_to_excitation) /
-                    (1.0 + gain_v_per_rad * gain_v_per_rad * noise_to_excitation);
+    const auto h1 =
+        (g - gain_v_per_rad * noise_to_excitation) / (1.0 + gain_v_per_rad * gain_v_per_rad * noise_to_excitation);
     predicted_sum_db += magnitudeDb(h1 / g);
   }
   EXPECT_NEAR(h1_mean_bias_db, predicted_sum_db / coherent, 0.5);

@@ -51,8 +51,12 @@ SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double 
              wn * wn * (u - x[3]) - 2.0 * m.spool_damping * wn * x[4],
              wf * (cell(x) - x[5])};
   };
-  X x{start_rad - p[kAngleOffset], 0.0, p[kLoadTorque],
-      p[kLeakage] * p[kLoadTorque] / p[kFlowGain] - p[kValveOffset], 0.0, p[kLoadTorque]};
+  X x{start_rad - p[kAngleOffset],
+      0.0,
+      p[kLoadTorque],
+      p[kLeakage] * p[kLoadTorque] / p[kFlowGain] - p[kValveOffset],
+      0.0,
+      p[kLoadTorque]};
   SignalTable t;
   t.names = kExperimentColumns;
   t.columns.assign(5, {});
@@ -62,7 +66,8 @@ SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double 
   for (std::size_t k = 0; k < r.size(); ++k) {
     q_out.push_back(x[0] + p[kAngleOffset]);
     tau_out.push_back((m.torque_filter_hz > 0.0 ? x[5] : cell(x)) + p[kTorqueOffset]);
-    const std::size_t seen = k >= static_cast<std::size_t>(m.delay_samples) ? k - static_cast<std::size_t>(m.delay_samples) : 0;
+    const std::size_t seen =
+        k >= static_cast<std::size_t>(m.delay_samples) ? k - static_cast<std::size_t>(m.delay_samples) : 0;
     const double u = hold_gain * (start_rad - q_out[seen]) + r[k];
     t.columns[0].push_back(static_cast<double>(k) * kT);
     t.columns[1].push_back(r[k]);
@@ -86,8 +91,8 @@ SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double 
 }
 
 std::vector<ExperimentData> twoExperiments(const GreyModel& m) {
-  const SampledSignal prbs_r = prbs(1.5, 10, 3, 2, kT);                       // 6.1 s, band ~170 Hz
-  const Multisine ms = schroederMultisine(2.0, 0.5, 120.0, 2.0, 3, kT);      // 6 s
+  const SampledSignal prbs_r = prbs(1.5, 10, 3, 2, kT);                  // 6.1 s, band ~170 Hz
+  const Multisine ms = schroederMultisine(2.0, 0.5, 120.0, 2.0, 3, kT);  // 6 s
   return {experimentFromLog(experiment(m, prbs_r.value_v, 10.0, 0.3)),
           experimentFromLog(experiment(m, ms.signal.value_v, 15.0, -0.2))};
 }

@@ -160,9 +160,15 @@ TEST(SignalCsvTest, FuzzedLogsAreAcceptedConsistentlyOrRejectedWithALine) {
       const auto pos = static_cast<std::size_t>(rng.uniformInt(0, static_cast<int>(text.size()) - 1));
       const char c = alphabet[static_cast<std::size_t>(rng.uniformInt(0, static_cast<int>(alphabet.size()) - 1))];
       switch (rng.uniformInt(0, 2)) {
-        case 0: text[pos] = c; break;
-        case 1: text.insert(pos, 1, c); break;
-        default: text.erase(pos, 1); break;
+        case 0:
+          text[pos] = c;
+          break;
+        case 1:
+          text.insert(pos, 1, c);
+          break;
+        default:
+          text.erase(pos, 1);
+          break;
       }
       if (text.empty()) break;
     }

@@ -35,8 +35,7 @@ struct SampledSignal {
 /// +-A, each clock period `clock_samples` samples long; `periods` whole periods are generated.
 /// Its power spectrum is flat to within 3 dB up to about 0.44 / (clock_samples T).
 /// @throws std::invalid_argument for an order outside 2..24, clock_samples < 1 or periods < 1
-[[nodiscard]] SampledSignal prbs(double amplitude_v, int order, int clock_samples, int periods,
-                                 double sample_period_s);
+[[nodiscard]] SampledSignal prbs(double amplitude_v, int order, int clock_samples, int periods, double sample_period_s);
 
 /// Clock period (in samples) of a PRBS whose flat band reaches `band_hz`: round(1 / (2 B T)), at
 /// least 1 (the first spectral null then sits at about 2 B).
@@ -46,9 +45,9 @@ struct SampledSignal {
 /// A Schroeder-phase multisine and its figures.
 struct Multisine {
   SampledSignal signal;
-  double fundamental_hz = 0.0;     ///< 1 / period
-  std::vector<int> harmonics;      ///< excited harmonic numbers k (frequency k f0)
-  double crest_factor = 0.0;       ///< peak |u| / RMS(u) over one period
+  double fundamental_hz = 0.0;  ///< 1 / period
+  std::vector<int> harmonics;   ///< excited harmonic numbers k (frequency k f0)
+  double crest_factor = 0.0;    ///< peak |u| / RMS(u) over one period
   int samples_per_period = 0;
 };
 

@@ -27,22 +27,22 @@ namespace fullarm::identification {
 
 /// Settings of one experiment.
 struct ExperimentOptions {
-  int joint = 0;                       ///< the driven joint (device order)
-  double hold_gain_v_per_rad = 10.0;   ///< K of the driven joint's position hold
-  double held_gain_v_per_rad = 30.0;   ///< K of the other joints' holds
-  double settle_s = 1.0;               ///< hold without excitation first (covers the device's ramp-in)
-  double min_rad = -1.0;               ///< the driven joint's lower limit
-  double max_rad = 1.0;                ///< the driven joint's upper limit
-  double limit_margin_rad = 0.05;      ///< stop when the driven joint comes this close to a limit
-  double held_drift_limit_rad = 0.1;   ///< stop when a held joint leaves its hold by more than this
+  int joint = 0;                      ///< the driven joint (device order)
+  double hold_gain_v_per_rad = 10.0;  ///< K of the driven joint's position hold
+  double held_gain_v_per_rad = 30.0;  ///< K of the other joints' holds
+  double settle_s = 1.0;              ///< hold without excitation first (covers the device's ramp-in)
+  double min_rad = -1.0;              ///< the driven joint's lower limit
+  double max_rad = 1.0;               ///< the driven joint's upper limit
+  double limit_margin_rad = 0.05;     ///< stop when the driven joint comes this close to a limit
+  double held_drift_limit_rad = 0.1;  ///< stop when a held joint leaves its hold by more than this
 };
 
 /// Outcome of one experiment.
 struct ExperimentResult {
-  SignalTable log;             ///< kExperimentColumns, one row per excitation sample run
+  SignalTable log;               ///< kExperimentColumns, one row per excitation sample run
   std::vector<double> hold_rad;  ///< the hold angle of every device joint
-  bool completed = false;      ///< the whole excitation ran
-  std::string stop_reason;     ///< why it stopped early (empty when completed)
+  bool completed = false;        ///< the whole excitation ran
+  std::string stop_reason;       ///< why it stopped early (empty when completed)
 };
 
 /// Runs the experiment: configures the device if needed, activates it, holds for

@@ -26,8 +26,8 @@ namespace fullarm::identification {
 
 /// Result of a gravity fit.
 struct GravityFit {
-  Eigen::VectorXd parameters;      ///< pi, closest to the nominal among the least-squares solutions
-  int rank = 0;                    ///< number of base parameters the holds determine
+  Eigen::VectorXd parameters;       ///< pi, closest to the nominal among the least-squares solutions
+  int rank = 0;                     ///< number of base parameters the holds determine
   Eigen::MatrixXd base_directions;  ///< rank x 4 links: rows span what the holds determine
   Eigen::VectorXd base_values;      ///< base_directions * parameters
   Eigen::VectorXd residual_rms_nm;  ///< per joint, over the holds
@@ -38,7 +38,8 @@ struct GravityFit {
 /// (both configuration vectors). pi = pi_nom + Y^+ (tau - Y pi_nom) over the links that have
 /// mass in `nominal` (massless links stay massless).
 /// @throws std::invalid_argument for no holds or vectors of the wrong size
-[[nodiscard]] GravityFit fitGravityParameters(const arm::ArmModel& nominal, const std::vector<Eigen::VectorXd>& postures,
+[[nodiscard]] GravityFit fitGravityParameters(const arm::ArmModel& nominal,
+                                              const std::vector<Eigen::VectorXd>& postures,
                                               const std::vector<Eigen::VectorXd>& torques_nm);
 
 }  // namespace fullarm::identification

@@ -39,16 +39,16 @@ namespace fullarm::identification {
 
 /// The parameters of the reduced joint model.
 enum GreyParam : int {
-  kFlowGain = 0,   ///< a [rad/s/V]
-  kStiffness,      ///< K_h [N m/rad]
-  kLeakage,        ///< c [rad/s/(N m)]
-  kInertia,        ///< J [kg m^2]
-  kViscous,        ///< b [N m s/rad]
-  kCoulomb,        ///< tau_c [N m]
-  kLoadTorque,     ///< tau_g [N m]
-  kValveOffset,    ///< u_0 [V]
-  kAngleOffset,    ///< q_off [rad]
-  kTorqueOffset,   ///< tau_off [N m]
+  kFlowGain = 0,  ///< a [rad/s/V]
+  kStiffness,     ///< K_h [N m/rad]
+  kLeakage,       ///< c [rad/s/(N m)]
+  kInertia,       ///< J [kg m^2]
+  kViscous,       ///< b [N m s/rad]
+  kCoulomb,       ///< tau_c [N m]
+  kLoadTorque,    ///< tau_g [N m]
+  kValveOffset,   ///< u_0 [V]
+  kAngleOffset,   ///< q_off [rad]
+  kTorqueOffset,  ///< tau_off [N m]
   kGreyParams
 };
 
@@ -105,10 +105,10 @@ struct ParamSpec {
 struct FitOptions {
   std::array<ParamSpec, kGreyParams> params{};
   int max_delay_samples = 4;
-  int global_samples = 200;       ///< points of the global stage (per delay)
-  int polished_candidates = 3;    ///< best global points polished
-  int max_iterations = 60;        ///< Levenberg-Marquardt iterations per polish
-  std::uint64_t seed = 1;         ///< the global stage's sampling
+  int global_samples = 200;     ///< points of the global stage (per delay)
+  int polished_candidates = 3;  ///< best global points polished
+  int max_iterations = 60;      ///< Levenberg-Marquardt iterations per polish
+  std::uint64_t seed = 1;       ///< the global stage's sampling
   /// Threads running the simulations (the global stage's points, the Jacobian's columns); the
   /// result does not depend on it.
   int threads = 1;
@@ -123,14 +123,14 @@ struct FitOptions {
 /// Result of a fit.
 struct FitResult {
   GreyModel model;
-  double cost = 0.0;                                    ///< half the sum of squared normalised residuals
-  std::array<double, kGreyParams> standard_error{};     ///< in the parameter's unit (0 when fixed)
-  Eigen::MatrixXd correlation;                           ///< of the free parameters, in order
-  std::vector<int> free_params;                          ///< indices of the free parameters
-  std::vector<std::string> unidentifiable;               ///< directions the data cannot determine
-  int evaluations = 0;                                   ///< closed-loop simulations run
-  double global_seconds = 0.0;                           ///< wall time of the global stage
-  double polish_seconds = 0.0;                           ///< wall time of the polish
+  double cost = 0.0;                                 ///< half the sum of squared normalised residuals
+  std::array<double, kGreyParams> standard_error{};  ///< in the parameter's unit (0 when fixed)
+  Eigen::MatrixXd correlation;                       ///< of the free parameters, in order
+  std::vector<int> free_params;                      ///< indices of the free parameters
+  std::vector<std::string> unidentifiable;           ///< directions the data cannot determine
+  int evaluations = 0;                               ///< closed-loop simulations run
+  double global_seconds = 0.0;                       ///< wall time of the global stage
+  double polish_seconds = 0.0;                       ///< wall time of the polish
 };
 
 /// Fits the model to the experiments jointly, starting from `start` (the global stage includes it).
