@@ -18,8 +18,10 @@
 #include "fullarm/hil/io_device.hpp"
 #include "fullarm/hil/log_records.hpp"
 #include "fullarm/hil/run_log.hpp"
+#include "fullarm/identification/signal_csv.hpp"
 #include "fullarm/reports/report.hpp"
 #include "haptics_command.hpp"
+#include "identify_command.hpp"
 #include "output_files.hpp"
 #include "plant_command.hpp"
 #include "run_command.hpp"
@@ -190,6 +192,8 @@ struct CommandLine {
   RunCommandOptions run_options;
   CLI::App* replay = nullptr;
   ReplayCommandOptions replay_options;
+  CLI::App* identify = nullptr;
+  IdentifyOptions identify_options;
 
   CommandLine() {
     app.set_version_flag("--version", std::string(reports::fullarmVersion()));
@@ -220,6 +224,7 @@ struct CommandLine {
     haptics_query = addHapticsCommand(app, haptics_options, table);
     run = addRunCommand(app, run_options, table);
     replay = addReplayCommand(app, replay_options, table);
+    identify = addIdentifyCommand(app, identify_options, table);
   }
 };
 
@@ -247,6 +252,10 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
     return runRun(cli.run_options, command_line);
   }
   if (cli.replay->parsed()) return runReplay(cli.replay_options);
+  if (cli.identify->parsed()) {
+    cli.identify_options.progress = &progress;
+    return runIdentify(cli.identify_options);
+  }
   return kExitBadInput;
 }
 
@@ -290,6 +299,9 @@ int exitCodeForException(const std::exception_ptr& error, std::ostream& err) {
     err << "fullarm: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const hil::RecordError& e) {
+    err << "fullarm: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const identification::CsvFormatError& e) {
     err << "fullarm: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const std::filesystem::filesystem_error& e) {

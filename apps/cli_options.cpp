@@ -293,6 +293,12 @@ CLI::Option* OptionDeclarer::file(const std::string& name, std::string& path, co
   return command_.add_option(name, path, description)->check(fileValidator());
 }
 
+CLI::Option* OptionDeclarer::files(const std::string& name, std::vector<std::string>& paths,
+                                   const std::string& description) {
+  record(name, OptionKind::kFile);
+  return command_.add_option(name, paths, description)->check(fileValidator());
+}
+
 CLI::Option* OptionDeclarer::folder(const std::string& name, std::string& path, const std::string& description) {
   record(name, OptionKind::kFolder);
   return command_.add_option(name, path, description)->check(folderValidator());

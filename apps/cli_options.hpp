@@ -95,6 +95,8 @@ class OptionDeclarer {
                       std::vector<std::string> choices);
   /// An existing file.
   CLI::Option* file(const std::string& name, std::string& path, const std::string& description);
+  /// One or more existing files.
+  CLI::Option* files(const std::string& name, std::vector<std::string>& paths, const std::string& description);
   /// An output folder (not empty).
   CLI::Option* folder(const std::string& name, std::string& path, const std::string& description);
   /// A flag (no value). `name` may hold CLI11's alternatives ("--a,!--no-a").

@@ -1,0 +1,563 @@
+#include "identify_command.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "cli_values.hpp"
+#include "exit_codes.hpp"
+#include "fullarm/arm/arm_data.hpp"
+#include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/arm/dynamics.hpp"
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/hil/sim_io.hpp"
+#include "fullarm/hil/simulated_arm.hpp"
+#include "fullarm/identification/excitation.hpp"
+#include "fullarm/identification/experiment.hpp"
+#include "fullarm/identification/frf.hpp"
+#include "fullarm/identification/grey_box.hpp"
+#include "fullarm/identification/identification_config.hpp"
+#include "fullarm/identification/identified_model.hpp"
+#include "fullarm/identification/joint_groups.hpp"
+#include "fullarm/identification/signal_csv.hpp"
+#include "fullarm/identification/validation.hpp"
+#include "fullarm/plant/plant_config.hpp"
+#include "output_files.hpp"
+
+namespace fullarm::app {
+namespace {
+
+namespace id = identification;
+
+constexpr double kSamplePeriod_s = 1.0e-3;  // the loop's 1 kHz
+constexpr double kBandHz = 30.0;            // excitation band (PRBS flat band, multisine top)
+constexpr int kLatencySamples = 1;          // the simulated DTS's I/O latency
+constexpr std::size_t kMaxPlotPoints = 2000;
+constexpr const char* kIdentifiedFile = "identified.yaml";
+constexpr const char* kFitLogFile = "experiment_fit.csv";
+constexpr const char* kValidationLogFile = "experiment_validation.csv";
+
+// One experiment: its log, where it came from and how it ended.
+struct Experiment {
+  std::string name;  // file name (written or read)
+  id::SignalTable log;
+  id::ExperimentData data;
+  bool completed = true;
+  std::string stop_reason;
+};
+
+// Everything a run produced, for the report and the summary.
+struct Outcome {
+  std::string joint;
+  std::string source;  // "sim" or "logs"
+  std::vector<Experiment> fit_experiments;
+  Experiment validation;
+  id::GreyModel start;
+  std::string start_source;
+  id::IdentificationConfig config;
+  id::FitResult fit;
+  id::ModelValidation validation_result;
+  double wall_s = 0.0;
+};
+
+id::ExperimentData dataFromLog(const id::SignalTable& log, const std::string& file) {
+  try {
+    return id::experimentFromLog(log);
+  } catch (const std::invalid_argument& e) {
+    throw core::ConfigError(file, "", e.what());
+  }
+}
+
+// PRBS over [0, duration): one period of the shortest register whose period covers it, cut.
+id::SampledSignal fitExcitation(double amplitude_v, double duration_s) {
+  const int clock = id::prbsClockSamplesForBand(kBandHz, kSamplePeriod_s);
+  const double periods_needed = duration_s / (clock * kSamplePeriod_s) + 1.0;
+  const int order = std::clamp(static_cast<int>(std::ceil(std::log2(periods_needed))), 2, 24);
+  id::SampledSignal s = id::prbs(amplitude_v, order, clock, 1, kSamplePeriod_s);
+  const auto n = static_cast<std::size_t>(std::llround(duration_s / kSamplePeriod_s));
+  if (s.value_v.size() > n) {
+    s.value_v.resize(n);
+    s.time_s.resize(n);
+  }
+  return s;
+}
+
+// Schroeder multisine, one period over the duration, from its fundamental (at least 0.2 Hz) to the band.
+id::SampledSignal validationExcitation(double amplitude_v, double duration_s) {
+  const double low = std::max(0.2, 1.0 / duration_s);
+  return id::schroederMultisine(amplitude_v, low, kBandHz, duration_s, 1, kSamplePeriod_s).signal;
+}
+
+Experiment runSimExperiment(const arm::ArmModel& model, plant::PlantConfig plant_config, int joint,
+                            const Eigen::VectorXd& posture, const id::SampledSignal& excitation, std::uint64_t seed,
+                            const std::string& name) {
+  plant_config.seed = seed;
+  plant_config.solver.integrator = plant::IntegratorKind::kRodas3;  // the lockstep loop's integrator
+  hil::SimulatedArm arm(model, plant_config, posture, kSamplePeriod_s, kLatencySamples);
+  hil::SimIoDevice device(arm, {}, hil::IoSafetyParams{});
+  id::ExperimentOptions options;
+  options.joint = joint;
+  options.min_rad = plant_config.joints[static_cast<std::size_t>(joint)].min_rad;
+  options.max_rad = plant_config.joints[static_cast<std::size_t>(joint)].max_rad;
+  const id::ExperimentResult r = id::runExperiment(device, excitation, options);
+  Experiment e;
+  e.name = name;
+  e.log = r.log;
+  e.completed = r.completed;
+  e.stop_reason = r.stop_reason;
+  if (e.log.rows() < 64) {
+    throw core::ConfigError({}, "--joint",
+                            "the experiment stopped after " + std::to_string(e.log.rows()) +
+                                " samples (" + r.stop_reason + "): expected a joint that can move about its start");
+  }
+  e.data = dataFromLog(e.log, name);
+  return e;
+}
+
+// The start's values must lie inside the settings' bounds (the fit refuses otherwise).
+void checkStartInBounds(const id::GreyModel& start, const id::IdentificationConfig& config,
+                        const std::string& start_source) {
+  for (int i = 0; i < id::kGreyParams; ++i) {
+    const id::ParamSpec& p = config.fit.params[static_cast<std::size_t>(i)];
+    const double v = start.value[static_cast<std::size_t>(i)];
+    if (!(v >= p.min && v <= p.max)) {
+      throw core::ConfigError(config.source, std::string("parameters.") + id::greyParamName(i),
+                              "the start (" + start_source + ") has " + numberText(v) + ", outside the bounds [" +
+                                  numberText(p.min) + ", " + numberText(p.max) + "]: expected bounds that hold it");
+    }
+  }
+}
+
+// The linearised model's response from valve command to angle at `f_hz` (Coulomb friction left
+// out): q/u = a K_h S(s) e^{-s d T} / ((s + K_h c)(J s^2 + b s) + K_h s), S the spool's lag.
+std::complex<double> modelAngleResponse(const id::GreyModel& m, double f_hz) {
+  using C = std::complex<double>;
+  const C s(0.0, 2.0 * std::numbers::pi * f_hz);
+  const auto& v = m.value;
+  const double kh = v[id::kStiffness];
+  C num = v[id::kFlowGain] * kh * std::exp(-s * (m.delay_samples * kSamplePeriod_s));
+  if (m.spool_hz > 0.0) {
+    const double wn = 2.0 * std::numbers::pi * m.spool_hz;
+    num *= wn * wn / (s * s + 2.0 * m.spool_damping * wn * s + wn * wn);
+  }
+  const C den = (s + kh * v[id::kLeakage]) * (v[id::kInertia] * s * s + v[id::kViscous] * s) + kh * s;
+  return num / den;
+}
+
+template <typename T>
+std::vector<T> every(const std::vector<T>& v, std::size_t stride) {
+  std::vector<T> out;
+  for (std::size_t i = 0; i < v.size(); i += stride) out.push_back(v[i]);
+  return out;
+}
+
+bool allFinite(const id::FitResult& fit) {
+  for (int i = 0; i < id::kGreyParams; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (!std::isfinite(fit.model.value[k]) || !std::isfinite(fit.standard_error[k])) return false;
+  }
+  return std::isfinite(fit.cost);
+}
+
+nlohmann::json correlationJson(const id::CorrelationTest& t) {
+  return {{"bound", t.bound}, {"outside", t.outside}, {"lags", t.lags.size()}};
+}
+
+void addToReport(const Outcome& o, reports::Report& report, const std::string& heading) {
+  const auto& cfg = o.config;
+  nlohmann::json params = nlohmann::json::object();
+  for (int i = 0; i < id::kGreyParams; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const id::ParamSpec& p = cfg.fit.params[k];
+    params[id::greyParamName(i)] = {{"value", o.fit.model.value[k]},   {"standard_error", o.fit.standard_error[k]},
+                                    {"start", o.start.value[k]},       {"min", p.min},
+                                    {"max", p.max},                    {"free", p.free},
+                                    {"at_bound", p.free && (o.fit.model.value[k] <= p.min * (1.0 + 1e-9) ||
+                                                            o.fit.model.value[k] >= p.max * (1.0 - 1e-9))}};
+  }
+  nlohmann::json experiments = nlohmann::json::array();
+  const auto addExperiment = [&](const Experiment& e, const char* role) {
+    experiments.push_back({{"file", e.name},
+                           {"role", role},
+                           {"samples", e.log.rows()},
+                           {"completed", e.completed},
+                           {"stop_reason", e.stop_reason},
+                           {"hold_gain_v_per_rad", e.data.hold_gain_v_per_rad},
+                           {"hold_rad", e.data.hold_rad}});
+  };
+  for (const Experiment& e : o.fit_experiments) addExperiment(e, "fit");
+  addExperiment(o.validation, "validation");
+  const id::ModelValidation& v = o.validation_result;
+  report.results()["identify"] = {
+      {"joint", o.joint},
+      {"source", o.source},
+      {"start", o.start_source},
+      {"settings", cfg.source.string()},
+      {"experiments", experiments},
+      {"delay_samples", o.fit.model.delay_samples},
+      {"parameters", params},
+      {"cost", o.fit.cost},
+      {"evaluations", o.fit.evaluations},
+      {"fit_wall_s", o.fit.global_seconds + o.fit.polish_seconds},
+      {"unidentifiable", o.fit.unidentifiable},
+      {"validation",
+       {{"fit_angle_percent", v.angle.fit_percent},
+        {"fit_torque_percent", v.torque.fit_percent},
+        {"angle_autocorrelation", correlationJson(v.angle.autocorrelation)},
+        {"angle_cross_correlation", correlationJson(v.angle.cross_correlation)},
+        {"torque_autocorrelation", correlationJson(v.torque.autocorrelation)},
+        {"torque_cross_correlation", correlationJson(v.torque.cross_correlation)},
+        {"pass", v.pass},
+        {"failures", v.failures}}}};
+
+  reports::Section& section = report.addSection(heading);
+  std::ostringstream intro;
+  intro << "Joint " << o.joint << ": the reduced hydraulic joint model (docs/identification.md) fitted by output "
+        << "error to " << o.fit_experiments.size() << " closed-loop experiment(s) "
+        << (o.source == "sim" ? "on the simulated DTS (PRBS to " : "from recorded logs (") << kBandHz
+        << (o.source == "sim" ? " Hz on the valve command, the joint held by a proportional hold, the others held)"
+                              : " Hz band of the simulated runs)")
+        << ", validated by pure simulation on a held-out experiment"
+        << (o.source == "sim" ? " (Schroeder multisine)" : "") << ". Fit start: " << o.start_source << ". "
+        << o.fit.evaluations << " closed-loop simulations, cost " << std::setprecision(4) << o.fit.cost << ".";
+  section.addParagraph(intro.str());
+  for (const Experiment& e : o.fit_experiments) {
+    if (!e.completed) section.addParagraph("Fit experiment " + e.name + " stopped early: " + e.stop_reason);
+  }
+  if (!o.validation.completed) {
+    section.addParagraph("Held-out experiment " + o.validation.name + " stopped early: " + o.validation.stop_reason);
+  }
+
+  // Parameter table with 95 % confidence intervals.
+  reports::Table table;
+  table.caption = "Identified parameter groups (delay " + std::to_string(o.fit.model.delay_samples) +
+                  " samples); 95 % interval = value +- 1.96 standard errors from the Jacobian at the optimum";
+  table.columns = {"Parameter", "Start", "Identified", "Standard error", "95 % low", "95 % high", "Bounds", "Note"};
+  for (int i = 0; i < id::kGreyParams; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const id::ParamSpec& p = cfg.fit.params[k];
+    const double val = o.fit.model.value[k];
+    const double se = o.fit.standard_error[k];
+    std::string note = p.free ? "" : "fixed";
+    if (p.free && (val <= p.min * (1.0 + 1e-9) || val >= p.max * (1.0 - 1e-9))) note = "at a bound";
+    table.rows.push_back({id::greyParamName(i), o.start.value[k], val, se, val - 1.96 * se, val + 1.96 * se,
+                          "[" + numberText(p.min) + ", " + numberText(p.max) + "]", note});
+  }
+  table.significant_digits = 4;
+  section.addTable(std::move(table));
+  if (o.fit.unidentifiable.empty()) {
+    section.addParagraph("Unidentifiable directions: none (no singular value of the scaled Jacobian below 1e-6 of "
+                         "the largest).");
+  } else {
+    std::string text = "Unidentifiable directions (the data cannot determine these combinations):";
+    for (const std::string& d : o.fit.unidentifiable) text += " " + d + ";";
+    section.addParagraph(text);
+  }
+
+  // Time-domain overlay on the held-out experiment.
+  const id::ExperimentData& d = o.validation.data;
+  const id::Simulation sim = id::simulateClosedLoop(o.fit.model, d);
+  const std::size_t stride = std::max<std::size_t>(1, d.q_rad.size() / kMaxPlotPoints);
+  std::vector<double> t(d.q_rad.size());
+  for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) * d.sample_period_s;
+  const auto overlay = [&](const char* title, const char* label, const char* unit, const std::vector<double>& measured,
+                           const std::vector<double>& simulated) {
+    reports::XyChart c;
+    c.title = title;
+    c.x_axis = {"Time", "s"};
+    c.y_axis = {label, unit};
+    c.series.push_back({"measured", every(t, stride), every(measured, stride)});
+    if (sim.ok && simulated.size() == measured.size()) {
+      c.series.push_back({"simulated (identified model)", every(t, stride), every(simulated, stride)});
+    }
+    c.caption = "Held-out experiment " + o.validation.name + "; the model sees only the excitation (pure simulation).";
+    section.addLineChart(std::move(c));
+  };
+  overlay("Held-out experiment: angle, measured vs simulated", "Angle", "rad", d.q_rad, sim.q_rad);
+  overlay("Held-out experiment: load-cell torque, measured vs simulated", "Torque", "N·m", d.tau_nm, sim.tau_nm);
+
+  // FRF from valve command to angle, with the excitation as instrument.
+  const std::size_t n = d.q_rad.size();
+  int segment = 64;
+  while (static_cast<std::size_t>(segment) * 2 <= std::min<std::size_t>(n / 4, 4096)) segment *= 2;
+  try {
+    id::FrfOptions fo;
+    fo.segment_samples = segment;
+    const id::FrfEstimate frf = id::estimateFrf(d.excitation_v, d.command_v, d.q_rad, d.sample_period_s, fo);
+    reports::XyChart mag;
+    mag.title = "Frequency response, valve command to angle (held-out experiment)";
+    mag.x_axis = {"Frequency", "Hz", true};
+    mag.y_axis = {"|q/u|", "dB"};
+    reports::Series inst{"S_ry / S_ru (excitation as instrument)", {}, {}};
+    reports::Series h1{"H1 = S_uy / S_uu (biased under feedback)", {}, {}};
+    reports::Series model{"identified model (linearised, no Coulomb friction)", {}, {}};
+    reports::XyChart coh;
+    coh.title = "Coherence (held-out experiment)";
+    coh.x_axis = {"Frequency", "Hz", true};
+    coh.y_axis = {"Coherence", ""};
+    reports::Series c_ry{"excitation to angle", {}, {}};
+    reports::Series c_ru{"excitation to command", {}, {}};
+    reports::Series c_uy{"command to angle", {}, {}};
+    for (std::size_t k = 0; k < frf.frequency_hz.size(); ++k) {
+      const double f = frf.frequency_hz[k];
+      if (f > 2.0 * kBandHz) break;
+      inst.x.push_back(f);
+      inst.y.push_back(id::magnitudeDb(frf.instrument[k]));
+      h1.x.push_back(f);
+      h1.y.push_back(id::magnitudeDb(frf.h1[k]));
+      model.x.push_back(f);
+      model.y.push_back(id::magnitudeDb(modelAngleResponse(o.fit.model, f)));
+      c_ry.x.push_back(f);
+      c_ry.y.push_back(frf.coherence_ry[k]);
+      c_ru.x.push_back(f);
+      c_ru.y.push_back(frf.coherence_ru[k]);
+      c_uy.x.push_back(f);
+      c_uy.y.push_back(frf.coherence_uy[k]);
+    }
+    mag.series = {inst, h1, model};
+    mag.caption = "Welch estimate, " + std::to_string(frf.segments) + " Hann-windowed segments of " +
+                  std::to_string(segment) + " samples; trust it where the excitation-angle coherence is high.";
+    section.addLineChart(std::move(mag));
+    coh.series = {c_ry, c_ru, c_uy};
+    section.addLineChart(std::move(coh));
+  } catch (const std::invalid_argument& e) {
+    section.addParagraph(std::string("No frequency response: ") + e.what());
+  }
+
+  // Residual tests with their 99 % bounds.
+  const auto correlationChart = [&](const char* title, const char* x_label, bool cross) {
+    reports::XyChart c;
+    c.title = title;
+    c.x_axis = {x_label, "samples"};
+    c.y_axis = {"Normalised correlation", ""};
+    double bound = 0.0;
+    double lo = 0.0, hi = 0.0;
+    for (const auto& [name, ch] : {std::pair<const char*, const id::ChannelValidation*>{"angle", &v.angle},
+                                   std::pair<const char*, const id::ChannelValidation*>{"torque", &v.torque}}) {
+      const id::CorrelationTest& test = cross ? ch->cross_correlation : ch->autocorrelation;
+      reports::Series s{std::string(name) + " residual", {}, test.values};
+      for (int lag : test.lags) s.x.push_back(lag);
+      s.mode = reports::SeriesMode::kLinesMarkers;
+      if (!test.lags.empty()) {
+        lo = std::min(lo, static_cast<double>(test.lags.front()));
+        hi = std::max(hi, static_cast<double>(test.lags.back()));
+      }
+      bound = test.bound;
+      c.series.push_back(std::move(s));
+    }
+    c.series.push_back({"99 % bound", {lo, hi}, {bound, bound}});
+    c.series.push_back({"-99 % bound", {lo, hi}, {-bound, -bound}});
+    section.addLineChart(std::move(c));
+  };
+  correlationChart("Residual autocorrelation (held-out experiment)", "Lag", false);
+  correlationChart("Excitation-residual cross-correlation (held-out experiment)", "Lag", true);
+
+  reports::Table vt;
+  vt.caption = "Validation on the held-out experiment (thresholds from " + cfg.source.filename().string() + ")";
+  vt.columns = {"Channel", "Fit [%]", "Required fit [%]", "Autocorrelation lags outside", "Cross-correlation lags outside"};
+  const auto outside = [](const id::CorrelationTest& test) {
+    return std::to_string(test.outside) + " / " + std::to_string(test.lags.size());
+  };
+  vt.rows.push_back({"angle", v.angle.fit_percent, cfg.validation.min_fit_angle_percent,
+                     outside(v.angle.autocorrelation), outside(v.angle.cross_correlation)});
+  vt.rows.push_back({"torque", v.torque.fit_percent, cfg.validation.min_fit_torque_percent,
+                     outside(v.torque.autocorrelation), outside(v.torque.cross_correlation)});
+  vt.significant_digits = 4;
+  section.addTable(std::move(vt));
+  if (v.pass) {
+    section.addParagraph("Verdict: the identified model passes every validation threshold.");
+  } else {
+    std::string text = "Verdict: the identified model fails its validation:";
+    for (const std::string& f : v.failures) text += " " + f;
+    section.addParagraph(text);
+  }
+}
+
+std::string verdictText(const Outcome& o) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(1) << o.joint << " identified: held-out fit angle "
+    << o.validation_result.angle.fit_percent << " %, torque " << o.validation_result.torque.fit_percent << " % ("
+    << (o.validation_result.pass ? "passes its validation" : "fails its validation") << ")";
+  return s.str();
+}
+
+// The whole identification: experiments (or logs), fit, validation; the logs and identified.yaml
+// written into `out`.
+Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, core::Progress& progress,
+                 std::ostream& text) {
+  const auto started = std::chrono::steady_clock::now();
+  const arm::ArmModel model = arm::loadArmModel(configPathOr(o.arm_config, arm::defaultArmModelPath));
+  const plant::PlantConfig plant_config =
+      plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), model);
+  Outcome r;
+  r.config = id::loadIdentificationConfig(configPathOr(o.settings, id::defaultIdentificationConfigPath));
+  int joint = 0;
+  try {
+    joint = plant::findPlantJoint(plant_config, o.joint);
+  } catch (const core::ConfigError& e) {
+    throw core::ConfigError({}, "--joint", e.message());
+  }
+  const plant::JointParams& jp = plant_config.joints[static_cast<std::size_t>(joint)];
+  r.joint = jp.name;
+  const int model_joint = model.jointIndex(jp.name);
+  if (model_joint < 0) throw core::ConfigError({}, "--joint", "'" + o.joint + "' is not a joint of the arm model");
+
+  progress.begin("identify", 0);
+  if (o.logs.empty()) {
+    r.source = "sim";
+    const Eigen::VectorXd posture = model.defaultPosture();
+    progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint));
+    r.fit_experiments.push_back(runSimExperiment(model, plant_config, joint, posture,
+                                                 fitExcitation(o.amplitude_v, o.duration_s),
+                                                 static_cast<std::uint64_t>(o.seed), kFitLogFile));
+    progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint));
+    r.validation = runSimExperiment(model, plant_config, joint, posture,
+                                    validationExcitation(o.amplitude_v, o.duration_s),
+                                    static_cast<std::uint64_t>(o.seed) + 1, kValidationLogFile);
+    writeOutput(out / kFitLogFile, [&] { id::writeSignalCsv(out / kFitLogFile, r.fit_experiments[0].log); });
+    writeOutput(out / kValidationLogFile, [&] { id::writeSignalCsv(out / kValidationLogFile, r.validation.log); });
+  } else {
+    r.source = "logs";
+    if (o.logs.size() < 2) {
+      throw core::ConfigError({}, "--log",
+                              "expected at least two logs (all but the last are fitted, the last is held out), got 1");
+    }
+    for (std::size_t k = 0; k < o.logs.size(); ++k) {
+      Experiment e;
+      e.name = o.logs[k];
+      e.log = id::readSignalCsv(o.logs[k], id::kExperimentColumns);  // CsvFormatError: bad input (exit 2)
+      e.data = dataFromLog(e.log, o.logs[k]);
+      if (k + 1 < o.logs.size()) {
+        r.fit_experiments.push_back(std::move(e));
+      } else {
+        r.validation = std::move(e);
+      }
+    }
+  }
+  // The start: a given model, or the plant joint's groups at the hold angle with the link's
+  // inertia and gravity load there (the other joints at the default posture).
+  const double q_hold = r.fit_experiments.front().data.hold_rad;
+  if (!o.start.empty()) {
+    const id::IdentifiedModel given = id::loadIdentifiedModel(o.start);
+    r.start = given.model;
+    r.start_source = o.start;
+  } else {
+    Eigen::VectorXd q = model.defaultPosture();
+    q[model_joint] = q_hold;
+    arm::ArmData data(model);
+    arm::computeMassMatrix(model, data, q);
+    arm::computeGravityTorques(model, data, q);
+    r.start = id::greyModelFromJoint(jp, q_hold, data.mass_matrix(model_joint, model_joint),
+                                     data.tau_gravity[model_joint], 1);
+    r.start.spool_hz = jp.valve.natural_frequency_hz;
+    r.start.spool_damping = jp.valve.damping_ratio;
+    r.start.torque_filter_hz = jp.sensor_noise.torque_filter_hz;
+    r.start_source = "the plant's groups of " + r.joint + " (" + plant_config.source.filename().string() + ")";
+  }
+  r.start.coulomb_smoothing_radps = r.config.coulomb_smoothing_radps;
+  checkStartInBounds(r.start, r.config, r.start_source);
+
+  id::FitOptions fit = r.config.fit;
+  fit.threads = o.threads;
+  fit.progress = [&progress](const std::string& line) { progress.step(line); };
+  std::vector<id::ExperimentData> data;
+  for (const Experiment& e : r.fit_experiments) data.push_back(e.data);
+  progress.step("fit: " + std::to_string(data.size()) + " experiment(s)");
+  r.fit = id::fitGreyModel(data, r.start, fit);
+  progress.step("validation on the held-out experiment");
+  r.validation_result = id::validateModel(r.fit.model, r.validation.data, r.config.validation);
+  progress.end(r.validation_result.pass ? "passes its validation" : "fails its validation");
+
+  id::IdentifiedModel identified;
+  identified.joint = r.joint;
+  identified.model = r.fit.model;
+  identified.standard_error = r.fit.standard_error;
+  writeTextFile(out / kIdentifiedFile, id::formatIdentifiedModelYaml(identified));
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  text << verdictText(r) << "\n";
+  for (const std::string& f : r.validation_result.failures) text << "  " << f << "\n";
+  if (!allFinite(r.fit)) text << "  warning: the fit returned a non-finite value or standard error\n";
+  return r;
+}
+
+}  // namespace
+
+CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& table) {
+  CLI::App* cmd = app.add_subcommand(
+      "identify",
+      "Identify one joint's hydraulic parameter groups from closed-loop experiments (simulated DTS or recorded "
+      "logs); write the logs, identified.yaml, summary.json and report.html");
+  OptionDeclarer declare(*cmd, table);
+  CLI::Option* io = declare.choice("--io", o.io, "I/O back-end the experiments run on", {"sim"});
+  io->capture_default_str();
+  declare.name("--joint", o.joint, "Joint to identify (short or model name)")->capture_default_str();
+  declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
+  declare.integer("--seed", o.seed, "Seed of the simulated sensors' noise (the held-out experiment uses seed + 1)", 0,
+                  2147483647);
+  declare.number("--duration", o.duration_s, "Excitation time of each experiment", {0.5, 600.0, "s"})
+      ->capture_default_str();
+  declare.number("--amplitude", o.amplitude_v, "Peak of the excitation on the valve command", {0.01, 5.0, "V"})
+      ->capture_default_str();
+  declare.integer("--threads", o.threads, "Threads of the fit's simulations", 1, 64)->capture_default_str();
+  declare.file("--start", o.start, "identified.yaml whose model starts the fit (default: the plant joint's groups)");
+  declare.file("--plant", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)");
+  declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
+  declare.file("--settings", o.settings, "Identification settings YAML (default: config/identification.yaml)");
+  declare.files("--log", o.logs,
+                "Recorded experiment logs (CSV) to fit instead of running experiments: all but the last are "
+                "fitted, the last is held out")
+      ->excludes(io);
+  return cmd;
+}
+
+int runIdentify(const IdentifyOptions& o) {
+  core::Progress quiet;
+  core::Progress& progress = o.progress != nullptr ? *o.progress : quiet;
+  const std::filesystem::path out(o.out_dir);
+  createOutputFolder(out);
+  const Outcome r = identify(o, out, progress, std::cout);
+  reports::Report report("identify", "Identification of " + r.joint);
+  report.setVerdict(r.validation_result.pass, verdictText(r));
+  report.addHeadlineNumber("fit_angle_percent", "Held-out angle fit", r.validation_result.angle.fit_percent, "%");
+  report.addHeadlineNumber("fit_torque_percent", "Held-out torque fit", r.validation_result.torque.fit_percent, "%");
+  report.addHeadlineNumber("wall_time_s", "Wall time", r.wall_s, "s");
+  if (r.source == "sim") {
+    report.addFile(kFitLogFile);
+    report.addFile(kValidationLogFile);
+  }
+  report.addFile(kIdentifiedFile);
+  addToReport(r, report, "Identification");
+  writeReport(report, out);
+  std::cout << "Identified model: " << (std::filesystem::absolute(out) / kIdentifiedFile).string() << " ("
+            << std::fixed << std::setprecision(1) << r.wall_s << " s)\n"
+            << "Report: " << (std::filesystem::absolute(out) / "report.html").string() << "\n";
+  return r.validation_result.pass ? kExitPass : kExitFail;
+}
+
+IdentifyDemoStep runIdentifyDemoStep(const std::filesystem::path& out_dir, reports::Report& report,
+                                     core::Progress& progress) {
+  IdentifyOptions o;
+  const std::filesystem::path out = out_dir / "identify";
+  createOutputFolder(out);
+  std::ostringstream text;
+  const Outcome r = identify(o, out, progress, text);
+  for (const char* f : {kFitLogFile, kValidationLogFile, kIdentifiedFile}) {
+    report.addFile(std::filesystem::path("identify") / f);
+  }
+  addToReport(r, report, "Identify a joint");
+  IdentifyDemoStep step;
+  step.pass = r.validation_result.pass;
+  std::ostringstream detail;
+  detail << verdictText(r) << ", " << std::fixed << std::setprecision(1) << r.wall_s << " s wall";
+  step.detail = detail.str();
+  return step;
+}
+
+}  // namespace fullarm::app

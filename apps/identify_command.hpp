@@ -1,0 +1,53 @@
+#pragma once
+// `fullarm identify` and the identify step of `fullarm demo`.
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "cli_options.hpp"
+#include "fullarm/arm/arm_model.hpp"
+#include "fullarm/core/progress.hpp"
+#include "fullarm/reports/report.hpp"
+
+namespace fullarm::app {
+
+/// Options of `fullarm identify`.
+struct IdentifyOptions {
+  std::string io = "sim";          ///< the I/O back-end the experiments run on
+  std::string arm_config;          ///< --config (default: dts_master.yaml)
+  std::string plant_config;        ///< --plant (default: dts_plant.yaml)
+  std::string settings;            ///< --settings (default: identification.yaml)
+  std::string joint = "EB";        ///< the driven joint (short or model name)
+  std::string out_dir = "out/identify";
+  int seed = 1;                    ///< seed of the simulated sensors' noise (experiment k uses seed + k)
+  double duration_s = 5.0;         ///< excitation time of each experiment
+  double amplitude_v = 0.5;        ///< peak of the excitation added to the valve command
+  int threads = 2;                 ///< threads of the fit's simulations
+  std::string start;               ///< identified.yaml whose model starts the fit (default: the plant's groups)
+  std::vector<std::string> logs;   ///< recorded logs: all but the last fitted, the last held out
+  core::Progress* progress = nullptr;
+};
+
+/// Adds `identify` to `app`.
+CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& options, OptionTable& table);
+
+/// Runs `fullarm identify`: the experiment logs, identified.yaml, summary.json, report.html.
+/// @return 0 when the identified model passes its validation on the held-out experiment, 1 otherwise.
+/// @throws core::ConfigError for bad input (also a malformed log); OutputError when the output
+///   folder cannot be written.
+int runIdentify(const IdentifyOptions& options);
+
+/// Result of the demo's identify step.
+struct IdentifyDemoStep {
+  bool pass = false;
+  std::string detail;
+};
+
+/// The demo step: `fullarm identify` on the simulated elbow with the default settings, its files
+/// in `out_dir`/identify and its section and `results.identify` keys in `report`.
+IdentifyDemoStep runIdentifyDemoStep(const std::filesystem::path& out_dir, reports::Report& report,
+                                     core::Progress& progress);
+
+}  // namespace fullarm::app

@@ -1,0 +1,124 @@
+// `fullarm identify` end to end: a short run on the simulated DTS writes its logs, identified.yaml
+// (which the library reads back), summary.json and report.html with finite parameters inside
+// their bounds; fitting the written logs again with --log gives the same parameters; bad input
+// exits 2 with a message naming the option, file or line.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_runner.hpp"
+#include "fullarm/identification/identified_model.hpp"
+
+namespace {
+
+using Result = fullarm::test::CliResult;
+using fullarm::test::runFullarm;
+namespace id = fullarm::identification;
+
+std::filesystem::path tempDir(const std::string& name) {
+  return fullarm::test::cliTempDir("fullarm_identify_cli_test", name);
+}
+
+nlohmann::json readSummary(const std::filesystem::path& dir) {
+  std::ifstream in(dir / "summary.json");
+  return nlohmann::json::parse(in);
+}
+
+TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
+  const auto dir = tempDir("sim");
+  const Result r = runFullarm("identify --io sim --joint EB --duration 1 --quiet --out " + dir.string());
+  // The reduced model misses its thresholds on the full simulated plant: 1 (fails) is expected,
+  // 0 allowed; anything else is an error.
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+  for (const char* f : {"experiment_fit.csv", "experiment_validation.csv", "identified.yaml", "summary.json",
+                        "report.html"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+  }
+  const nlohmann::json summary = readSummary(dir);
+  const nlohmann::json& result = summary["results"]["identify"];
+  EXPECT_EQ(result["joint"], "R_EB");
+  const id::IdentifiedModel identified = id::loadIdentifiedModel(dir / "identified.yaml");
+  EXPECT_EQ(identified.joint, "R_EB");
+  for (int i = 0; i < id::kGreyParams; ++i) {
+    const char* name = id::greyParamName(i);
+    const nlohmann::json& p = result["parameters"][name];
+    const double value = p["value"].get<double>();
+    const double se = p["standard_error"].get<double>();
+    EXPECT_TRUE(std::isfinite(value)) << name;
+    EXPECT_TRUE(std::isfinite(se) && se >= 0.0) << name;
+    EXPECT_GE(value, p["min"].get<double>()) << name;
+    EXPECT_LE(value, p["max"].get<double>()) << name;
+    // identified.yaml holds the same numbers as the summary.
+    EXPECT_EQ(identified.model.value[static_cast<std::size_t>(i)], value) << name;
+    EXPECT_EQ(identified.standard_error[static_cast<std::size_t>(i)], se) << name;
+  }
+  const double fit_angle = result["validation"]["fit_angle_percent"].get<double>();
+  EXPECT_TRUE(std::isfinite(fit_angle));
+  EXPECT_EQ(result["validation"]["pass"].get<bool>(), r.exit_code == 0);
+
+  // The same data through --log: the same fit.
+  const auto again = tempDir("log");
+  const Result l = runFullarm("identify --quiet --joint EB --log " + (dir / "experiment_fit.csv").string() + " " +
+                              (dir / "experiment_validation.csv").string() + " --out " + again.string());
+  ASSERT_EQ(l.exit_code, r.exit_code) << l.output;
+  const id::IdentifiedModel refit = id::loadIdentifiedModel(again / "identified.yaml");
+  EXPECT_EQ(refit.model.delay_samples, identified.model.delay_samples);
+  for (int i = 0; i < id::kGreyParams; ++i) {
+    EXPECT_EQ(refit.model.value[static_cast<std::size_t>(i)], identified.model.value[static_cast<std::size_t>(i)])
+        << id::greyParamName(i);
+    EXPECT_EQ(refit.standard_error[static_cast<std::size_t>(i)],
+              identified.standard_error[static_cast<std::size_t>(i)])
+        << id::greyParamName(i);
+  }
+  EXPECT_EQ(readSummary(again)["results"]["identify"]["validation"]["fit_angle_percent"].get<double>(), fit_angle);
+
+  // The identified model starts another fit.
+  const auto restart = tempDir("start");
+  const Result s = runFullarm("identify --quiet --log " + (dir / "experiment_fit.csv").string() + " " +
+                              (dir / "experiment_validation.csv").string() + " --start " +
+                              (dir / "identified.yaml").string() + " --out " + restart.string());
+  EXPECT_TRUE(s.exit_code == 0 || s.exit_code == 1) << s.output;
+  EXPECT_EQ(readSummary(restart)["results"]["identify"]["start"], (dir / "identified.yaml").string());
+}
+
+TEST(IdentifyCli, BadInputExitsTwoNamingTheOptionFileOrLine) {
+  const auto dir = tempDir("bad");
+  const auto expectBad = [&](const std::string& args, const std::string& named) {
+    const Result r = runFullarm("identify --quiet --out " + dir.string() + " " + args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(named), std::string::npos) << args << ": expected '" << named << "' in\n" << r.output;
+  };
+  expectBad("--joint XX", "--joint");
+  expectBad("--duration nan", "--duration");
+  expectBad("--duration=-1", "--duration");
+  expectBad("--duration 0", "--duration");
+  const std::string missing = (dir / "missing.csv").string();
+  expectBad("--log " + missing + " " + missing, "--log");
+
+  // A malformed log: a field that is not a number on line 3.
+  const auto bad_log = dir / "malformed.csv";
+  {
+    std::ofstream out(bad_log);
+    out << "time_s,excitation_v,command_v,q_rad,tau_measured_nm\n"
+        << "0,0,0,1.2,0\n"
+        << "0.001,0.1,zero,1.2,0\n";
+  }
+  const Result m = runFullarm("identify --quiet --out " + dir.string() + " --log " + bad_log.string() + " " +
+                              bad_log.string());
+  EXPECT_EQ(m.exit_code, 2) << m.output;
+  EXPECT_NE(m.output.find(bad_log.string()), std::string::npos) << m.output;
+  EXPECT_NE(m.output.find("3"), std::string::npos) << m.output;
+  EXPECT_NE(m.output.find("zero"), std::string::npos) << m.output;
+
+  // Only one log: nothing to hold out.
+  const Result one = runFullarm("identify --quiet --out " + dir.string() + " --log " + bad_log.string());
+  EXPECT_EQ(one.exit_code, 2) << one.output;
+  EXPECT_NE(one.output.find("--log"), std::string::npos) << one.output;
+}
+
+}  // namespace
