@@ -108,6 +108,9 @@ int runDemo(const ArmOptions& options, const std::string& out_dir, int validate_
   const PlantDemoStep plant_step = runPlantDemoStep(model, out_dir, report);
   out << "  " << plant_step.detail << "\n";
   progress.end(plant_step.pass ? "done" : "failed");
+  out << "\n[3/7] Identify a joint (closed-loop experiments on the simulated elbow, grey-box fit, held-out validation)\n";
+  const IdentifyDemoStep identify_step = runIdentifyDemoStep(out_dir, report, progress);
+  out << "  " << identify_step.detail << "\n";
   out << "\n[4/7] Tune the admittance controller (NLopt, all 7 joints)\n";
   const TuneDemoStep tune_step = runTuneDemoStep(model, out_dir, report, progress);
   out << "  " << tune_step.detail << "\n";
@@ -124,8 +127,7 @@ int runDemo(const ArmOptions& options, const std::string& out_dir, int validate_
   const Step steps[] = {
       {"DTS arm model", summary.holds_itself ? "done" : "failed", "kinematics, dynamics, reach, gravity load"},
       {"Simulated chirp experiment (plant)", plant_step.pass ? "done" : "failed", plant_step.detail.c_str()},
-      {"Identify a joint", "not built yet",
-       "needs identification of the joint dynamics from logged data (excitation, frequency response, grey-box fit)"},
+      {"Identify a joint", identify_step.pass ? "done" : "failed", identify_step.detail.c_str()},
       {"Tune the admittance controller", tune_step.pass ? "done" : "failed", tune_step.detail.c_str()},
       {"Validate stability", validate_step.pass ? "done" : "failed", validate_step.detail.c_str()},
       {"Haptic rendering at the valve opening", haptics_step.pass ? "done" : "failed", haptics_step.detail.c_str()},
@@ -134,15 +136,16 @@ int runDemo(const ArmOptions& options, const std::string& out_dir, int validate_
   };
   out << "\n";
   for (int i = 2; i < 7; ++i) {
-    if (i == 3 || i == 4 || i == 5) continue;  // the tune, validate and haptics steps printed their own lines
+    if (i == 2 || i == 3 || i == 4 || i == 5) continue;  // the identify, tune, validate and haptics steps printed theirs
     out << "[" << i + 1 << "/7] " << steps[i].name << ": " << steps[i].status << " (" << steps[i].detail << ")\n";
   }
 
-  const bool demo_pass =
-      summary.holds_itself && plant_step.pass && tune_step.pass && validate_step.pass && haptics_step.pass;
-  report.setVerdict(demo_pass, demo_pass               ? "Every step that exists passed (5 of 7 steps built)"
+  const bool demo_pass = summary.holds_itself && plant_step.pass && identify_step.pass && tune_step.pass &&
+                         validate_step.pass && haptics_step.pass;
+  report.setVerdict(demo_pass, demo_pass               ? "Every step that exists passed (6 of 7 steps built)"
                                : !summary.holds_itself ? "The arm model step failed"
                                : !plant_step.pass      ? "The plant step failed"
+                               : !identify_step.pass   ? "The identify step failed: the identified model fails its validation"
                                : !tune_step.pass       ? "The tune step failed"
                                : !validate_step.pass   ? "The validate step failed"
                                                        : "The haptics step failed");
