@@ -114,8 +114,8 @@ Experiment runSimExperiment(const arm::ArmModel& model, plant::PlantConfig plant
   e.stop_reason = r.stop_reason;
   if (e.log.rows() < 64) {
     throw core::ConfigError({}, "--joint",
-                            "the experiment stopped after " + std::to_string(e.log.rows()) +
-                                " samples (" + r.stop_reason + "): expected a joint that can move about its start");
+                            "the experiment stopped after " + std::to_string(e.log.rows()) + " samples (" +
+                                r.stop_reason + "): expected a joint that can move about its start");
   }
   e.data = dataFromLog(e.log, name);
   return e;
@@ -176,9 +176,12 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   for (int i = 0; i < id::kGreyParams; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const id::ParamSpec& p = cfg.fit.params[k];
-    params[id::greyParamName(i)] = {{"value", o.fit.model.value[k]},   {"standard_error", o.fit.standard_error[k]},
-                                    {"start", o.start.value[k]},       {"min", p.min},
-                                    {"max", p.max},                    {"free", p.free},
+    params[id::greyParamName(i)] = {{"value", o.fit.model.value[k]},
+                                    {"standard_error", o.fit.standard_error[k]},
+                                    {"start", o.start.value[k]},
+                                    {"min", p.min},
+                                    {"max", p.max},
+                                    {"free", p.free},
                                     {"at_bound", p.free && (o.fit.model.value[k] <= p.min * (1.0 + 1e-9) ||
                                                             o.fit.model.value[k] >= p.max * (1.0 - 1e-9))}};
   }
@@ -195,27 +198,26 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   for (const Experiment& e : o.fit_experiments) addExperiment(e, "fit");
   addExperiment(o.validation, "validation");
   const id::ModelValidation& v = o.validation_result;
-  report.results()["identify"] = {
-      {"joint", o.joint},
-      {"source", o.source},
-      {"start", o.start_source},
-      {"settings", cfg.source.string()},
-      {"experiments", experiments},
-      {"delay_samples", o.fit.model.delay_samples},
-      {"parameters", params},
-      {"cost", o.fit.cost},
-      {"evaluations", o.fit.evaluations},
-      {"fit_wall_s", o.fit.global_seconds + o.fit.polish_seconds},
-      {"unidentifiable", o.fit.unidentifiable},
-      {"validation",
-       {{"fit_angle_percent", v.angle.fit_percent},
-        {"fit_torque_percent", v.torque.fit_percent},
-        {"angle_autocorrelation", correlationJson(v.angle.autocorrelation)},
-        {"angle_cross_correlation", correlationJson(v.angle.cross_correlation)},
-        {"torque_autocorrelation", correlationJson(v.torque.autocorrelation)},
-        {"torque_cross_correlation", correlationJson(v.torque.cross_correlation)},
-        {"pass", v.pass},
-        {"failures", v.failures}}}};
+  report.results()["identify"] = {{"joint", o.joint},
+                                  {"source", o.source},
+                                  {"start", o.start_source},
+                                  {"settings", cfg.source.string()},
+                                  {"experiments", experiments},
+                                  {"delay_samples", o.fit.model.delay_samples},
+                                  {"parameters", params},
+                                  {"cost", o.fit.cost},
+                                  {"evaluations", o.fit.evaluations},
+                                  {"fit_wall_s", o.fit.global_seconds + o.fit.polish_seconds},
+                                  {"unidentifiable", o.fit.unidentifiable},
+                                  {"validation",
+                                   {{"fit_angle_percent", v.angle.fit_percent},
+                                    {"fit_torque_percent", v.torque.fit_percent},
+                                    {"angle_autocorrelation", correlationJson(v.angle.autocorrelation)},
+                                    {"angle_cross_correlation", correlationJson(v.angle.cross_correlation)},
+                                    {"torque_autocorrelation", correlationJson(v.torque.autocorrelation)},
+                                    {"torque_cross_correlation", correlationJson(v.torque.cross_correlation)},
+                                    {"pass", v.pass},
+                                    {"failures", v.failures}}}};
 
   reports::Section& section = report.addSection(heading);
   std::ostringstream intro;
@@ -253,8 +255,9 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   table.significant_digits = 4;
   section.addTable(std::move(table));
   if (o.fit.unidentifiable.empty()) {
-    section.addParagraph("Unidentifiable directions: none (no singular value of the scaled Jacobian below 1e-6 of "
-                         "the largest).");
+    section.addParagraph(
+        "Unidentifiable directions: none (no singular value of the scaled Jacobian below 1e-6 of "
+        "the largest).");
   } else {
     std::string text = "Unidentifiable directions (the data cannot determine these combinations):";
     for (const std::string& d : o.fit.unidentifiable) text += " " + d + ";";
@@ -361,7 +364,8 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
 
   reports::Table vt;
   vt.caption = "Validation on the held-out experiment (thresholds from " + cfg.source.filename().string() + ")";
-  vt.columns = {"Channel", "Fit [%]", "Required fit [%]", "Autocorrelation lags outside", "Cross-correlation lags outside"};
+  vt.columns = {"Channel", "Fit [%]", "Required fit [%]", "Autocorrelation lags outside",
+                "Cross-correlation lags outside"};
   const auto outside = [](const id::CorrelationTest& test) {
     return std::to_string(test.outside) + " / " + std::to_string(test.lags.size());
   };
@@ -418,9 +422,9 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
                                                  fitExcitation(o.amplitude_v, o.duration_s),
                                                  static_cast<std::uint64_t>(o.seed), kFitLogFile));
     progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint));
-    r.validation = runSimExperiment(model, plant_config, joint, posture,
-                                    validationExcitation(o.amplitude_v, o.duration_s),
-                                    static_cast<std::uint64_t>(o.seed) + 1, kValidationLogFile);
+    r.validation =
+        runSimExperiment(model, plant_config, joint, posture, validationExcitation(o.amplitude_v, o.duration_s),
+                         static_cast<std::uint64_t>(o.seed) + 1, kValidationLogFile);
     writeOutput(out / kFitLogFile, [&] { id::writeSignalCsv(out / kFitLogFile, r.fit_experiments[0].log); });
     writeOutput(out / kValidationLogFile, [&] { id::writeSignalCsv(out / kValidationLogFile, r.validation.log); });
   } else {
@@ -510,9 +514,10 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
   declare.file("--plant", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)");
   declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
   declare.file("--settings", o.settings, "Identification settings YAML (default: config/identification.yaml)");
-  declare.files("--log", o.logs,
-                "Recorded experiment logs (CSV) to fit instead of running experiments: all but the last are "
-                "fitted, the last is held out")
+  declare
+      .files("--log", o.logs,
+             "Recorded experiment logs (CSV) to fit instead of running experiments: all but the last are "
+             "fitted, the last is held out")
       ->excludes(io);
   return cmd;
 }
@@ -535,8 +540,8 @@ int runIdentify(const IdentifyOptions& o) {
   report.addFile(kIdentifiedFile);
   addToReport(r, report, "Identification");
   writeReport(report, out);
-  std::cout << "Identified model: " << (std::filesystem::absolute(out) / kIdentifiedFile).string() << " ("
-            << std::fixed << std::setprecision(1) << r.wall_s << " s)\n"
+  std::cout << "Identified model: " << (std::filesystem::absolute(out) / kIdentifiedFile).string() << " (" << std::fixed
+            << std::setprecision(1) << r.wall_s << " s)\n"
             << "Report: " << (std::filesystem::absolute(out) / "report.html").string() << "\n";
   return r.validation_result.pass ? kExitPass : kExitFail;
 }

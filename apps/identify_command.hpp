@@ -15,18 +15,18 @@ namespace fullarm::app {
 
 /// Options of `fullarm identify`.
 struct IdentifyOptions {
-  std::string io = "sim";          ///< the I/O back-end the experiments run on
-  std::string arm_config;          ///< --config (default: dts_master.yaml)
-  std::string plant_config;        ///< --plant (default: dts_plant.yaml)
-  std::string settings;            ///< --settings (default: identification.yaml)
-  std::string joint = "EB";        ///< the driven joint (short or model name)
+  std::string io = "sim";    ///< the I/O back-end the experiments run on
+  std::string arm_config;    ///< --config (default: dts_master.yaml)
+  std::string plant_config;  ///< --plant (default: dts_plant.yaml)
+  std::string settings;      ///< --settings (default: identification.yaml)
+  std::string joint = "EB";  ///< the driven joint (short or model name)
   std::string out_dir = "out/identify";
-  int seed = 1;                    ///< seed of the simulated sensors' noise (experiment k uses seed + k)
-  double duration_s = 5.0;         ///< excitation time of each experiment
-  double amplitude_v = 0.5;        ///< peak of the excitation added to the valve command
-  int threads = 2;                 ///< threads of the fit's simulations
-  std::string start;               ///< identified.yaml whose model starts the fit (default: the plant's groups)
-  std::vector<std::string> logs;   ///< recorded logs: all but the last fitted, the last held out
+  int seed = 1;                   ///< seed of the simulated sensors' noise (experiment k uses seed + k)
+  double duration_s = 5.0;        ///< excitation time of each experiment
+  double amplitude_v = 0.5;       ///< peak of the excitation added to the valve command
+  int threads = 2;                ///< threads of the fit's simulations
+  std::string start;              ///< identified.yaml whose model starts the fit (default: the plant's groups)
+  std::vector<std::string> logs;  ///< recorded logs: all but the last fitted, the last held out
   core::Progress* progress = nullptr;
 };
 

@@ -35,8 +35,8 @@ TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
   // The reduced model misses its thresholds on the full simulated plant: 1 (fails) is expected,
   // 0 allowed; anything else is an error.
   ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
-  for (const char* f : {"experiment_fit.csv", "experiment_validation.csv", "identified.yaml", "summary.json",
-                        "report.html"}) {
+  for (const char* f :
+       {"experiment_fit.csv", "experiment_validation.csv", "identified.yaml", "summary.json", "report.html"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
   }
   const nlohmann::json summary = readSummary(dir);
@@ -71,8 +71,7 @@ TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
   for (int i = 0; i < id::kGreyParams; ++i) {
     EXPECT_EQ(refit.model.value[static_cast<std::size_t>(i)], identified.model.value[static_cast<std::size_t>(i)])
         << id::greyParamName(i);
-    EXPECT_EQ(refit.standard_error[static_cast<std::size_t>(i)],
-              identified.standard_error[static_cast<std::size_t>(i)])
+    EXPECT_EQ(refit.standard_error[static_cast<std::size_t>(i)], identified.standard_error[static_cast<std::size_t>(i)])
         << id::greyParamName(i);
   }
   EXPECT_EQ(readSummary(again)["results"]["identify"]["validation"]["fit_angle_percent"].get<double>(), fit_angle);
@@ -108,8 +107,8 @@ TEST(IdentifyCli, BadInputExitsTwoNamingTheOptionFileOrLine) {
         << "0,0,0,1.2,0\n"
         << "0.001,0.1,zero,1.2,0\n";
   }
-  const Result m = runFullarm("identify --quiet --out " + dir.string() + " --log " + bad_log.string() + " " +
-                              bad_log.string());
+  const Result m =
+      runFullarm("identify --quiet --out " + dir.string() + " --log " + bad_log.string() + " " + bad_log.string());
   EXPECT_EQ(m.exit_code, 2) << m.output;
   EXPECT_NE(m.output.find(bad_log.string()), std::string::npos) << m.output;
   EXPECT_NE(m.output.find("3"), std::string::npos) << m.output;

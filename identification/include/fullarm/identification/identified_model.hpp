@@ -28,8 +28,7 @@ struct IdentifiedModel {
 /// Parses the YAML text; `source` names it in errors.
 /// @throws core::ConfigError for a missing or unknown key, a negative standard error, a
 ///   non-positive value of a positive group, a negative delay or a negative frequency
-[[nodiscard]] IdentifiedModel parseIdentifiedModelYaml(std::string_view yaml_text,
-                                                       const std::filesystem::path& source);
+[[nodiscard]] IdentifiedModel parseIdentifiedModelYaml(std::string_view yaml_text, const std::filesystem::path& source);
 
 /// Loads a file (see parseIdentifiedModelYaml). @throws core::ConfigError
 [[nodiscard]] IdentifiedModel loadIdentifiedModel(const std::filesystem::path& file);
