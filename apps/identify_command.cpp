@@ -223,12 +223,13 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   std::ostringstream intro;
   intro << "Joint " << o.joint << ": the reduced hydraulic joint model (docs/identification.md) fitted by output "
         << "error to " << o.fit_experiments.size() << " closed-loop experiment(s) "
-        << (o.source == "sim" ? "on the simulated DTS (PRBS to " : "from recorded logs (") << kBandHz
-        << (o.source == "sim" ? " Hz on the valve command, the joint held by a proportional hold, the others held)"
-                              : " Hz band of the simulated runs)")
+        << (o.source == "sim" ? "on the simulated DTS (a PRBS to 30 Hz added to the valve command, every joint "
+                                "held by a proportional position hold)"
+                              : "read from recorded logs")
         << ", validated by pure simulation on a held-out experiment"
-        << (o.source == "sim" ? " (Schroeder multisine)" : "") << ". Fit start: " << o.start_source << ". "
-        << o.fit.evaluations << " closed-loop simulations, cost " << std::setprecision(4) << o.fit.cost << ".";
+        << (o.source == "sim" ? " (a Schroeder multisine to 30 Hz)" : " (the last log)")
+        << ". Fit start: " << o.start_source << ". " << o.fit.evaluations << " closed-loop simulations, cost "
+        << std::setprecision(4) << o.fit.cost << ".";
   section.addParagraph(intro.str());
   for (const Experiment& e : o.fit_experiments) {
     if (!e.completed) section.addParagraph("Fit experiment " + e.name + " stopped early: " + e.stop_reason);
