@@ -11,6 +11,7 @@
 #include "fullarm/core/data_paths.hpp"
 #include "fullarm/hil/sim_io.hpp"
 #include "fullarm/hil/fake_daq.hpp"
+#include "fullarm/hil/lcm_io.hpp"
 
 namespace fullarm::hil {
 
@@ -22,6 +23,8 @@ const char* ioKindName(IoKind io) noexcept {
       return "fakedaq";
     case IoKind::kComedi:
       return "comedi";
+    case IoKind::kLcm:
+      return "lcm";
   }
   return "unknown";
 }
@@ -111,7 +114,8 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
   tick_ = makeTickModel(*model_, *world_, haptics_, gains_, config_.supervisor, joints, posture_);
   if (!build_device) return;
 
-  if (options.io != IoKind::kComedi) {
+  // The simulated arm lives in this process for sim and fakedaq, in the plant node for lcm.
+  if (options.io == IoKind::kSim || options.io == IoKind::kFakeDaq) {
     arm_ = std::make_unique<SimulatedArm>(*model_, plant_, posture_, config_.control_period_s, config_.latency_samples);
     user_ = std::make_unique<ScriptedUser>(loadScriptedUser(options_.user), *model_, haptics::armBasePose(*scene_, *model_));
     arm_->setUser(user_.get());
@@ -134,6 +138,12 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
     case IoKind::kComedi:
       device_ = makeComediIoDevice(daq_, *model_, config_.control_period_s, config_.io_safety);
       break;
+    case IoKind::kLcm: {
+      LcmIoOptions lcm;
+      if (!options.lcm_url.empty()) lcm.url = options.lcm_url;
+      device_ = std::make_unique<LcmIoDevice>(joints, config_.control_period_s, config_.io_safety, lcm);
+      break;
+    }
   }
   if (device_->joints().modelIndices() != joints.modelIndices()) {
     throw DeviceError("the I/O device's joints differ from the tick's: check the channel map " +

@@ -97,7 +97,7 @@ RunRecorder::RunRecorder(const std::filesystem::path& file, const HilSession& se
              fileEntry("gains", o.gains_config),     fileEntry("haptics", o.haptics_config),
              fileEntry("hil", o.hil_config),         fileEntry("scene", o.scene),
              fileEntry("user", o.user)};
-  if (o.io != IoKind::kSim) h.files.push_back(fileEntry("daq", o.daq_config));
+  if (o.io == IoKind::kFakeDaq || o.io == IoKind::kComedi) h.files.push_back(fileEntry("daq", o.daq_config));
   h.num_files = static_cast<std::int16_t>(h.files.size());
   h.parameters = {parameter("duration_s", exact(o.duration_s)),
                   parameter("start_posture", o.start_posture),
@@ -237,6 +237,8 @@ RunOptions optionsFromHeader(const fullarm_lcm::run_header_t& h, const std::file
     o.io = IoKind::kFakeDaq;
   } else if (h.io == "comedi") {
     o.io = IoKind::kComedi;
+  } else if (h.io == "lcm") {
+    o.io = IoKind::kLcm;
   } else {
     throw core::ConfigError(log, "run header io", "unknown I/O back-end '" + h.io + "'");
   }

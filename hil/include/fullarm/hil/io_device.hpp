@@ -136,6 +136,9 @@ class IoDevice {
 
  protected:
   IoDevice(arm::JointSelection joints, double period_s, const IoSafetyParams& safety);
+  /// The plant node serves a remote device's back-end directly: the lifecycle and the safety
+  /// policy already ran on the remote side (lcm_io.hpp).
+  friend class LcmPlantNode;
 
   /// Back-end hooks. onConfigure may throw; the others must not.
   virtual void onConfigure() = 0;

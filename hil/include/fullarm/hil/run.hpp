@@ -38,7 +38,8 @@
 namespace fullarm::hil {
 
 /// Which I/O back-end drives the run.
-enum class IoKind { kSim, kFakeDaq, kComedi };
+/// kLcm: remote I/O, the device's back-end in a plant node in another process (lcm_io.hpp).
+enum class IoKind { kSim, kFakeDaq, kComedi, kLcm };
 /// Which clock drives the run.
 enum class ClockKind { kLockstep, kRealtime };
 
@@ -67,6 +68,9 @@ struct RunOptions {
   /// sim: read and write through the channel map's converters and calibrations (those of the
   /// fake DAQ), for a bit-for-bit comparison of the two back-ends.
   bool sim_uses_daq_converters = false;
+  /// lcm: the LCM URL shared with the plant node (empty: kDefaultLcmUrl, which stays on this
+  /// machine).
+  std::string lcm_url;
   /// The run's LCM log (empty: none) and the command line its header records.
   std::filesystem::path log;
   std::string command_line;
