@@ -10,6 +10,7 @@
 #include <random>
 #include <string_view>
 
+#include "fullarm/hil/lcm_io.hpp"
 #include "fullarm/hil/lcm_transport.hpp"
 
 namespace fullarm::hil {
@@ -59,6 +60,29 @@ Bytes fragmentBytes() {
   return b;
 }
 
+Bytes ioCommandBytes() {
+  fullarm_lcm::io_command_t m;
+  m.seq = 3;
+  m.num_valves = 7;
+  m.valve_command_v.assign(7, 1.5);
+  m.enable = 1;
+  Bytes b;
+  encodeMessage(m, b);
+  return b;
+}
+
+Bytes ioReadingBytes() {
+  fullarm_lcm::io_reading_t m;
+  m.seq = 3;
+  m.t_s = 0.003;
+  m.num_joints = 7;
+  m.q_rad.assign(7, 0.25);
+  m.tau_load_cell_nm.assign(7, -4.0);
+  Bytes b;
+  encodeMessage(m, b);
+  return b;
+}
+
 /// One decoder under test: its valid payload, its checked decoder, and its bounds check on a
 /// record it accepted (independent of the decoder: the record's own invariants).
 struct Case {
@@ -66,6 +90,7 @@ struct Case {
   const char* channel;
   Bytes valid;
   std::function<DecodeStatus(const Bytes&)> decode;
+  /// The receiver's counters of its channel; empty when LcmReceiver does not handle it.
   std::function<const LcmChannelCounters&(const LcmReceiverCounters&)> counters;
 };
 
@@ -115,6 +140,30 @@ std::vector<Case> cases() {
                    return s;
                  },
                  [](const LcmReceiverCounters& c) -> const LcmChannelCounters& { return c.minima_fragment; }});
+  // The remote-I/O messages (no LcmReceiver channel: the device and the node decode them).
+  out.push_back({"io_command_t", channel::kIoCommand, ioCommandBytes(),
+                 [](const Bytes& b) {
+                   fullarm_lcm::io_command_t m;
+                   const DecodeStatus s = decodeChecked(b, m);
+                   if (s == DecodeStatus::kOk) {
+                     EXPECT_TRUE(m.num_valves >= 0 && m.num_valves <= kMaxIoJoints);
+                     EXPECT_EQ(m.valve_command_v.size(), static_cast<std::size_t>(m.num_valves));
+                   }
+                   return s;
+                 },
+                 {}});
+  out.push_back({"io_reading_t", channel::kIoReading, ioReadingBytes(),
+                 [](const Bytes& b) {
+                   fullarm_lcm::io_reading_t m;
+                   const DecodeStatus s = decodeChecked(b, m);
+                   if (s == DecodeStatus::kOk) {
+                     EXPECT_TRUE(m.num_joints >= 0 && m.num_joints <= kMaxIoJoints);
+                     EXPECT_EQ(m.q_rad.size(), static_cast<std::size_t>(m.num_joints));
+                     EXPECT_EQ(m.tau_load_cell_nm.size(), static_cast<std::size_t>(m.num_joints));
+                   }
+                   return s;
+                 },
+                 {}});
   return out;
 }
 
@@ -208,6 +257,7 @@ TEST(LcmDecoderFuzz, RandomDamageNeverCrashesAndTheReceiverCountsIt) {
       rx.handle(c.channel, b);
       ++fed;
     }
+    if (!c.counters) continue;  // not a receiver channel
     const LcmChannelCounters& k = c.counters(rx.counters());
     EXPECT_EQ(k.received, fed) << c.name;
     // Every payload the decoder rejects, the receiver rejects and counts (a fragment can also
