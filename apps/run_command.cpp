@@ -210,7 +210,8 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
                                      "Run the 1 kHz haptic loop on a simulated, fake-DAQ or real DTS; write an "
                                      "LCM log, summary.json and report.html");
   OptionDeclarer declare(*cmd, table);
-  declare.choice("--io", o.io, "I/O back-end", {"sim", "fakedaq", "comedi"})->capture_default_str();
+  declare.choice("--io", o.io, "I/O back-end", {"sim", "fakedaq", "comedi", "lcm"})->capture_default_str();
+  declare.name("--lcm-url", o.lcm_url, "--io lcm: LCM URL of the plant node (default udpm://239.255.76.67:7667?ttl=0)");
   declare.choice("--mode", o.mode, "Haptic rendering", {"full-arm", "hand-only"})->capture_default_str();
   declare.file("--scene", o.scene, "Scene YAML (default: scenes/valve_wall.yaml)");
   // Every tick's inputs and telemetry stay in memory for the report and the replay check (the
@@ -240,7 +241,11 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
 
 int runRun(const RunCommandOptions& o, const std::string& command_line) {
   hil::RunOptions ro;
-  ro.io = o.io == "sim" ? hil::IoKind::kSim : o.io == "fakedaq" ? hil::IoKind::kFakeDaq : hil::IoKind::kComedi;
+  ro.io = o.io == "sim"       ? hil::IoKind::kSim
+          : o.io == "fakedaq" ? hil::IoKind::kFakeDaq
+          : o.io == "lcm"     ? hil::IoKind::kLcm
+                              : hil::IoKind::kComedi;
+  ro.lcm_url = o.lcm_url;
   ro.mode = o.mode == "hand-only" ? haptics::RenderMode::kHandOnly : haptics::RenderMode::kFullArm;
   ro.clock = o.clock == "lockstep" ? hil::ClockKind::kLockstep : hil::ClockKind::kRealtime;
   ro.duration_s = o.duration_s;

@@ -35,6 +35,12 @@ DecodeStatus decodeIo(std::span<const std::uint8_t> bytes, Message& m) noexcept 
   return DecodeStatus::kOk;
 }
 
+std::string seconds(double s) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g s", s);
+  return text;
+}
+
 int waitMillis(Clock::time_point deadline) {
   const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
   return static_cast<int>(std::clamp<long long>(left, 0, 1000));
@@ -121,6 +127,7 @@ void LcmIoDevice::onConfigure() {
   held_v_.setZero();
   held_enable_ = false;
   seq_ = 0;
+  lost_ = false;
 }
 
 core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
@@ -139,10 +146,18 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
       return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead, "lcm I/O: the command could not be sent");
     }
     ++counters_.commands;
-    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                             std::chrono::duration<double>(options_.reply_timeout_s));
+    // Once a reply failed to come, later reads only take what has already arrived: a lost node
+    // must not stall every later tick by the whole timeout.
+    const double wait_s = lost_ ? 0.0 : options_.reply_timeout_s;
+    const auto deadline =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait_s));
+    if (lost_) {
+      while (!handler_->have_reading && lcm_->handleTimeout(0) > 0) {
+      }
+    }
     while (!handler_->have_reading && Clock::now() < deadline) lcm_->handleTimeout(waitMillis(deadline) + 1);
     if (!handler_->have_reading) {
+      lost_ = true;
       ++counters_.timeouts;
       return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead,
                                    "lcm I/O: no reading from the I/O node in time (communication lost)");
@@ -150,6 +165,7 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
   } catch (const std::exception&) {
     return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead, "lcm I/O: receive failed");
   }
+  lost_ = false;
   const fullarm_lcm::io_reading_t& m = handler_->reading;
   if (m.num_joints != numJoints()) {
     return core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead, "lcm I/O: the node serves another number of joints");
@@ -192,6 +208,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     char stamp[32];
     std::snprintf(stamp, sizeof stamp, "%.3f s: ", std::chrono::duration<double>(Clock::now() - start).count());
     result.log.push_back(stamp + what);
+    if (options_.on_log) options_.on_log(result.log.back());
   };
 
   device_.configure();  // safe outputs
@@ -240,12 +257,12 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
       safe = true;
       ++result.watchdog_trips;
       publisher.setNodeState(last_seq, true);
-      log("watchdog: no command for " + std::to_string(options_.watchdog_timeout_s) +
-          " s: safe outputs (valves null, amplifiers disabled)");
+      log("watchdog: no command for " + seconds(options_.watchdog_timeout_s) +
+          ": safe outputs (valves null, amplifiers disabled)");
     }
     if (options_.idle_exit_s > 0.0 && now - last_command > idle) {
-      log(commanded ? "no command for " + std::to_string(options_.idle_exit_s) + " s: stopped"
-                    : "no tick connected within " + std::to_string(options_.idle_exit_s) + " s: stopped");
+      log(commanded ? "no command for " + seconds(options_.idle_exit_s) + ": stopped"
+                    : "no tick connected within " + seconds(options_.idle_exit_s) + ": stopped");
       break;
     }
     have_command = false;
@@ -266,7 +283,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     commanded = true;
     for (int k = 0; k < valve.size(); ++k) valve[k] = command.valve_command_v[static_cast<std::size_t>(k)];
     const bool enable = command.enable != 0;
-    if (safe && enable) log("commands resumed");
+    if (safe && enable) log("amplifiers enabled: commands applied");
     (void)device_.onWrite(enable ? valve : zero, enable);
     safe = !enable;
     const core::RtStatus status = device_.onRead(sample);

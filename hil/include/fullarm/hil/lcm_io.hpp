@@ -14,7 +14,8 @@
 ///
 /// **Safety.** The tick side keeps the whole IoDevice policy (lifecycle, clamp, ramp-in, safe
 /// outputs on fault); a reading that does not come within `reply_timeout_s` is a read failure,
-/// which faults the device (and the supervisor trips). The node has its own watchdog: when no
+/// which faults the device (and the supervisor trips); after one, later reads take only a
+/// reading that has already arrived, so a lost node does not stall every later tick. The node has its own watchdog: when no
 /// command has come for `watchdog_timeout_s` it puts out the safe output (null valves,
 /// amplifiers disabled) and says so in its heartbeat and its log, until commands resume; a
 /// command with enable = false is the safe output too.
@@ -86,6 +87,7 @@ class LcmIoDevice final : public IoDevice {
   IoVector held_v_;
   bool held_enable_ = false;
   std::int64_t seq_ = 0;
+  bool lost_ = false;  ///< the last read got no reply in time: later reads do not wait
   std::vector<std::uint8_t> buffer_;
   LcmIoCounters counters_;
 };
@@ -98,6 +100,8 @@ struct PlantNodeOptions {
   /// Stop serving after this long without a command (also before the first) [s]; <= 0: never.
   double idle_exit_s = 5.0;
   double heartbeat_period_s = 0.05;
+  /// Called with each log line as it happens (empty: collected in the result only).
+  std::function<void(const std::string&)> on_log;
 };
 
 /// What a plant node did.
