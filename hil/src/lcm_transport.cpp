@@ -146,8 +146,8 @@ bool LcmPublisher::pushMinimaSet(const MinimaSetRecord& record) noexcept {
 }
 
 void LcmPublisher::setNodeState(std::int64_t tick, bool safe_output) noexcept {
-  node_tick_.store(tick, std::memory_order_relaxed);
-  node_safe_.store(safe_output, std::memory_order_relaxed);
+  node_safe_.store(safe_output, std::memory_order_release);
+  node_tick_.store(tick, std::memory_order_release);
 }
 
 void LcmPublisher::publishBytes(const char* channel, std::int64_t seq, std::atomic<std::uint64_t>& sent) {
@@ -187,14 +187,19 @@ bool LcmPublisher::sendQueued() {
 }
 
 void LcmPublisher::sendHeartbeat() {
+  // The state first, then what was pushed before it: a heartbeat never reports a tick whose
+  // messages are still queued behind it.
+  const std::int64_t tick = node_tick_.load(std::memory_order_acquire);
+  const bool safe = node_safe_.load(std::memory_order_acquire);
+  sendQueued();
   HeartbeatRecord h;
   h.utime_us = std::chrono::duration_cast<std::chrono::microseconds>(
                    std::chrono::system_clock::now().time_since_epoch())
                    .count();
   h.seq = heartbeat_seq_;
   h.node = options_.node;
-  h.tick = node_tick_.load(std::memory_order_relaxed);
-  h.safe_output = node_safe_.load(std::memory_order_relaxed);
+  h.tick = tick;
+  h.safe_output = safe;
   encodeMessage(toMessage(h), buffer_);
   publishBytes(channel::kHeartbeat, heartbeat_seq_++, heartbeats_sent_);
 }

@@ -8,6 +8,7 @@
 #include <deque>
 
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/hil/lcm_search.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_recording.hpp"
 
@@ -53,6 +54,9 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
   r.hand_W_m.reserve(ticks);
 
   GlobalSearchRunner search(*model_, *world_, haptics_);
+  // The global search in a node of its own: queried at the same ticks, awaited at delivery.
+  std::unique_ptr<LcmSearchClient> remote;
+  if (!options_.search_url.empty()) remote = std::make_unique<LcmSearchClient>(options_.search_url, 5.0, 0.5);
   std::unique_ptr<MissedContactOracle> oracle;
   if (options_.oracle) oracle = std::make_unique<MissedContactOracle>(*model_, *world_, haptics_.force_threshold_m);
   std::deque<PendingSet> pending;
@@ -93,15 +97,18 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
     if (!pending.empty() && pending.front().deliver_tick == k) {
       RecordedSet& set = r.sets[pending.front().set_index];
       pending.pop_front();
-      set.adopted_tick = static_cast<std::int64_t>(k);
-      delivery.set_id = set.id;
-      delivery.minima = set.minima;
-      delivery.query_q_rad = set.query_q_rad;
-      delivered = &delivery;
-      recorded.adopted_set = set.id;
-      if (recorder) {
-        toSetRecord(set, period, set_record);
-        recorder->recordAdoptedSet(set_record);
+      // A remote set that does not come in time is not adopted (the old minima go stale).
+      if (!remote || remote->await(set.id, set.query_tick, set.minima, set.found)) {
+        set.adopted_tick = static_cast<std::int64_t>(k);
+        delivery.set_id = set.id;
+        delivery.minima = set.minima;
+        delivery.query_q_rad = set.query_q_rad;
+        delivered = &delivery;
+        recorded.adopted_set = set.id;
+        if (recorder) {
+          toSetRecord(set, period, set_record);
+          recorder->recordAdoptedSet(set_record);
+        }
       }
     }
     r.inputs.push_back(recorded);
@@ -151,8 +158,12 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
       set.id = static_cast<std::int64_t>(r.sets.size()) + 1;
       set.query_tick = k;
       set.query_q_rad.assign(data.q.data(), data.q.data() + data.q.size());
-      set.found = search.run(data.q, set.minima);
-      search_s = search.lastSeconds();
+      if (remote) {
+        remote->query(set.id, k, data.q);
+      } else {
+        set.found = search.run(data.q, set.minima);
+        search_s = search.lastSeconds();
+      }
       r.sets.push_back(std::move(set));
       pending.push_back({k + static_cast<std::uint64_t>(config_.delivery_delay_ticks), r.sets.size() - 1});
       ++r.timing.searches;

@@ -150,7 +150,8 @@ class LcmPublisher {
   bool pushValveCommand(const ValveCommandRecord& record) noexcept;
   /// Queues a minima set (sent as fragments); false (counted) if the ring is full. @rt
   bool pushMinimaSet(const MinimaSetRecord& record) noexcept;
-  /// The tick and safe-output state the next heartbeats report. @rt
+  /// The tick and safe-output state the next heartbeats report. A heartbeat goes out only
+  /// after everything pushed before this call. @rt
   void setNodeState(std::int64_t tick, bool safe_output) noexcept;
 
   /// Blocks until everything pushed before the call has been sent (not real time).
