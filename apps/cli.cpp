@@ -23,6 +23,7 @@
 #include "output_files.hpp"
 #include "plant_command.hpp"
 #include "plant_serve_command.hpp"
+#include "global_command.hpp"
 #include "run_command.hpp"
 #include "tune_command.hpp"
 #include "validate_command.hpp"
@@ -185,6 +186,8 @@ struct CommandLine {
   PlantSimulateOptions plant_options;
   CLI::App* plant_serve = nullptr;
   PlantServeOptions plant_serve_options;
+  CLI::App* global_node = nullptr;
+  GlobalCommandOptions global_options;
   CLI::App* validate = nullptr;
   ValidateOptions validate_options;
   CLI::App* haptics_query = nullptr;
@@ -220,6 +223,7 @@ struct CommandLine {
     tune = addTuneCommand(app, tune_options, table);
     plant_simulate = addPlantCommand(app, plant_options, table);
     plant_serve = addPlantServeCommand(app, plant_serve_options, table);
+    global_node = addGlobalCommand(app, global_options, table);
     validate = addValidateCommand(app, validate_options, table);
     haptics_query = addHapticsCommand(app, haptics_options, table);
     run = addRunCommand(app, run_options, table);
@@ -237,6 +241,7 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
     return runPlantSimulate(cli.plant_options);
   }
   if (cli.plant_serve->parsed()) return runPlantServe(cli.plant_serve_options, out);
+  if (cli.global_node->parsed()) return runGlobal(cli.global_options, out);
   if (cli.validate->parsed()) {
     cli.validate_options.progress = &progress;
     return runValidate(cli.validate_options);

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "fullarm/core/config_error.hpp"
+#include "fullarm/hil/lcm_transport.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_recording.hpp"
 #include "fullarm/reports/report.hpp"
@@ -211,7 +212,10 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
                                      "LCM log, summary.json and report.html");
   OptionDeclarer declare(*cmd, table);
   declare.choice("--io", o.io, "I/O back-end", {"sim", "fakedaq", "comedi", "lcm"})->capture_default_str();
-  declare.name("--lcm-url", o.lcm_url, "--io lcm: LCM URL of the plant node (default udpm://239.255.76.67:7667?ttl=0)");
+  declare.choice("--search", o.search, "Global search: in this process, or the global node `fullarm global` over LCM (lockstep)",
+                 {"in-process", "lcm"})
+      ->capture_default_str();
+  declare.name("--lcm-url", o.lcm_url, "--io lcm, --search lcm: LCM URL of the plant and global nodes (default udpm://239.255.76.67:7667?ttl=0)");
   declare.choice("--mode", o.mode, "Haptic rendering", {"full-arm", "hand-only"})->capture_default_str();
   declare.file("--scene", o.scene, "Scene YAML (default: scenes/valve_wall.yaml)");
   // Every tick's inputs and telemetry stay in memory for the report and the replay check (the
@@ -246,6 +250,7 @@ int runRun(const RunCommandOptions& o, const std::string& command_line) {
           : o.io == "lcm"     ? hil::IoKind::kLcm
                               : hil::IoKind::kComedi;
   ro.lcm_url = o.lcm_url;
+  if (o.search == "lcm") ro.search_url = o.lcm_url.empty() ? hil::kDefaultLcmUrl : o.lcm_url;
   ro.mode = o.mode == "hand-only" ? haptics::RenderMode::kHandOnly : haptics::RenderMode::kFullArm;
   ro.clock = o.clock == "lockstep" ? hil::ClockKind::kLockstep : hil::ClockKind::kRealtime;
   ro.duration_s = o.duration_s;

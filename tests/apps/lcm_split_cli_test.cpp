@@ -137,6 +137,35 @@ TEST_F(LcmSplitCli, ALockstepRunOverThePlantNodeWritesTheInProcessRunsLog) {
   }
 }
 
+TEST_F(LcmSplitCli, ThreeProcessesInLockstepWriteTheInProcessRunsLog) {
+  Process plant(plantArgs("5"), dir_ / "plant.txt");
+  Process global({"--quiet", "global", "--lcm-url", kUrl, "--idle-exit", "5"}, dir_ / "global.txt");
+  const test::CliResult remote = test::runFullarm("--quiet run --io lcm --search lcm --lcm-url '" + std::string(kUrl) +
+                                                  "' --clock lockstep --duration 1.5 --no-oracle " + scenario() +
+                                                  " --out " + (dir_ / "lcm").string());
+  ASSERT_EQ(remote.exit_code, 0) << remote.output;
+  const test::CliResult local = test::runFullarm("--quiet run --io sim --clock lockstep --duration 1.5 --no-oracle " +
+                                                 scenario() + " --out " + (dir_ / "sim").string());
+  ASSERT_EQ(local.exit_code, 0) << local.output;
+  plant.kill();
+  global.kill();
+  (void)plant.wait();
+  (void)global.wait();
+  EXPECT_NE(global.output().find("first query"), std::string::npos) << global.output();
+
+  const auto a = eventsAfterHeader(dir_ / "sim" / "run.lcmlog");
+  const auto b = eventsAfterHeader(dir_ / "lcm" / "run.lcmlog");
+  ASSERT_GT(a.size(), 1500u);
+  ASSERT_EQ(a.size(), b.size());
+  std::size_t sets = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].first, b[i].first) << "event " << i;
+    ASSERT_TRUE(a[i].second == b[i].second) << "event " << i << " on " << a[i].first << " differs";
+    sets += a[i].first == hil::channel::kMinimaSet ? 1 : 0;
+  }
+  EXPECT_GT(sets, 100u) << "the adopted minima sets are in both logs";
+}
+
 TEST_F(LcmSplitCli, KillingThePlantNodeFaultsTheRun) {
   Process plant(plantArgs("5"), dir_ / "plant.txt");
   Process run({"--quiet", "run", "--io", "lcm", "--lcm-url", kUrl, "--clock", "lockstep", "--duration", "20", "--no-oracle",
