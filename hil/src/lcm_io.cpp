@@ -128,6 +128,8 @@ void LcmIoDevice::onConfigure() {
   held_enable_ = false;
   seq_ = 0;
   lost_ = false;
+  have_sample_ = false;
+  counters_.consecutive_missed = 0;
 }
 
 core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
@@ -146,12 +148,14 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
       return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead, "lcm I/O: the command could not be sent");
     }
     ++counters_.commands;
-    // Once a reply failed to come, later reads only take what has already arrived: a lost node
-    // must not stall every later tick by the whole timeout.
-    const double wait_s = lost_ ? 0.0 : options_.reply_timeout_s;
+    // Once a reply failed to come, later reads only take what has already arrived when the
+    // timeout is longer than a period (lockstep): a lost node must not stall every later tick by
+    // the whole timeout. A timeout within the period (real time) is always waited for.
+    const bool poll_only = lost_ && options_.reply_timeout_s > period();
+    const double wait_s = poll_only ? 0.0 : options_.reply_timeout_s;
     const auto deadline =
         Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait_s));
-    if (lost_) {
+    if (poll_only) {
       while (!handler_->have_reading && lcm_->handleTimeout(0) > 0) {
       }
     }
@@ -159,13 +163,18 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
     if (!handler_->have_reading) {
       lost_ = true;
       ++counters_.timeouts;
-      return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead,
-                                   "lcm I/O: no reading from the I/O node in time (communication lost)");
+      if (++counters_.consecutive_missed >= options_.max_missed_replies || !have_sample_) {
+        return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead,
+                                     "lcm I/O: no reading from the I/O node in time (communication lost)");
+      }
+      sample = last_sample_;  // a held reading, as a late DAQ conversion would give
+      return {};
     }
   } catch (const std::exception&) {
     return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead, "lcm I/O: receive failed");
   }
   lost_ = false;
+  counters_.consecutive_missed = 0;
   const fullarm_lcm::io_reading_t& m = handler_->reading;
   if (m.num_joints != numJoints()) {
     return core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead, "lcm I/O: the node serves another number of joints");
@@ -180,6 +189,8 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
   }
   sample.t_s = m.t_s;
   sample.out_of_range_mask = static_cast<std::uint32_t>(m.out_of_range_mask);
+  last_sample_ = sample;
+  have_sample_ = true;
   if (m.status_code != 0) {
     return core::RtStatus::fault(static_cast<core::RtCode>(m.status_code), static_cast<std::uint32_t>(m.status_faults),
                                  "lcm I/O: the node's read failed");

@@ -144,6 +144,9 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
     case IoKind::kLcm: {
       LcmIoOptions lcm;
       if (!options.lcm_url.empty()) lcm.url = options.lcm_url;
+      // Real time: a reading must come within 0.6 of a period to leave the tick its compute
+      // time; lockstep waits long, for determinism.
+      if (options.clock == ClockKind::kRealtime) lcm.reply_timeout_s = 0.6 * config_.control_period_s;
       device_ = std::make_unique<LcmIoDevice>(joints, config_.control_period_s, config_.io_safety, lcm);
       break;
     }

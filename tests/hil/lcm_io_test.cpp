@@ -339,7 +339,7 @@ TEST_F(LcmIo, ThePlantNodesWatchdogPutsOutTheSafeOutputWhenCommandsStop) {
   EXPECT_EQ(h->tick, 21);
 }
 
-TEST_F(LcmIo, AReadWithoutAnAnswerFaultsTheDevice) {
+TEST_F(LcmIo, ConsecutiveReadsWithoutAnAnswerFaultTheDevice) {
   PlantNodeOptions po;
   po.url = kUrl;
   po.idle_exit_s = 5.0;
@@ -349,12 +349,20 @@ TEST_F(LcmIo, AReadWithoutAnAnswerFaultsTheDevice) {
   device.activate();
   JointSample s;
   for (int k = 0; k < 5; ++k) ASSERT_TRUE(device.read(s).ok());
+  const JointSample last = s;
   plant->join();  // the plant node is gone
+  const int n = LcmIoOptions{}.max_missed_replies;
+  for (int k = 1; k < n; ++k) {
+    ASSERT_TRUE(device.read(s).ok()) << "miss " << k << " of " << n << " holds the last reading";
+    EXPECT_EQ(s.q_rad, last.q_rad);
+    EXPECT_EQ(s.t_s, last.t_s);
+    EXPECT_EQ(device.state(), IoState::kActive);
+  }
   const core::RtStatus status = device.read(s);
   EXPECT_FALSE(status.ok());
   EXPECT_NE(status.faults & kFaultDeviceRead, 0u);
   EXPECT_EQ(device.state(), IoState::kFault);
-  EXPECT_EQ(device.counters().timeouts, 1u);
+  EXPECT_EQ(device.counters().timeouts, static_cast<std::uint64_t>(n));
   EXPECT_EQ(device.counters().readings, 5u);
 }
 
