@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstring>
 #include <fstream>
 #include <thread>
@@ -237,6 +238,43 @@ TEST_F(LcmIo, TheGlobalNodeStoppedMidContactFadesTheForcesWithinTheRate) {
   const TickTelemetry& last = r.telemetry.back();
   EXPECT_EQ(last.contact_scale, 0.0);
   for (int l = 0; l < last.num_config; ++l) EXPECT_EQ(last.tau_contact_nm[static_cast<std::size_t>(l)], 0.0);
+}
+
+TEST_F(LcmIo, MinimaDelayed50msAreStillAdoptedOnTimeInLockstep) {
+  RunOptions local = holdAtTheWheel(1.5);
+  const RunResult in_process = runHil(local);
+  HilSession plant(local);
+  LcmPlantNode plant_node(plant.device(), plantOptions());
+  std::atomic<bool> stop{false};
+  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  GlobalNodeOptions go = globalOptions();
+  std::atomic<int> delayed{0};
+  // One fragment in twenty held back 50 ms on the wire (the publisher thread waits before it).
+  go.drop = [&delayed](std::string_view ch, std::int64_t seq) {
+    if (ch == channel::kMinimaSet && seq % 20 == 5) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      ++delayed;
+    }
+    return false;
+  };
+  GlobalThread global(local, go);
+  local.io = IoKind::kLcm;
+  local.lcm_url = kUrl;
+  local.search_url = kUrl;
+  RunResult r;
+  try {
+    r = runHil(local);
+  } catch (...) {
+    stop = true;
+    plant_thread.join();
+    throw;
+  }
+  global.join();
+  stop = true;
+  plant_thread.join();
+  EXPECT_GT(delayed.load(), 3);
+  // Lockstep waits for each set at its delivery tick: a late set changes nothing.
+  expectSameRun(in_process, r);
 }
 
 TEST_F(LcmIo, MinimaFragmentsDroppedAreSetsNotAdoptedAndTheRunStaysSafe) {
