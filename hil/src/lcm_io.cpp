@@ -6,6 +6,9 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <string_view>
+
+#include "lcm_subscribe.hpp"
 
 namespace fullarm::hil {
 namespace {
@@ -77,9 +80,16 @@ struct LcmIoDevice::Handler {
   std::uint64_t heartbeats = 0;
   LcmIoCounters* counters = nullptr;
 
-  void onReading(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+  void onMessage(std::span<const std::uint8_t> bytes, const char* channel) {
+    if (std::string_view(channel) == channel::kHeartbeat) {
+      onHeartbeat(bytes);
+    } else {
+      onReading(bytes);
+    }
+  }
+  void onReading(std::span<const std::uint8_t> bytes) {
     fullarm_lcm::io_reading_t m;
-    if (decodeChecked({static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size}, m) != DecodeStatus::kOk) {
+    if (decodeChecked(bytes, m) != DecodeStatus::kOk) {
       ++counters->rejected;
       return;
     }
@@ -90,9 +100,9 @@ struct LcmIoDevice::Handler {
     reading = std::move(m);
     have_reading = true;
   }
-  void onHeartbeat(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+  void onHeartbeat(std::span<const std::uint8_t> bytes) {
     HeartbeatRecord h;
-    if (decodeChecked({static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size}, h) != DecodeStatus::kOk) {
+    if (decodeChecked(bytes, h) != DecodeStatus::kOk) {
       ++counters->rejected;
       return;
     }
@@ -112,11 +122,10 @@ void LcmIoDevice::onConfigure() {
   if (!lcm_->good()) throw DeviceError("lcm I/O: cannot open the LCM URL " + options_.url);
   handler_ = std::make_unique<Handler>();
   handler_->counters = &counters_;
-  lcm::Subscription* r = lcm_->subscribe(channel::kIoReading, &Handler::onReading, handler_.get());
-  lcm::Subscription* h = lcm_->subscribe(channel::kHeartbeat, &Handler::onHeartbeat, handler_.get());
+  // Subscriptions end with the LCM instance (lcm_destroy).
+  lcm_subscription_t* r = detail::subscribeRaw(*lcm_, channel::kIoReading, handler_.get(), 64);
+  lcm_subscription_t* h = detail::subscribeRaw(*lcm_, channel::kHeartbeat, handler_.get(), 64);
   if (r == nullptr || h == nullptr) throw DeviceError("lcm I/O: cannot subscribe on " + options_.url);
-  r->setQueueCapacity(64);
-  h->setQueueCapacity(64);
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(options_.connect_timeout_s));
   while (handler_->heartbeats == 0 && Clock::now() < deadline) lcm_->handleTimeout(waitMillis(deadline) + 1);
@@ -164,7 +173,7 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
       lost_ = true;
       ++counters_.timeouts;
       if (++counters_.consecutive_missed >= options_.max_missed_replies || !have_sample_) {
-        return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead,
+        return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead | kFaultLinkLost,
                                      "lcm I/O: no reading from the I/O node in time (communication lost)");
       }
       sample = last_sample_;  // a held reading, as a late DAQ conversion would give
@@ -234,8 +243,8 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     fullarm_lcm::io_command_t* command;
     bool* have;
     std::uint64_t* rejected;
-    void on(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-      if (decodeChecked({static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size}, *command) != DecodeStatus::kOk) {
+    void onMessage(std::span<const std::uint8_t> bytes, const char* /*channel*/) {
+      if (decodeChecked(bytes, *command) != DecodeStatus::kOk) {
         ++*rejected;
         *have = false;
         return;
@@ -243,9 +252,8 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
       *have = true;
     }
   } sink{&command, &have_command, &result.rejected};
-  lcm::Subscription* sub = rx.subscribe(channel::kIoCommand, &Sink::on, &sink);
+  lcm_subscription_t* sub = detail::subscribeRaw(rx, channel::kIoCommand, &sink, 64);
   if (sub == nullptr) throw DeviceError("plant node: cannot subscribe on " + options_.url);
-  sub->setQueueCapacity(64);
 
   LcmPublisherOptions beat;
   beat.node = NodeKind::kPlant;
@@ -322,7 +330,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     safe = true;
   }
   result.safe_at_exit = safe;
-  rx.unsubscribe(sub);
+  lcm_unsubscribe(rx.getUnderlyingLCM(), sub);
   return result;
 }
 

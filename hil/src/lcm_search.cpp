@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "fullarm/hil/io_device.hpp"
+#include "lcm_subscribe.hpp"
 
 namespace fullarm::hil {
 namespace {
@@ -117,15 +118,14 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
     JointStateRecord query;
     bool have = false;
     std::uint64_t* rejected = nullptr;
-    void on(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-      have = decodeChecked({static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size}, query) == DecodeStatus::kOk;
+    void onMessage(std::span<const std::uint8_t> bytes, const char* /*channel*/) {
+      have = decodeChecked(bytes, query) == DecodeStatus::kOk;
       if (!have) ++*rejected;
     }
   } sink;
   sink.rejected = &result.rejected;
-  lcm::Subscription* sub = rx.subscribe(channel::kSearchQuery, &Sink::on, &sink);
+  lcm_subscription_t* sub = detail::subscribeRaw(rx, channel::kSearchQuery, &sink, 256);
   if (sub == nullptr) throw DeviceError("global node: cannot subscribe on " + options_.url);
-  sub->setQueueCapacity(256);
 
   LcmPublisherOptions po;
   po.node = NodeKind::kGlobal;
@@ -182,7 +182,7 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
     ++result.queries;
   }
   publisher.stop();
-  rx.unsubscribe(sub);
+  lcm_unsubscribe(rx.getUnderlyingLCM(), sub);
   return result;
 }
 

@@ -7,6 +7,8 @@
 #include <exception>
 #include <string>
 
+#include "lcm_subscribe.hpp"
+
 namespace fullarm::hil {
 namespace {
 
@@ -262,17 +264,14 @@ LcmPublisherCounters LcmPublisher::counters() const noexcept {
 /// Forwards LCM's raw callbacks to LcmReceiver::handle.
 struct LcmReceiver::RawHandler {
   LcmReceiver* receiver;
-  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    receiver->handle(channel, {static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size});
-  }
+  void onMessage(std::span<const std::uint8_t> bytes, const char* channel) { receiver->handle(channel, bytes); }
 };
 
 LcmReceiver::LcmReceiver(lcm::LCM& lcm, LcmReceiverOptions options)
     : lcm_(lcm), handler_(std::make_unique<RawHandler>(RawHandler{this})), minima_set_(std::make_unique<MinimaSetRecord>()) {
   auto subscribe = [&](const char* name) {
-    lcm::Subscription* s = lcm_.subscribe(name, &RawHandler::onMessage, handler_.get());
+    lcm_subscription_t* s = detail::subscribeRaw(lcm_, name, handler_.get(), options.queue_capacity);
     if (s == nullptr) throw std::runtime_error(std::string("LCM: cannot subscribe to channel ") + name);
-    s->setQueueCapacity(options.queue_capacity);
     subscriptions_.push_back(s);
   };
   if (options.joint_state) subscribe(channel::kJointState);
@@ -282,7 +281,7 @@ LcmReceiver::LcmReceiver(lcm::LCM& lcm, LcmReceiverOptions options)
 }
 
 LcmReceiver::~LcmReceiver() {
-  for (lcm::Subscription* s : subscriptions_) lcm_.unsubscribe(s);
+  for (lcm_subscription_t* s : subscriptions_) lcm_unsubscribe(lcm_.getUnderlyingLCM(), s);
 }
 
 int LcmReceiver::drain() {

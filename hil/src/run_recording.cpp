@@ -59,6 +59,7 @@ const char* modeName(haptics::RenderMode mode) noexcept {
 std::uint32_t encodeInputFlags(const RecordedTick& tick, std::uint64_t previous_heartbeat) noexcept {
   std::uint32_t f = tick.sample.out_of_range_mask & kInputFlagOutOfRangeMask;
   if (!tick.device_status.ok()) f |= kInputFlagDeviceFault;
+  if ((tick.device_status.faults & kFaultLinkLost) != 0) f |= kInputFlagLinkLost;
   if (tick.requests.estop_command) f |= kInputFlagEstopCommand;
   if (tick.requests.estop_signal) f |= kInputFlagEstopSignal;
   if (tick.requests.reset_command) f |= kInputFlagReset;
@@ -336,7 +337,8 @@ ReplayReport replayLog(const std::filesystem::path& log) {
     TickInputs in;
     in.sample = &sample;
     if ((flags & kInputFlagDeviceFault) != 0) {
-      in.device_status = core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead, "device read failed");
+      const std::uint32_t link = (flags & kInputFlagLinkLost) != 0 ? kFaultLinkLost : 0u;
+      in.device_status = core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead | link, "device read failed");
     }
     in.requests.estop_command = (flags & kInputFlagEstopCommand) != 0;
     in.requests.estop_signal = (flags & kInputFlagEstopSignal) != 0;

@@ -399,6 +399,7 @@ TEST_F(LcmIo, ConsecutiveReadsWithoutAnAnswerFaultTheDevice) {
   const core::RtStatus status = device.read(s);
   EXPECT_FALSE(status.ok());
   EXPECT_NE(status.faults & kFaultDeviceRead, 0u);
+  EXPECT_NE(status.faults & kFaultLinkLost, 0u);
   EXPECT_EQ(device.state(), IoState::kFault);
   EXPECT_EQ(device.counters().timeouts, static_cast<std::uint64_t>(n));
   EXPECT_EQ(device.counters().readings, 5u);

@@ -259,7 +259,7 @@ class LcmReceiver {
   static bool acceptSeq(std::int64_t seq, std::int64_t& newest, LcmChannelCounters& c) noexcept;
 
   lcm::LCM& lcm_;
-  std::vector<lcm::Subscription*> subscriptions_;
+  std::vector<lcm_subscription_t*> subscriptions_;
   std::unique_ptr<RawHandler> handler_;
   LcmReceiverCounters counters_;
 
