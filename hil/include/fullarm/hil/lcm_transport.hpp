@@ -5,8 +5,8 @@
 /// its channels every cycle and keeps the newest message of each.
 ///
 /// **Publishing off the real-time path.** The tick (or the search) pushes fixed-size records
-/// into SpscRings (`LcmPublisher::pushJointState` and friends, @rt: no lock, no allocation, no
-/// system call other than a futex wake when the publisher thread sleeps); the publisher thread
+/// into SpscRings (`LcmPublisher::pushJointState` and friends, @rt: no lock, no allocation; the
+/// wake-up is an atomic add on a semaphore and at most one futex wake); the publisher thread
 /// turns them into LCM messages, encodes and sends them, and sends the node's heartbeat at a
 /// fixed period. A minima set travels as fragments of at most kMaxMinimaPerFragment minima
 /// (toFragment), each under 1,400 bytes so the kernel never splits a datagram at the IP level
