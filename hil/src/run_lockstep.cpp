@@ -56,7 +56,9 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
   GlobalSearchRunner search(*model_, *world_, haptics_);
   // The global search in a node of its own: queried at the same ticks, awaited at delivery.
   std::unique_ptr<LcmSearchClient> remote;
-  if (!options_.search_url.empty()) remote = std::make_unique<LcmSearchClient>(options_.search_url, 5.0, 0.5);
+  // Lockstep waits long for a set (a loaded machine must not change the run); a silent node
+  // costs this once.
+  if (!options_.search_url.empty()) remote = std::make_unique<LcmSearchClient>(options_.search_url, 5.0, 2.0);
   std::unique_ptr<MissedContactOracle> oracle;
   if (options_.oracle) oracle = std::make_unique<MissedContactOracle>(*model_, *world_, haptics_.force_threshold_m);
   std::deque<PendingSet> pending;

@@ -51,8 +51,9 @@ struct LcmIoOptions {
   std::string url = kDefaultLcmUrl;  ///< LCM URL shared with the node
   /// configure(): how long to wait for the node's heartbeat [s].
   double connect_timeout_s = 5.0;
-  /// read(): how long to wait for the reading that answers the command [s].
-  double reply_timeout_s = 0.5;
+  /// read(): how long to wait for the reading that answers the command [s]. Long, for lockstep
+  /// runs, which a loaded machine must not change; a real-time run sets it within the period.
+  double reply_timeout_s = 2.0;
   /// Consecutive reads without an answer that mean the link is lost (a device read failure:
   /// the device faults and the supervisor trips). A read before that returns the last reading
   /// again. 20, as libfranka's limit: at 1 kHz 20 ms of a held reading, well inside the plant
