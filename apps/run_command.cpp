@@ -12,6 +12,7 @@
 #include "fullarm/hil/run_recording.hpp"
 #include "fullarm/reports/report.hpp"
 #include "output_files.hpp"
+#include "run_replay3d.hpp"
 
 namespace fullarm::app {
 namespace {
@@ -124,6 +125,10 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
   results["user"] = {{"hand_to_target_m", r.hand_to_target_m}, {"max_force_n", r.max_user_force_n}};
   results["log"] = {{"file", "run.lcmlog"}, {"events", r.log_events}, {"records_dropped", r.log_records_dropped}};
 
+  reports::Replay3d replay = runReplay3d(r, session);
+  results["replay"] = replaySummary(replay, r);
+  report.addSection("3D replay").addReplay3d(std::move(replay));
+
   reports::Section& timing = report.addSection("Timing");
   reports::Table tt;
   tt.caption = lockstep ? "Lockstep run: simulated time, as fast as the machine allows"
@@ -175,6 +180,22 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
         session.tickModel().device_joints.modelIndex(static_cast<int>(k))));
   }
   forces.addLineChart(std::move(torques));
+  reports::XyChart link_forces;
+  link_forces.title = "Contact force per link (rendered, before the fade)";
+  link_forces.x_axis = {"Time", "s"};
+  link_forces.y_axis = {"Force", "N"};
+  for (std::size_t l = 0; l < r.link_names.size(); ++l) {
+    reports::Series s = seriesOf(
+        r.link_names[l], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) {
+          const auto& f = t.link_force_W_n[static_cast<std::size_t>(j)];
+          return std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+        },
+        static_cast<int>(l));
+    if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v) && v > 0.0; }))
+      link_forces.series.push_back(std::move(s));
+  }
+  if (!link_forces.series.empty()) forces.addLineChart(std::move(link_forces));
   reports::XyChart distance;
   distance.title = "Smallest tracked distance per link";
   distance.x_axis = {"Time", "s"};

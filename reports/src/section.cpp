@@ -56,4 +56,10 @@ Section& Section::addHeatMap(HeatMap heat_map) {
   return *this;
 }
 
+Section& Section::addReplay3d(Replay3d replay) {
+  detail::validateReplay3d(replay);
+  blocks_.emplace_back(std::move(replay));
+  return *this;
+}
+
 }  // namespace fullarm::reports

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fullarm/reports/charts.hpp"
+#include "fullarm/reports/replay3d.hpp"
 #include "fullarm/reports/table.hpp"
 
 namespace fullarm::reports {
@@ -32,7 +33,7 @@ struct ScatterChart {
 class Section {
  public:
   /// One piece of content.
-  using Block = std::variant<Paragraph, Table, LineChart, ScatterChart, Histogram, HeatMap>;
+  using Block = std::variant<Paragraph, Table, LineChart, ScatterChart, Histogram, HeatMap, Replay3d>;
 
   /// A section with the given heading (may be empty: no heading is shown).
   explicit Section(std::string heading);
@@ -64,6 +65,14 @@ class Section {
   ///   empty, not finite or not strictly monotonic, a value on a log axis is <= 0, z is not
   ///   `y.size()` rows by `x.size()` columns, or a z value is infinite.
   Section& addHeatMap(HeatMap heat_map);
+
+  /// Appends a 3D replay (drawn with the inlined three.js; see replay3d.hpp).
+  /// @throws std::invalid_argument naming the replay title if the title is empty, there is no
+  ///   link or no frame, a link radius or a scale is not a finite positive number, frame times
+  ///   are not finite and strictly increasing, a frame does not hold one segment and one
+  ///   penetration flag per link and one torque per joint, a triangle index is out of range,
+  ///   or a coordinate, torque or force is not finite (or a force is negative).
+  Section& addReplay3d(Replay3d replay);
 
   /// The heading.
   const std::string& heading() const noexcept { return heading_; }
