@@ -18,6 +18,9 @@ import {
   Mesh,
   MeshLambertMaterial,
   PerspectiveCamera,
+  Points,
+  PointsMaterial,
+  SRGBColorSpace,
   Quaternion,
   Scene,
   Vector3,
@@ -39,11 +42,11 @@ function decode(base64) {
   return bytes.buffer;
 }
 
-// Force colour: blue (no force) through yellow to red (force_scale_n and above).
+// Force colour (sRGB): green (no force) through yellow to red (force_scale_n and above).
 function forceColor(force, scale, color) {
   const x = Math.max(0, Math.min(1, force / scale));
-  if (x < 0.5) color.setRGB(0.12 + 1.6 * x * 0.88, 0.47 + x * 0.9, 0.71 - x * 1.3);
-  else color.setRGB(1.0, 0.92 - (x - 0.5) * 1.6, 0.06);
+  if (x < 0.5) color.setRGB(0.17 + 1.66 * x, 0.63 + 0.58 * x, 0.17 - 0.22 * x, SRGBColorSpace);
+  else color.setRGB(1.0, 0.92 - 1.7 * (x - 0.5), 0.06, SRGBColorSpace);
   return color;
 }
 
@@ -242,6 +245,18 @@ class Replay {
     this.lines.frustumCulled = false;
     this.lines.renderOrder = 2;
     scene.add(this.lines);
+    // The object end of each minimum as a dot, so that a short line still shows.
+    const dotGeometry = new BufferGeometry();
+    this.dotPositions = new Float32Array(maxMinima * 3);
+    this.dotColors = new Float32Array(maxMinima * 3);
+    dotGeometry.setAttribute("position", new BufferAttribute(this.dotPositions, 3));
+    dotGeometry.setAttribute("color", new BufferAttribute(this.dotColors, 3));
+    dotGeometry.setDrawRange(0, 0);
+    this.dots = new Points(dotGeometry, new PointsMaterial({
+      vertexColors: true, size: 7, sizeAttenuation: false, depthTest: false }));
+    this.dots.frustumCulled = false;
+    this.dots.renderOrder = 3;
+    scene.add(this.dots);
 
     const camera = new PerspectiveCamera(40, 1, 0.01, 100);
     camera.up.set(0, 0, 1);
@@ -321,11 +336,17 @@ class Replay {
         this.lineColors[m * 6 + v * 3 + 1] = color.g;
         this.lineColors[m * 6 + v * 3 + 2] = color.b;
       }
+      for (let k = 0; k < 3; ++k) {
+        this.dotPositions[m * 3 + k] = this.minima[src + 3 + k];
+        this.dotColors[m * 3 + k] = this.lineColors[m * 6 + k];
+      }
     }
-    const geometry = this.lines.geometry;
-    geometry.setDrawRange(0, count * 2);
-    geometry.attributes.position.needsUpdate = true;
-    geometry.attributes.color.needsUpdate = true;
+    for (const object of [this.lines, this.dots]) {
+      const geometry = object.geometry;
+      geometry.setDrawRange(0, object === this.lines ? count * 2 : count);
+      geometry.attributes.position.needsUpdate = true;
+      geometry.attributes.color.needsUpdate = true;
+    }
 
     const scale = this.data.torque_scale_nm;
     for (let j = 0; j < this.joints.length; ++j) {
