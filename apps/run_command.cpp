@@ -46,6 +46,65 @@ nlohmann::json percentilesJson(const hil::Percentiles& p) {
   return {{"p50_s", p.p50_s}, {"p99_s", p.p99_s}, {"max_s", p.max_s}};
 }
 
+// The charts over time shared by the reports of `run` and `replay`: valve commands, contact
+// torques, contact force per link, smallest tracked distance per link.
+void addTelemetryCharts(const hil::RunResult& r, const hil::HilSession& session, reports::Section& forces) {
+  reports::XyChart valves;
+  valves.title = "Valve commands";
+  valves.x_axis = {"Time", "s"};
+  valves.y_axis = {"Command", "V"};
+  for (std::size_t k = 0; k < r.joint_names.size(); ++k) {
+    valves.series.push_back(seriesOf(
+        r.joint_names[k], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) { return t.valve_v[static_cast<std::size_t>(j)]; },
+        static_cast<int>(k)));
+  }
+  forces.addLineChart(std::move(valves));
+  reports::XyChart torques;
+  torques.title = "Contact torques (Eq. 1-2, after the stale-minima fade)";
+  torques.x_axis = {"Time", "s"};
+  torques.y_axis = {"Torque", "N·m"};
+  for (std::size_t k = 0; k < r.joint_names.size(); ++k) {
+    torques.series.push_back(seriesOf(
+        r.joint_names[k], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) { return t.tau_contact_nm[static_cast<std::size_t>(j)]; },
+        session.tickModel().device_joints.modelIndex(static_cast<int>(k))));
+  }
+  forces.addLineChart(std::move(torques));
+  reports::XyChart link_forces;
+  link_forces.title = "Contact force per link (rendered, before the fade)";
+  link_forces.x_axis = {"Time", "s"};
+  link_forces.y_axis = {"Force", "N"};
+  for (std::size_t l = 0; l < r.link_names.size(); ++l) {
+    reports::Series s = seriesOf(
+        r.link_names[l], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) {
+          const auto& f = t.link_force_W_n[static_cast<std::size_t>(j)];
+          return std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+        },
+        static_cast<int>(l));
+    if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v) && v > 0.0; }))
+      link_forces.series.push_back(std::move(s));
+  }
+  if (!link_forces.series.empty()) forces.addLineChart(std::move(link_forces));
+  reports::XyChart distance;
+  distance.title = "Smallest tracked distance per link";
+  distance.x_axis = {"Time", "s"};
+  distance.y_axis = {"Distance", "m"};
+  for (std::size_t l = 0; l < r.link_names.size(); ++l) {
+    reports::Series s = seriesOf(
+        r.link_names[l], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) {
+          const double d = t.link_min_distance_m[static_cast<std::size_t>(j)];
+          return std::isfinite(d) ? d : std::nan("");
+        },
+        static_cast<int>(l));
+    if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v); }))
+      distance.series.push_back(std::move(s));
+  }
+  if (!distance.series.empty()) forces.addLineChart(std::move(distance));
+}
+
 void addRunReport(const hil::RunResult& r, const hil::HilSession& session, reports::Report& report) {
   const hil::RunTiming& tm = r.timing;
   const bool lockstep = r.options.clock == hil::ClockKind::kLockstep;
@@ -126,7 +185,7 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
   results["log"] = {{"file", "run.lcmlog"}, {"events", r.log_events}, {"records_dropped", r.log_records_dropped}};
 
   reports::Replay3d replay = runReplay3d(r, session);
-  results["replay"] = replaySummary(replay, r);
+  results["replay3d"] = replaySummary(replay, r);
   report.addSection("3D replay").addReplay3d(std::move(replay));
 
   reports::Section& timing = report.addSection("Timing");
@@ -181,60 +240,7 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
   if (!event_table.rows.empty()) sup.addTable(std::move(event_table));
 
   reports::Section& forces = report.addSection("Forces and torques");
-  reports::XyChart valves;
-  valves.title = "Valve commands";
-  valves.x_axis = {"Time", "s"};
-  valves.y_axis = {"Command", "V"};
-  for (std::size_t k = 0; k < r.joint_names.size(); ++k) {
-    valves.series.push_back(seriesOf(
-        r.joint_names[k], r.telemetry,
-        [](const hil::TickTelemetry& t, int j) { return t.valve_v[static_cast<std::size_t>(j)]; },
-        static_cast<int>(k)));
-  }
-  forces.addLineChart(std::move(valves));
-  reports::XyChart torques;
-  torques.title = "Contact torques (Eq. 1-2, after the stale-minima fade)";
-  torques.x_axis = {"Time", "s"};
-  torques.y_axis = {"Torque", "N·m"};
-  for (std::size_t k = 0; k < r.joint_names.size(); ++k) {
-    torques.series.push_back(seriesOf(
-        r.joint_names[k], r.telemetry,
-        [](const hil::TickTelemetry& t, int j) { return t.tau_contact_nm[static_cast<std::size_t>(j)]; },
-        session.tickModel().device_joints.modelIndex(static_cast<int>(k))));
-  }
-  forces.addLineChart(std::move(torques));
-  reports::XyChart link_forces;
-  link_forces.title = "Contact force per link (rendered, before the fade)";
-  link_forces.x_axis = {"Time", "s"};
-  link_forces.y_axis = {"Force", "N"};
-  for (std::size_t l = 0; l < r.link_names.size(); ++l) {
-    reports::Series s = seriesOf(
-        r.link_names[l], r.telemetry,
-        [](const hil::TickTelemetry& t, int j) {
-          const auto& f = t.link_force_W_n[static_cast<std::size_t>(j)];
-          return std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-        },
-        static_cast<int>(l));
-    if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v) && v > 0.0; }))
-      link_forces.series.push_back(std::move(s));
-  }
-  if (!link_forces.series.empty()) forces.addLineChart(std::move(link_forces));
-  reports::XyChart distance;
-  distance.title = "Smallest tracked distance per link";
-  distance.x_axis = {"Time", "s"};
-  distance.y_axis = {"Distance", "m"};
-  for (std::size_t l = 0; l < r.link_names.size(); ++l) {
-    reports::Series s = seriesOf(
-        r.link_names[l], r.telemetry,
-        [](const hil::TickTelemetry& t, int j) {
-          const double d = t.link_min_distance_m[static_cast<std::size_t>(j)];
-          return std::isfinite(d) ? d : std::nan("");
-        },
-        static_cast<int>(l));
-    if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v); }))
-      distance.series.push_back(std::move(s));
-  }
-  if (!distance.series.empty()) forces.addLineChart(std::move(distance));
+  addTelemetryCharts(r, session, forces);
   if (r.oracle_ran) {
     reports::Table lt;
     lt.caption = "Each link against the scene (exact, every tick): the missed-contact oracle";
@@ -381,6 +387,15 @@ int runReplay(const ReplayCommandOptions& o) {
                                   {"truncated", r.truncated},
                                   {"warning", r.warning},
                                   {"changed_files", r.changed_files}};
+    // What the log shows of the run: its 3D replay and its charts over time.
+    const hil::HilSession session(r.options, false);
+    const hil::RunResult logged = runFromLog(o.log, session);
+    if (!logged.telemetry.empty()) {
+      reports::Replay3d replay = runReplay3d(logged, session);
+      report.results()["replay3d"] = replaySummary(replay, logged);
+      report.addSection("3D replay").addReplay3d(std::move(replay));
+      addTelemetryCharts(logged, session, report.addSection("Forces and torques (as logged)"));
+    }
     writeReport(report, o.out_dir);
   }
   return pass ? 0 : 1;

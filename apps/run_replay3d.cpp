@@ -2,11 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <string>
+#include <variant>
 
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/haptics/scene.hpp"
+#include "fullarm/hil/log_records.hpp"
+#include "fullarm/hil/run_log.hpp"
 
 namespace fullarm::app {
 namespace {
@@ -157,6 +161,84 @@ nlohmann::json replaySummary(const reports::Replay3d& replay, const hil::RunResu
   return {{"frames", replay.frames.size()},
           {"frame_rate_hz", span_s > 0.0 ? static_cast<double>(replay.frames.size() - 1) / span_s : 0.0},
           {"first_penetration_s", first}};
+}
+
+hil::RunResult runFromLog(const std::filesystem::path& log, const hil::HilSession& session) {
+  const hil::TickModel& tick = session.tickModel();
+  const arm::ArmModel& model = session.model();
+  const double period_s = session.config().control_period_s;
+  hil::RunResult r;
+  r.options = session.options();
+  for (int k = 0; k < tick.device_joints.size(); ++k)
+    r.joint_names.push_back(model.joints[static_cast<std::size_t>(tick.device_joints.modelIndex(k))].name);
+  for (const arm::Joint& j : model.joints) r.link_names.push_back(j.name);
+
+  std::map<std::int64_t, hil::JointStateRecord> joints;
+  std::map<std::int64_t, hil::HapticStatusRecord> statuses;
+  hil::MinimaSetAssembler assembler;
+  hil::RunLogReader reader(log);
+  hil::RunLogEntry entry;
+  while (reader.next(entry)) {
+    if (const auto* j = std::get_if<fullarm_lcm::joint_state_t>(&entry.message)) {
+      joints[j->tick] = hil::fromMessage(*j);
+    } else if (const auto* h = std::get_if<fullarm_lcm::haptic_status_t>(&entry.message)) {
+      statuses[h->tick] = hil::fromMessage(*h);
+    } else if (const auto* m = std::get_if<fullarm_lcm::minima_set_t>(&entry.message)) {
+      if (assembler.add(*m)) {
+        const hil::MinimaSetRecord& set = assembler.set();
+        hil::RecordedSet recorded;
+        recorded.id = set.set_id;
+        recorded.query_tick = static_cast<std::uint64_t>(std::max<std::int64_t>(0, set.computed_tick));
+        recorded.adopted_tick = set.adopted_tick;
+        recorded.query_q_rad.assign(set.q_rad.begin(), set.q_rad.begin() + set.num_joints);
+        for (int i = 0; i < set.num_minima; ++i)
+          recorded.minima.push_back(hil::toLocalMinimum(set.minima[static_cast<std::size_t>(i)]));
+        recorded.found = set.num_minima + set.num_minima_dropped;
+        r.sets.push_back(std::move(recorded));
+      }
+    } else if (const auto* e = std::get_if<fullarm_lcm::supervisor_event_t>(&entry.message)) {
+      const hil::SupervisorEventRecord record = hil::fromMessage(*e);
+      hil::SupervisorEvent event;
+      event.tick = static_cast<std::uint64_t>(std::max<std::int64_t>(0, record.tick));
+      event.t_s = static_cast<double>(record.tick) * period_s;
+      event.cause = static_cast<hil::SupervisorCause>(record.cause_code);
+      event.trip = record.severity == hil::EventSeverity::kFault || record.severity == hil::EventSeverity::kEStop;
+      event.joint = record.joint;
+      event.value = record.value;
+      r.events.push_back(event);
+    }
+  }
+  for (const auto& [k, js] : joints) {
+    const auto status = statuses.find(k);
+    if (status == statuses.end()) continue;
+    const hil::HapticStatusRecord& hs = status->second;
+    hil::TickTelemetry t;
+    t.tick = static_cast<std::uint64_t>(std::max<std::int64_t>(0, k));
+    t.t_s = static_cast<double>(k) * period_s;
+    t.num_device_joints = js.num_joints;
+    t.num_config = hs.num_joints;
+    for (int j = 0; j < js.num_joints; ++j) {
+      const auto i = static_cast<std::size_t>(j);
+      t.q_rad[i] = js.q_rad[i];
+      t.tau_load_cell_nm[i] = js.tau_measured_nm[i];
+      t.valve_v[i] = js.valve_command_v[i];
+    }
+    for (int j = 0; j < hs.num_joints; ++j) t.tau_contact_nm[static_cast<std::size_t>(j)] = hs.tau_contact_nm[static_cast<std::size_t>(j)];
+    for (int l = 0; l < hs.num_links; ++l) {
+      const auto i = static_cast<std::size_t>(l);
+      t.link_force_W_n[i] = hs.links[i].force_world_n;
+      t.link_min_distance_m[i] = hs.links[i].min_distance_m;
+      t.link_depth_m[i] = hs.links[i].depth_m;
+      if (hs.links[i].in_contact) t.link_contact_mask |= 1U << l;
+      if (hs.links[i].penetrating) t.link_penetration_mask |= 1U << l;
+    }
+    t.tracked_minima = hs.num_minima_tracked;
+    t.active_springs = hs.active_springs;
+    t.minima_set_id = hs.minima_set_id;
+    t.contact_scale = hs.contact_scale;
+    r.telemetry.push_back(t);
+  }
+  return r;
 }
 
 }  // namespace fullarm::app

@@ -4,6 +4,8 @@
 // decimated joint angles (forward kinematics here, in C++), the scene's meshes, the adopted
 // minima, penetrating links, contact torques and supervisor events.
 
+#include <filesystem>
+
 #include <nlohmann/json.hpp>
 
 #include "fullarm/hil/run.hpp"
@@ -24,5 +26,13 @@ inline constexpr double kReplayFrameRate_hz = 25.0;
 /// Figures of the replay for summary.json: frame count and rate, and per link the time of its
 /// first penetration in the telemetry (null: never).
 [[nodiscard]] nlohmann::json replaySummary(const reports::Replay3d& replay, const hil::RunResult& r);
+
+/// What the report of `fullarm replay` shows of a run, read back from its LCM log: per logged
+/// tick the joint angles, valve commands, contact torques and per-link forces, distances and
+/// penetration (hil::TickTelemetry fields of those names; t_s = tick x the loop period), the
+/// adopted minima sets and the supervisor's events. Ticks without both their joint state and
+/// their haptic status (a truncated log's last tick) are left out.
+/// @throws hil::RunLogError for a corrupt log; hil::RecordError for a record out of bounds
+[[nodiscard]] hil::RunResult runFromLog(const std::filesystem::path& log, const hil::HilSession& session);
 
 }  // namespace fullarm::app

@@ -13,7 +13,7 @@
 // moving its time slider from the first to the last frame must change the picture (two
 // screenshots of the replay, saved beside <screenshot.png>, must differ). With --summary, the
 // report's summary.json names, per link, the time of its first penetration
-// (results.replay.first_penetration_s): at the frame holding that time the page's own state
+// (results.replay3d.first_penetration_s): at the frame holding that time the page's own state
 // must show the link penetrating and drawn in the penetration colour, and one frame earlier
 // not; --expect-penetration fails when no link penetrates at all.
 //
@@ -217,7 +217,7 @@ async function checkReplays(browser, sessionId) {
   let firstPenetration = {};
   if (summaryPath) {
     const summary = JSON.parse(await readFile(summaryPath, "utf8"));
-    firstPenetration = summary?.results?.replay?.first_penetration_s ?? {};
+    firstPenetration = summary?.results?.replay3d?.first_penetration_s ?? {};
   }
   const base = screenshotPath.replace(/\.png$/, "");
   for (const id of ids) {
@@ -246,7 +246,7 @@ async function checkReplays(browser, sessionId) {
 
     const penetrating = Object.entries(firstPenetration).filter(([, t]) => t !== null);
     if (summaryPath && expectPenetration && penetrating.length === 0) {
-      problems.push(`replay ${id}: no link penetrates in ${summaryPath} (results.replay.first_penetration_s)`);
+      problems.push(`replay ${id}: no link penetrates in ${summaryPath} (results.replay3d.first_penetration_s)`);
     }
     for (const [name, t] of penetrating) {
       const link = state.links.indexOf(name);
