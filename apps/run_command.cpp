@@ -48,6 +48,32 @@ nlohmann::json percentilesJson(const hil::Percentiles& p) {
 
 // The charts over time shared by the reports of `run` and `replay`: valve commands, contact
 // torques, contact force per link, smallest tracked distance per link.
+// The supervisor's events over time (when there are any), for the reports of `run` and `replay`.
+void addEventsChart(const hil::RunResult& r, reports::Section& section) {
+  if (!r.events.empty()) {
+    reports::XyChart events;
+    events.title = "Supervisor events";
+    events.x_axis = {"Time", "s"};
+    events.y_axis = {"Cause code (hover for its name)", ""};
+    events.caption = "Each event at its time; the causes are listed in docs/hil.md, \"Safety\".";
+    reports::Series info{"information", {}, {}, reports::SeriesMode::kMarkers, {}};
+    reports::Series trips{"trip", {}, {}, reports::SeriesMode::kMarkers, {}};
+    for (const hil::SupervisorEvent& e : r.events) {
+      reports::Series& s = e.trip ? trips : info;
+      s.x.push_back(e.t_s);
+      s.y.push_back(static_cast<double>(e.cause));
+      std::string label = hil::supervisorCauseName(e.cause);
+      if (e.joint >= 0 && static_cast<std::size_t>(e.joint) < r.joint_names.size())
+        label += " (" + r.joint_names[static_cast<std::size_t>(e.joint)] + ")";
+      s.point_labels.push_back(std::move(label));
+    }
+    for (reports::Series* s : {&info, &trips}) {
+      if (!s->x.empty()) events.series.push_back(std::move(*s));
+    }
+    section.addScatterChart(std::move(events));
+  }
+}
+
 void addTelemetryCharts(const hil::RunResult& r, const hil::HilSession& session, reports::Section& forces) {
   reports::XyChart valves;
   valves.title = "Valve commands";
@@ -238,6 +264,7 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
   sup.addParagraph(r.tripped ? std::string("Tripped: ") + hil::supervisorCauseName(r.trip_cause)
                              : "No trip: the run ended with the supervisor running.");
   if (!event_table.rows.empty()) sup.addTable(std::move(event_table));
+  addEventsChart(r, sup);
 
   reports::Section& forces = report.addSection("Forces and torques");
   addTelemetryCharts(r, session, forces);
@@ -394,7 +421,9 @@ int runReplay(const ReplayCommandOptions& o) {
       reports::Replay3d replay = runReplay3d(logged, session);
       report.results()["replay3d"] = replaySummary(replay, logged);
       report.addSection("3D replay").addReplay3d(std::move(replay));
-      addTelemetryCharts(logged, session, report.addSection("Forces and torques (as logged)"));
+      reports::Section& charts = report.addSection("Supervisor, forces and torques (as logged)");
+      addEventsChart(logged, charts);
+      addTelemetryCharts(logged, session, charts);
     }
     writeReport(report, o.out_dir);
   }
