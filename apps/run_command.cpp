@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <sstream>
 
 #include "fullarm/core/config_error.hpp"
@@ -46,35 +48,36 @@ nlohmann::json percentilesJson(const hil::Percentiles& p) {
   return {{"p50_s", p.p50_s}, {"p99_s", p.p99_s}, {"max_s", p.max_s}};
 }
 
-// The charts over time shared by the reports of `run` and `replay`: valve commands, contact
-// torques, contact force per link, smallest tracked distance per link.
-// The supervisor's events over time (when there are any), for the reports of `run` and `replay`.
-void addEventsChart(const hil::RunResult& r, reports::Section& section) {
-  if (!r.events.empty()) {
-    reports::XyChart events;
-    events.title = "Supervisor events";
-    events.x_axis = {"Time", "s"};
-    events.y_axis = {"Cause code (hover for its name)", ""};
-    events.caption = "Each event at its time; the causes are listed in docs/hil.md, \"Safety\".";
-    reports::Series info{"information", {}, {}, reports::SeriesMode::kMarkers, {}};
-    reports::Series trips{"trip", {}, {}, reports::SeriesMode::kMarkers, {}};
-    for (const hil::SupervisorEvent& e : r.events) {
-      reports::Series& s = e.trip ? trips : info;
-      s.x.push_back(e.t_s);
-      s.y.push_back(static_cast<double>(e.cause));
-      std::string label = hil::supervisorCauseName(e.cause);
-      if (e.joint >= 0 && static_cast<std::size_t>(e.joint) < r.joint_names.size())
-        label += " (" + r.joint_names[static_cast<std::size_t>(e.joint)] + ")";
-      s.point_labels.push_back(std::move(label));
-    }
-    for (reports::Series* s : {&info, &trips}) {
-      if (!s->x.empty()) events.series.push_back(std::move(*s));
-    }
-    section.addScatterChart(std::move(events));
+// The charts over time of the reports of `run` and `replay` (and of `run --mode both`, side by
+// side). Each is empty (nullopt) when the run has nothing to show in it.
+
+// The supervisor's events over time.
+std::optional<reports::XyChart> eventsChart(const hil::RunResult& r) {
+  if (r.events.empty()) return std::nullopt;
+  reports::XyChart events;
+  events.title = "Supervisor events";
+  events.x_axis = {"Time", "s"};
+  events.y_axis = {"Cause code (hover for its name)", ""};
+  events.caption = "Each event at its time; the causes are listed in docs/hil.md, \"Safety\".";
+  reports::Series info{"information", {}, {}, reports::SeriesMode::kMarkers, {}};
+  reports::Series trips{"trip", {}, {}, reports::SeriesMode::kMarkers, {}};
+  for (const hil::SupervisorEvent& e : r.events) {
+    reports::Series& s = e.trip ? trips : info;
+    s.x.push_back(e.t_s);
+    s.y.push_back(static_cast<double>(e.cause));
+    std::string label = hil::supervisorCauseName(e.cause);
+    if (e.joint >= 0 && static_cast<std::size_t>(e.joint) < r.joint_names.size())
+      label += " (" + r.joint_names[static_cast<std::size_t>(e.joint)] + ")";
+    s.point_labels.push_back(std::move(label));
   }
+  for (reports::Series* s : {&info, &trips}) {
+    if (!s->x.empty()) events.series.push_back(std::move(*s));
+  }
+  return events;
 }
 
-void addTelemetryCharts(const hil::RunResult& r, const hil::HilSession& session, reports::Section& forces) {
+std::optional<reports::XyChart> valveChart(const hil::RunResult& r) {
+  if (r.telemetry.empty()) return std::nullopt;
   reports::XyChart valves;
   valves.title = "Valve commands";
   valves.x_axis = {"Time", "s"};
@@ -85,7 +88,11 @@ void addTelemetryCharts(const hil::RunResult& r, const hil::HilSession& session,
         [](const hil::TickTelemetry& t, int j) { return t.valve_v[static_cast<std::size_t>(j)]; },
         static_cast<int>(k)));
   }
-  forces.addLineChart(std::move(valves));
+  return valves;
+}
+
+std::optional<reports::XyChart> torqueChart(const hil::RunResult& r, const hil::HilSession& session) {
+  if (r.telemetry.empty()) return std::nullopt;
   reports::XyChart torques;
   torques.title = "Contact torques (Eq. 1-2, after the stale-minima fade)";
   torques.x_axis = {"Time", "s"};
@@ -96,7 +103,10 @@ void addTelemetryCharts(const hil::RunResult& r, const hil::HilSession& session,
         [](const hil::TickTelemetry& t, int j) { return t.tau_contact_nm[static_cast<std::size_t>(j)]; },
         session.tickModel().device_joints.modelIndex(static_cast<int>(k))));
   }
-  forces.addLineChart(std::move(torques));
+  return torques;
+}
+
+std::optional<reports::XyChart> linkForceChart(const hil::RunResult& r) {
   reports::XyChart link_forces;
   link_forces.title = "Contact force per link (rendered, before the fade)";
   link_forces.x_axis = {"Time", "s"};
@@ -112,7 +122,11 @@ void addTelemetryCharts(const hil::RunResult& r, const hil::HilSession& session,
     if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v) && v > 0.0; }))
       link_forces.series.push_back(std::move(s));
   }
-  if (!link_forces.series.empty()) forces.addLineChart(std::move(link_forces));
+  if (link_forces.series.empty()) return std::nullopt;
+  return link_forces;
+}
+
+std::optional<reports::XyChart> distanceChart(const hil::RunResult& r) {
   reports::XyChart distance;
   distance.title = "Smallest tracked distance per link";
   distance.x_axis = {"Time", "s"};
@@ -128,7 +142,19 @@ void addTelemetryCharts(const hil::RunResult& r, const hil::HilSession& session,
     if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v); }))
       distance.series.push_back(std::move(s));
   }
-  if (!distance.series.empty()) forces.addLineChart(std::move(distance));
+  if (distance.series.empty()) return std::nullopt;
+  return distance;
+}
+
+void addEventsChart(const hil::RunResult& r, reports::Section& section) {
+  if (auto chart = eventsChart(r)) section.addScatterChart(std::move(*chart));
+}
+
+// Valve commands, contact torques, contact force per link, smallest tracked distance per link.
+void addTelemetryCharts(const hil::RunResult& r, const hil::HilSession& session, reports::Section& forces) {
+  for (std::optional<reports::XyChart> chart : {valveChart(r), torqueChart(r, session), linkForceChart(r), distanceChart(r)}) {
+    if (chart) forces.addLineChart(std::move(*chart));
+  }
 }
 
 void addRunReport(const hil::RunResult& r, const hil::HilSession& session, reports::Report& report) {
@@ -288,7 +314,12 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
                                      "LCM log, summary.json and report.html");
   OptionDeclarer declare(*cmd, table);
   declare.choice("--io", o.io, "I/O back-end", {"sim", "fakedaq", "comedi"})->capture_default_str();
-  declare.choice("--mode", o.mode, "Haptic rendering", {"full-arm", "hand-only"})->capture_default_str();
+  declare
+      .choice("--mode", o.mode,
+              "Haptic rendering (both: the run in each mode, in full-arm/ and hand-only/, and a report of the two "
+              "side by side)",
+              {"full-arm", "hand-only", "both"})
+      ->capture_default_str();
   declare.file("--scene", o.scene, "Scene YAML (default: scenes/valve_wall.yaml)");
   // Every tick's inputs and telemetry stay in memory for the report and the replay check (the
   // LCM log holds them too): the duration is bounded before the run starts.
@@ -315,7 +346,10 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
   return cmd;
 }
 
-int runRun(const RunCommandOptions& o, const std::string& command_line) {
+namespace {
+
+// The loop's options from the command's (the log goes into the output folder).
+hil::RunOptions runOptionsOf(const RunCommandOptions& o, const std::string& command_line) {
   hil::RunOptions ro;
   ro.io = o.io == "sim" ? hil::IoKind::kSim : o.io == "fakedaq" ? hil::IoKind::kFakeDaq : hil::IoKind::kComedi;
   ro.mode = o.mode == "hand-only" ? haptics::RenderMode::kHandOnly : haptics::RenderMode::kFullArm;
@@ -333,9 +367,97 @@ int runRun(const RunCommandOptions& o, const std::string& command_line) {
   ro.start_posture = o.start_posture;
   ro.oracle = !o.no_oracle && ro.clock == hil::ClockKind::kLockstep;
   if (o.delivery_delay_ticks) ro.delivery_delay_ticks = *o.delivery_delay_ticks;
-  std::filesystem::create_directories(o.out_dir);
   ro.log = std::filesystem::path(o.out_dir) / "run.lcmlog";
   ro.command_line = command_line;
+  return ro;
+}
+
+// One of the two runs of `--mode both`, read back from its log.
+struct ModeRun {
+  std::string mode;
+  int exit_code = 0;
+  std::unique_ptr<hil::HilSession> session;
+  hil::RunResult logged;
+};
+
+// A chart of one mode's run for the side-by-side sections, or a note in its place so that the
+// two columns stay paired.
+void addModeChart(reports::Section& section, const std::string& mode, std::optional<reports::XyChart> chart,
+                  const std::string& what, bool scatter = false) {
+  if (chart) {
+    chart->title = mode + ": " + chart->title;
+    if (scatter) {
+      section.addScatterChart(std::move(*chart));
+    } else {
+      section.addLineChart(std::move(*chart));
+    }
+  } else {
+    section.addParagraph(mode + ": no " + what + " in this run.");
+  }
+}
+
+// `--mode both`: the same run in full-arm and then hand-only mode, each with its own output
+// folder (full-arm/, hand-only/), and a report that shows the two side by side.
+int runBothModes(const RunCommandOptions& o, const std::string& command_line) {
+  const std::filesystem::path out = o.out_dir;
+  std::vector<ModeRun> runs;
+  for (const char* mode : {"full-arm", "hand-only"}) {
+    RunCommandOptions one = o;
+    one.mode = mode;
+    one.out_dir = (out / mode).string();
+    ModeRun run;
+    run.mode = mode;
+    run.exit_code = runRun(one, command_line);
+    run.session = std::make_unique<hil::HilSession>(runOptionsOf(one, command_line), false);
+    run.logged = runFromLog(out / mode / "run.lcmlog", *run.session);
+    runs.push_back(std::move(run));
+  }
+  const bool pass = runs[0].exit_code == 0 && runs[1].exit_code == 0;
+  reports::Report report("run", "Haptic run, full-arm and hand-only side by side: " + o.io + ", " + o.clock);
+  report.setVerdict(pass, pass ? "Both runs ended without a trip or a missed contact"
+                               : std::string("See the ") + (runs[0].exit_code != 0 ? "full-arm" : "hand-only") +
+                                     " run's report: it did not pass");
+  nlohmann::json modes = nlohmann::json::object();
+  reports::Section& replays = report.addSection("3D replays: full-arm (left) and hand-only (right)").setColumns(2);
+  for (ModeRun& run : runs) {
+    reports::Replay3d replay = runReplay3d(run.logged, *run.session);
+    replay.title = run.mode + ": " + replay.title;
+    const nlohmann::json shown = replaySummary(replay, run.logged);
+    std::uint64_t penetrating_ticks = 0;
+    for (const hil::TickTelemetry& t : run.logged.telemetry) penetrating_ticks += t.link_penetration_mask != 0 ? 1 : 0;
+    const double penetration_s = static_cast<double>(penetrating_ticks) * run.session->config().control_period_s;
+    const std::string key = run.mode == "full-arm" ? "full_arm" : "hand_only";
+    report.addHeadlineNumber(key + "_penetration_s", run.mode + ": time a link touched the scene", penetration_s, "s");
+    modes[run.mode] = {{"folder", run.mode},
+                       {"exit_code", run.exit_code},
+                       {"penetration_s", penetration_s},
+                       {"replay3d", shown}};
+    replays.addReplay3d(std::move(replay));
+    report.addFile(std::filesystem::path(run.mode) / "report.html");
+  }
+  report.results()["modes"] = modes;
+  reports::Section& events = report.addSection("Supervisor events").setColumns(2);
+  for (const ModeRun& run : runs) addModeChart(events, run.mode, eventsChart(run.logged), "supervisor event", true);
+  reports::Section& torques = report.addSection("Contact torques").setColumns(2);
+  for (const ModeRun& run : runs) addModeChart(torques, run.mode, torqueChart(run.logged, *run.session), "contact torque");
+  reports::Section& forces = report.addSection("Contact force per link").setColumns(2);
+  for (const ModeRun& run : runs) addModeChart(forces, run.mode, linkForceChart(run.logged), "contact force");
+  reports::Section& distances = report.addSection("Smallest tracked distance per link").setColumns(2);
+  for (const ModeRun& run : runs) addModeChart(distances, run.mode, distanceChart(run.logged), "tracked minimum");
+  report.addSection("").addParagraph(
+      "Each run's own report (timing, supervisor, valve commands, the oracle) is in its folder: full-arm/report.html "
+      "and hand-only/report.html.");
+  writeReport(report, o.out_dir);
+  std::cout << "Report (side by side): " << (std::filesystem::absolute(out) / "report.html").string() << "\n";
+  return pass ? 0 : 1;
+}
+
+}  // namespace
+
+int runRun(const RunCommandOptions& o, const std::string& command_line) {
+  if (o.mode == "both") return runBothModes(o, command_line);
+  const hil::RunOptions ro = runOptionsOf(o, command_line);
+  std::filesystem::create_directories(o.out_dir);
 
   hil::HilSession session(ro);
   std::cout << "fullarm run: " << o.io << ", " << o.mode << ", " << o.clock << " clock, " << o.duration_s << " s at "

@@ -139,7 +139,7 @@ reports::Replay3d runReplay3d(const hil::RunResult& r, const hil::HilSession& se
       "Drag to turn, scroll to zoom. Poses from the measured joint angles at " +
       std::to_string(static_cast<int>(std::lround(1.0 / (static_cast<double>(stride) * period_s)))) +
       " frames per second of run time; lines join each adopted minimum's link point to its object point, coloured by "
-      "the contact force on its link (blue: none, red: the run's largest); a link drawn red touched the scene during "
+      "the contact force on its link (green: none, red: the run's largest); a link drawn red touched the scene during "
       "the frame; bars: contact torques (Eq. 1-2) after the fade; marks under the slider: supervisor events (red: "
       "trips).";
   return replay;

@@ -231,9 +231,15 @@ std::string renderHtml(const Report& report) {
       page.escaped(section.heading());
       page.text("</h2>\n");
     }
-    for (const Section::Block& block : section.blocks()) {
-      std::visit([&page](const auto& content) { page.block(content); }, block);
+    if (section.columns() > 1) {
+      page.text((Text() << "<div class=\"columns columns-" << section.columns() << "\">\n").str());
     }
+    for (const Section::Block& block : section.blocks()) {
+      if (section.columns() > 1) page.text("<div class=\"column-cell\">\n");
+      std::visit([&page](const auto& content) { page.block(content); }, block);
+      if (section.columns() > 1) page.text("</div>\n");
+    }
+    if (section.columns() > 1) page.text("</div>\n");
     page.text("</section>\n");
   }
   page.text("</main>\n");

@@ -245,5 +245,29 @@ TEST(ReplayHtml, ThreeJsIsInlinedOnlyWithAReplay) {
   }
 }
 
+TEST(SectionColumns, BlocksAreLaidOutInTheGivenColumns) {
+  Report report("run", "Side by side");
+  report.setVerdict(true, "ok");
+  report.addSection("Two").setColumns(2).addParagraph("left").addParagraph("right");
+  report.addSection("One").addParagraph("alone");
+  const std::string html = report.html();
+  EXPECT_EQ(test::countOccurrences(html, "<div class=\"columns columns-2\">"), 1U);
+  EXPECT_EQ(test::countOccurrences(html, "<div class=\"column-cell\">"), 2U);
+  EXPECT_LT(html.find("columns-2"), html.find("<p>left</p>"));
+  EXPECT_LT(html.find("<p>left</p>"), html.find("<p>right</p>"));
+  EXPECT_EQ(report.sections()[1].columns(), 1);
+
+  Section section("Bad");
+  EXPECT_THROW(section.setColumns(0), std::invalid_argument);
+  EXPECT_THROW(section.setColumns(5), std::invalid_argument);
+  try {
+    section.setColumns(7);
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("section \"Bad\""), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("1 .. 4"), std::string::npos) << error.what();
+  }
+  EXPECT_EQ(section.columns(), 1);
+}
+
 }  // namespace
 }  // namespace fullarm::reports

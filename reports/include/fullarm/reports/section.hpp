@@ -74,6 +74,15 @@ class Section {
   ///   or a coordinate, torque or force is not finite (or a force is negative).
   Section& addReplay3d(Replay3d replay);
 
+  /// Lays the section's blocks out in `columns` side-by-side columns (1, the default: one
+  /// below the other), filled row by row: with 2, blocks 1 and 2 share the first row, 3 and 4
+  /// the second, ... (for example a full-arm and a hand-only run side by side). Narrow
+  /// windows and print fall back to one column.
+  /// @throws std::invalid_argument naming the heading if `columns` is not 1 .. 4
+  Section& setColumns(int columns);
+  /// Number of columns (see setColumns()).
+  int columns() const noexcept { return columns_; }
+
   /// The heading.
   const std::string& heading() const noexcept { return heading_; }
   /// The content, in the order added.
@@ -82,6 +91,7 @@ class Section {
  private:
   std::string heading_;
   std::vector<Block> blocks_;
+  int columns_ = 1;
 };
 
 }  // namespace fullarm::reports
