@@ -80,7 +80,9 @@ reports::Replay3d runReplay3d(const hil::RunResult& r, const hil::HilSession& se
                    [](const hil::RecordedSet* a, const hil::RecordedSet* b) { return a->adopted_tick < b->adopted_tick; });
 
   const std::size_t ticks = r.telemetry.size();
-  const auto stride = static_cast<std::size_t>(std::max(1.0, std::round(1.0 / (frame_rate_hz * period_s))));
+  const std::size_t stride =
+      std::max(static_cast<std::size_t>(std::max(1.0, std::round(1.0 / (frame_rate_hz * period_s)))),
+               (ticks + kMaxReplayFrames - 1) / kMaxReplayFrames);
   arm::ArmData fk(model);
   Eigen::VectorXd q = tick.fixed_posture;
   std::size_t next_set = 0;

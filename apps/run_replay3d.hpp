@@ -4,6 +4,7 @@
 // decimated joint angles (forward kinematics here, in C++), the scene's meshes, the adopted
 // minima, penetrating links, contact torques and supervisor events.
 
+#include <cstddef>
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
@@ -15,8 +16,12 @@ namespace fullarm::app {
 
 /// Frames per second of run time the replay shows (the full-rate data stay in the LCM log).
 inline constexpr double kReplayFrameRate_hz = 25.0;
+/// The most frames a replay holds: runs longer than 120 s are shown at a lower frame rate, so
+/// that the report stays small (a frame holds up to 128 minima, about 3.7 kB).
+inline constexpr std::size_t kMaxReplayFrames = 3000;
 
-/// The replay of run `r` of `session`, in the arm's world frame W. A frame stands for the
+/// The replay of run `r` of `session`, in the arm's world frame W, at `frame_rate_hz` (lower
+/// when the run would need more than kMaxReplayFrames frames). A frame stands for the
 /// ticks since the previous frame and is posed at its last tick; a link is marked
 /// penetrating in a frame when it touched an object (telemetry link_penetration_mask) at any
 /// of those ticks, so a touch shorter than a frame still shows.

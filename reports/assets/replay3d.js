@@ -412,7 +412,6 @@ class Replay {
       penetratingColor: kPenetratingColor,
       minima: this.minimaOffsets[this.frame + 1] - this.minimaOffsets[this.frame],
       times: Array.from(this.times),
-      penetratingByFrame: Array.from(this.penetrating),
     };
   }
 }
