@@ -48,6 +48,16 @@ nlohmann::json percentilesJson(const hil::Percentiles& p) {
   return {{"p50_s", p.p50_s}, {"p99_s", p.p99_s}, {"max_s", p.max_s}};
 }
 
+// Adds `replay` to `section`, or a note when it has nothing to draw (a model without capsule
+// links, a log without a complete tick).
+void addReplayOrNote(reports::Section& section, reports::Replay3d replay) {
+  if (replay.links.empty() || replay.frames.empty()) {
+    section.addParagraph(replay.title + ": nothing to draw (no capsule link or no complete tick).");
+  } else {
+    section.addReplay3d(std::move(replay));
+  }
+}
+
 // The charts over time of the reports of `run` and `replay` (and of `run --mode both`, side by
 // side). Each is empty (nullopt) when the run has nothing to show in it.
 
@@ -238,7 +248,7 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
 
   reports::Replay3d replay = runReplay3d(r, session);
   results["replay3d"] = replaySummary(replay, r);
-  report.addSection("3D replay").addReplay3d(std::move(replay));
+  addReplayOrNote(report.addSection("3D replay"), std::move(replay));
 
   reports::Section& timing = report.addSection("Timing");
   reports::Table tt;
@@ -432,7 +442,7 @@ int runBothModes(const RunCommandOptions& o, const std::string& command_line) {
                        {"exit_code", run.exit_code},
                        {"penetration_s", penetration_s},
                        {"replay3d", shown}};
-    replays.addReplay3d(std::move(replay));
+    addReplayOrNote(replays, std::move(replay));
     report.addFile(std::filesystem::path(run.mode) / "report.html");
   }
   report.results()["modes"] = modes;
@@ -542,7 +552,7 @@ int runReplay(const ReplayCommandOptions& o) {
     if (!logged.telemetry.empty()) {
       reports::Replay3d replay = runReplay3d(logged, session);
       report.results()["replay3d"] = replaySummary(replay, logged);
-      report.addSection("3D replay").addReplay3d(std::move(replay));
+      addReplayOrNote(report.addSection("3D replay"), std::move(replay));
       reports::Section& charts = report.addSection("Supervisor, forces and torques (as logged)");
       addEventsChart(logged, charts);
       addTelemetryCharts(logged, session, charts);
