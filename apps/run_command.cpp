@@ -162,7 +162,8 @@ void addEventsChart(const hil::RunResult& r, reports::Section& section) {
 
 // Valve commands, contact torques, contact force per link, smallest tracked distance per link.
 void addTelemetryCharts(const hil::RunResult& r, const hil::HilSession& session, reports::Section& forces) {
-  for (std::optional<reports::XyChart> chart : {valveChart(r), torqueChart(r, session), linkForceChart(r), distanceChart(r)}) {
+  for (std::optional<reports::XyChart> chart :
+       {valveChart(r), torqueChart(r, session), linkForceChart(r), distanceChart(r)}) {
     if (chart) forces.addLineChart(std::move(*chart));
   }
 }
@@ -281,7 +282,8 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
     // The rare long ticks would squeeze the bulk into one bin: the range ends at 4 x the larger
     // p99, and the note under the chart counts the samples beyond it.
     const double max_us = std::max(tm.compute.max_s, tm.period_jitter.max_s) * 1e6;
-    if (std::isfinite(p99_us) && p99_us > 0.0 && max_us > 4.0 * p99_us) loop.range = std::array<double, 2>{0.0, 4.0 * p99_us};
+    if (std::isfinite(p99_us) && p99_us > 0.0 && max_us > 4.0 * p99_us)
+      loop.range = std::array<double, 2>{0.0, 4.0 * p99_us};
     loop.caption = "Every tick of the run; the table above gives p50, p99 and max.";
     timing.addHistogram(std::move(loop));
   }
@@ -438,10 +440,8 @@ int runBothModes(const RunCommandOptions& o, const std::string& command_line) {
     const double penetration_s = static_cast<double>(penetrating_ticks) * run.session->config().control_period_s;
     const std::string key = run.mode == "full-arm" ? "full_arm" : "hand_only";
     report.addHeadlineNumber(key + "_penetration_s", run.mode + ": time a link touched the scene", penetration_s, "s");
-    modes[run.mode] = {{"folder", run.mode},
-                       {"exit_code", run.exit_code},
-                       {"penetration_s", penetration_s},
-                       {"replay3d", shown}};
+    modes[run.mode] = {
+        {"folder", run.mode}, {"exit_code", run.exit_code}, {"penetration_s", penetration_s}, {"replay3d", shown}};
     addReplayOrNote(replays, std::move(replay));
     report.addFile(std::filesystem::path(run.mode) / "report.html");
   }
@@ -449,7 +449,8 @@ int runBothModes(const RunCommandOptions& o, const std::string& command_line) {
   reports::Section& events = report.addSection("Supervisor events").setColumns(2);
   for (const ModeRun& run : runs) addModeChart(events, run.mode, eventsChart(run.logged), "supervisor event", true);
   reports::Section& torques = report.addSection("Contact torques").setColumns(2);
-  for (const ModeRun& run : runs) addModeChart(torques, run.mode, torqueChart(run.logged, *run.session), "contact torque");
+  for (const ModeRun& run : runs)
+    addModeChart(torques, run.mode, torqueChart(run.logged, *run.session), "contact torque");
   reports::Section& forces = report.addSection("Contact force per link").setColumns(2);
   for (const ModeRun& run : runs) addModeChart(forces, run.mode, linkForceChart(run.logged), "contact force");
   reports::Section& distances = report.addSection("Smallest tracked distance per link").setColumns(2);

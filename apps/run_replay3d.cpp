@@ -15,7 +15,9 @@
 namespace fullarm::app {
 namespace {
 
-std::array<double, 3> toArray(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+std::array<double, 3> toArray(const Eigen::Vector3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
 
 }  // namespace
 
@@ -35,7 +37,8 @@ reports::Replay3d runReplay3d(const hil::RunResult& r, const hil::HilSession& se
     X_WO.push_back(X_WS * object.X_SO);
     reports::ReplayMesh mesh;
     mesh.name = object.name;
-    for (int v = 0; v < object.mesh.numVertices(); ++v) mesh.vertices_m.push_back(toArray(X_WO.back() * object.mesh.vertex(v)));
+    for (int v = 0; v < object.mesh.numVertices(); ++v)
+      mesh.vertices_m.push_back(toArray(X_WO.back() * object.mesh.vertex(v)));
     for (int t = 0; t < object.mesh.numTriangles(); ++t) {
       const Eigen::Vector3i& tri = object.mesh.triangle(t);
       mesh.triangles.push_back(
@@ -76,8 +79,9 @@ reports::Replay3d runReplay3d(const hil::RunResult& r, const hil::HilSession& se
   for (const hil::RecordedSet& set : r.sets) {
     if (set.adopted_tick >= 0) adopted.push_back(&set);
   }
-  std::stable_sort(adopted.begin(), adopted.end(),
-                   [](const hil::RecordedSet* a, const hil::RecordedSet* b) { return a->adopted_tick < b->adopted_tick; });
+  std::stable_sort(adopted.begin(), adopted.end(), [](const hil::RecordedSet* a, const hil::RecordedSet* b) {
+    return a->adopted_tick < b->adopted_tick;
+  });
 
   const std::size_t ticks = r.telemetry.size();
   const std::size_t stride =
@@ -119,7 +123,8 @@ reports::Replay3d runReplay3d(const hil::RunResult& r, const hil::HilSession& se
     }
     if (active != nullptr) {
       for (const haptics::LocalMinimum& m : active->minima) {
-        if (m.link < 0 || m.link >= model.numJoints() || m.object < 0 || static_cast<std::size_t>(m.object) >= X_WO.size())
+        if (m.link < 0 || m.link >= model.numJoints() || m.object < 0 ||
+            static_cast<std::size_t>(m.object) >= X_WO.size())
           continue;
         const auto& f = t.link_force_W_n[static_cast<std::size_t>(m.link)];
         const double force = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
@@ -225,7 +230,8 @@ hil::RunResult runFromLog(const std::filesystem::path& log, const hil::HilSessio
       t.tau_load_cell_nm[i] = js.tau_measured_nm[i];
       t.valve_v[i] = js.valve_command_v[i];
     }
-    for (int j = 0; j < hs.num_joints; ++j) t.tau_contact_nm[static_cast<std::size_t>(j)] = hs.tau_contact_nm[static_cast<std::size_t>(j)];
+    for (int j = 0; j < hs.num_joints; ++j)
+      t.tau_contact_nm[static_cast<std::size_t>(j)] = hs.tau_contact_nm[static_cast<std::size_t>(j)];
     for (int l = 0; l < hs.num_links; ++l) {
       const auto i = static_cast<std::size_t>(l);
       t.link_force_W_n[i] = hs.links[i].force_world_n;

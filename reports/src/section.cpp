@@ -59,8 +59,8 @@ Section& Section::addHeatMap(HeatMap heat_map) {
 
 Section& Section::setColumns(int columns) {
   if (columns < 1 || columns > 4) {
-    detail::failInput(detail::describe("section", heading_),
-                      detail::Text() << "columns is " << columns << " (expected 1 .. 4)");
+    detail::failInput(detail::describe("section", heading_), detail::Text()
+                                                                 << "columns is " << columns << " (expected 1 .. 4)");
   }
   columns_ = columns;
   return *this;

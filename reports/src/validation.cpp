@@ -127,8 +127,9 @@ void validateReplay3d(const Replay3d& replay) {
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       for (std::uint32_t index : mesh.triangles[t]) {
         if (index >= mesh.vertices_m.size()) {
-          failInput(what, Text() << "mesh \"" << mesh.name << "\" triangle " << t << " has vertex index " << static_cast<std::size_t>(index)
-                                 << " (expected < " << mesh.vertices_m.size() << ")");
+          failInput(what, Text() << "mesh \"" << mesh.name << "\" triangle " << t << " has vertex index "
+                                 << static_cast<std::size_t>(index) << " (expected < " << mesh.vertices_m.size()
+                                 << ")");
         }
       }
     }
@@ -148,8 +149,8 @@ void validateReplay3d(const Replay3d& replay) {
                              << replay.links.size() << ")");
     }
     if (frame.torques_nm.size() != replay.joints.size()) {
-      failInput(what, Text() << "frame " << f << " has " << frame.torques_nm.size() << " torques (expected one per joint, "
-                             << replay.joints.size() << ")");
+      failInput(what, Text() << "frame " << f << " has " << frame.torques_nm.size()
+                             << " torques (expected one per joint, " << replay.joints.size() << ")");
     }
     for (const std::array<double, 6>& segment : frame.segments_m) {
       for (double c : segment) checkFinite(what, Text() << "frame " << f << " segment coordinate", c);
@@ -166,7 +167,8 @@ void validateReplay3d(const Replay3d& replay) {
       }
     }
   }
-  for (const ReplayEvent& event : replay.events) checkFinite(what, Text() << "event \"" << event.label << "\" time", event.t_s);
+  for (const ReplayEvent& event : replay.events)
+    checkFinite(what, Text() << "event \"" << event.label << "\" time", event.t_s);
 }
 
 }  // namespace fullarm::reports::detail

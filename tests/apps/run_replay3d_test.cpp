@@ -38,7 +38,8 @@ hil::RunResult syntheticRun(std::size_t ticks) {
     t.tick = k;
     t.t_s = static_cast<double>(k) * period_s;
     t.num_device_joints = s.tickModel().device_joints.size();
-    for (int j = 0; j < t.num_device_joints; ++j) t.q_rad[static_cast<std::size_t>(j)] = 0.3 * std::sin(0.5 * t.t_s + j);
+    for (int j = 0; j < t.num_device_joints; ++j)
+      t.q_rad[static_cast<std::size_t>(j)] = 0.3 * std::sin(0.5 * t.t_s + j);
   }
   return r;
 }
@@ -63,7 +64,8 @@ TEST(RunReplay3d, CapsulesKeepTheirLengthAndATouchShorterThanAFrameShows) {
       const auto& s = plain.frames[f].segments_m[l];
       return std::hypot(s[3] - s[0], s[4] - s[1], s[5] - s[2]);
     };
-    for (std::size_t f = 1; f < plain.frames.size(); ++f) EXPECT_NEAR(length(f), length(0), 1e-9) << plain.links[l].name;
+    for (std::size_t f = 1; f < plain.frames.size(); ++f)
+      EXPECT_NEAR(length(f), length(0), 1e-9) << plain.links[l].name;
   }
   // The last capsule link touches at one tick in the middle of frame 10 (ticks 400 .. 439).
   const std::string touching = plain.links.back().name;

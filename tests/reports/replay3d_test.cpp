@@ -53,9 +53,8 @@ std::vector<T> decodeArray(const nlohmann::json& value) {
 Replay3d sampleReplay() {
   Replay3d replay;
   replay.title = "Arm replay";
-  replay.meshes.push_back({"wall",
-                           {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {1.0, 0.0, 2.0}, {0.0, 0.0, 2.0}},
-                           {{0, 1, 2}, {0, 2, 3}}});
+  replay.meshes.push_back(
+      {"wall", {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {1.0, 0.0, 2.0}, {0.0, 0.0, 2.0}}, {{0, 1, 2}, {0, 2, 3}}});
   replay.links = {{"upper", 0.05}, {"fore", 0.04}};
   replay.joints = {"SFE", "EB"};
   replay.torque_scale_nm = 10.0;

@@ -133,9 +133,8 @@ Report makeReport() {
   // A 3D replay: a two-link arm swinging its forearm through a wall over 2 s (25 frames/s).
   Replay3d replay;
   replay.title = "Two-link arm through a wall";
-  replay.meshes.push_back({"wall",
-                           {{0.3, -0.5, -0.8}, {0.3, 0.5, -0.8}, {0.3, 0.5, 0.4}, {0.3, -0.5, 0.4}},
-                           {{0, 1, 2}, {0, 2, 3}}});
+  replay.meshes.push_back(
+      {"wall", {{0.3, -0.5, -0.8}, {0.3, 0.5, -0.8}, {0.3, 0.5, 0.4}, {0.3, -0.5, 0.4}}, {{0, 1, 2}, {0, 2, 3}}});
   replay.links = {{"upper arm", 0.05}, {"forearm", 0.04}};
   replay.joints = {"shoulder", "elbow"};
   replay.torque_scale_nm = 5.0;
