@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <utility>
 
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/hil/lcm_search.hpp"
@@ -197,6 +198,7 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
   r.timing.ticks = ticks;
   r.timing.simulated_s = static_cast<double>(ticks) * period;
   r.timing.compute = percentiles(compute_s);
+  r.timing.compute_samples_s = std::move(compute_s);
   r.timing.overruns = overruns.total;
   r.timing.max_consecutive_overruns = overruns.max_consecutive;
   if (oracle) {

@@ -107,6 +107,8 @@ struct RunTiming {
   double simulated_s = 0.0;       ///< ticks x period
   Percentiles compute;            ///< per tick: read, tick, write (and the lockstep search)
   Percentiles period_jitter;      ///< real time: |wake-up - deadline|
+  std::vector<double> compute_samples_s;        ///< per tick: the samples of `compute`
+  std::vector<double> period_jitter_samples_s;  ///< real time, per tick: the samples of `period_jitter`
   std::uint64_t overruns = 0;     ///< ticks that ended after the next deadline
   int max_consecutive_overruns = 0;
   // Lockstep breakdown of the wall time [s].
