@@ -1,0 +1,56 @@
+#pragma once
+/// @file
+/// A closed-loop identification experiment on one joint through an I/O device (the simulated
+/// DTS, the fake DAQ or the real arm).
+///
+/// The DTS joints cannot run open loop near their stops, so every joint of the device is held
+/// by a low-gain proportional position hold u_j = K_j (q_hold_j - q_j) about the angle it had
+/// when the experiment started, and the excitation r is added to the driven joint's valve
+/// command: u = K (q_hold - q) + r. The device first ramps its outputs in (its safety policy);
+/// the excitation starts after a settling time. The run stops early, with the outputs at their
+/// safe value (valve null), when the driven joint comes within a margin of its limits, its load
+/// cell reads out of range, a held joint drifts too far from its hold, or the device reports a
+/// fault.
+///
+/// The log has one row per control period of the excitation: `time_s` (the reading's device
+/// time), `excitation_v`, `command_v` (what the device put out after its clamp, held over the
+/// next period), `q_rad` and `tau_measured_nm` (the driven joint's reading).
+
+#include <string>
+#include <vector>
+
+#include "fullarm/hil/io_device.hpp"
+#include "fullarm/identification/excitation.hpp"
+#include "fullarm/identification/signal_csv.hpp"
+
+namespace fullarm::identification {
+
+/// Settings of one experiment.
+struct ExperimentOptions {
+  int joint = 0;                      ///< the driven joint (device order)
+  double hold_gain_v_per_rad = 10.0;  ///< K of the driven joint's position hold
+  double held_gain_v_per_rad = 30.0;  ///< K of the other joints' holds
+  double settle_s = 1.0;              ///< hold without excitation first (covers the device's ramp-in)
+  double min_rad = -1.0;              ///< the driven joint's lower limit
+  double max_rad = 1.0;               ///< the driven joint's upper limit
+  double limit_margin_rad = 0.05;     ///< stop when the driven joint comes this close to a limit
+  double held_drift_limit_rad = 0.1;  ///< stop when a held joint leaves its hold by more than this
+};
+
+/// Outcome of one experiment.
+struct ExperimentResult {
+  SignalTable log;               ///< kExperimentColumns, one row per excitation sample run
+  std::vector<double> hold_rad;  ///< the hold angle of every device joint
+  bool completed = false;        ///< the whole excitation ran
+  std::string stop_reason;       ///< why it stopped early (empty when completed)
+};
+
+/// Runs the experiment: configures the device if needed, activates it, holds for
+/// `options.settle_s`, plays `excitation` on the driven joint, then deactivates the device
+/// (safe outputs) whatever happened.
+/// @throws std::invalid_argument for a joint outside the device, an excitation whose period
+///   differs from the device's, limits that leave no room, or a start outside the margins
+[[nodiscard]] ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excitation,
+                                             const ExperimentOptions& options);
+
+}  // namespace fullarm::identification

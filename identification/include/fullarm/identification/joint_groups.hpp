@@ -1,0 +1,20 @@
+#pragma once
+/// @file
+/// The reduced model's parameter groups (grey_box.hpp) computed from a hydraulic joint of the
+/// plant at an operating angle: the nominal start of a fit and the figures an identified model
+/// is compared with.
+
+#include "fullarm/identification/grey_box.hpp"
+#include "fullarm/plant/joint_params.hpp"
+
+namespace fullarm::identification {
+
+/// Groups of `joint` at `q_rad`: a = amplifier gain x no-load flow gain / D(q) (H10), K_h =
+/// hydraulic stiffness at mean supply-return pressure (H9), c = internal leakage / D(q)^2, J =
+/// `link_inertia_kgm2` + the actuator's inertia, b and tau_c the joint's viscous and Coulomb
+/// friction, tau_g = `load_torque_nm`; offsets zero, delay `delay_samples`. D(q) is the vane's
+/// displacement or the cylinder's area times its moment arm.
+[[nodiscard]] GreyModel greyModelFromJoint(const plant::JointParams& joint, double q_rad, double link_inertia_kgm2,
+                                           double load_torque_nm, int delay_samples);
+
+}  // namespace fullarm::identification

@@ -1,0 +1,504 @@
+#include "fullarm/identification/grey_box.hpp"
+
+#include <Eigen/Dense>
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "fullarm/core/job_pool.hpp"
+#include "fullarm/core/random.hpp"
+
+namespace fullarm::identification {
+namespace {
+
+constexpr int kSubsteps = 4;
+constexpr double kDivergedResidual = 1.0e3;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct State {
+  double q = 0.0, w = 0.0, th = 0.0;
+  double x = 0.0, xd = 0.0;  // spool position (in volts of command) and its rate
+  double tf = 0.0;           // filtered load-cell torque
+};
+
+// The reduced joint's right-hand side, (I1)-(I2) of grey_box.hpp.
+double cellTorque(const GreyModel& m, const State& x) noexcept {
+  const auto& p = m.value;
+  return x.th - p[kViscous] * x.w - p[kCoulomb] * std::tanh(x.w / m.coulomb_smoothing_radps);
+}
+
+State rhs(const GreyModel& m, const State& x, double u) noexcept {
+  const auto& p = m.value;
+  State d;
+  double drive = u;
+  if (m.spool_hz > 0.0) {
+    const double wn = 2.0 * std::numbers::pi * m.spool_hz;
+    d.x = x.xd;
+    d.xd = wn * wn * (u - x.x) - 2.0 * m.spool_damping * wn * x.xd;
+    drive = x.x;
+  }
+  d.q = x.w;
+  d.w = (cellTorque(m, x) - p[kLoadTorque]) / p[kInertia];
+  d.th = p[kStiffness] * (p[kFlowGain] * (drive + p[kValveOffset]) - x.w - p[kLeakage] * x.th);
+  if (m.torque_filter_hz > 0.0) d.tf = 2.0 * std::numbers::pi * m.torque_filter_hz * (cellTorque(m, x) - x.tf);
+  return d;
+}
+
+State axpy(const State& x, double h, const State& d) noexcept {
+  return {x.q + h * d.q, x.w + h * d.w, x.th + h * d.th, x.x + h * d.x, x.xd + h * d.xd, x.tf + h * d.tf};
+}
+
+double measuredTorque(const GreyModel& m, const State& x) noexcept {
+  return (m.torque_filter_hz > 0.0 ? x.tf : cellTorque(m, x)) + m.value[kTorqueOffset];
+}
+
+double spread(const std::vector<double>& v) {
+  double mean = 0.0;
+  for (double x : v) mean += x;
+  mean /= static_cast<double>(v.size());
+  double ss = 0.0;
+  for (double x : v) ss += (x - mean) * (x - mean);
+  const double s = std::sqrt(ss / static_cast<double>(v.size()));
+  return s > 0.0 ? s : 1.0;
+}
+
+/// The free parameters in fit coordinates (log for log-scaled ones).
+struct Coordinates {
+  std::vector<int> index;
+  std::vector<bool> log_scaled;
+  Eigen::VectorXd lo, hi;
+
+  explicit Coordinates(const FitOptions& o) {
+    for (int i = 0; i < kGreyParams; ++i) {
+      const ParamSpec& s = o.params[static_cast<std::size_t>(i)];
+      if (!s.free) continue;
+      index.push_back(i);
+      log_scaled.push_back(s.log_scaled);
+    }
+    const auto n = static_cast<Eigen::Index>(index.size());
+    lo.resize(n);
+    hi.resize(n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const ParamSpec& s = o.params[static_cast<std::size_t>(index[static_cast<std::size_t>(k)])];
+      lo[k] = log_scaled[static_cast<std::size_t>(k)] ? std::log(s.min) : s.min;
+      hi[k] = log_scaled[static_cast<std::size_t>(k)] ? std::log(s.max) : s.max;
+    }
+  }
+  [[nodiscard]] Eigen::VectorXd toZ(const GreyModel& m) const {
+    Eigen::VectorXd z(static_cast<Eigen::Index>(index.size()));
+    for (std::size_t k = 0; k < index.size(); ++k) {
+      const double v = m.value[static_cast<std::size_t>(index[k])];
+      z[static_cast<Eigen::Index>(k)] = log_scaled[k] ? std::log(v) : v;
+    }
+    return z;
+  }
+  [[nodiscard]] GreyModel fromZ(const GreyModel& base, const Eigen::VectorXd& z) const {
+    GreyModel m = base;
+    for (std::size_t k = 0; k < index.size(); ++k) {
+      const double v = z[static_cast<Eigen::Index>(k)];
+      m.value[static_cast<std::size_t>(index[k])] = log_scaled[k] ? std::exp(v) : v;
+    }
+    return m;
+  }
+  [[nodiscard]] Eigen::VectorXd clamp(const Eigen::VectorXd& z) const { return z.cwiseMax(lo).cwiseMin(hi); }
+};
+
+class Problem {
+ public:
+  Problem(const std::vector<ExperimentData>& experiments) : experiments_(experiments) {
+    for (const auto& e : experiments_) {
+      q_scale_.push_back(spread(e.q_rad));
+      tau_scale_.push_back(spread(e.tau_nm));
+      residual_count_ += 2 * static_cast<Eigen::Index>(e.q_rad.size());
+    }
+  }
+  [[nodiscard]] Eigen::Index residualCount() const noexcept { return residual_count_; }
+  std::atomic<int> evaluations{0};
+
+  /// Thread-safe: each call simulates on its own.
+  void residuals(const GreyModel& m, Eigen::VectorXd& r) {
+    ++evaluations;
+    r.resize(residual_count_);
+    Eigen::Index at = 0;
+    for (std::size_t e = 0; e < experiments_.size(); ++e) {
+      const ExperimentData& x = experiments_[e];
+      const Simulation s = simulateClosedLoop(m, x);
+      for (std::size_t k = 0; k < x.q_rad.size(); ++k) {
+        const double rq = (s.q_rad[k] - x.q_rad[k]) / q_scale_[e];
+        const double rt = (s.tau_nm[k] - x.tau_nm[k]) / tau_scale_[e];
+        r[at++] = s.ok && std::isfinite(rq) ? rq : kDivergedResidual;
+        r[at++] = s.ok && std::isfinite(rt) ? rt : kDivergedResidual;
+      }
+    }
+  }
+  double cost(const GreyModel& m) {
+    Eigen::VectorXd r;
+    residuals(m, r);
+    return 0.5 * r.squaredNorm();
+  }
+
+ private:
+  const std::vector<ExperimentData>& experiments_;
+  std::vector<double> q_scale_, tau_scale_;
+  Eigen::Index residual_count_ = 0;
+};
+
+struct Polished {
+  GreyModel model;
+  double cost = 0.0;
+  Eigen::MatrixXd jacobian;
+};
+
+// Central differences, the 2 p simulations spread over the pool.
+void jacobian(Problem& problem, const Coordinates& c, const GreyModel& base, const Eigen::VectorXd& z,
+              Eigen::MatrixXd& jac, core::JobPool& pool) {
+  const auto p = z.size();
+  jac.resize(problem.residualCount(), p);
+  std::vector<Eigen::VectorXd> r(static_cast<std::size_t>(2 * p));
+  auto step = [&](Eigen::Index k) {
+    return c.log_scaled[static_cast<std::size_t>(k)] ? 1e-5 : 1e-5 * std::max(1.0, c.hi[k] - c.lo[k]);
+  };
+  pool.run(static_cast<int>(2 * p), [&](int task) {
+    const Eigen::Index k = task / 2;
+    Eigen::VectorXd zk = z;
+    zk[k] += (task % 2 == 0 ? 1.0 : -1.0) * step(k);
+    problem.residuals(c.fromZ(base, zk), r[static_cast<std::size_t>(task)]);
+  });
+  for (Eigen::Index k = 0; k < p; ++k) {
+    jac.col(k) = (r[static_cast<std::size_t>(2 * k)] - r[static_cast<std::size_t>(2 * k + 1)]) / (2.0 * step(k));
+  }
+}
+
+// Projected Levenberg-Marquardt (Marquardt's diagonal scaling) inside the box.
+Polished polish(Problem& problem, const Coordinates& c, const GreyModel& start, int max_iterations,
+                core::JobPool& pool) {
+  Eigen::VectorXd z = c.clamp(c.toZ(start));
+  Eigen::VectorXd r;
+  problem.residuals(c.fromZ(start, z), r);
+  double cost = 0.5 * r.squaredNorm();
+  double mu = 1e-3;
+  Eigen::MatrixXd jac;
+  for (int it = 0; it < max_iterations && z.size() > 0; ++it) {
+    jacobian(problem, c, start, z, jac, pool);
+    const Eigen::MatrixXd jtj = jac.transpose() * jac;
+    const Eigen::VectorXd g = jac.transpose() * r;
+    bool improved = false;
+    for (int tries = 0; tries < 12; ++tries) {
+      Eigen::MatrixXd a = jtj;
+      for (Eigen::Index k = 0; k < a.rows(); ++k) a(k, k) += mu * std::max(jtj(k, k), 1e-12);
+      const Eigen::VectorXd step = a.ldlt().solve(-g);
+      const Eigen::VectorXd z_new = c.clamp(z + step);
+      Eigen::VectorXd r_new;
+      problem.residuals(c.fromZ(start, z_new), r_new);
+      const double cost_new = 0.5 * r_new.squaredNorm();
+      if (cost_new < cost) {
+        const double gain = (cost - cost_new) / std::max(cost, 1e-300);
+        const double moved = (z_new - z).norm();
+        z = z_new;
+        r = r_new;
+        cost = cost_new;
+        mu = std::max(mu / 3.0, 1e-12);
+        improved = true;
+        if (gain < 1e-12 || moved < 1e-12) it = max_iterations;
+        break;
+      }
+      mu *= 4.0;
+    }
+    if (!improved) break;
+  }
+  Polished out;
+  out.model = c.fromZ(start, z);
+  out.cost = cost;
+  jacobian(problem, c, start, z, jac, pool);
+  out.jacobian = jac;
+  return out;
+}
+
+}  // namespace
+
+const char* greyParamName(int index) noexcept {
+  switch (index) {
+    case kFlowGain:
+      return "flow_gain_radps_per_v";
+    case kStiffness:
+      return "hydraulic_stiffness_nm_per_rad";
+    case kLeakage:
+      return "leakage_radps_per_nm";
+    case kInertia:
+      return "inertia_kgm2";
+    case kViscous:
+      return "viscous_nms_per_rad";
+    case kCoulomb:
+      return "coulomb_nm";
+    case kLoadTorque:
+      return "load_torque_nm";
+    case kValveOffset:
+      return "valve_offset_v";
+    case kAngleOffset:
+      return "angle_offset_rad";
+    case kTorqueOffset:
+      return "torque_offset_nm";
+    default:
+      return "unknown";
+  }
+}
+
+ExperimentData experimentFromLog(const SignalTable& log) {
+  ExperimentData d;
+  const auto& t = log.column("time_s");
+  if (t.size() < 3) throw std::invalid_argument("experiment log: fewer than three rows");
+  for (const auto& column : log.columns) {
+    for (std::size_t k = 0; k < column.size(); ++k) {
+      if (!std::isfinite(column[k])) {
+        throw std::invalid_argument("experiment log: a non-finite value at row " + std::to_string(k + 1));
+      }
+    }
+  }
+  d.sample_period_s = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+  for (std::size_t k = 1; k < t.size(); ++k) {
+    if (std::abs(t[k] - t[k - 1] - d.sample_period_s) > 1e-6 * d.sample_period_s + 1e-9) {
+      throw std::invalid_argument("experiment log: time step at row " + std::to_string(k + 1) + " is " +
+                                  std::to_string(t[k] - t[k - 1]) + " s, the log's mean step is " +
+                                  std::to_string(d.sample_period_s) + " s");
+    }
+  }
+  d.excitation_v = log.column("excitation_v");
+  d.command_v = log.column("command_v");
+  d.q_rad = log.column("q_rad");
+  d.tau_nm = log.column("tau_measured_nm");
+  // u - r = K q_hold - K q: a straight line in q.
+  const auto n = static_cast<double>(t.size());
+  double sq = 0.0, sy = 0.0, sqq = 0.0, sqy = 0.0;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const double y = d.command_v[k] - d.excitation_v[k];
+    sq += d.q_rad[k];
+    sy += y;
+    sqq += d.q_rad[k] * d.q_rad[k];
+    sqy += d.q_rad[k] * y;
+  }
+  const double var = sqq - sq * sq / n;
+  if (!(var > 0.0)) throw std::invalid_argument("experiment log: the angle never moves, no hold law to recover");
+  const double slope = (sqy - sq * sy / n) / var;
+  if (!(slope < 0.0)) {
+    throw std::invalid_argument("experiment log: command minus excitation does not fall with the angle (slope " +
+                                std::to_string(slope) + " V/rad): no position hold in the log");
+  }
+  d.hold_gain_v_per_rad = -slope;
+  d.hold_rad = (sy - slope * sq) / n / d.hold_gain_v_per_rad;
+  return d;
+}
+
+Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data) {
+  const std::size_t n = data.q_rad.size();
+  Simulation s;
+  s.q_rad.resize(n);
+  s.tau_nm.resize(n);
+  s.command_v.resize(n);
+  const auto& p = model.value;
+  State x;
+  x.q = n > 0 ? data.q_rad[0] - p[kAngleOffset] : 0.0;
+  x.th = p[kLoadTorque];
+  x.tf = p[kLoadTorque];
+  // At rest the spool sits where the leakage flow balances: a (x + u_0) = c tau_g.
+  x.x = p[kLeakage] * p[kLoadTorque] / p[kFlowGain] - p[kValveOffset];
+  const std::size_t d = static_cast<std::size_t>(std::max(0, model.delay_samples));
+  std::vector<double> out_q(n), out_tau(n);
+  const int substeps = model.spool_hz > 0.0 ? 2 * kSubsteps : kSubsteps;
+  const double h = data.sample_period_s / substeps;
+  // (I1)-(I2) in closed loop: the hold law on the delayed reading, the command held over the sample.
+  for (std::size_t k = 0; k < n; ++k) {
+    out_q[k] = x.q + p[kAngleOffset];
+    out_tau[k] = measuredTorque(model, x);
+    const std::size_t seen = k >= d ? k - d : 0;
+    s.q_rad[k] = out_q[seen];
+    s.tau_nm[k] = out_tau[seen];
+    const double u = data.hold_gain_v_per_rad * (data.hold_rad - s.q_rad[k]) + data.excitation_v[k];
+    s.command_v[k] = u;
+    for (int i = 0; i < substeps; ++i) {
+      const State k1 = rhs(model, x, u);
+      const State k2 = rhs(model, axpy(x, 0.5 * h, k1), u);
+      const State k3 = rhs(model, axpy(x, 0.5 * h, k2), u);
+      const State k4 = rhs(model, axpy(x, h, k3), u);
+      x = axpy(axpy(axpy(axpy(x, h / 6.0, k1), h / 3.0, k2), h / 3.0, k3), h / 6.0, k4);
+    }
+    if (!std::isfinite(x.q) || !std::isfinite(x.w) || !std::isfinite(x.th) || std::abs(x.q) > 1e3) {
+      s.ok = false;
+      return s;
+    }
+  }
+  return s;
+}
+
+FitOptions defaultFitOptions(const GreyModel& nominal, double factor) {
+  FitOptions o;
+  for (int i = 0; i < kGreyParams; ++i) {
+    ParamSpec& s = o.params[static_cast<std::size_t>(i)];
+    const double v = nominal.value[static_cast<std::size_t>(i)];
+    if (i == kLoadTorque) {
+      s = {true, v - 20.0, v + 20.0, false};
+    } else if (i == kValveOffset || i == kAngleOffset || i == kTorqueOffset) {
+      s = {false, v - 1.0, v + 1.0, false};
+    } else {
+      s = {true, v / factor, v * factor, true};
+    }
+  }
+  return o;
+}
+
+FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const GreyModel& start,
+                       const FitOptions& options) {
+  if (experiments.empty()) throw std::invalid_argument("grey-box fit: no experiments");
+  for (int i = 0; i < kGreyParams; ++i) {
+    const ParamSpec& s = options.params[static_cast<std::size_t>(i)];
+    if (!s.free) continue;
+    const double v = start.value[static_cast<std::size_t>(i)];
+    if (s.log_scaled && !(s.min > 0.0)) {
+      throw std::invalid_argument(std::string("grey-box fit: ") + greyParamName(i) +
+                                  " is log-scaled and needs positive bounds, got min " + std::to_string(s.min));
+    }
+    if (!(s.min <= v && v <= s.max)) {
+      throw std::invalid_argument(std::string("grey-box fit: start ") + greyParamName(i) + " = " + std::to_string(v) +
+                                  " outside its bounds " + std::to_string(s.min) + ".." + std::to_string(s.max));
+    }
+  }
+  const Coordinates c(options);
+  Problem problem(experiments);
+  auto say = [&](const std::string& line) {
+    if (options.progress) options.progress(line);
+  };
+  using Clock = std::chrono::steady_clock;
+
+  // Global stage: the start and a seeded sample of the box, at every delay.
+  const auto t0 = Clock::now();
+  struct Candidate {
+    double cost = kInf;
+    GreyModel model;
+  };
+  core::JobPool pool(std::max(1, options.threads));
+  const int samples = std::max(1, options.global_samples);
+  const int delays = options.max_delay_samples + 1;
+  std::vector<Candidate> candidates(static_cast<std::size_t>(samples * delays));
+  constexpr int kBlock = 25;  // points per progress line
+  for (int first = 0; first < samples; first += kBlock) {
+    const int count = std::min(kBlock, samples - first);
+    pool.run(count * delays, [&](int task) {
+      const int sample = first + task / delays;
+      Eigen::VectorXd z = c.toZ(start);
+      if (sample > 0) {
+        core::RandomStream rng(options.seed, 0x6772657962ULL, static_cast<std::uint64_t>(sample));
+        for (Eigen::Index k = 0; k < z.size(); ++k) z[k] = rng.uniform(c.lo[k], c.hi[k]);
+      }
+      GreyModel m = c.fromZ(start, z);
+      m.delay_samples = task % delays;
+      const double cost = problem.cost(m);
+      candidates[static_cast<std::size_t>(sample * delays + task % delays)] = {std::isfinite(cost) ? cost : kInf, m};
+    });
+    say("global stage: " + std::to_string(first + count) + "/" + std::to_string(samples) + " points x " +
+        std::to_string(delays) + " delays");
+  }
+  // Ties keep the sampling order, so the result does not depend on the thread count.
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  FitResult result;
+  result.global_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+
+  // Polish the best candidates; then the delays next to the winner's.
+  const auto t1 = Clock::now();
+  Polished best;
+  best.cost = std::numeric_limits<double>::infinity();
+  const std::size_t count =
+      std::min(candidates.size(), static_cast<std::size_t>(std::max(1, options.polished_candidates)));
+  for (std::size_t i = 0; i < count; ++i) {
+    Polished p = polish(problem, c, candidates[i].model, options.max_iterations, pool);
+    std::ostringstream line;
+    line << "polish " << i + 1 << "/" << count << ": delay " << p.model.delay_samples << " samples, cost "
+         << candidates[i].cost << " -> " << p.cost;
+    say(line.str());
+    if (p.cost < best.cost) best = std::move(p);
+  }
+  for (int step : {-1, 1}) {
+    GreyModel m = best.model;
+    m.delay_samples += step;
+    if (m.delay_samples < 0 || m.delay_samples > options.max_delay_samples) continue;
+    Polished p = polish(problem, c, m, options.max_iterations, pool);
+    say("delay " + std::to_string(m.delay_samples) + " samples: cost " + std::to_string(p.cost));
+    if (p.cost < best.cost) best = std::move(p);
+  }
+  result.polish_seconds = std::chrono::duration<double>(Clock::now() - t1).count();
+
+  result.model = best.model;
+  result.cost = best.cost;
+  result.evaluations = problem.evaluations.load();
+  result.free_params = c.index;
+  // Covariance of the fit coordinates: s^2 (J^T J)^+, s^2 the residual variance.
+  const Eigen::Index np = best.jacobian.cols();
+  result.correlation = Eigen::MatrixXd::Identity(np, np);
+  if (np > 0) {
+    const double dof = std::max<double>(1.0, static_cast<double>(problem.residualCount() - np));
+    const double s2 = 2.0 * best.cost / dof;
+    Eigen::VectorXd norms = best.jacobian.colwise().norm().transpose();
+    for (Eigen::Index k = 0; k < np; ++k) norms[k] = norms[k] > 0.0 ? norms[k] : 1.0;
+    const Eigen::MatrixXd scaled = best.jacobian * norms.cwiseInverse().asDiagonal();
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeThinV);
+    const Eigen::VectorXd sv = svd.singularValues();
+    const double smax = sv.size() > 0 ? sv[0] : 0.0;
+    constexpr double kRankTolerance = 1e-6;
+    Eigen::MatrixXd cov_scaled = Eigen::MatrixXd::Zero(np, np);
+    for (Eigen::Index k = 0; k < sv.size(); ++k) {
+      if (sv[k] > kRankTolerance * smax) {
+        cov_scaled += svd.matrixV().col(k) * svd.matrixV().col(k).transpose() / (sv[k] * sv[k]);
+      } else {
+        std::string direction;
+        for (Eigen::Index j = 0; j < np; ++j) {
+          const double weight = svd.matrixV()(j, k);
+          if (std::abs(weight) < 0.2) continue;
+          std::ostringstream term;
+          term.precision(2);
+          term << (direction.empty() ? "" : (weight > 0 ? " + " : " - "))
+               << (direction.empty() && weight < 0 ? "-" : "") << std::abs(weight) << " "
+               << greyParamName(c.index[static_cast<std::size_t>(j)]);
+          direction += term.str();
+        }
+        result.unidentifiable.push_back(direction);
+      }
+    }
+    const Eigen::MatrixXd cov = s2 * norms.cwiseInverse().asDiagonal() * cov_scaled * norms.cwiseInverse().asDiagonal();
+    for (Eigen::Index k = 0; k < np; ++k) {
+      const auto i = static_cast<std::size_t>(c.index[static_cast<std::size_t>(k)]);
+      const double sd = std::sqrt(std::max(0.0, cov(k, k)));
+      result.standard_error[i] = c.log_scaled[static_cast<std::size_t>(k)] ? sd * result.model.value[i] : sd;
+      for (Eigen::Index j = 0; j < np; ++j) {
+        const double denom = std::sqrt(cov(k, k) * cov(j, j));
+        result.correlation(k, j) = denom > 0.0 ? cov(k, j) / denom : (k == j ? 1.0 : 0.0);
+      }
+    }
+  }
+  return result;
+}
+
+double fitPercent(const std::vector<double>& measured, const std::vector<double>& modelled) {
+  if (measured.size() != modelled.size() || measured.empty()) {
+    throw std::invalid_argument("fit percentage: " + std::to_string(measured.size()) + " measured and " +
+                                std::to_string(modelled.size()) + " modelled samples");
+  }
+  // I6: fit = 100 (1 - |y - y_hat| / |y - mean(y)|).
+  double mean = 0.0;
+  for (double v : measured) mean += v;
+  mean /= static_cast<double>(measured.size());
+  double err = 0.0, dev = 0.0;
+  for (std::size_t k = 0; k < measured.size(); ++k) {
+    err += (measured[k] - modelled[k]) * (measured[k] - modelled[k]);
+    dev += (measured[k] - mean) * (measured[k] - mean);
+  }
+  if (!(dev > 0.0)) throw std::invalid_argument("fit percentage: the measured signal is constant");
+  return 100.0 * (1.0 - std::sqrt(err / dev));
+}
+
+}  // namespace fullarm::identification

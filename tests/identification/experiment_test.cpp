@@ -1,0 +1,128 @@
+// The closed-loop experiment runner: against a scripted device whose joints integrate their
+// valve commands: the log and the hold law recomputed independently (the simulated DTS
+// is in experiment_sim_test.cpp).
+
+#include "fullarm/identification/experiment.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+namespace fullarm::identification {
+namespace {
+
+constexpr double kT = 1.0e-3;
+
+/// Each joint's angle integrates its applied command: q += gain * T * u (one period of delay).
+class IntegratorDevice final : public hil::IoDevice {
+ public:
+  IntegratorDevice(int joints, double ramp_in_s)
+      : hil::IoDevice(arm::JointSelection(joints,
+                                          [joints] {
+                                            std::vector<int> all;
+                                            for (int k = 0; k < joints; ++k) all.push_back(k);
+                                            return all;
+                                          }()),
+                      kT, hil::IoSafetyParams{ramp_in_s, 10.0}),
+        q_(hil::IoVector::Constant(joints, 0.2)),
+        held_(hil::IoVector::Zero(joints)) {}
+  [[nodiscard]] std::string_view name() const noexcept override { return "integrator"; }
+  double gain_radps_per_v = 0.5;
+  int reads = 0;
+  int fail_read_at = -1;
+
+ private:
+  void onConfigure() override {}
+  core::RtStatus onRead(hil::JointSample& sample) noexcept override {
+    if (reads++ == fail_read_at) return core::RtStatus::fault(core::RtCode::kBadInput, 0, "scripted read failure");
+    q_ += gain_radps_per_v * kT * held_;
+    t_ += kT;
+    sample.t_s = t_;
+    sample.q_rad = q_;
+    sample.tau_load_cell_nm = 100.0 * held_;
+    return {};
+  }
+  core::RtStatus onWrite(const hil::IoVector& valve_v, bool) noexcept override {
+    held_ = valve_v;
+    return {};
+  }
+  hil::IoVector q_;
+  hil::IoVector held_;
+  double t_ = 0.0;
+};
+
+TEST(ExperimentTest, LogsTheHoldLawPlusExcitationAlignedWithTheReadings) {
+  IntegratorDevice device(3, 0.0);
+  const SampledSignal r = linearChirp(0.5, 1.0, 20.0, 2.0, kT);
+  ExperimentOptions options;
+  options.joint = 1;
+  options.settle_s = 0.1;
+  const ExperimentResult result = runExperiment(device, r, options);
+  ASSERT_TRUE(result.completed) << result.stop_reason;
+  EXPECT_EQ(device.state(), hil::IoState::kInactive);
+  ASSERT_EQ(result.log.rows(), r.value_v.size());
+  ASSERT_EQ(result.hold_rad.size(), 3u);
+  EXPECT_DOUBLE_EQ(result.hold_rad[1], 0.2);
+  const auto& t = result.log.column("time_s");
+  const auto& e = result.log.column("excitation_v");
+  const auto& u = result.log.column("command_v");
+  const auto& q = result.log.column("q_rad");
+  const auto& tau = result.log.column("tau_measured_nm");
+  for (std::size_t k = 0; k < r.value_v.size(); ++k) {
+    ASSERT_EQ(e[k], r.value_v[k]);
+    ASSERT_NEAR(u[k], options.hold_gain_v_per_rad * (0.2 - q[k]) + r.value_v[k], 1e-12) << k;
+    if (k > 0) {
+      // The command logged at k - 1 is what moved the joint to the reading logged at k, and
+      // what the load cell of this device shows.
+      ASSERT_NEAR(q[k] - q[k - 1], device.gain_radps_per_v * kT * u[k - 1], 1e-12) << k;
+      ASSERT_NEAR(tau[k], 100.0 * u[k - 1], 1e-9) << k;
+      ASSERT_NEAR(t[k] - t[k - 1], kT, 1e-12);
+    }
+  }
+  // The settling period ran before the first logged row (100 reads, plus the initial one).
+  EXPECT_NEAR(t.front(), 0.101, 1e-9);
+}
+
+TEST(ExperimentTest, StopsSafelyBeforeTheLimitAndOnDeviceFaults) {
+  IntegratorDevice device(2, 0.0);
+  ExperimentOptions options;
+  options.joint = 0;
+  options.settle_s = 0.0;
+  options.hold_gain_v_per_rad = 0.0;
+  options.min_rad = -1.0;
+  options.max_rad = 0.5;
+  const SampledSignal push = stepSequence({10.0}, 2.0, kT);  // 5 rad/s towards the upper limit
+  const ExperimentResult result = runExperiment(device, push, options);
+  EXPECT_FALSE(result.completed);
+  EXPECT_NE(result.stop_reason.find("limits"), std::string::npos) << result.stop_reason;
+  ASSERT_GT(result.log.rows(), 0u);
+  for (double q : result.log.column("q_rad")) EXPECT_LE(q, 0.45);
+  EXPECT_EQ(device.state(), hil::IoState::kInactive);
+  EXPECT_EQ(device.appliedCommand()[0], 0.0);
+
+  IntegratorDevice failing(2, 0.0);
+  failing.fail_read_at = 50;
+  options.max_rad = 10.0;
+  const ExperimentResult failed = runExperiment(failing, stepSequence({0.1}, 1.0, kT), options);
+  EXPECT_FALSE(failed.completed);
+  EXPECT_NE(failed.stop_reason.find("read failed"), std::string::npos) << failed.stop_reason;
+  EXPECT_EQ(failing.appliedCommand()[0], 0.0);
+}
+
+TEST(ExperimentTest, RejectsBadSetups) {
+  IntegratorDevice device(2, 0.0);
+  ExperimentOptions options;
+  options.joint = 2;
+  EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
+  options.joint = 0;
+  EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, 2 * kT), options), std::invalid_argument);
+  options.min_rad = 0.25;  // the joint starts at 0.2 rad
+  EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
+  options.min_rad = 0.0;
+  options.max_rad = 0.05;
+  EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace fullarm::identification

@@ -1,0 +1,76 @@
+// The identification settings: the shipped file loads with the values it states, and each kind
+// of mistake is a ConfigError naming the key path and the line.
+
+#include "fullarm/identification/identification_config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "fullarm/core/config_error.hpp"
+
+namespace fullarm::identification {
+namespace {
+
+std::string shippedText() {
+  const char* root = std::getenv("FULLARM_SOURCE_DIR");
+  std::ifstream in(std::string(root != nullptr ? root : ".") + "/config/identification.yaml");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+core::ConfigError errorOf(const std::string& text) {
+  try {
+    (void)parseIdentificationConfig(text, "identification.yaml");
+  } catch (const core::ConfigError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "accepted";
+  return core::ConfigError("", "", "");
+}
+
+TEST(IdentificationConfigTest, ShippedFileLoads) {
+  const IdentificationConfig c = parseIdentificationConfig(shippedText(), "identification.yaml");
+  EXPECT_EQ(c.fit.max_delay_samples, 4);
+  EXPECT_EQ(c.fit.global_samples, 100);
+  EXPECT_TRUE(c.fit.params[kFlowGain].free);
+  EXPECT_TRUE(c.fit.params[kFlowGain].log_scaled);
+  EXPECT_DOUBLE_EQ(c.fit.params[kStiffness].max, 2.0e5);
+  EXPECT_FALSE(c.fit.params[kAngleOffset].free);
+  EXPECT_FALSE(c.fit.params[kLoadTorque].log_scaled);
+  EXPECT_DOUBLE_EQ(c.validation.min_fit_angle_percent, 90.0);
+  EXPECT_EQ(c.validation.max_lag, 25);
+  EXPECT_DOUBLE_EQ(c.coulomb_smoothing_radps, 0.05);
+  EXPECT_TRUE(std::filesystem::exists(loadIdentificationConfig(defaultIdentificationConfigPath()).source));
+}
+
+TEST(IdentificationConfigTest, MistakesNameTheKeyAndTheLine) {
+  const std::string text = shippedText();
+  const auto log_zero = errorOf(replaced(text, "scaling: log, min: 0.05", "scaling: log, min: 0.0"));
+  EXPECT_EQ(log_zero.keyPath(), "parameters.flow_gain_radps_per_v.min");
+  EXPECT_GT(log_zero.line(), 0);
+  const auto inverted = errorOf(replaced(text, "min: 500.0, max: 2.0e5", "min: 500.0, max: 100.0"));
+  EXPECT_EQ(inverted.keyPath(), "parameters.hydraulic_stiffness_nm_per_rad.max");
+  const auto scaling = errorOf(replaced(text, "scaling: linear, min: -60.0", "scaling: cubic, min: -60.0"));
+  EXPECT_EQ(scaling.keyPath(), "parameters.load_torque_nm.scaling");
+  const auto unknown = errorOf(replaced(text, "  seed: 1\n", "  seed: 1\n  sede: 2\n"));
+  EXPECT_NE(std::string(unknown.what()).find("sede"), std::string::npos) << unknown.what();
+  const auto missing = errorOf(replaced(text, "  max_lag: 25 ", "  #max_lag: 25 "));
+  EXPECT_NE(std::string(missing.what()).find("max_lag"), std::string::npos) << missing.what();
+  const auto fraction = errorOf(replaced(text, "max_outside_fraction: 0.1", "max_outside_fraction: 1.5"));
+  EXPECT_EQ(fraction.keyPath(), "validation.max_outside_fraction");
+  EXPECT_THROW((void)loadIdentificationConfig("/nonexistent/identification.yaml"), core::ConfigError);
+}
+
+}  // namespace
+}  // namespace fullarm::identification

@@ -1,0 +1,51 @@
+// Reduced groups of a plant joint against Merritt's formulas worked by hand for a rotary vane
+// with pure oil (no entrained air): a = k_amp K_v sqrt((p_s - p_r)/2) / D, K_h = beta D^2 (1/V_a +
+// 1/V_b), c = C_i / D^2.
+
+#include "fullarm/identification/joint_groups.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace fullarm::identification {
+namespace {
+
+TEST(JointGroupsTest, RotaryVaneGroupsFollowMerrittsFormulas) {
+  plant::JointParams j;
+  j.actuator.kind = plant::ActuatorKind::kRotaryVane;
+  j.actuator.displacement_m3_per_rad = 2.0e-6;
+  j.actuator.inertia_kgm2 = 1.0e-4;
+  j.valve.amplifier_gain_per_v = 0.1;
+  j.valve.rated_flow_m3ps = 8.0e-6;
+  j.valve.rated_pressure_drop_pa = 4.0e6;
+  j.supply_pressure_pa = 20.0e6;
+  j.return_pressure_pa = 0.0;
+  j.fluid.oil_bulk_modulus_pa = 1.5e9;
+  j.fluid.air_fraction = 0.0;
+  j.chambers.dead_volume_a_m3 = 1.0e-6;
+  j.chambers.dead_volume_b_m3 = 1.0e-6;
+  j.chambers.internal_leakage_m3ps_per_pa = 4.0e-13;
+  j.friction.coulomb_nm = 0.7;
+  j.friction.viscous_nms_per_rad = 0.2;
+  j.min_rad = -1.0;
+  j.max_rad = 1.0;
+  const double q = 0.5;
+  const GreyModel m = greyModelFromJoint(j, q, 0.3, 4.0, 2);
+  const double d = 2.0e-6;
+  const double kv = 8.0e-6 / std::sqrt(4.0e6);
+  EXPECT_NEAR(m.value[kFlowGain], 0.1 * kv * std::sqrt(10.0e6) / d, 1e-12);
+  // Chambers: V_a = V0 + D (q - q_min) = 1e-6 + 2e-6 * 1.5, V_b = V0 + D (q_max - q) = 1e-6 + 2e-6 * 0.5.
+  const double va = 1.0e-6 + 2.0e-6 * 1.5;
+  const double vb = 1.0e-6 + 2.0e-6 * 0.5;
+  EXPECT_NEAR(m.value[kStiffness], 1.5e9 * d * d * (1.0 / va + 1.0 / vb), 1e-6 * m.value[kStiffness]);
+  EXPECT_NEAR(m.value[kLeakage], 4.0e-13 / (d * d), 1e-12);
+  EXPECT_DOUBLE_EQ(m.value[kInertia], 0.3 + 1.0e-4);
+  EXPECT_DOUBLE_EQ(m.value[kViscous], 0.2);
+  EXPECT_DOUBLE_EQ(m.value[kCoulomb], 0.7);
+  EXPECT_DOUBLE_EQ(m.value[kLoadTorque], 4.0);
+  EXPECT_EQ(m.delay_samples, 2);
+}
+
+}  // namespace
+}  // namespace fullarm::identification
