@@ -24,6 +24,8 @@
 #include "identify_command.hpp"
 #include "output_files.hpp"
 #include "plant_command.hpp"
+#include "plant_serve_command.hpp"
+#include "global_command.hpp"
 #include "run_command.hpp"
 #include "tune_command.hpp"
 #include "validate_command.hpp"
@@ -188,6 +190,10 @@ struct CommandLine {
   TuneOptions tune_options;
   CLI::App* plant_simulate = nullptr;
   PlantSimulateOptions plant_options;
+  CLI::App* plant_serve = nullptr;
+  PlantServeOptions plant_serve_options;
+  CLI::App* global_node = nullptr;
+  GlobalCommandOptions global_options;
   CLI::App* validate = nullptr;
   ValidateOptions validate_options;
   CLI::App* haptics_query = nullptr;
@@ -224,6 +230,8 @@ struct CommandLine {
 
     tune = addTuneCommand(app, tune_options, table);
     plant_simulate = addPlantCommand(app, plant_options, table);
+    plant_serve = addPlantServeCommand(app, plant_serve_options, table);
+    global_node = addGlobalCommand(app, global_options, table);
     validate = addValidateCommand(app, validate_options, table);
     haptics_query = addHapticsCommand(app, haptics_options, table);
     run = addRunCommand(app, run_options, table);
@@ -241,6 +249,8 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
     cli.plant_options.progress = &progress;
     return runPlantSimulate(cli.plant_options);
   }
+  if (cli.plant_serve->parsed()) return runPlantServe(cli.plant_serve_options, out);
+  if (cli.global_node->parsed()) return runGlobal(cli.global_options, out);
   if (cli.validate->parsed()) {
     cli.validate_options.progress = &progress;
     return runValidate(cli.validate_options);

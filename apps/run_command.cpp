@@ -5,13 +5,17 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <sstream>
 
 #include "fullarm/core/config_error.hpp"
+#include "fullarm/hil/lcm_transport.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_recording.hpp"
 #include "fullarm/reports/report.hpp"
 #include "output_files.hpp"
+#include "run_replay3d.hpp"
 
 namespace fullarm::app {
 namespace {
@@ -43,6 +47,126 @@ std::filesystem::path pathOr(const std::string& s) {
 
 nlohmann::json percentilesJson(const hil::Percentiles& p) {
   return {{"p50_s", p.p50_s}, {"p99_s", p.p99_s}, {"max_s", p.max_s}};
+}
+
+// Adds `replay` to `section`, or a note when it has nothing to draw (a model without capsule
+// links, a log without a complete tick).
+void addReplayOrNote(reports::Section& section, reports::Replay3d replay) {
+  if (replay.links.empty() || replay.frames.empty()) {
+    section.addParagraph(replay.title + ": nothing to draw (no capsule link or no complete tick).");
+  } else {
+    section.addReplay3d(std::move(replay));
+  }
+}
+
+// The charts over time of the reports of `run` and `replay` (and of `run --mode both`, side by
+// side). Each is empty (nullopt) when the run has nothing to show in it.
+
+// The supervisor's events over time.
+std::optional<reports::XyChart> eventsChart(const hil::RunResult& r) {
+  if (r.events.empty()) return std::nullopt;
+  reports::XyChart events;
+  events.title = "Supervisor events";
+  events.x_axis = {"Time", "s"};
+  events.y_axis = {"Cause code (hover for its name)", ""};
+  events.caption = "Each event at its time; the causes are listed in docs/hil.md, \"Safety\".";
+  reports::Series info{"information", {}, {}, reports::SeriesMode::kMarkers, {}};
+  reports::Series trips{"trip", {}, {}, reports::SeriesMode::kMarkers, {}};
+  for (const hil::SupervisorEvent& e : r.events) {
+    reports::Series& s = e.trip ? trips : info;
+    s.x.push_back(e.t_s);
+    s.y.push_back(static_cast<double>(e.cause));
+    std::string label = hil::supervisorCauseName(e.cause);
+    if (e.joint >= 0 && static_cast<std::size_t>(e.joint) < r.joint_names.size())
+      label += " (" + r.joint_names[static_cast<std::size_t>(e.joint)] + ")";
+    s.point_labels.push_back(std::move(label));
+  }
+  for (reports::Series* s : {&info, &trips}) {
+    if (!s->x.empty()) events.series.push_back(std::move(*s));
+  }
+  return events;
+}
+
+std::optional<reports::XyChart> valveChart(const hil::RunResult& r) {
+  if (r.telemetry.empty()) return std::nullopt;
+  reports::XyChart valves;
+  valves.title = "Valve commands";
+  valves.x_axis = {"Time", "s"};
+  valves.y_axis = {"Command", "V"};
+  for (std::size_t k = 0; k < r.joint_names.size(); ++k) {
+    valves.series.push_back(seriesOf(
+        r.joint_names[k], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) { return t.valve_v[static_cast<std::size_t>(j)]; },
+        static_cast<int>(k)));
+  }
+  return valves;
+}
+
+std::optional<reports::XyChart> torqueChart(const hil::RunResult& r, const hil::HilSession& session) {
+  if (r.telemetry.empty()) return std::nullopt;
+  reports::XyChart torques;
+  torques.title = "Contact torques (Eq. 1-2, after the stale-minima fade)";
+  torques.x_axis = {"Time", "s"};
+  torques.y_axis = {"Torque", "N·m"};
+  for (std::size_t k = 0; k < r.joint_names.size(); ++k) {
+    torques.series.push_back(seriesOf(
+        r.joint_names[k], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) { return t.tau_contact_nm[static_cast<std::size_t>(j)]; },
+        session.tickModel().device_joints.modelIndex(static_cast<int>(k))));
+  }
+  return torques;
+}
+
+std::optional<reports::XyChart> linkForceChart(const hil::RunResult& r) {
+  reports::XyChart link_forces;
+  link_forces.title = "Contact force per link (rendered, before the fade)";
+  link_forces.x_axis = {"Time", "s"};
+  link_forces.y_axis = {"Force", "N"};
+  for (std::size_t l = 0; l < r.link_names.size(); ++l) {
+    reports::Series s = seriesOf(
+        r.link_names[l], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) {
+          const auto& f = t.link_force_W_n[static_cast<std::size_t>(j)];
+          return std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+        },
+        static_cast<int>(l));
+    if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v) && v > 0.0; }))
+      link_forces.series.push_back(std::move(s));
+  }
+  if (link_forces.series.empty()) return std::nullopt;
+  return link_forces;
+}
+
+std::optional<reports::XyChart> distanceChart(const hil::RunResult& r) {
+  reports::XyChart distance;
+  distance.title = "Smallest tracked distance per link";
+  distance.x_axis = {"Time", "s"};
+  distance.y_axis = {"Distance", "m"};
+  for (std::size_t l = 0; l < r.link_names.size(); ++l) {
+    reports::Series s = seriesOf(
+        r.link_names[l], r.telemetry,
+        [](const hil::TickTelemetry& t, int j) {
+          const double d = t.link_min_distance_m[static_cast<std::size_t>(j)];
+          return std::isfinite(d) ? d : std::nan("");
+        },
+        static_cast<int>(l));
+    if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v); }))
+      distance.series.push_back(std::move(s));
+  }
+  if (distance.series.empty()) return std::nullopt;
+  return distance;
+}
+
+void addEventsChart(const hil::RunResult& r, reports::Section& section) {
+  if (auto chart = eventsChart(r)) section.addScatterChart(std::move(*chart));
+}
+
+// Valve commands, contact torques, contact force per link, smallest tracked distance per link.
+void addTelemetryCharts(const hil::RunResult& r, const hil::HilSession& session, reports::Section& forces) {
+  for (std::optional<reports::XyChart> chart :
+       {valveChart(r), torqueChart(r, session), linkForceChart(r), distanceChart(r)}) {
+    if (chart) forces.addLineChart(std::move(*chart));
+  }
 }
 
 void addRunReport(const hil::RunResult& r, const hil::HilSession& session, reports::Report& report) {
@@ -124,6 +248,10 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
   results["user"] = {{"hand_to_target_m", r.hand_to_target_m}, {"max_force_n", r.max_user_force_n}};
   results["log"] = {{"file", "run.lcmlog"}, {"events", r.log_events}, {"records_dropped", r.log_records_dropped}};
 
+  reports::Replay3d replay = runReplay3d(r, session);
+  results["replay3d"] = replaySummary(replay, r);
+  addReplayOrNote(report.addSection("3D replay"), std::move(replay));
+
   reports::Section& timing = report.addSection("Timing");
   reports::Table tt;
   tt.caption = lockstep ? "Lockstep run: simulated time, as fast as the machine allows"
@@ -136,6 +264,30 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
                        us(tm.period_jitter.max_s)});
   }
   timing.addTable(std::move(tt));
+  if (!tm.compute_samples_s.empty()) {
+    reports::Histogram loop;
+    loop.title = lockstep ? "Loop timing: tick compute time" : "Loop timing: tick compute time and period jitter";
+    loop.x_axis = {"Time", "µs"};
+    const auto micro = [](const std::vector<double>& samples_s) {
+      std::vector<double> out;
+      out.reserve(samples_s.size());
+      for (double s : samples_s) out.push_back(s * 1e6);
+      return out;
+    };
+    loop.series.push_back({"Tick compute time", micro(tm.compute_samples_s)});
+    double p99_us = tm.compute.p99_s * 1e6;
+    if (!lockstep && !tm.period_jitter_samples_s.empty()) {
+      loop.series.push_back({"Period jitter |wake-up - deadline|", micro(tm.period_jitter_samples_s)});
+      p99_us = std::max(p99_us, tm.period_jitter.p99_s * 1e6);
+    }
+    // The rare long ticks would squeeze the bulk into one bin: the range ends at 4 x the larger
+    // p99, and the note under the chart counts the samples beyond it.
+    const double max_us = std::max(tm.compute.max_s, tm.period_jitter.max_s) * 1e6;
+    if (std::isfinite(p99_us) && p99_us > 0.0 && max_us > 4.0 * p99_us)
+      loop.range = std::array<double, 2>{0.0, 4.0 * p99_us};
+    loop.caption = "Every tick of the run; the table above gives p50, p99 and max.";
+    timing.addHistogram(std::move(loop));
+  }
   std::ostringstream text;
   text << tm.ticks << " ticks, " << tm.simulated_s << " s of control time in " << tm.wall_s << " s of wall time; "
        << tm.overruns << " overruns (longest run " << tm.max_consecutive_overruns << "); " << tm.searches
@@ -151,46 +303,10 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
   sup.addParagraph(r.tripped ? std::string("Tripped: ") + hil::supervisorCauseName(r.trip_cause)
                              : "No trip: the run ended with the supervisor running.");
   if (!event_table.rows.empty()) sup.addTable(std::move(event_table));
+  addEventsChart(r, sup);
 
   reports::Section& forces = report.addSection("Forces and torques");
-  reports::XyChart valves;
-  valves.title = "Valve commands";
-  valves.x_axis = {"Time", "s"};
-  valves.y_axis = {"Command", "V"};
-  for (std::size_t k = 0; k < r.joint_names.size(); ++k) {
-    valves.series.push_back(seriesOf(
-        r.joint_names[k], r.telemetry,
-        [](const hil::TickTelemetry& t, int j) { return t.valve_v[static_cast<std::size_t>(j)]; },
-        static_cast<int>(k)));
-  }
-  forces.addLineChart(std::move(valves));
-  reports::XyChart torques;
-  torques.title = "Contact torques (Eq. 1-2, after the stale-minima fade)";
-  torques.x_axis = {"Time", "s"};
-  torques.y_axis = {"Torque", "N·m"};
-  for (std::size_t k = 0; k < r.joint_names.size(); ++k) {
-    torques.series.push_back(seriesOf(
-        r.joint_names[k], r.telemetry,
-        [](const hil::TickTelemetry& t, int j) { return t.tau_contact_nm[static_cast<std::size_t>(j)]; },
-        session.tickModel().device_joints.modelIndex(static_cast<int>(k))));
-  }
-  forces.addLineChart(std::move(torques));
-  reports::XyChart distance;
-  distance.title = "Smallest tracked distance per link";
-  distance.x_axis = {"Time", "s"};
-  distance.y_axis = {"Distance", "m"};
-  for (std::size_t l = 0; l < r.link_names.size(); ++l) {
-    reports::Series s = seriesOf(
-        r.link_names[l], r.telemetry,
-        [](const hil::TickTelemetry& t, int j) {
-          const double d = t.link_min_distance_m[static_cast<std::size_t>(j)];
-          return std::isfinite(d) ? d : std::nan("");
-        },
-        static_cast<int>(l));
-    if (std::any_of(s.y.begin(), s.y.end(), [](double v) { return std::isfinite(v); }))
-      distance.series.push_back(std::move(s));
-  }
-  if (!distance.series.empty()) forces.addLineChart(std::move(distance));
+  addTelemetryCharts(r, session, forces);
   if (r.oracle_ran) {
     reports::Table lt;
     lt.caption = "Each link against the scene (exact, every tick): the missed-contact oracle";
@@ -210,8 +326,17 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
                                      "Run the 1 kHz haptic loop on a simulated, fake-DAQ or real DTS; write an "
                                      "LCM log, summary.json and report.html");
   OptionDeclarer declare(*cmd, table);
-  declare.choice("--io", o.io, "I/O back-end", {"sim", "fakedaq", "comedi"})->capture_default_str();
-  declare.choice("--mode", o.mode, "Haptic rendering", {"full-arm", "hand-only"})->capture_default_str();
+  declare.choice("--io", o.io, "I/O back-end", {"sim", "fakedaq", "comedi", "lcm"})->capture_default_str();
+  declare.choice("--search", o.search, "Global search: in this process, or the global node `fullarm global` over LCM (lockstep)",
+                 {"in-process", "lcm"})
+      ->capture_default_str();
+  declare.name("--lcm-url", o.lcm_url, "--io lcm, --search lcm: LCM URL of the plant and global nodes (default udpm://239.255.76.67:7667?ttl=0)");
+  declare
+      .choice("--mode", o.mode,
+              "Haptic rendering (both: the run in each mode, in full-arm/ and hand-only/, and a report of the two "
+              "side by side)",
+              {"full-arm", "hand-only", "both"})
+      ->capture_default_str();
   declare.file("--scene", o.scene, "Scene YAML (default: scenes/valve_wall.yaml)");
   // Every tick's inputs and telemetry stay in memory for the report and the replay check (the
   // LCM log holds them too): the duration is bounded before the run starts.
@@ -238,9 +363,17 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
   return cmd;
 }
 
-int runRun(const RunCommandOptions& o, const std::string& command_line) {
+namespace {
+
+// The loop's options from the command's (the log goes into the output folder).
+hil::RunOptions runOptionsOf(const RunCommandOptions& o, const std::string& command_line) {
   hil::RunOptions ro;
-  ro.io = o.io == "sim" ? hil::IoKind::kSim : o.io == "fakedaq" ? hil::IoKind::kFakeDaq : hil::IoKind::kComedi;
+  ro.io = o.io == "sim"       ? hil::IoKind::kSim
+          : o.io == "fakedaq" ? hil::IoKind::kFakeDaq
+          : o.io == "lcm"     ? hil::IoKind::kLcm
+                              : hil::IoKind::kComedi;
+  ro.lcm_url = o.lcm_url;
+  if (o.search == "lcm") ro.search_url = o.lcm_url.empty() ? hil::kDefaultLcmUrl : o.lcm_url;
   ro.mode = o.mode == "hand-only" ? haptics::RenderMode::kHandOnly : haptics::RenderMode::kFullArm;
   ro.clock = o.clock == "lockstep" ? hil::ClockKind::kLockstep : hil::ClockKind::kRealtime;
   ro.duration_s = o.duration_s;
@@ -256,9 +389,96 @@ int runRun(const RunCommandOptions& o, const std::string& command_line) {
   ro.start_posture = o.start_posture;
   ro.oracle = !o.no_oracle && ro.clock == hil::ClockKind::kLockstep;
   if (o.delivery_delay_ticks) ro.delivery_delay_ticks = *o.delivery_delay_ticks;
-  std::filesystem::create_directories(o.out_dir);
   ro.log = std::filesystem::path(o.out_dir) / "run.lcmlog";
   ro.command_line = command_line;
+  return ro;
+}
+
+// One of the two runs of `--mode both`, read back from its log.
+struct ModeRun {
+  std::string mode;
+  int exit_code = 0;
+  std::unique_ptr<hil::HilSession> session;
+  hil::RunResult logged;
+};
+
+// A chart of one mode's run for the side-by-side sections, or a note in its place so that the
+// two columns stay paired.
+void addModeChart(reports::Section& section, const std::string& mode, std::optional<reports::XyChart> chart,
+                  const std::string& what, bool scatter = false) {
+  if (chart) {
+    chart->title = mode + ": " + chart->title;
+    if (scatter) {
+      section.addScatterChart(std::move(*chart));
+    } else {
+      section.addLineChart(std::move(*chart));
+    }
+  } else {
+    section.addParagraph(mode + ": no " + what + " in this run.");
+  }
+}
+
+// `--mode both`: the same run in full-arm and then hand-only mode, each with its own output
+// folder (full-arm/, hand-only/), and a report that shows the two side by side.
+int runBothModes(const RunCommandOptions& o, const std::string& command_line) {
+  const std::filesystem::path out = o.out_dir;
+  std::vector<ModeRun> runs;
+  for (const char* mode : {"full-arm", "hand-only"}) {
+    RunCommandOptions one = o;
+    one.mode = mode;
+    one.out_dir = (out / mode).string();
+    ModeRun run;
+    run.mode = mode;
+    run.exit_code = runRun(one, command_line);
+    run.session = std::make_unique<hil::HilSession>(runOptionsOf(one, command_line), false);
+    run.logged = runFromLog(out / mode / "run.lcmlog", *run.session);
+    runs.push_back(std::move(run));
+  }
+  const bool pass = runs[0].exit_code == 0 && runs[1].exit_code == 0;
+  reports::Report report("run", "Haptic run, full-arm and hand-only side by side: " + o.io + ", " + o.clock);
+  report.setVerdict(pass, pass ? "Both runs ended without a trip or a missed contact"
+                               : std::string("See the ") + (runs[0].exit_code != 0 ? "full-arm" : "hand-only") +
+                                     " run's report: it did not pass");
+  nlohmann::json modes = nlohmann::json::object();
+  reports::Section& replays = report.addSection("3D replays: full-arm (left) and hand-only (right)").setColumns(2);
+  for (ModeRun& run : runs) {
+    reports::Replay3d replay = runReplay3d(run.logged, *run.session);
+    replay.title = run.mode + ": " + replay.title;
+    const nlohmann::json shown = replaySummary(replay, run.logged);
+    std::uint64_t penetrating_ticks = 0;
+    for (const hil::TickTelemetry& t : run.logged.telemetry) penetrating_ticks += t.link_penetration_mask != 0 ? 1 : 0;
+    const double penetration_s = static_cast<double>(penetrating_ticks) * run.session->config().control_period_s;
+    const std::string key = run.mode == "full-arm" ? "full_arm" : "hand_only";
+    report.addHeadlineNumber(key + "_penetration_s", run.mode + ": time a link touched the scene", penetration_s, "s");
+    modes[run.mode] = {
+        {"folder", run.mode}, {"exit_code", run.exit_code}, {"penetration_s", penetration_s}, {"replay3d", shown}};
+    addReplayOrNote(replays, std::move(replay));
+    report.addFile(std::filesystem::path(run.mode) / "report.html");
+  }
+  report.results()["modes"] = modes;
+  reports::Section& events = report.addSection("Supervisor events").setColumns(2);
+  for (const ModeRun& run : runs) addModeChart(events, run.mode, eventsChart(run.logged), "supervisor event", true);
+  reports::Section& torques = report.addSection("Contact torques").setColumns(2);
+  for (const ModeRun& run : runs)
+    addModeChart(torques, run.mode, torqueChart(run.logged, *run.session), "contact torque");
+  reports::Section& forces = report.addSection("Contact force per link").setColumns(2);
+  for (const ModeRun& run : runs) addModeChart(forces, run.mode, linkForceChart(run.logged), "contact force");
+  reports::Section& distances = report.addSection("Smallest tracked distance per link").setColumns(2);
+  for (const ModeRun& run : runs) addModeChart(distances, run.mode, distanceChart(run.logged), "tracked minimum");
+  report.addSection("").addParagraph(
+      "Each run's own report (timing, supervisor, valve commands, the oracle) is in its folder: full-arm/report.html "
+      "and hand-only/report.html.");
+  writeReport(report, o.out_dir);
+  std::cout << "Report (side by side): " << (std::filesystem::absolute(out) / "report.html").string() << "\n";
+  return pass ? 0 : 1;
+}
+
+}  // namespace
+
+int runRun(const RunCommandOptions& o, const std::string& command_line) {
+  if (o.mode == "both") return runBothModes(o, command_line);
+  const hil::RunOptions ro = runOptionsOf(o, command_line);
+  std::filesystem::create_directories(o.out_dir);
 
   hil::HilSession session(ro);
   std::cout << "fullarm run: " << o.io << ", " << o.mode << ", " << o.clock << " clock, " << o.duration_s << " s at "
@@ -337,6 +557,17 @@ int runReplay(const ReplayCommandOptions& o) {
                                   {"truncated", r.truncated},
                                   {"warning", r.warning},
                                   {"changed_files", r.changed_files}};
+    // What the log shows of the run: its 3D replay and its charts over time.
+    const hil::HilSession session(r.options, false);
+    const hil::RunResult logged = runFromLog(o.log, session);
+    if (!logged.telemetry.empty()) {
+      reports::Replay3d replay = runReplay3d(logged, session);
+      report.results()["replay3d"] = replaySummary(replay, logged);
+      addReplayOrNote(report.addSection("3D replay"), std::move(replay));
+      reports::Section& charts = report.addSection("Supervisor, forces and torques (as logged)");
+      addEventsChart(logged, charts);
+      addTelemetryCharts(logged, session, charts);
+    }
     writeReport(report, o.out_dir);
   }
   return pass ? 0 : 1;

@@ -11,6 +11,7 @@
 #include "fullarm/core/data_paths.hpp"
 #include "fullarm/hil/sim_io.hpp"
 #include "fullarm/hil/fake_daq.hpp"
+#include "fullarm/hil/lcm_io.hpp"
 
 namespace fullarm::hil {
 
@@ -22,6 +23,8 @@ const char* ioKindName(IoKind io) noexcept {
       return "fakedaq";
     case IoKind::kComedi:
       return "comedi";
+    case IoKind::kLcm:
+      return "lcm";
   }
   return "unknown";
 }
@@ -68,6 +71,9 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
   if (build_device && options.io == IoKind::kComedi && options.clock == ClockKind::kLockstep) {
     throw core::ConfigError({}, "--clock", "lockstep runs in simulated time: the real board (--io comedi) needs --clock realtime");
   }
+  if (!options.search_url.empty() && options.clock != ClockKind::kLockstep) {
+    throw core::ConfigError({}, "--search", "the global search over LCM runs in lockstep (--clock lockstep)");
+  }
   model_ = std::make_unique<arm::ArmModel>(arm::loadArmModel(options_.arm_config));
   scene_ = std::make_unique<haptics::Scene>(haptics::loadScene(options_.scene));
   world_ = std::make_unique<haptics::CollisionWorld>(haptics::makeCollisionWorld(*scene_, *model_));
@@ -111,7 +117,8 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
   tick_ = makeTickModel(*model_, *world_, haptics_, gains_, config_.supervisor, joints, posture_);
   if (!build_device) return;
 
-  if (options.io != IoKind::kComedi) {
+  // The simulated arm lives in this process for sim and fakedaq, in the plant node for lcm.
+  if (options.io == IoKind::kSim || options.io == IoKind::kFakeDaq) {
     arm_ = std::make_unique<SimulatedArm>(*model_, plant_, posture_, config_.control_period_s, config_.latency_samples);
     user_ = std::make_unique<ScriptedUser>(loadScriptedUser(options_.user), *model_, haptics::armBasePose(*scene_, *model_));
     arm_->setUser(user_.get());
@@ -134,6 +141,15 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
     case IoKind::kComedi:
       device_ = makeComediIoDevice(daq_, *model_, config_.control_period_s, config_.io_safety);
       break;
+    case IoKind::kLcm: {
+      LcmIoOptions lcm;
+      if (!options.lcm_url.empty()) lcm.url = options.lcm_url;
+      // Real time: a reading must come within 0.6 of a period to leave the tick its compute
+      // time; lockstep waits long, for determinism.
+      if (options.clock == ClockKind::kRealtime) lcm.reply_timeout_s = 0.6 * config_.control_period_s;
+      device_ = std::make_unique<LcmIoDevice>(joints, config_.control_period_s, config_.io_safety, lcm);
+      break;
+    }
   }
   if (device_->joints().modelIndices() != joints.modelIndices()) {
     throw DeviceError("the I/O device's joints differ from the tick's: check the channel map " +

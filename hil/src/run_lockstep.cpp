@@ -6,8 +6,10 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <utility>
 
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/hil/lcm_search.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_recording.hpp"
 
@@ -53,6 +55,11 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
   r.hand_W_m.reserve(ticks);
 
   GlobalSearchRunner search(*model_, *world_, haptics_);
+  // The global search in a node of its own: queried at the same ticks, awaited at delivery.
+  std::unique_ptr<LcmSearchClient> remote;
+  // Lockstep waits long for a set (a loaded machine must not change the run); a silent node
+  // costs this once.
+  if (!options_.search_url.empty()) remote = std::make_unique<LcmSearchClient>(options_.search_url, 5.0, 2.0);
   std::unique_ptr<MissedContactOracle> oracle;
   if (options_.oracle) oracle = std::make_unique<MissedContactOracle>(*model_, *world_, haptics_.force_threshold_m);
   std::deque<PendingSet> pending;
@@ -93,15 +100,18 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
     if (!pending.empty() && pending.front().deliver_tick == k) {
       RecordedSet& set = r.sets[pending.front().set_index];
       pending.pop_front();
-      set.adopted_tick = static_cast<std::int64_t>(k);
-      delivery.set_id = set.id;
-      delivery.minima = set.minima;
-      delivery.query_q_rad = set.query_q_rad;
-      delivered = &delivery;
-      recorded.adopted_set = set.id;
-      if (recorder) {
-        toSetRecord(set, period, set_record);
-        recorder->recordAdoptedSet(set_record);
+      // A remote set that does not come in time is not adopted (the old minima go stale).
+      if (!remote || remote->await(set.id, set.query_tick, set.minima, set.found)) {
+        set.adopted_tick = static_cast<std::int64_t>(k);
+        delivery.set_id = set.id;
+        delivery.minima = set.minima;
+        delivery.query_q_rad = set.query_q_rad;
+        delivered = &delivery;
+        recorded.adopted_set = set.id;
+        if (recorder) {
+          toSetRecord(set, period, set_record);
+          recorder->recordAdoptedSet(set_record);
+        }
       }
     }
     r.inputs.push_back(recorded);
@@ -151,8 +161,12 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
       set.id = static_cast<std::int64_t>(r.sets.size()) + 1;
       set.query_tick = k;
       set.query_q_rad.assign(data.q.data(), data.q.data() + data.q.size());
-      set.found = search.run(data.q, set.minima);
-      search_s = search.lastSeconds();
+      if (remote) {
+        remote->query(set.id, k, data.q);
+      } else {
+        set.found = search.run(data.q, set.minima);
+        search_s = search.lastSeconds();
+      }
       r.sets.push_back(std::move(set));
       pending.push_back({k + static_cast<std::uint64_t>(config_.delivery_delay_ticks), r.sets.size() - 1});
       ++r.timing.searches;
@@ -184,6 +198,7 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
   r.timing.ticks = ticks;
   r.timing.simulated_s = static_cast<double>(ticks) * period;
   r.timing.compute = percentiles(compute_s);
+  r.timing.compute_samples_s = std::move(compute_s);
   r.timing.overruns = overruns.total;
   r.timing.max_consecutive_overruns = overruns.max_consecutive;
   if (oracle) {

@@ -19,6 +19,7 @@
 #include <cstring>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/hil/log_records.hpp"
@@ -344,6 +345,8 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
   r.timing.simulated_s = static_cast<double>(ticks_run) * period;
   r.timing.compute = percentiles(compute_s);
   r.timing.period_jitter = percentiles(jitter_s);
+  r.timing.compute_samples_s = std::move(compute_s);
+  r.timing.period_jitter_samples_s = std::move(jitter_s);
   r.timing.overruns = overruns;
   r.timing.max_consecutive_overruns = max_consecutive;
   r.timing.search_s = search_s;

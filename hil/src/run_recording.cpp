@@ -59,6 +59,7 @@ const char* modeName(haptics::RenderMode mode) noexcept {
 std::uint32_t encodeInputFlags(const RecordedTick& tick, std::uint64_t previous_heartbeat) noexcept {
   std::uint32_t f = tick.sample.out_of_range_mask & kInputFlagOutOfRangeMask;
   if (!tick.device_status.ok()) f |= kInputFlagDeviceFault;
+  if ((tick.device_status.faults & kFaultLinkLost) != 0) f |= kInputFlagLinkLost;
   if (tick.requests.estop_command) f |= kInputFlagEstopCommand;
   if (tick.requests.estop_signal) f |= kInputFlagEstopSignal;
   if (tick.requests.reset_command) f |= kInputFlagReset;
@@ -97,7 +98,7 @@ RunRecorder::RunRecorder(const std::filesystem::path& file, const HilSession& se
              fileEntry("gains", o.gains_config),     fileEntry("haptics", o.haptics_config),
              fileEntry("hil", o.hil_config),         fileEntry("scene", o.scene),
              fileEntry("user", o.user)};
-  if (o.io != IoKind::kSim) h.files.push_back(fileEntry("daq", o.daq_config));
+  if (o.io == IoKind::kFakeDaq || o.io == IoKind::kComedi) h.files.push_back(fileEntry("daq", o.daq_config));
   h.num_files = static_cast<std::int16_t>(h.files.size());
   h.parameters = {parameter("duration_s", exact(o.duration_s)),
                   parameter("start_posture", o.start_posture),
@@ -237,6 +238,8 @@ RunOptions optionsFromHeader(const fullarm_lcm::run_header_t& h, const std::file
     o.io = IoKind::kFakeDaq;
   } else if (h.io == "comedi") {
     o.io = IoKind::kComedi;
+  } else if (h.io == "lcm") {
+    o.io = IoKind::kLcm;
   } else {
     throw core::ConfigError(log, "run header io", "unknown I/O back-end '" + h.io + "'");
   }
@@ -334,7 +337,8 @@ ReplayReport replayLog(const std::filesystem::path& log) {
     TickInputs in;
     in.sample = &sample;
     if ((flags & kInputFlagDeviceFault) != 0) {
-      in.device_status = core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead, "device read failed");
+      const std::uint32_t link = (flags & kInputFlagLinkLost) != 0 ? kFaultLinkLost : 0u;
+      in.device_status = core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead | link, "device read failed");
     }
     in.requests.estop_command = (flags & kInputFlagEstopCommand) != 0;
     in.requests.estop_signal = (flags & kInputFlagEstopSignal) != 0;

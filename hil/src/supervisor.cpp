@@ -47,6 +47,8 @@ const char* supervisorCauseName(SupervisorCause cause) noexcept {
       return "fresh global minima: contact forces restored";
     case SupervisorCause::kReset:
       return "reset by command";
+    case SupervisorCause::kCommunicationLost:
+      return "communication lost";
   }
   return "unknown";
 }
@@ -141,7 +143,10 @@ bool supervisorCheckInputs(const SupervisorModel& model, SupervisorData& data, s
       supervisorTrip(data, SupervisorCause::kHeartbeatLost, -1, t_s - data.heartbeat_changed_s);
     }
   }
-  if (!device_status.ok()) supervisorTrip(data, SupervisorCause::kDeviceFault, -1, 0.0);
+  if (!device_status.ok()) {
+    const bool link = (device_status.faults & kFaultLinkLost) != 0;
+    supervisorTrip(data, link ? SupervisorCause::kCommunicationLost : SupervisorCause::kDeviceFault, -1, 0.0);
+  }
 
   // The reading.
   bool valid = device_status.ok() && sample.q_rad.size() == model.n && sample.tau_load_cell_nm.size() == model.n;

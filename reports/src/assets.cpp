@@ -10,6 +10,7 @@
 
 FULLARM_REPORTS_ASSET(plotly_js)
 FULLARM_REPORTS_ASSET(report_js)
+FULLARM_REPORTS_ASSET(replay_js)
 FULLARM_REPORTS_ASSET(report_css)
 
 #undef FULLARM_REPORTS_ASSET
@@ -22,6 +23,10 @@ std::string_view plotlyJs() noexcept {
 
 std::string_view reportJs() noexcept {
   return {fullarm_reports_report_js, static_cast<std::size_t>(fullarm_reports_report_js_size)};
+}
+
+std::string_view replayJs() noexcept {
+  return {fullarm_reports_replay_js, static_cast<std::size_t>(fullarm_reports_replay_js_size)};
 }
 
 std::string_view reportCss() noexcept {

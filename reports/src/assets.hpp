@@ -11,6 +11,9 @@ namespace fullarm::reports::detail {
 std::string_view plotlyJs() noexcept;
 // reports/assets/report.js: draws every [data-chart] element.
 std::string_view reportJs() noexcept;
+// three.js and reports/assets/replay3d.js, bundled by esbuild: draws every [data-replay3d]
+// element (only inlined into reports that hold a 3D replay).
+std::string_view replayJs() noexcept;
 // reports/assets/report.css.
 std::string_view reportCss() noexcept;
 

@@ -73,6 +73,10 @@ std::string_view fullarmVersion() noexcept {
   return FULLARM_VERSION;
 }
 
+std::string_view threeVersion() noexcept {
+  return FULLARM_THREE_VERSION;
+}
+
 std::string_view plotlyVersion() noexcept {
   return FULLARM_PLOTLY_VERSION;
 }

@@ -8,6 +8,7 @@
 
 #include "assets.hpp"
 #include "figures.hpp"
+#include "replay3d_json.hpp"
 #include "text.hpp"
 
 namespace fullarm::reports::detail {
@@ -116,7 +117,26 @@ class PageBuilder {
 
   void block(const HeatMap& heat_map) { figure(heat_map.title, heatMapFigure(heat_map), heat_map.caption); }
 
+  void block(const Replay3d& replay) {
+    const std::string id = (Text() << "replay-" << replays_.size() + 1).str();
+    text("<figure class=\"replay3d-figure\">\n<h3>");
+    escaped(replay.title);
+    text((Text() << "</h3>\n<div class=\"replay3d\" id=\"" << id << "\" data-replay3d=\"" << id
+                 << "\" role=\"group\" aria-label=\"")
+             .str());
+    escaped(replay.title);
+    text("\"></div>\n");
+    if (!replay.caption.empty()) {
+      text("<figcaption>");
+      escaped(replay.caption);
+      text("</figcaption>\n");
+    }
+    text("</figure>\n");
+    replays_[id] = replayJson(replay);
+  }
+
   json takeCharts() { return std::move(charts_); }
+  json takeReplays() { return std::move(replays_); }
 
  private:
   void figure(const std::string& title, json plotly_figure, const std::string& caption) {
@@ -139,6 +159,7 @@ class PageBuilder {
 
   std::string& out_;
   json charts_ = json::object();
+  json replays_ = json::object();
 };
 
 // The caller has checked that the report has a verdict.
@@ -210,9 +231,15 @@ std::string renderHtml(const Report& report) {
       page.escaped(section.heading());
       page.text("</h2>\n");
     }
-    for (const Section::Block& block : section.blocks()) {
-      std::visit([&page](const auto& content) { page.block(content); }, block);
+    if (section.columns() > 1) {
+      page.text((Text() << "<div class=\"columns columns-" << section.columns() << "\">\n").str());
     }
+    for (const Section::Block& block : section.blocks()) {
+      if (section.columns() > 1) page.text("<div class=\"column-cell\">\n");
+      std::visit([&page](const auto& content) { page.block(content); }, block);
+      if (section.columns() > 1) page.text("</div>\n");
+    }
+    if (section.columns() > 1) page.text("</div>\n");
     page.text("</section>\n");
   }
   page.text("</main>\n");
@@ -233,11 +260,20 @@ std::string renderHtml(const Report& report) {
   page.escaped(report.subcommand());
   page.text("</code> on ");
   page.escaped(formatUtc(report.createdTime()));
+  const json charts = page.takeCharts();
+  const json replays = page.takeReplays();
+  const bool has_replay = !replays.empty();
   page.text(". Charts drawn with plotly.js ");
   page.escaped(plotlyVersion());
-  page.text(" (MIT licence), included in this file: it opens without a network.</p>\n</footer>\n");
+  if (has_replay) {
+    page.text(", the 3D replay with three.js ");
+    page.escaped(threeVersion());
+    page.text(" (both MIT licence), included");
+  } else {
+    page.text(" (MIT licence), included");
+  }
+  page.text(" in this file: it opens without a network.</p>\n</footer>\n");
 
-  const json charts = page.takeCharts();
   std::string html;
   html.reserve(body.size() + plotly.size() + 65536);
   html += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
@@ -256,10 +292,14 @@ std::string renderHtml(const Report& report) {
   html += body;
   html += "<noscript><p>The charts need JavaScript; the tables and numbers above do not.</p></noscript>\n";
   html += "<script type=\"application/json\" id=\"fullarm-report-data\">";
-  html += jsonForScript(json{{"charts", charts}});
+  html += jsonForScript(json{{"charts", charts}, {"replays", replays}});
   html += "</script>\n<script>\n";
   html += plotly;
   html += "\n</script>\n<script>\n";
+  if (has_replay) {
+    html += replayJs();
+    html += "\n</script>\n<script>\n";
+  }
   html += reportJs();
   html += "</script>\n</body>\n</html>\n";
   return html;

@@ -2,6 +2,7 @@
 
 #include <utility>
 
+#include "text.hpp"
 #include "validation.hpp"
 
 namespace fullarm::reports {
@@ -53,6 +54,21 @@ Section& Section::addHistogram(Histogram histogram) {
 Section& Section::addHeatMap(HeatMap heat_map) {
   detail::validateHeatMap(heat_map);
   blocks_.emplace_back(std::move(heat_map));
+  return *this;
+}
+
+Section& Section::setColumns(int columns) {
+  if (columns < 1 || columns > 4) {
+    detail::failInput(detail::describe("section", heading_), detail::Text()
+                                                                 << "columns is " << columns << " (expected 1 .. 4)");
+  }
+  columns_ = columns;
+  return *this;
+}
+
+Section& Section::addReplay3d(Replay3d replay) {
+  detail::validateReplay3d(replay);
+  blocks_.emplace_back(std::move(replay));
   return *this;
 }
 

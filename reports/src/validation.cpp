@@ -1,6 +1,7 @@
 #include "validation.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "text.hpp"
@@ -92,6 +93,82 @@ void validateTable(const Table& table) {
                              << table.columns.size() << ", one per column)");
     }
   }
+}
+
+namespace {
+
+void checkFinite(const std::string& what, const Text& where, double value) {
+  if (!std::isfinite(value)) failInput(what, Text() << where.str() << " is " << value << " (expected a finite number)");
+}
+
+}  // namespace
+
+void validateReplay3d(const Replay3d& replay) {
+  const std::string what = describe("3D replay", replay.title);
+  requireTitle(what, replay.title);
+  if (replay.links.empty()) failInput(what, Text() << "at least one link is required");
+  if (replay.frames.empty()) failInput(what, Text() << "at least one frame is required");
+  for (const ReplayLink& link : replay.links) {
+    if (!(std::isfinite(link.radius_m) && link.radius_m > 0.0)) {
+      failInput(what, Text() << "link \"" << link.name << "\" has radius " << link.radius_m
+                             << " m (expected a finite number > 0)");
+    }
+  }
+  if (!(std::isfinite(replay.torque_scale_nm) && replay.torque_scale_nm > 0.0)) {
+    failInput(what, Text() << "torque_scale_nm is " << replay.torque_scale_nm << " (expected a finite number > 0)");
+  }
+  if (!(std::isfinite(replay.force_scale_n) && replay.force_scale_n > 0.0)) {
+    failInput(what, Text() << "force_scale_n is " << replay.force_scale_n << " (expected a finite number > 0)");
+  }
+  for (const ReplayMesh& mesh : replay.meshes) {
+    for (std::size_t v = 0; v < mesh.vertices_m.size(); ++v) {
+      for (double c : mesh.vertices_m[v]) checkFinite(what, Text() << "mesh \"" << mesh.name << "\" vertex " << v, c);
+    }
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      for (std::uint32_t index : mesh.triangles[t]) {
+        if (index >= mesh.vertices_m.size()) {
+          failInput(what, Text() << "mesh \"" << mesh.name << "\" triangle " << t << " has vertex index "
+                                 << static_cast<std::size_t>(index) << " (expected < " << mesh.vertices_m.size()
+                                 << ")");
+        }
+      }
+    }
+  }
+  double previous_t_s = -std::numeric_limits<double>::infinity();
+  for (std::size_t f = 0; f < replay.frames.size(); ++f) {
+    const ReplayFrame& frame = replay.frames[f];
+    checkFinite(what, Text() << "frame " << f << " time", frame.t_s);
+    if (!(frame.t_s > previous_t_s)) {
+      failInput(what, Text() << "frame " << f << " time " << frame.t_s << " s does not follow " << previous_t_s
+                             << " s (expected strictly increasing times)");
+    }
+    previous_t_s = frame.t_s;
+    if (frame.segments_m.size() != replay.links.size() || frame.penetrating.size() != replay.links.size()) {
+      failInput(what, Text() << "frame " << f << " has " << frame.segments_m.size() << " segments and "
+                             << frame.penetrating.size() << " penetration flags (expected one per link, "
+                             << replay.links.size() << ")");
+    }
+    if (frame.torques_nm.size() != replay.joints.size()) {
+      failInput(what, Text() << "frame " << f << " has " << frame.torques_nm.size()
+                             << " torques (expected one per joint, " << replay.joints.size() << ")");
+    }
+    for (const std::array<double, 6>& segment : frame.segments_m) {
+      for (double c : segment) checkFinite(what, Text() << "frame " << f << " segment coordinate", c);
+    }
+    for (double tau : frame.torques_nm) checkFinite(what, Text() << "frame " << f << " torque", tau);
+    for (const ReplayMinimum& minimum : frame.minima) {
+      for (std::size_t a = 0; a < 3; ++a) {
+        checkFinite(what, Text() << "frame " << f << " minimum point", minimum.link_point_m[a]);
+        checkFinite(what, Text() << "frame " << f << " minimum point", minimum.object_point_m[a]);
+      }
+      if (!(std::isfinite(minimum.force_n) && minimum.force_n >= 0.0)) {
+        failInput(what, Text() << "frame " << f << " has a minimum with force " << minimum.force_n
+                               << " N (expected a finite number >= 0)");
+      }
+    }
+  }
+  for (const ReplayEvent& event : replay.events)
+    checkFinite(what, Text() << "event \"" << event.label << "\" time", event.t_s);
 }
 
 }  // namespace fullarm::reports::detail

@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "fullarm/reports/charts.hpp"
+#include "fullarm/reports/replay3d.hpp"
 #include "fullarm/reports/table.hpp"
 
 namespace fullarm::reports::detail {
@@ -15,5 +16,6 @@ namespace fullarm::reports::detail {
 void validateXyChart(const XyChart& chart, std::string_view kind);
 void validateHeatMap(const HeatMap& heat_map);
 void validateTable(const Table& table);
+void validateReplay3d(const Replay3d& replay);
 
 }  // namespace fullarm::reports::detail

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -51,6 +52,47 @@ TEST(RunCli, ALockstepRunWritesItsLogAndSummaryAndReplaysBitForBit) {
   std::ifstream(dir / "replay" / "summary.json") >> replay_summary;
   EXPECT_EQ(replay_summary["results"]["replay"]["ticks"], 1000);
   EXPECT_EQ(replay_summary["results"]["replay"]["valve_mismatches"], 0);
+}
+
+// The report's data block (the JSON script element of report.html).
+nlohmann::json reportData(const std::filesystem::path& html_file) {
+  std::ifstream in(html_file);
+  const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string start_tag = "<script type=\"application/json\" id=\"fullarm-report-data\">";
+  const std::size_t begin = html.find(start_tag);
+  if (begin == std::string::npos) return {};
+  const std::size_t from = begin + start_tag.size();
+  return nlohmann::json::parse(html.substr(from, html.find("</script>", from) - from));
+}
+
+TEST(RunCli, TheReplaysReportShowsTheRunAsTheRunsReportDoes) {
+  // A hand-only run whose hand is pulled through the truss: links penetrate.
+  const auto dir = fullarm::test::cliTempDir("run_cli", "replay3d");
+  const auto r = runFullarm("run --clock lockstep --duration 6 --mode hand-only --no-oracle --user " +
+                            source("tests/reports/data/user_through_truss.yaml") + " --out " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto replay = runFullarm("replay " + (dir / "run.lcmlog").string() + " --out " + (dir / "replay").string());
+  ASSERT_EQ(replay.exit_code, 0) << replay.output;
+  nlohmann::json run_summary;
+  nlohmann::json replay_summary;
+  std::ifstream(dir / "summary.json") >> run_summary;
+  std::ifstream(dir / "replay" / "summary.json") >> replay_summary;
+  const nlohmann::json& shown = run_summary["results"]["replay3d"];
+  EXPECT_EQ(shown["frames"], 150);
+  EXPECT_NEAR(shown["frame_rate_hz"].get<double>(), 25.0, 1e-9);
+  int penetrating = 0;
+  for (const auto& [link, t] : shown["first_penetration_s"].items()) penetrating += t.is_null() ? 0 : 1;
+  EXPECT_GT(penetrating, 0) << shown.dump();
+  EXPECT_EQ(replay_summary["results"]["replay3d"], shown);
+  // Read back from the log, every pose, penetration flag, torque, minimum and event is the
+  // run's own, to the bit.
+  const nlohmann::json from_run = reportData(dir / "report.html")["replays"]["replay-1"];
+  const nlohmann::json from_log = reportData(dir / "replay" / "report.html")["replays"]["replay-1"];
+  ASSERT_FALSE(from_run.is_null());
+  for (const char* key : {"t_f64", "segments_f32", "penetrating_u8", "torques_f32", "minima_offsets_u32", "minima_f32",
+                          "events", "links", "joints", "meshes", "torque_scale_nm", "force_scale_n"}) {
+    EXPECT_EQ(from_log[key], from_run[key]) << key;
+  }
 }
 
 TEST(RunCli, ARealTimeRunReportsItsTimingAndReplaysBitForBit) {

@@ -31,6 +31,11 @@ TEST(Realtime, RunsTheTickOnTheWallClockAndReplaysBitForBit) {
   EXPECT_GT(r.timing.wall_s, 1.9);
   EXPECT_GT(r.timing.compute.p50_s, 0.0);
   EXPECT_GE(r.timing.period_jitter.max_s, r.timing.period_jitter.p99_s);
+  // The per-tick samples behind the statistics (the report's timing histogram).
+  ASSERT_EQ(r.timing.compute_samples_s.size(), r.timing.ticks);
+  ASSERT_EQ(r.timing.period_jitter_samples_s.size(), r.timing.ticks);
+  EXPECT_EQ(percentiles(r.timing.compute_samples_s).p99_s, r.timing.compute.p99_s);
+  EXPECT_EQ(percentiles(r.timing.period_jitter_samples_s).max_s, r.timing.period_jitter.max_s);
   EXPECT_GE(r.timing.realtime_notes.size(), 3u);
   EXPECT_GT(r.timing.searches, 100u);
   EXPECT_GT(r.sets.size(), 100u);

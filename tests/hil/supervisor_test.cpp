@@ -213,6 +213,13 @@ TEST_F(SupervisorTest, OverrunAndDeviceFaultsTrip) {
   ASSERT_TRUE(run(20));
   EXPECT_FALSE(step(test::sampleAt(q_), {}, core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead, "x")));
   expectTrip(SupervisorCause::kDeviceFault, -1);
+
+  // A remote device's lost link is its own cause.
+  resetSupervisor(model_, data_, test::model().numJoints());
+  ASSERT_TRUE(run(20));
+  EXPECT_FALSE(step(test::sampleAt(q_), {},
+                    core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead | kFaultLinkLost, "x")));
+  expectTrip(SupervisorCause::kCommunicationLost, -1);
 }
 
 TEST_F(SupervisorTest, StaleMinimaFadeTheContactTorquesWithinTheRateBound) {

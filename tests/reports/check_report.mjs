@@ -1,17 +1,27 @@
 // Opens a fullarm report.html in headless Chromium and checks that it works from disk alone.
 //
 // Usage: node tests/reports/check_report.mjs <report.html> <screenshot.png> [--min-charts N]
+//          [--min-replays N] [--summary summary.json [--expect-penetration]]
 //
 // Fails (exit status 1) on any console error or page error, on any request that is not a
 // file: or data: URL, if a [data-chart] element does not reach data-rendered="true" within
 // 30 s, or if a chart's SVG holds no plotted content; exit status 2 on bad usage. Saves a
 // full-page screenshot either way. Environment: FULLARM_CHROMIUM overrides /usr/bin/chromium.
 //
+// 3D replays ([data-replay3d], drawn with WebGL: headless Chromium has no GPU here and draws
+// with SwiftShader): each must render, its canvas must not be blank (a pixel count), and
+// moving its time slider from the first to the last frame must change the picture (two
+// screenshots of the replay, saved beside <screenshot.png>, must differ). With --summary, the
+// report's summary.json names, per link, the time of its first penetration
+// (results.replay3d.first_penetration_s): at the frame holding that time the page's own state
+// must show the link penetrating and drawn in the penetration colour, and one frame earlier
+// not; --expect-penetration fails when no link penetrates at all.
+//
 // Chromium is driven through the DevTools protocol over a pipe (--remote-debugging-pipe: JSON
 // messages separated by NUL bytes on file descriptors 3 and 4), with Node's standard library
 // alone: no npm package, and any Node.js from 18 on (Debian 12's own).
 import { spawn } from "node:child_process";
-import { mkdtemp, rm, mkdir, writeFile } from "node:fs/promises";
+import { mkdtemp, rm, mkdir, writeFile, readFile } from "node:fs/promises";
 import { existsSync } from "node:fs";
 import { tmpdir } from "node:os";
 import path from "node:path";
@@ -29,11 +39,22 @@ function usage(message) {
 
 const args = process.argv.slice(2);
 let minCharts = 1;
+let minReplays = 0;
+let summaryPath = null;
+let expectPenetration = false;
 const positional = [];
 for (let i = 0; i < args.length; ++i) {
   if (args[i] === "--min-charts") {
     minCharts = Number.parseInt(args[++i], 10);
     if (!Number.isInteger(minCharts) || minCharts < 0) usage("--min-charts needs a count");
+  } else if (args[i] === "--min-replays") {
+    minReplays = Number.parseInt(args[++i], 10);
+    if (!Number.isInteger(minReplays) || minReplays < 0) usage("--min-replays needs a count");
+  } else if (args[i] === "--summary") {
+    summaryPath = args[++i];
+    if (!summaryPath) usage("--summary needs a path");
+  } else if (args[i] === "--expect-penetration") {
+    expectPenetration = true;
   } else {
     positional.push(args[i]);
   }
@@ -128,6 +149,138 @@ async function evaluate(browser, sessionId, expression) {
   return result.value;
 }
 
+// Pixels of a replay's canvas that are not background white, and a sample of distinct colours.
+function canvasPixelsExpression(id) {
+  return `(() => {
+    const canvas = document.querySelector('[data-replay3d="${id}"] canvas');
+    const copy = document.createElement("canvas");
+    copy.width = canvas.width;
+    copy.height = canvas.height;
+    const context = copy.getContext("2d");
+    context.drawImage(canvas, 0, 0);
+    const data = context.getImageData(0, 0, copy.width, copy.height).data;
+    let drawn = 0;
+    let hash = 0;
+    const colours = new Set();
+    for (let i = 0; i < data.length; i += 4) {
+      if (data[i] < 245 || data[i + 1] < 245 || data[i + 2] < 245) ++drawn;
+      if (i % 256 === 0) colours.add((data[i] << 16) | (data[i + 1] << 8) | data[i + 2]);
+      hash = (hash * 31 + data[i] + 7 * data[i + 1] + 13 * data[i + 2]) >>> 0;
+    }
+    return { drawn, total: data.length / 4, colours: colours.size, hash };
+  })()`;
+}
+
+// Moves replay `id`'s slider to `frame` the way a user does (value, then an input event).
+function moveSliderExpression(id, frame) {
+  return `(() => {
+    const slider = document.querySelector('[data-replay3d="${id}"] input[type=range]');
+    slider.value = String(${frame});
+    slider.dispatchEvent(new Event("input", { bubbles: true }));
+    return window.fullarmReplays["${id}"].state().frame;
+  })()`;
+}
+
+async function screenshotOf(browser, sessionId, id, file) {
+  const rect = await evaluate(browser, sessionId, `(() => {
+      const element = document.querySelector('[data-replay3d="${id}"]');
+      element.scrollIntoView();
+      const r = element.getBoundingClientRect();
+      return { x: r.left + window.scrollX, y: r.top + window.scrollY, width: r.width, height: r.height };
+    })()`);
+  const { data } = await browser.send("Page.captureScreenshot", {
+    format: "png", captureBeyondViewport: true, clip: { ...rect, scale: 1 } }, sessionId);
+  const bytes = Buffer.from(data, "base64");
+  await mkdir(path.dirname(file), { recursive: true });
+  await writeFile(file, bytes);
+  return bytes;
+}
+
+async function checkReplays(browser, sessionId) {
+  const ids = await evaluate(browser, sessionId,
+                             `[...document.querySelectorAll("[data-replay3d]")].map((e) => e.dataset.replay3d)`);
+  if (ids.length < minReplays) problems.push(`found ${ids.length} 3D replays, expected at least ${minReplays}`);
+  if (ids.length === 0) {
+    if (summaryPath) problems.push("--summary given but the report holds no 3D replay");
+    return;
+  }
+  await evaluate(browser, sessionId, `new Promise((resolve) => {
+      const start = performance.now();
+      const poll = () => {
+        const all = [...document.querySelectorAll("[data-replay3d]")];
+        if (all.every((element) => element.hasAttribute("data-rendered"))) return resolve(true);
+        if (performance.now() - start > ${kRenderTimeoutMs}) return resolve(false);
+        setTimeout(poll, 50);
+      };
+      poll();
+    })`);
+  let firstPenetration = {};
+  if (summaryPath) {
+    const summary = JSON.parse(await readFile(summaryPath, "utf8"));
+    firstPenetration = summary?.results?.replay3d?.first_penetration_s ?? {};
+  }
+  const base = screenshotPath.replace(/\.png$/, "");
+  for (const id of ids) {
+    const rendered = await evaluate(browser, sessionId,
+                                    `document.querySelector('[data-replay3d="${id}"]').getAttribute("data-rendered")`);
+    if (rendered !== "true") {
+      problems.push(`replay ${id}: data-rendered=${rendered}`);
+      continue;
+    }
+    const state = await evaluate(browser, sessionId, `window.fullarmReplays["${id}"].state()`);
+    await evaluate(browser, sessionId, moveSliderExpression(id, 0));
+    const first = await evaluate(browser, sessionId, canvasPixelsExpression(id));
+    if (first.drawn < 0.01 * first.total || first.colours < 3) {
+      problems.push(`replay ${id}: the canvas is blank (${first.drawn} of ${first.total} pixels drawn, ` +
+                    `${first.colours} colours)`);
+    }
+    const shotA = await screenshotOf(browser, sessionId, id, `${base}-${id}-first.png`);
+    const last = await evaluate(browser, sessionId, moveSliderExpression(id, state.frameCount - 1));
+    if (last !== state.frameCount - 1) problems.push(`replay ${id}: the slider moved to frame ${last}, not the last`);
+    const moved = await evaluate(browser, sessionId, canvasPixelsExpression(id));
+    const shotB = await screenshotOf(browser, sessionId, id, `${base}-${id}-last.png`);
+    if (shotA.equals(shotB)) problems.push(`replay ${id}: moving the slider did not change the screenshot`);
+    if (moved.hash === first.hash) problems.push(`replay ${id}: moving the slider did not change the canvas`);
+    console.log(`check_report: replay ${id}: ${state.frameCount} frames, ${first.drawn} of ${first.total} ` +
+                `pixels drawn; screenshots ${base}-${id}-first.png, ${base}-${id}-last.png`);
+
+    const penetrating = Object.entries(firstPenetration).filter(([, t]) => t !== null);
+    if (summaryPath && expectPenetration && penetrating.length === 0) {
+      problems.push(`replay ${id}: no link penetrates in ${summaryPath} (results.replay3d.first_penetration_s)`);
+    }
+    for (const [name, t] of penetrating) {
+      const link = state.links.indexOf(name);
+      if (link < 0) {
+        problems.push(`replay ${id}: link ${name} of the summary is not in the replay`);
+        continue;
+      }
+      const frame = state.times.findIndex((time) => time >= t - 1e-9);
+      if (frame < 0) {
+        problems.push(`replay ${id}: no frame at or after ${name}'s first penetration at ${t} s`);
+        continue;
+      }
+      await evaluate(browser, sessionId, moveSliderExpression(id, frame));
+      const at = await evaluate(browser, sessionId, `window.fullarmReplays["${id}"].state()`);
+      if (!at.penetrating[link] || at.linkColors[link] !== at.penetratingColor) {
+        problems.push(`replay ${id}: at ${at.t_s} s (frame ${frame}) ${name} penetrates from ${t} s but is drawn ` +
+                      `${at.linkColors[link]} (penetrating flag ${at.penetrating[link]}, expected ` +
+                      `${at.penetratingColor})`);
+      }
+      await screenshotOf(browser, sessionId, id, `${base}-${id}-${name}-penetrating.png`);
+      if (frame > 0) {
+        await evaluate(browser, sessionId, moveSliderExpression(id, frame - 1));
+        const before = await evaluate(browser, sessionId, `window.fullarmReplays["${id}"].state()`);
+        if (before.penetrating[link] || before.linkColors[link] === before.penetratingColor) {
+          problems.push(`replay ${id}: at ${before.t_s} s, before its first penetration at ${t} s, ${name} is ` +
+                        `drawn in the penetration colour`);
+        }
+      }
+      console.log(`check_report: replay ${id}: ${name} penetrates from ${t} s, drawn ${at.linkColors[link]} ` +
+                  `in frame ${frame} (${at.t_s} s)`);
+    }
+  }
+}
+
 const problems = [];
 const userDataDir = await mkdtemp(path.join(tmpdir(), "fullarm-check-report-"));
 let child;
@@ -137,6 +290,9 @@ try {
     "--headless",
     "--no-sandbox",
     "--disable-gpu",
+    // WebGL without a GPU: SwiftShader, the software renderer Chromium ships.
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
     "--disable-quic",
     "--no-first-run",
     "--no-default-browser-check",
@@ -254,6 +410,8 @@ try {
     if (!chart.hasSvg) problems.push(`chart ${chart.id}: no SVG`);
     else if (chart.drawn === 0) problems.push(`chart ${chart.id}: SVG has no plotted content`);
   }
+
+  await checkReplays(browser, sessionId);
 
   // The page must open with its verdict.
   const headline = await evaluate(browser, sessionId,

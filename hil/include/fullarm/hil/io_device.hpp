@@ -40,6 +40,7 @@ enum HilFault : std::uint32_t {
   kFaultDeviceWrite = 1u << 17,   ///< the device could not write its outputs
   kFaultDeviceState = 1u << 18,   ///< read or write in a lifecycle state that does not allow it
   kFaultDeviceLatched = 1u << 19, ///< the device was put in its fault state (fault())
+  kFaultLinkLost = 1u << 20,      ///< a remote device's node stopped answering (lcm_io.hpp)
 };
 
 /// A device that cannot be opened or does not match its channel map (a missing board, a channel
@@ -136,6 +137,9 @@ class IoDevice {
 
  protected:
   IoDevice(arm::JointSelection joints, double period_s, const IoSafetyParams& safety);
+  /// The plant node serves a remote device's back-end directly: the lifecycle and the safety
+  /// policy already ran on the remote side (lcm_io.hpp).
+  friend class LcmPlantNode;
 
   /// Back-end hooks. onConfigure may throw; the others must not.
   virtual void onConfigure() = 0;

@@ -38,7 +38,8 @@
 namespace fullarm::hil {
 
 /// Which I/O back-end drives the run.
-enum class IoKind { kSim, kFakeDaq, kComedi };
+/// kLcm: remote I/O, the device's back-end in a plant node in another process (lcm_io.hpp).
+enum class IoKind { kSim, kFakeDaq, kComedi, kLcm };
 /// Which clock drives the run.
 enum class ClockKind { kLockstep, kRealtime };
 
@@ -67,6 +68,12 @@ struct RunOptions {
   /// sim: read and write through the channel map's converters and calibrations (those of the
   /// fake DAQ), for a bit-for-bit comparison of the two back-ends.
   bool sim_uses_daq_converters = false;
+  /// lcm: the LCM URL shared with the plant node (empty: kDefaultLcmUrl, which stays on this
+  /// machine).
+  std::string lcm_url;
+  /// Lockstep: the global search runs in a global node (`fullarm global`, lcm_search.hpp)
+  /// reached over this LCM URL (empty: in this process).
+  std::string search_url;
   /// The run's LCM log (empty: none) and the command line its header records.
   std::filesystem::path log;
   std::string command_line;
@@ -100,6 +107,8 @@ struct RunTiming {
   double simulated_s = 0.0;       ///< ticks x period
   Percentiles compute;            ///< per tick: read, tick, write (and the lockstep search)
   Percentiles period_jitter;      ///< real time: |wake-up - deadline|
+  std::vector<double> compute_samples_s;        ///< per tick: the samples of `compute`
+  std::vector<double> period_jitter_samples_s;  ///< real time, per tick: the samples of `period_jitter`
   std::uint64_t overruns = 0;     ///< ticks that ended after the next deadline
   int max_consecutive_overruns = 0;
   // Lockstep breakdown of the wall time [s].

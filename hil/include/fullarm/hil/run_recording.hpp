@@ -33,6 +33,7 @@ inline constexpr std::uint32_t kInputFlagReset = 1u << 19;
 inline constexpr std::uint32_t kInputFlagOverrunFault = 1u << 20;
 inline constexpr std::uint32_t kInputFlagHeartbeatWatched = 1u << 21;
 inline constexpr std::uint32_t kInputFlagHeartbeatBeat = 1u << 22;  ///< the heartbeat changed at this tick
+inline constexpr std::uint32_t kInputFlagLinkLost = 1u << 23;  ///< the failed read was a lost link (kFaultLinkLost)
 
 /// The flags of one tick's inputs; `previous_heartbeat` is the last tick's counter. @rt
 [[nodiscard]] std::uint32_t encodeInputFlags(const RecordedTick& tick, std::uint64_t previous_heartbeat) noexcept;

@@ -74,6 +74,7 @@ enum class SupervisorCause : std::uint8_t {
   kMinimaStale,        ///< (event) the global minima went stale: the contact forces fade
   kMinimaFresh,        ///< (event) a new minima set arrived: the contact forces come back
   kReset,              ///< (event) reset by command
+  kCommunicationLost,  ///< the link to a remote I/O node is lost (the device's kFaultLinkLost)
 };
 
 /// Name of a cause ("sensor NaN", ...). @rt

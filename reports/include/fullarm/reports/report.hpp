@@ -41,6 +41,10 @@ std::string_view fullarmVersion() noexcept;
 /// The version of the plotly.js library inlined into every report.html, e.g. "4.1.2".
 std::string_view plotlyVersion() noexcept;
 
+/// The version of the three.js library inlined into a report.html that holds a 3D replay,
+/// e.g. "0.180.0".
+std::string_view threeVersion() noexcept;
+
 /// The pass/fail outcome of a subcommand.
 struct Verdict {
   bool pass = false;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fullarm/reports/charts.hpp"
+#include "fullarm/reports/replay3d.hpp"
 #include "fullarm/reports/table.hpp"
 
 namespace fullarm::reports {
@@ -32,7 +33,7 @@ struct ScatterChart {
 class Section {
  public:
   /// One piece of content.
-  using Block = std::variant<Paragraph, Table, LineChart, ScatterChart, Histogram, HeatMap>;
+  using Block = std::variant<Paragraph, Table, LineChart, ScatterChart, Histogram, HeatMap, Replay3d>;
 
   /// A section with the given heading (may be empty: no heading is shown).
   explicit Section(std::string heading);
@@ -65,6 +66,23 @@ class Section {
   ///   `y.size()` rows by `x.size()` columns, or a z value is infinite.
   Section& addHeatMap(HeatMap heat_map);
 
+  /// Appends a 3D replay (drawn with the inlined three.js; see replay3d.hpp).
+  /// @throws std::invalid_argument naming the replay title if the title is empty, there is no
+  ///   link or no frame, a link radius or a scale is not a finite positive number, frame times
+  ///   are not finite and strictly increasing, a frame does not hold one segment and one
+  ///   penetration flag per link and one torque per joint, a triangle index is out of range,
+  ///   or a coordinate, torque or force is not finite (or a force is negative).
+  Section& addReplay3d(Replay3d replay);
+
+  /// Lays the section's blocks out in `columns` side-by-side columns (1, the default: one
+  /// below the other), filled row by row: with 2, blocks 1 and 2 share the first row, 3 and 4
+  /// the second, ... (for example a full-arm and a hand-only run side by side). Narrow
+  /// windows and print fall back to one column.
+  /// @throws std::invalid_argument naming the heading if `columns` is not 1 .. 4
+  Section& setColumns(int columns);
+  /// Number of columns (see setColumns()).
+  int columns() const noexcept { return columns_; }
+
   /// The heading.
   const std::string& heading() const noexcept { return heading_; }
   /// The content, in the order added.
@@ -73,6 +91,7 @@ class Section {
  private:
   std::string heading_;
   std::vector<Block> blocks_;
+  int columns_ = 1;
 };
 
 }  // namespace fullarm::reports

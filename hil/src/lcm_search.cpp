@@ -1,0 +1,189 @@
+#include "fullarm/hil/lcm_search.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+
+#include "fullarm/hil/io_device.hpp"
+#include "lcm_subscribe.hpp"
+
+namespace fullarm::hil {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+Clock::time_point after(double s) {
+  return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
+int millisUntil(Clock::time_point deadline) {
+  const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+  return static_cast<int>(std::clamp<long long>(left, 0, 1000)) + 1;
+}
+
+std::string seconds(double s) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g s", s);
+  return text;
+}
+
+}  // namespace
+
+// --- the tick's side ---------------------------------------------------------------------------
+
+LcmSearchClient::LcmSearchClient(const std::string& url, double connect_timeout_s, double reply_timeout_s)
+    : lcm_(std::make_unique<lcm::LCM>(url)), reply_timeout_s_(reply_timeout_s) {
+  if (!lcm_->good()) throw DeviceError("remote search: cannot open the LCM URL " + url);
+  LcmReceiverOptions o;
+  o.minima_set = true;
+  o.heartbeat = true;
+  receiver_ = std::make_unique<LcmReceiver>(*lcm_, o);
+  const auto deadline = after(connect_timeout_s);
+  while (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0 && Clock::now() < deadline) {
+    receiver_->drainWait(static_cast<double>(millisUntil(deadline)) * 1e-3);
+  }
+  if (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0) {
+    throw DeviceError("remote search: no global node answered on " + url + " within " + seconds(connect_timeout_s) +
+                      " (start `fullarm global` with the same --lcm-url)");
+  }
+}
+
+LcmSearchClient::~LcmSearchClient() = default;
+
+void LcmSearchClient::query(std::int64_t set_id, std::uint64_t tick, const Eigen::VectorXd& q) {
+  JointStateRecord r;
+  r.utime_us = 0;
+  r.seq = set_id;
+  r.tick = static_cast<std::int64_t>(tick);
+  r.num_joints = static_cast<int>(std::min<Eigen::Index>(q.size(), kMaxRecordJoints));
+  for (int j = 0; j < r.num_joints; ++j) r.q_rad[static_cast<std::size_t>(j)] = q[j];
+  encodeMessage(toMessage(r), buffer_);
+  (void)lcm_->publish(channel::kSearchQuery, buffer_.data(), static_cast<unsigned int>(buffer_.size()));
+  ++counters_.queries;
+}
+
+bool LcmSearchClient::await(std::int64_t set_id, std::uint64_t query_tick, std::vector<haptics::LocalMinimum>& minima,
+                            int& found) {
+  // Each handled message is checked at once: a set completes on one fragment, so no set is
+  // lost behind a newer one even when several are waiting.
+  const auto deadline = after(lost_ ? 0.0 : reply_timeout_s_);
+  const std::uint64_t beats_before = receiver_->heartbeatsFrom(NodeKind::kGlobal);
+  for (;;) {
+    const int wait_ms = lost_ ? 0 : millisUntil(deadline);
+    if (lcm_->handleTimeout(wait_ms) <= 0) {
+      if (lost_ || Clock::now() >= deadline) break;
+      continue;
+    }
+    if (receiver_->heartbeatsFrom(NodeKind::kGlobal) != beats_before) lost_ = false;
+    const MinimaSetRecord* s = receiver_->takeMinimaSet();
+    if (s == nullptr) {
+      // The node answered this query or a later one, and the set is not whole: lost.
+      const HeartbeatRecord* h = receiver_->lastHeartbeat(NodeKind::kGlobal);
+      if (h != nullptr && h->tick >= static_cast<std::int64_t>(query_tick)) break;
+      continue;
+    }
+    if (s->set_id < set_id) continue;
+    if (s->set_id > set_id) break;  // ours was lost on the way
+    minima.clear();
+    minima.reserve(static_cast<std::size_t>(s->num_minima));
+    for (int i = 0; i < s->num_minima; ++i) minima.push_back(toLocalMinimum(s->minima[static_cast<std::size_t>(i)]));
+    found = s->num_minima + s->num_minima_dropped;
+    ++counters_.sets;
+    return true;
+  }
+  ++counters_.missed;
+  if (receiver_->heartbeatsFrom(NodeKind::kGlobal) == beats_before && Clock::now() >= deadline) lost_ = true;
+  return false;
+}
+
+// --- the global node ---------------------------------------------------------------------------
+
+LcmGlobalNode::LcmGlobalNode(GlobalSearchRunner& search, int num_config, GlobalNodeOptions options)
+    : search_(search), num_config_(num_config), options_(std::move(options)) {}
+
+GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
+  GlobalNodeResult result;
+  lcm::LCM rx(options_.url);
+  lcm::LCM tx(options_.url);
+  if (!rx.good() || !tx.good()) throw DeviceError("global node: cannot open the LCM URL " + options_.url);
+  const auto start = Clock::now();
+  auto log = [&](const std::string& what) {
+    char stamp[32];
+    std::snprintf(stamp, sizeof stamp, "%.3f s: ", std::chrono::duration<double>(Clock::now() - start).count());
+    result.log.push_back(stamp + what);
+    if (options_.on_log) options_.on_log(result.log.back());
+  };
+
+  struct Sink {
+    JointStateRecord query;
+    bool have = false;
+    std::uint64_t* rejected = nullptr;
+    void onMessage(std::span<const std::uint8_t> bytes, const char* /*channel*/) {
+      have = decodeChecked(bytes, query) == DecodeStatus::kOk;
+      if (!have) ++*rejected;
+    }
+  } sink;
+  sink.rejected = &result.rejected;
+  lcm_subscription_t* sub = detail::subscribeRaw(rx, channel::kSearchQuery, &sink, 256);
+  if (sub == nullptr) throw DeviceError("global node: cannot subscribe on " + options_.url);
+
+  LcmPublisherOptions po;
+  po.node = NodeKind::kGlobal;
+  po.heartbeat_period_s = options_.heartbeat_period_s;
+  po.drop = options_.drop;
+  LcmPublisher publisher(tx, po);
+  log("serving the global search on " + options_.url);
+
+  auto set = std::make_unique<MinimaSetRecord>();
+  std::vector<haptics::LocalMinimum> minima;
+  Eigen::VectorXd q(num_config_);
+  std::int64_t last_id = -1;
+  auto last_query = Clock::now();
+  bool queried = false;
+  const auto idle = std::chrono::duration<double>(options_.idle_exit_s);
+  for (;;) {
+    if (stop && stop()) break;
+    if (options_.idle_exit_s > 0.0 && Clock::now() - last_query > idle) {
+      log(queried ? "no query for " + seconds(options_.idle_exit_s) + ": stopped"
+                  : "no tick connected within " + seconds(options_.idle_exit_s) + ": stopped");
+      break;
+    }
+    sink.have = false;
+    if (rx.handleTimeout(5) <= 0 || !sink.have) continue;
+    const JointStateRecord& query = sink.query;
+    if (query.seq <= last_id) {
+      ++result.stale;
+      continue;
+    }
+    if (query.num_joints != num_config_) {
+      ++result.rejected;
+      log("a query with " + std::to_string(query.num_joints) + " joint angles ignored: the arm model has " +
+          std::to_string(num_config_));
+      continue;
+    }
+    if (!queried) log("first query");
+    queried = true;
+    last_query = Clock::now();
+    last_id = query.seq;
+    for (int j = 0; j < num_config_; ++j) q[j] = query.q_rad[static_cast<std::size_t>(j)];
+    const int found = search_.run(q, minima);
+    set->utime_us = query.utime_us;
+    set->seq = query.seq;
+    set->set_id = query.seq;
+    set->computed_tick = query.tick;
+    set->computed_utime_us = query.utime_us;
+    set->adopted_tick = -1;
+    set->num_joints = num_config_;
+    set->q_rad = query.q_rad;
+    fillMinima(minima, *set);
+    set->num_minima_dropped = found - set->num_minima;
+    while (!publisher.pushMinimaSet(*set)) publisher.flush();  // answer every query, in order
+    publisher.setNodeState(query.tick, false);
+    ++result.queries;
+  }
+  publisher.stop();
+  lcm_unsubscribe(rx.getUnderlyingLCM(), sub);
+  return result;
+}
+
+}  // namespace fullarm::hil

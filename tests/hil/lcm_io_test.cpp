@@ -1,0 +1,416 @@
+// Remote I/O over LCM udpm, inside a private network namespace the test makes (loopback only:
+// nothing can leave the process's own namespace). The plant node serves from a thread with its
+// own LCM instances, exactly as it would from another process. A lockstep run over the remote
+// device equals the in-process run bit for bit; the plant node's watchdog puts out the safe
+// output when commands stop; a read without an answer faults the device.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <fstream>
+#include <thread>
+
+#include "fullarm/hil/lcm_io.hpp"
+#include "fullarm/hil/lcm_search.hpp"
+#include "fullarm/hil/run.hpp"
+#include "fullarm/hil/sim_io.hpp"
+#include "hil_fixture.hpp"
+#include "private_network.hpp"
+#include "run_fixture.hpp"
+#include "scratch_dir.hpp"
+
+namespace fullarm::hil {
+namespace {
+
+// A group other than the default, so a stray node elsewhere could not answer even outside the
+// namespace.
+constexpr const char* kUrl = "udpm://239.255.76.99:7699?ttl=0";
+
+class LcmIo : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const std::string error = test::enterPrivateNetwork();
+    ASSERT_EQ(error, "") << "the test needs a private network namespace (unshare) and could not make one";
+  }
+};
+
+template <std::size_t N>
+bool sameBits(const std::array<double, N>& a, const std::array<double, N>& b) {
+  return std::memcmp(a.data(), b.data(), sizeof(double) * N) == 0;
+}
+
+/// The hand held against the valve wheel: in contact after the start-up.
+RunOptions holdAtTheWheel(double duration_s) {
+  const auto dir = fullarm::test::scratchDir("hil_lcm_io");
+  {
+    std::ofstream user(dir / "hold.yaml");
+    user << "schema_version: 1\nname: hold\narm_impedance: {stiffness_npm: 300.0, damping_nspm: 30.0}\n"
+            "push_force_n: 15.0\nhand_path:\n  - {t_s: 0.0, hand_m: [0.101, 0.568, 1.251]}\n";
+  }
+  RunOptions o = test::shippedRun(duration_s);
+  o.oracle = false;
+  o.start_posture = "reach_valve";
+  o.user = dir / "hold.yaml";
+  return o;
+}
+
+/// Forces, torques, valve commands and readings of two runs, bit for bit.
+void expectSameRun(const RunResult& in_process, const RunResult& remote) {
+  ASSERT_EQ(in_process.telemetry.size(), remote.telemetry.size());
+  bool driven = false;
+  bool touched = false;
+  for (std::size_t k = 0; k < remote.telemetry.size(); ++k) {
+    const TickTelemetry& a = in_process.telemetry[k];
+    const TickTelemetry& b = remote.telemetry[k];
+    ASSERT_EQ(std::memcmp(&a.sample_t_s, &b.sample_t_s, sizeof(double)), 0) << "tick " << k + 1;
+    ASSERT_TRUE(sameBits(a.q_rad, b.q_rad)) << "tick " << k + 1;
+    ASSERT_TRUE(sameBits(a.tau_load_cell_nm, b.tau_load_cell_nm)) << "tick " << k + 1;
+    ASSERT_TRUE(sameBits(a.valve_v, b.valve_v)) << "tick " << k + 1;
+    ASSERT_TRUE(sameBits(a.tau_contact_nm, b.tau_contact_nm)) << "tick " << k + 1;
+    for (std::size_t l = 0; l < a.link_force_W_n.size(); ++l) {
+      ASSERT_TRUE(sameBits(a.link_force_W_n[l], b.link_force_W_n[l])) << "tick " << k + 1 << " link " << l;
+    }
+    ASSERT_EQ(a.minima_set_id, b.minima_set_id) << "tick " << k + 1;
+    for (const double v : a.valve_v) driven = driven || v != 0.0;
+    for (const double t : a.tau_contact_nm) touched = touched || t != 0.0;
+  }
+  EXPECT_TRUE(driven);
+  EXPECT_TRUE(touched) << "the scenario should bring the arm into contact";
+  EXPECT_EQ(in_process.tripped, remote.tripped);
+}
+
+/// A global node serving the search from a thread, built from a run's files.
+struct GlobalThread {
+  GlobalThread(const RunOptions& options, GlobalNodeOptions node_options)
+      : session(options, false),
+        search(session.model(), session.world(), session.hapticsParams()),
+        node(search, session.model().numJoints(), std::move(node_options)) {
+    thread = std::thread([this] { result = node.serve([this] { return stop.load(); }); });
+  }
+  ~GlobalThread() { join(); }
+  void join() {
+    stop = true;
+    if (thread.joinable()) thread.join();
+  }
+  HilSession session;
+  GlobalSearchRunner search;
+  LcmGlobalNode node;
+  std::atomic<bool> stop{false};
+  GlobalNodeResult result;
+  std::thread thread;
+};
+
+TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
+  RunOptions local = holdAtTheWheel(1.5);
+  const RunResult in_process = runHil(local);
+
+  RunOptions plant_options = local;  // the plant node's session: the same files and seed
+  HilSession plant(plant_options);
+  PlantNodeOptions node_options;
+  node_options.url = kUrl;
+  node_options.idle_exit_s = 20.0;
+  LcmPlantNode node(plant.device(), node_options);
+  std::atomic<bool> stop{false};
+  PlantNodeResult served;
+  std::thread plant_thread([&] { served = node.serve([&] { return stop.load(); }); });
+
+  local.io = IoKind::kLcm;
+  local.lcm_url = kUrl;
+  RunResult remote;
+  try {
+    remote = runHil(local);
+  } catch (...) {
+    stop = true;
+    plant_thread.join();
+    throw;
+  }
+  stop = true;
+  plant_thread.join();
+
+  EXPECT_EQ(remote.io_name, "lcm");
+  EXPECT_EQ(served.commands, remote.telemetry.size());
+  expectSameRun(in_process, remote);
+}
+
+PlantNodeOptions plantOptions() {
+  PlantNodeOptions o;
+  o.url = kUrl;
+  o.idle_exit_s = 20.0;
+  return o;
+}
+
+GlobalNodeOptions globalOptions() {
+  GlobalNodeOptions o;
+  o.url = kUrl;
+  o.idle_exit_s = 20.0;
+  o.heartbeat_period_s = 0.01;
+  return o;
+}
+
+TEST_F(LcmIo, ThreeNodesInLockstepEqualTheInProcessRunBitForBit) {
+  RunOptions local = holdAtTheWheel(1.5);
+  const RunResult in_process = runHil(local);
+
+  HilSession plant(local);
+  LcmPlantNode plant_node(plant.device(), plantOptions());
+  std::atomic<bool> stop{false};
+  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  RunResult remote;
+  {
+    GlobalThread global(local, globalOptions());
+    local.io = IoKind::kLcm;
+    local.lcm_url = kUrl;
+    local.search_url = kUrl;
+    try {
+      remote = runHil(local);
+    } catch (...) {
+      stop = true;
+      plant_thread.join();
+      throw;
+    }
+    global.join();
+    EXPECT_EQ(global.result.queries, in_process.sets.size());
+  }
+  stop = true;
+  plant_thread.join();
+
+  ASSERT_EQ(in_process.sets.size(), remote.sets.size());
+  for (std::size_t i = 0; i < remote.sets.size(); ++i) {
+    EXPECT_EQ(in_process.sets[i].adopted_tick, remote.sets[i].adopted_tick) << "set " << i;
+    if (remote.sets[i].adopted_tick < 0) continue;  // queried near the end, never delivered
+    EXPECT_EQ(in_process.sets[i].found, remote.sets[i].found) << "set " << i;
+    EXPECT_EQ(in_process.sets[i].minima.size(), remote.sets[i].minima.size()) << "set " << i;
+  }
+  expectSameRun(in_process, remote);
+}
+
+TEST_F(LcmIo, TheGlobalNodeStoppedMidContactFadesTheForcesWithinTheRate) {
+  RunOptions local = holdAtTheWheel(2.0);
+  const auto maxContact = [](const TickTelemetry& t) {
+    double m = 0.0;
+    for (int l = 0; l < t.num_config; ++l) m = std::max(m, std::abs(t.tau_contact_nm[static_cast<std::size_t>(l)]));
+    return m;
+  };
+  // The in-process run finds a tick in contact after the start-up; the global node stops there.
+  std::uint64_t stall = 0;
+  {
+    const RunResult probe = runHil(local);
+    for (std::size_t k = 700; k < probe.telemetry.size() && stall == 0; ++k) {
+      if (maxContact(probe.telemetry[k]) > 2.0) stall = k + 1;
+    }
+  }
+  ASSERT_GT(stall, 0u) << "the held hand must touch the wheel's surroundings";
+
+  HilSession plant(local);
+  LcmPlantNode plant_node(plant.device(), plantOptions());
+  std::atomic<bool> stop{false};
+  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  GlobalThread global(local, globalOptions());
+  local.io = IoKind::kLcm;
+  local.lcm_url = kUrl;
+  local.search_url = kUrl;
+  HilSession session(local);
+  RunHooks hooks;
+  hooks.before_tick = [&](std::uint64_t k, JointSample&, SupervisorRequests&) {
+    if (k == stall) global.join();  // the global node is gone from here on
+  };
+  const RunResult r = session.run(hooks);
+  stop = true;
+  plant_thread.join();
+
+  EXPECT_FALSE(r.tripped) << supervisorCauseName(r.trip_cause);
+  ASSERT_GT(maxContact(r.telemetry[stall - 1]), 2.0) << "in contact when the global node stops";
+  const double max_step = session.config().supervisor.max_fade_rate_nm_per_s * session.config().control_period_s;
+  for (std::size_t k = stall; k < r.telemetry.size(); ++k) {
+    for (int l = 0; l < r.telemetry[k].num_config; ++l) {
+      const double step = std::abs(r.telemetry[k].tau_contact_nm[static_cast<std::size_t>(l)] -
+                                   r.telemetry[k - 1].tau_contact_nm[static_cast<std::size_t>(l)]);
+      if (r.telemetry[k].contact_scale < 1.0) {
+        ASSERT_LE(step, max_step + 1e-12) << "tick " << k + 1 << " joint " << l;
+      }
+    }
+  }
+  bool stale_logged = false;
+  for (const SupervisorEvent& e : r.events) stale_logged = stale_logged || e.cause == SupervisorCause::kMinimaStale;
+  EXPECT_TRUE(stale_logged);
+  const TickTelemetry& last = r.telemetry.back();
+  EXPECT_EQ(last.contact_scale, 0.0);
+  for (int l = 0; l < last.num_config; ++l) EXPECT_EQ(last.tau_contact_nm[static_cast<std::size_t>(l)], 0.0);
+}
+
+TEST_F(LcmIo, MinimaDelayed50msAreStillAdoptedOnTimeInLockstep) {
+  RunOptions local = holdAtTheWheel(1.5);
+  const RunResult in_process = runHil(local);
+  HilSession plant(local);
+  LcmPlantNode plant_node(plant.device(), plantOptions());
+  std::atomic<bool> stop{false};
+  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  GlobalNodeOptions go = globalOptions();
+  std::atomic<int> delayed{0};
+  // One fragment in twenty held back 50 ms on the wire (the publisher thread waits before it).
+  go.drop = [&delayed](std::string_view ch, std::int64_t seq) {
+    if (ch == channel::kMinimaSet && seq % 20 == 5) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      ++delayed;
+    }
+    return false;
+  };
+  GlobalThread global(local, go);
+  local.io = IoKind::kLcm;
+  local.lcm_url = kUrl;
+  local.search_url = kUrl;
+  RunResult r;
+  try {
+    r = runHil(local);
+  } catch (...) {
+    stop = true;
+    plant_thread.join();
+    throw;
+  }
+  global.join();
+  stop = true;
+  plant_thread.join();
+  EXPECT_GT(delayed.load(), 3);
+  // Lockstep waits for each set at its delivery tick: a late set changes nothing.
+  expectSameRun(in_process, r);
+}
+
+TEST_F(LcmIo, MinimaFragmentsDroppedAreSetsNotAdoptedAndTheRunStaysSafe) {
+  RunOptions local = holdAtTheWheel(1.5);
+  HilSession plant(local);
+  LcmPlantNode plant_node(plant.device(), plantOptions());
+  std::atomic<bool> stop{false};
+  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  GlobalNodeOptions go = globalOptions();
+  // One fragment in ten lost, deterministically (a lost fragment loses its set).
+  go.drop = [](std::string_view ch, std::int64_t seq) { return ch == channel::kMinimaSet && seq % 10 == 3; };
+  GlobalThread global(local, go);
+  local.io = IoKind::kLcm;
+  local.lcm_url = kUrl;
+  local.search_url = kUrl;
+  RunResult r;
+  try {
+    r = runHil(local);
+  } catch (...) {
+    stop = true;
+    plant_thread.join();
+    throw;
+  }
+  global.join();
+  stop = true;
+  plant_thread.join();
+  std::size_t adopted = 0;
+  for (const RecordedSet& s : r.sets) adopted += s.adopted_tick >= 0 ? 1 : 0;
+  EXPECT_LT(adopted, r.sets.size()) << "some sets lost a fragment";
+  EXPECT_GT(adopted, r.sets.size() * 3 / 4);
+  EXPECT_FALSE(r.tripped) << supervisorCauseName(r.trip_cause);
+}
+
+/// A plant node serving a simulated arm from a thread.
+struct PlantThread {
+  explicit PlantThread(PlantNodeOptions options)
+      : arm(test::makeArm(1)), device(*arm, SimIoOptions{}, IoSafetyParams{}), node(device, std::move(options)) {
+    thread = std::thread([this] { result = node.serve([this] { return stop.load(); }); });
+  }
+  ~PlantThread() { join(); }
+  void join() {
+    stop = true;
+    if (thread.joinable()) thread.join();
+  }
+  std::unique_ptr<SimulatedArm> arm;
+  SimIoDevice device;
+  LcmPlantNode node;
+  std::atomic<bool> stop{false};
+  PlantNodeResult result;
+  std::thread thread;
+};
+
+LcmIoOptions deviceOptions() {
+  LcmIoOptions o;
+  o.url = kUrl;
+  o.connect_timeout_s = 5.0;
+  o.reply_timeout_s = 0.2;
+  return o;
+}
+
+TEST_F(LcmIo, ThePlantNodesWatchdogPutsOutTheSafeOutputWhenCommandsStop) {
+  PlantNodeOptions po;
+  po.url = kUrl;
+  po.watchdog_timeout_s = 0.05;
+  po.idle_exit_s = 0.4;
+  po.heartbeat_period_s = 0.01;
+  PlantThread plant(po);
+  {
+    LcmIoDevice device(test::armJoints(), 1e-3, IoSafetyParams{0.0, 10.0}, deviceOptions());
+    device.configure();
+    device.activate();
+    JointSample s;
+    const IoVector command = IoVector::Constant(device.numJoints(), 2.0);
+    for (int k = 0; k < 20; ++k) {
+      ASSERT_TRUE(device.read(s).ok());
+      ASSERT_TRUE(device.write(command).ok());
+    }
+    ASSERT_TRUE(device.read(s).ok());  // the plant now holds 2 V on every valve
+    // The tick goes silent (its process died): no further command.
+  }
+  // Heartbeats after the silence say the plant holds its safe outputs.
+  lcm::LCM listen(kUrl);
+  LcmReceiver rx(listen, [] {
+    LcmReceiverOptions o;
+    o.heartbeat = true;
+    return o;
+  }());
+  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+  while (std::chrono::steady_clock::now() < until) rx.drainWait(0.02);
+  plant.thread.join();  // the node stops after idle_exit_s
+  EXPECT_EQ(plant.result.commands, 21u);
+  EXPECT_EQ(plant.result.watchdog_trips, 1u);
+  EXPECT_TRUE(plant.result.safe_at_exit);
+  bool logged = false;
+  for (const std::string& line : plant.result.log) logged = logged || line.find("watchdog") != std::string::npos;
+  EXPECT_TRUE(logged);
+  const HeartbeatRecord* h = rx.lastHeartbeat(NodeKind::kPlant);
+  ASSERT_NE(h, nullptr);
+  EXPECT_TRUE(h->safe_output);
+  EXPECT_EQ(h->tick, 21);
+}
+
+TEST_F(LcmIo, ConsecutiveReadsWithoutAnAnswerFaultTheDevice) {
+  PlantNodeOptions po;
+  po.url = kUrl;
+  po.idle_exit_s = 5.0;
+  auto plant = std::make_unique<PlantThread>(po);
+  LcmIoDevice device(test::armJoints(), 1e-3, IoSafetyParams{}, deviceOptions());
+  device.configure();
+  device.activate();
+  JointSample s;
+  for (int k = 0; k < 5; ++k) ASSERT_TRUE(device.read(s).ok());
+  const JointSample last = s;
+  plant->join();  // the plant node is gone
+  const int n = LcmIoOptions{}.max_missed_replies;
+  for (int k = 1; k < n; ++k) {
+    ASSERT_TRUE(device.read(s).ok()) << "miss " << k << " of " << n << " holds the last reading";
+    EXPECT_EQ(s.q_rad, last.q_rad);
+    EXPECT_EQ(s.t_s, last.t_s);
+    EXPECT_EQ(device.state(), IoState::kActive);
+  }
+  const core::RtStatus status = device.read(s);
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.faults & kFaultDeviceRead, 0u);
+  EXPECT_NE(status.faults & kFaultLinkLost, 0u);
+  EXPECT_EQ(device.state(), IoState::kFault);
+  EXPECT_EQ(device.counters().timeouts, static_cast<std::uint64_t>(n));
+  EXPECT_EQ(device.counters().readings, 5u);
+}
+
+TEST_F(LcmIo, ConfiguringWithoutAPlantNodeIsADeviceError) {
+  LcmIoOptions o = deviceOptions();
+  o.connect_timeout_s = 0.2;
+  LcmIoDevice device(test::armJoints(), 1e-3, IoSafetyParams{}, o);
+  EXPECT_THROW(device.configure(), DeviceError);
+}
+
+}  // namespace
+}  // namespace fullarm::hil

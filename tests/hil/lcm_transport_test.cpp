@@ -1,0 +1,276 @@
+// The LCM transport over LCM's in-process queue (memq://): fragments under a datagram's size,
+// sets reassembled bit for bit, the newest message kept, lost and out-of-order fragments and
+// sets dropped and counted, heartbeats, and the publisher's real-time side not allocating.
+
+#include "fullarm/hil/lcm_transport.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <thread>
+
+#include "alloc_guard.hpp"
+
+namespace fullarm::hil {
+namespace {
+
+bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+/// A set of `n` minima whose every field differs (and follows from `id`).
+MinimaSetRecord makeSet(std::int64_t id, int n) {
+  MinimaSetRecord s;
+  s.utime_us = 1000 * id;
+  s.set_id = id;
+  s.computed_tick = 10 * id;
+  s.computed_utime_us = 10000 * id;
+  s.adopted_tick = -1;
+  s.num_joints = 7;
+  for (int j = 0; j < 7; ++j) s.q_rad[static_cast<std::size_t>(j)] = 0.1 * j + 1e-3 * static_cast<double>(id) + 1.0 / 3.0;
+  s.num_minima = n;
+  s.num_minima_dropped = 2;
+  for (int i = 0; i < n; ++i) {
+    MinimumRecord& m = s.minima[static_cast<std::size_t>(i)];
+    m.link = i % 7;
+    m.object = i % 5;
+    m.tri_link = 1000 + i;
+    m.tri_object = 2000 + i;
+    m.feature_link_kind = static_cast<std::int8_t>(i % 3);
+    m.feature_link_index = 3000 + i;
+    m.feature_object_kind = static_cast<std::int8_t>((i + 1) % 3);
+    m.feature_object_index = 4000 + i;
+    m.p_link_m = {std::sqrt(2.0) * i, -1.0 / (i + 1), 0.5};
+    m.p_object_m = {std::exp(-0.1 * i), 1e-17 * i, -3.0};
+    m.distance_m = 0.001 * i + 1e-9;
+    m.u_world_unit = {0.6, 0.8, 0.0};
+    m.previous_distance_m = i == 0 ? std::nan("") : 0.002 * i;
+  }
+  return s;
+}
+
+/// Field-by-field, bit-for-bit equality of two sets.
+void expectSameSet(const MinimaSetRecord& a, const MinimaSetRecord& b) {
+  EXPECT_EQ(a.set_id, b.set_id);
+  EXPECT_EQ(a.computed_tick, b.computed_tick);
+  EXPECT_EQ(a.computed_utime_us, b.computed_utime_us);
+  EXPECT_EQ(a.adopted_tick, b.adopted_tick);
+  EXPECT_EQ(a.num_minima_dropped, b.num_minima_dropped);
+  ASSERT_EQ(a.num_joints, b.num_joints);
+  for (int j = 0; j < a.num_joints; ++j) EXPECT_TRUE(sameBits(a.q_rad[static_cast<std::size_t>(j)], b.q_rad[static_cast<std::size_t>(j)]));
+  ASSERT_EQ(a.num_minima, b.num_minima);
+  for (int i = 0; i < a.num_minima; ++i) {
+    const MinimumRecord& x = a.minima[static_cast<std::size_t>(i)];
+    const MinimumRecord& y = b.minima[static_cast<std::size_t>(i)];
+    EXPECT_EQ(x.link, y.link);
+    EXPECT_EQ(x.object, y.object);
+    EXPECT_EQ(x.tri_link, y.tri_link);
+    EXPECT_EQ(x.tri_object, y.tri_object);
+    EXPECT_EQ(x.feature_link_kind, y.feature_link_kind);
+    EXPECT_EQ(x.feature_link_index, y.feature_link_index);
+    EXPECT_EQ(x.feature_object_kind, y.feature_object_kind);
+    EXPECT_EQ(x.feature_object_index, y.feature_object_index);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_TRUE(sameBits(x.p_link_m[static_cast<std::size_t>(k)], y.p_link_m[static_cast<std::size_t>(k)]));
+      EXPECT_TRUE(sameBits(x.p_object_m[static_cast<std::size_t>(k)], y.p_object_m[static_cast<std::size_t>(k)]));
+      EXPECT_TRUE(sameBits(x.u_world_unit[static_cast<std::size_t>(k)], y.u_world_unit[static_cast<std::size_t>(k)]));
+    }
+    EXPECT_TRUE(sameBits(x.distance_m, y.distance_m));
+    EXPECT_TRUE(sameBits(x.previous_distance_m, y.previous_distance_m));
+  }
+}
+
+LcmPublisherOptions publisherOptions(NodeKind node, double heartbeat_period_s) {
+  LcmPublisherOptions o;
+  o.node = node;
+  o.heartbeat_period_s = heartbeat_period_s;
+  return o;
+}
+
+JointStateRecord makeJointState(std::int64_t seq) {
+  JointStateRecord r;
+  r.utime_us = 1000 * seq;
+  r.seq = seq;
+  r.tick = seq;
+  r.num_joints = 7;
+  for (int j = 0; j < 7; ++j) {
+    r.q_rad[static_cast<std::size_t>(j)] = 0.01 * static_cast<double>(seq) + j;
+    r.tau_measured_nm[static_cast<std::size_t>(j)] = -2.0 * j;
+    r.valve_command_v[static_cast<std::size_t>(j)] = 0.5 * j;
+  }
+  return r;
+}
+
+/// The encoded fragments of a set, fragment seq numbers from `first_seq`.
+std::vector<std::vector<std::uint8_t>> fragments(const MinimaSetRecord& set, std::int64_t first_seq) {
+  std::vector<std::vector<std::uint8_t>> out;
+  for (int i = 0; i < fragmentCount(set.num_minima); ++i) {
+    out.emplace_back();
+    encodeMessage(toFragment(set, i, first_seq + i), out.back());
+  }
+  return out;
+}
+
+TEST(LcmTransport, EveryFragmentOfAFullSetFitsOneDatagram) {
+  const MinimaSetRecord set = makeSet(3, kMaxMinimaPerSet);
+  const auto parts = fragments(set, 0);
+  // ceil(128 / 10) fragments, each under the 1,400-byte bound.
+  ASSERT_EQ(parts.size(), static_cast<std::size_t>((kMaxMinimaPerSet + kMaxMinimaPerFragment - 1) / kMaxMinimaPerFragment));
+  for (const auto& p : parts) EXPECT_LT(p.size(), kMaxFragmentBytes);
+}
+
+TEST(LcmTransport, PublishedSetAndJointStatesArriveBitForBit) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  LcmReceiver rx(lcm, {.joint_state = true, .minima_set = true});
+  LcmPublisher pub(lcm, publisherOptions(NodeKind::kGlobal, 0.0));
+  const MinimaSetRecord sent = makeSet(7, 64);
+  ASSERT_TRUE(pub.pushMinimaSet(sent));
+  for (int k = 1; k <= 5; ++k) ASSERT_TRUE(pub.pushJointState(makeJointState(k)));
+  pub.flush();
+  EXPECT_GT(rx.drain(), 0);
+
+  const MinimaSetRecord* got = rx.takeMinimaSet();
+  ASSERT_NE(got, nullptr);
+  expectSameSet(sent, *got);
+  EXPECT_EQ(rx.takeMinimaSet(), nullptr);  // taken once
+  EXPECT_EQ(pub.counters().minima_fragments, 7u);  // ceil(64 / 10)
+  EXPECT_LT(pub.counters().largest_fragment_bytes, kMaxFragmentBytes);
+
+  // Five joint states drained at once: the newest is kept, the others count as accepted.
+  const JointStateRecord* js = rx.takeJointState();
+  ASSERT_NE(js, nullptr);
+  EXPECT_EQ(js->seq, 5);
+  const JointStateRecord expected = makeJointState(5);
+  for (int j = 0; j < 7; ++j) EXPECT_TRUE(sameBits(js->q_rad[static_cast<std::size_t>(j)], expected.q_rad[static_cast<std::size_t>(j)]));
+  EXPECT_EQ(rx.takeJointState(), nullptr);
+  EXPECT_EQ(rx.counters().joint_state.accepted, 5u);
+  EXPECT_EQ(rx.counters().joint_state.gaps, 0u);
+}
+
+TEST(LcmTransport, OlderAndRepeatedJointStatesAreDroppedAndGapsCounted) {
+  lcm::LCM lcm("memq://");
+  LcmReceiver rx(lcm, {.joint_state = true});
+  std::vector<std::uint8_t> b;
+  for (std::int64_t seq : {4, 2, 4, 9}) {
+    encodeMessage(toMessage(makeJointState(seq)), b);
+    rx.handle(channel::kJointState, b);
+  }
+  const LcmChannelCounters& c = rx.counters().joint_state;
+  EXPECT_EQ(c.received, 4u);
+  EXPECT_EQ(c.accepted, 2u);  // 4, 9
+  EXPECT_EQ(c.stale, 2u);     // 2 (older), 4 (repeated)
+  EXPECT_EQ(c.gaps, 4u);      // 5, 6, 7, 8 never came
+  ASSERT_NE(rx.takeJointState(), nullptr);
+  EXPECT_EQ(rx.takeJointState(), nullptr);
+}
+
+TEST(LcmTransport, ASetMissingAFragmentIsDroppedAndCounted) {
+  lcm::LCM lcm("memq://");
+  LcmReceiver rx(lcm, {.minima_set = true});
+  // Set 1: fragments seq 0..2, the middle one withheld; set 2: seq 3..5, complete.
+  LcmPublisherOptions options = publisherOptions(NodeKind::kGlobal, 0.0);
+  options.drop = [](std::string_view ch, std::int64_t seq) { return ch == channel::kMinimaSet && seq == 1; };
+  LcmPublisher pub(lcm, options);
+  ASSERT_TRUE(pub.pushMinimaSet(makeSet(1, 25)));
+  ASSERT_TRUE(pub.pushMinimaSet(makeSet(2, 25)));
+  pub.flush();
+  rx.drain();
+  EXPECT_EQ(pub.counters().injected_drops, 1u);
+  const LcmReceiverCounters& c = rx.counters();
+  EXPECT_EQ(c.sets_completed, 1u);
+  EXPECT_EQ(c.sets_incomplete, 1u);
+  EXPECT_EQ(c.minima_fragment.gaps, 1u);
+  const MinimaSetRecord* got = rx.takeMinimaSet();
+  ASSERT_NE(got, nullptr);
+  expectSameSet(makeSet(2, 25), *got);
+}
+
+TEST(LcmTransport, FragmentsInAnyOrderReassembleButAnOlderSetIsDropped) {
+  lcm::LCM lcm("memq://");
+  LcmReceiver rx(lcm, {.minima_set = true});
+  auto newer = fragments(makeSet(5, 64), 100);
+  auto older = fragments(makeSet(4, 64), 90);
+  std::mt19937 rng(11);
+  std::shuffle(newer.begin(), newer.end(), rng);
+  // The newer set's fragments, shuffled, with the older set's interleaved after its first.
+  rx.handle(channel::kMinimaSet, newer[0]);
+  for (const auto& f : older) rx.handle(channel::kMinimaSet, f);
+  for (std::size_t i = 1; i < newer.size(); ++i) rx.handle(channel::kMinimaSet, newer[i]);
+  // A repeated fragment after completion.
+  rx.handle(channel::kMinimaSet, newer[3]);
+
+  const LcmReceiverCounters& c = rx.counters();
+  EXPECT_EQ(c.sets_completed, 1u);
+  EXPECT_EQ(c.fragments_ignored, older.size() + 1);
+  EXPECT_EQ(c.minima_fragment.stale, older.size() + 1);
+  EXPECT_EQ(c.minima_fragment.accepted, newer.size());
+  const MinimaSetRecord* got = rx.takeMinimaSet();
+  ASSERT_NE(got, nullptr);
+  expectSameSet(makeSet(5, 64), *got);
+}
+
+TEST(LcmTransport, AFragmentWhoseHeaderDisagreesWithItsSetIsRejected) {
+  lcm::LCM lcm("memq://");
+  LcmReceiver rx(lcm, {.minima_set = true});
+  const MinimaSetRecord set = makeSet(8, 30);
+  MinimaSetRecord other = set;
+  other.computed_tick += 1;  // same set id, another search: a corrupt or confused sender
+  std::vector<std::uint8_t> b;
+  encodeMessage(toFragment(set, 0, 0), b);
+  rx.handle(channel::kMinimaSet, b);
+  encodeMessage(toFragment(other, 1, 1), b);
+  rx.handle(channel::kMinimaSet, b);
+  EXPECT_EQ(rx.counters().minima_fragment.malformed, 1u);
+  encodeMessage(toFragment(set, 1, 2), b);
+  rx.handle(channel::kMinimaSet, b);
+  encodeMessage(toFragment(set, 2, 3), b);
+  rx.handle(channel::kMinimaSet, b);
+  const MinimaSetRecord* got = rx.takeMinimaSet();
+  ASSERT_NE(got, nullptr);
+  expectSameSet(set, *got);
+}
+
+TEST(LcmTransport, HeartbeatsCarryTheNodeState) {
+  lcm::LCM lcm("memq://");
+  LcmReceiver rx(lcm, {.heartbeat = true});
+  {
+    LcmPublisher pub(lcm, publisherOptions(NodeKind::kPlant, 0.005));
+    pub.setNodeState(42, true);
+    std::this_thread::sleep_for(std::chrono::milliseconds(40));
+  }  // the publisher is stopped: nothing is published while the receiver drains
+  rx.drain();
+  EXPECT_GE(rx.heartbeatsFrom(NodeKind::kPlant), 2u);
+  EXPECT_EQ(rx.heartbeatsFrom(NodeKind::kLocal), 0u);
+  EXPECT_EQ(rx.lastHeartbeat(NodeKind::kGlobal), nullptr);
+  const HeartbeatRecord* h = rx.lastHeartbeat(NodeKind::kPlant);
+  ASSERT_NE(h, nullptr);
+  EXPECT_EQ(h->tick, 42);
+  EXPECT_TRUE(h->safe_output);
+  EXPECT_EQ(h->seq + 1, static_cast<std::int64_t>(rx.heartbeatsFrom(NodeKind::kPlant)));
+  EXPECT_EQ(rx.counters().heartbeat.gaps, 0u);
+}
+
+TEST(LcmTransport, PushingDoesNotAllocate) {
+  lcm::LCM lcm("memq://");
+  LcmPublisherOptions options = publisherOptions(NodeKind::kLocal, 0.0);
+  options.minima_set_capacity = 2;
+  LcmPublisher pub(lcm, options);
+  const JointStateRecord js = makeJointState(1);
+  ValveCommandRecord vc;
+  vc.num_valves = 7;
+  const auto set = std::make_unique<MinimaSetRecord>(makeSet(1, 64));
+  EXPECT_NO_HEAP_ALLOCATION(pub.pushJointState(js));
+  EXPECT_NO_HEAP_ALLOCATION(pub.pushValveCommand(vc));
+  EXPECT_NO_HEAP_ALLOCATION(pub.pushMinimaSet(*set));
+  EXPECT_NO_HEAP_ALLOCATION(pub.setNodeState(3, false));
+  pub.flush();
+  EXPECT_EQ(pub.counters().joint_states, 1u);
+  EXPECT_EQ(pub.counters().valve_commands, 1u);
+  EXPECT_EQ(pub.counters().minima_sets, 1u);
+}
+
+}  // namespace
+}  // namespace fullarm::hil
