@@ -481,8 +481,11 @@ int runRun(const RunCommandOptions& o, const std::string& command_line) {
   std::filesystem::create_directories(o.out_dir);
 
   hil::HilSession session(ro);
-  std::cout << "fullarm run: " << o.io << ", " << o.mode << ", " << o.clock << " clock, " << o.duration_s << " s at "
-            << 1.0 / session.config().control_period_s << " Hz, scene " << session.scene().name << "\n";
+  // The lines below set fixed notation on std::cout; each run's header starts from the default
+  // (`--mode both` prints two runs).
+  std::cout << std::defaultfloat << std::setprecision(6) << "fullarm run: " << o.io << ", " << o.mode << ", "
+            << o.clock << " clock, " << o.duration_s << " s at " << 1.0 / session.config().control_period_s
+            << " Hz, scene " << session.scene().name << "\n";
   const hil::RunResult r = session.run();
   const hil::RunTiming& tm = r.timing;
   for (const std::string& note : tm.realtime_notes) std::cout << "  " << note << "\n";

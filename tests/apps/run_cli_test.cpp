@@ -54,6 +54,18 @@ TEST(RunCli, ALockstepRunWritesItsLogAndSummaryAndReplaysBitForBit) {
   EXPECT_EQ(replay_summary["results"]["replay"]["valve_mismatches"], 0);
 }
 
+// `--mode both` prints each run's header in the same format: the second run's header does not
+// inherit the first run's fixed notation.
+TEST(RunCli, BothModesPrintTheirHeadersAlike) {
+  const auto dir = fullarm::test::cliTempDir("run_cli", "both");
+  const auto r = runFullarm("run --clock lockstep --duration 1 --mode both --no-oracle --out " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("fullarm run: sim, full-arm, lockstep clock, 1 s at 1000 Hz, scene "), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("fullarm run: sim, hand-only, lockstep clock, 1 s at 1000 Hz, scene "), std::string::npos)
+      << r.output;
+}
+
 // The report's data block (the JSON script element of report.html).
 nlohmann::json reportData(const std::filesystem::path& html_file) {
   std::ifstream in(html_file);
