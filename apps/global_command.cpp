@@ -12,9 +12,13 @@ namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
 
-extern "C" void onGlobalStopSignal(int /*signal*/) { g_stop = 1; }
+extern "C" void onGlobalStopSignal(int /*signal*/) {
+  g_stop = 1;
+}
 
-std::filesystem::path pathOr(const std::string& s) { return s.empty() ? std::filesystem::path() : std::filesystem::path(s); }
+std::filesystem::path pathOr(const std::string& s) {
+  return s.empty() ? std::filesystem::path() : std::filesystem::path(s);
+}
 
 }  // namespace
 
@@ -30,8 +34,9 @@ CLI::App* addGlobalCommand(CLI::App& app, GlobalCommandOptions& o, OptionTable& 
   declare.file("--gains", o.gains_config, "Gains YAML (default: config/dts_gains.yaml)");
   declare.file("--haptics-config", o.haptics_config, "Haptics YAML (default: config/haptics.yaml)");
   declare.file("--hil-config", o.hil_config, "Loop YAML (default: config/hil.yaml)");
-  declare.number("--idle-exit", o.idle_exit_s, "No query for this long (or none at all): stop serving",
-                 {0.01, 86400.0, "s"})
+  declare
+      .number("--idle-exit", o.idle_exit_s, "No query for this long (or none at all): stop serving",
+              {0.01, 86400.0, "s"})
       ->capture_default_str();
   return cmd;
 }

@@ -13,16 +13,21 @@ namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
 
-extern "C" void onPlantServeStopSignal(int /*signal*/) { g_stop = 1; }
+extern "C" void onPlantServeStopSignal(int /*signal*/) {
+  g_stop = 1;
+}
 
-std::filesystem::path pathOr(const std::string& s) { return s.empty() ? std::filesystem::path() : std::filesystem::path(s); }
+std::filesystem::path pathOr(const std::string& s) {
+  return s.empty() ? std::filesystem::path() : std::filesystem::path(s);
+}
 
 }  // namespace
 
 CLI::App* addPlantServeCommand(CLI::App& app, PlantServeOptions& o, OptionTable& table) {
   CLI::App* plant = app.get_subcommand("plant");
   CLI::App* cmd = plant->add_subcommand(
-      "serve", "Serve the simulated DTS as an LCM I/O node for `fullarm run --io lcm` (each command advances it one period)");
+      "serve",
+      "Serve the simulated DTS as an LCM I/O node for `fullarm run --io lcm` (each command advances it one period)");
   OptionDeclarer declare(*cmd, table);
   declare.name("--lcm-url", o.lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0: this machine only)");
   declare.file("--scene", o.scene, "Scene YAML (default: scenes/valve_wall.yaml)");
@@ -34,10 +39,12 @@ CLI::App* addPlantServeCommand(CLI::App& app, PlantServeOptions& o, OptionTable&
   declare.file("--gains", o.gains_config, "Gains YAML (default: config/dts_gains.yaml)");
   declare.file("--haptics-config", o.haptics_config, "Haptics YAML (default: config/haptics.yaml)");
   declare.file("--hil-config", o.hil_config, "Loop YAML (default: config/hil.yaml)");
-  declare.number("--watchdog", o.watchdog_s, "No command for this long: safe outputs (null valves)", {0.002, 10.0, "s"})
+  declare
+      .number("--watchdog", o.watchdog_s, "No command for this long: safe outputs (null valves)", {0.002, 10.0, "s"})
       ->capture_default_str();
-  declare.number("--idle-exit", o.idle_exit_s, "No command for this long (or none at all): stop serving",
-                 {0.01, 86400.0, "s"})
+  declare
+      .number("--idle-exit", o.idle_exit_s, "No command for this long (or none at all): stop serving",
+              {0.01, 86400.0, "s"})
       ->capture_default_str();
   return cmd;
 }

@@ -327,10 +327,14 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
                                      "LCM log, summary.json and report.html");
   OptionDeclarer declare(*cmd, table);
   declare.choice("--io", o.io, "I/O back-end", {"sim", "fakedaq", "comedi", "lcm"})->capture_default_str();
-  declare.choice("--search", o.search, "Global search: in this process, or the global node `fullarm global` over LCM (lockstep)",
-                 {"in-process", "lcm"})
+  declare
+      .choice("--search", o.search,
+              "Global search: in this process, or the global node `fullarm global` over LCM (lockstep)",
+              {"in-process", "lcm"})
       ->capture_default_str();
-  declare.name("--lcm-url", o.lcm_url, "--io lcm, --search lcm: LCM URL of the plant and global nodes (default udpm://239.255.76.67:7667?ttl=0)");
+  declare.name(
+      "--lcm-url", o.lcm_url,
+      "--io lcm, --search lcm: LCM URL of the plant and global nodes (default udpm://239.255.76.67:7667?ttl=0)");
   declare
       .choice("--mode", o.mode,
               "Haptic rendering (both: the run in each mode, in full-arm/ and hand-only/, and a report of the two "
@@ -483,9 +487,9 @@ int runRun(const RunCommandOptions& o, const std::string& command_line) {
   hil::HilSession session(ro);
   // The lines below set fixed notation on std::cout; each run's header starts from the default
   // (`--mode both` prints two runs).
-  std::cout << std::defaultfloat << std::setprecision(6) << "fullarm run: " << o.io << ", " << o.mode << ", "
-            << o.clock << " clock, " << o.duration_s << " s at " << 1.0 / session.config().control_period_s
-            << " Hz, scene " << session.scene().name << "\n";
+  std::cout << std::defaultfloat << std::setprecision(6) << "fullarm run: " << o.io << ", " << o.mode << ", " << o.clock
+            << " clock, " << o.duration_s << " s at " << 1.0 / session.config().control_period_s << " Hz, scene "
+            << session.scene().name << "\n";
   const hil::RunResult r = session.run();
   const hil::RunTiming& tm = r.timing;
   for (const std::string& note : tm.realtime_notes) std::cout << "  " << note << "\n";

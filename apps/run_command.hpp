@@ -16,11 +16,11 @@ inline constexpr double kMaxRunDuration_s = 600.0;
 
 /// Options of `fullarm run`.
 struct RunCommandOptions {
-  std::string io = "sim";         ///< sim | fakedaq | comedi | lcm
+  std::string io = "sim";             ///< sim | fakedaq | comedi | lcm
   std::string search = "in-process";  ///< in-process | lcm (the global node)
-  std::string lcm_url;            ///< --io lcm, --search lcm: the nodes' LCM URL (empty: the default)
-  std::string mode = "full-arm";  ///< full-arm | hand-only
-  std::string scene;              ///< scene YAML (default scenes/valve_wall.yaml)
+  std::string lcm_url;                ///< --io lcm, --search lcm: the nodes' LCM URL (empty: the default)
+  std::string mode = "full-arm";      ///< full-arm | hand-only
+  std::string scene;                  ///< scene YAML (default scenes/valve_wall.yaml)
   double duration_s = 10.0;
   std::string clock = "realtime";  ///< realtime | lockstep
   std::string user;                ///< scripted user YAML (default config/user_reach_valve.yaml)

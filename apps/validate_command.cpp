@@ -10,12 +10,12 @@
 #include <vector>
 
 #include "cli_values.hpp"
-#include "output_files.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/controllers/gains.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/design/validate_arm.hpp"
 #include "fullarm/plant/plant_config.hpp"
+#include "output_files.hpp"
 
 namespace fullarm::app {
 namespace {

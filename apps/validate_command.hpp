@@ -21,11 +21,11 @@ struct ValidateOptions {
   std::string gains_config;   ///< --gains (default: dts_gains.yaml)
   std::string ranges_config;  ///< --ranges (default: dts_validation.yaml)
   std::string out_dir = "out/validate";
-  std::optional<int> samples;        ///< overrides the ranges file
-  std::optional<std::int64_t> seed;  ///< overrides the ranges file
-  int threads = 0;                   ///< 0: hardware concurrency
-  std::string joints;                ///< comma-separated subset (default: every joint of the gains file)
-  bool paper_claim = false;          ///< also measure the paper's claim per joint
+  std::optional<int> samples;          ///< overrides the ranges file
+  std::optional<std::int64_t> seed;    ///< overrides the ranges file
+  int threads = 0;                     ///< 0: hardware concurrency
+  std::string joints;                  ///< comma-separated subset (default: every joint of the gains file)
+  bool paper_claim = false;            ///< also measure the paper's claim per joint
   core::Progress* progress = nullptr;  ///< where the validation reports its progress (null: silent)
 };
 
