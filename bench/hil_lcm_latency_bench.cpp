@@ -40,8 +40,11 @@ void report(const char* what, std::vector<double> us) {
     return;
   }
   std::sort(us.begin(), us.end());
-  const auto at = [&](double q) { return us[std::min(us.size() - 1, static_cast<std::size_t>(q * static_cast<double>(us.size())))]; };
-  std::printf("%-44s n %5zu  p50 %8.1f us  p99 %8.1f us  max %8.1f us\n", what, us.size(), at(0.5), at(0.99), us.back());
+  const auto at = [&](double q) {
+    return us[std::min(us.size() - 1, static_cast<std::size_t>(q * static_cast<double>(us.size())))];
+  };
+  std::printf("%-44s n %5zu  p50 %8.1f us  p99 %8.1f us  max %8.1f us\n", what, us.size(), at(0.5), at(0.99),
+              us.back());
 }
 
 MinimaSetRecord set64() {
@@ -75,7 +78,8 @@ std::vector<double> overLcm(int n, std::chrono::microseconds period, bool minima
       receiver.drainWait(0.01);
       const std::int64_t t = nowNs();
       if (minima) {
-        if (const MinimaSetRecord* s = receiver.takeMinimaSet()) us.push_back(static_cast<double>(t - s->computed_utime_us) * 1e-3);
+        if (const MinimaSetRecord* s = receiver.takeMinimaSet())
+          us.push_back(static_cast<double>(t - s->computed_utime_us) * 1e-3);
       } else if (const JointStateRecord* j = receiver.takeJointState()) {
         us.push_back(static_cast<double>(t - j->utime_us) * 1e-3);
       }
@@ -119,7 +123,8 @@ std::vector<double> inProcess(int n, std::chrono::microseconds period) {
   std::atomic<bool> done{false};
   std::thread reader([&] {
     while (!done.load(std::memory_order_relaxed)) {
-      if (const MinimaSetRecord* s = exchange.takeNewest()) us.push_back(static_cast<double>(nowNs() - s->computed_utime_us) * 1e-3);
+      if (const MinimaSetRecord* s = exchange.takeNewest())
+        us.push_back(static_cast<double>(nowNs() - s->computed_utime_us) * 1e-3);
     }
   });
   const MinimaSetRecord set = set64();

@@ -63,10 +63,12 @@ DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_
   const DecodeStatus s = decodeIo(bytes, out);
   if (s != DecodeStatus::kOk) return s;
   const auto n = static_cast<std::size_t>(out.num_joints);
-  if (out.num_joints < 0 || out.num_joints > kMaxIoJoints || out.q_rad.size() != n || out.tau_load_cell_nm.size() != n) {
+  if (out.num_joints < 0 || out.num_joints > kMaxIoJoints || out.q_rad.size() != n ||
+      out.tau_load_cell_nm.size() != n) {
     return DecodeStatus::kMalformed;
   }
-  if (out.status_code < 0 || out.status_code > static_cast<int>(core::RtCode::kSolverFailure)) return DecodeStatus::kMalformed;
+  if (out.status_code < 0 || out.status_code > static_cast<int>(core::RtCode::kSolverFailure))
+    return DecodeStatus::kMalformed;
   return DecodeStatus::kOk;
 }
 
@@ -110,7 +112,8 @@ struct LcmIoDevice::Handler {
   }
 };
 
-LcmIoDevice::LcmIoDevice(arm::JointSelection joints, double period_s, const IoSafetyParams& safety, LcmIoOptions options)
+LcmIoDevice::LcmIoDevice(arm::JointSelection joints, double period_s, const IoSafetyParams& safety,
+                         LcmIoOptions options)
     : IoDevice(std::move(joints), period_s, safety), options_(std::move(options)) {
   held_v_ = IoVector::Zero(numJoints());
 }
@@ -131,7 +134,8 @@ void LcmIoDevice::onConfigure() {
   while (handler_->heartbeats == 0 && Clock::now() < deadline) lcm_->handleTimeout(waitMillis(deadline) + 1);
   if (handler_->heartbeats == 0) {
     throw DeviceError("lcm I/O: no plant node answered on " + options_.url + " within " +
-                      std::to_string(options_.connect_timeout_s) + " s (start `fullarm plant serve` with the same --lcm-url)");
+                      std::to_string(options_.connect_timeout_s) +
+                      " s (start `fullarm plant serve` with the same --lcm-url)");
   }
   held_v_.setZero();
   held_enable_ = false;
@@ -186,7 +190,8 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
   counters_.consecutive_missed = 0;
   const fullarm_lcm::io_reading_t& m = handler_->reading;
   if (m.num_joints != numJoints()) {
-    return core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead, "lcm I/O: the node serves another number of joints");
+    return core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead,
+                                 "lcm I/O: the node serves another number of joints");
   }
   ++counters_.readings;
   const int n = numJoints();
@@ -216,7 +221,8 @@ core::RtStatus LcmIoDevice::onWrite(const IoVector& valve_v, bool toggle_enable)
 
 // --- the plant node ----------------------------------------------------------------------------
 
-LcmPlantNode::LcmPlantNode(IoDevice& device, PlantNodeOptions options) : device_(device), options_(std::move(options)) {}
+LcmPlantNode::LcmPlantNode(IoDevice& device, PlantNodeOptions options)
+    : device_(device), options_(std::move(options)) {}
 
 PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
   PlantNodeResult result;

@@ -3,8 +3,8 @@
 // (LCM's C++ untyped subscription reaches its handler through a static_cast of the C callback's
 // user data, which UndefinedBehaviorSanitizer's vptr check rejects.)
 
-#include <lcm/lcm-cpp.hpp>
 #include <lcm/lcm.h>
+#include <lcm/lcm-cpp.hpp>
 
 #include <cstdint>
 #include <span>

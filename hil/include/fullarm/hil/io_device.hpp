@@ -36,11 +36,11 @@ using IoVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxIoJoints, 1>;
 
 /// The fault bits of the hil module (core::RtStatus::faults), beside core's.
 enum HilFault : std::uint32_t {
-  kFaultDeviceRead = 1u << 16,    ///< the device could not read its inputs
-  kFaultDeviceWrite = 1u << 17,   ///< the device could not write its outputs
-  kFaultDeviceState = 1u << 18,   ///< read or write in a lifecycle state that does not allow it
-  kFaultDeviceLatched = 1u << 19, ///< the device was put in its fault state (fault())
-  kFaultLinkLost = 1u << 20,      ///< a remote device's node stopped answering (lcm_io.hpp)
+  kFaultDeviceRead = 1u << 16,     ///< the device could not read its inputs
+  kFaultDeviceWrite = 1u << 17,    ///< the device could not write its outputs
+  kFaultDeviceState = 1u << 18,    ///< read or write in a lifecycle state that does not allow it
+  kFaultDeviceLatched = 1u << 19,  ///< the device was put in its fault state (fault())
+  kFaultLinkLost = 1u << 20,       ///< a remote device's node stopped answering (lcm_io.hpp)
 };
 
 /// A device that cannot be opened or does not match its channel map (a missing board, a channel

@@ -16,10 +16,10 @@
 /// outputs on fault). A read whose reading does not come within `reply_timeout_s` returns the
 /// last reading again; `max_missed_replies` consecutive such reads are a read failure (the link
 /// is lost), which faults the device (and the supervisor trips). After one miss, later reads
-/// take only a reading that has already arrived, so a lost node does not stall every tick. The node has its own watchdog: when no
-/// command has come for `watchdog_timeout_s` it puts out the safe output (null valves,
-/// amplifiers disabled) and says so in its heartbeat and its log, until commands resume; a
-/// command with enable = false is the safe output too.
+/// take only a reading that has already arrived, so a lost node does not stall every tick. The node has its own
+/// watchdog: when no command has come for `watchdog_timeout_s` it puts out the safe output (null valves, amplifiers
+/// disabled) and says so in its heartbeat and its log, until commands resume; a command with enable = false is the safe
+/// output too.
 
 #include <cstdint>
 #include <functional>
@@ -63,12 +63,12 @@ struct LcmIoOptions {
 
 /// What the `lcm` back-end saw.
 struct LcmIoCounters {
-  std::uint64_t commands = 0;      ///< io_command_t sent
-  std::uint64_t readings = 0;      ///< readings accepted (answering the current command)
-  std::uint64_t stale = 0;         ///< readings answering an older command (dropped)
-  std::uint64_t rejected = 0;      ///< truncated, wrong-hash or malformed payloads (dropped)
-  std::uint64_t timeouts = 0;      ///< reads that got no answer in time
-  int consecutive_missed = 0;      ///< reads without an answer since the last answered one
+  std::uint64_t commands = 0;  ///< io_command_t sent
+  std::uint64_t readings = 0;  ///< readings accepted (answering the current command)
+  std::uint64_t stale = 0;     ///< readings answering an older command (dropped)
+  std::uint64_t rejected = 0;  ///< truncated, wrong-hash or malformed payloads (dropped)
+  std::uint64_t timeouts = 0;  ///< reads that got no answer in time
+  int consecutive_missed = 0;  ///< reads without an answer since the last answered one
 };
 
 /// The `lcm` I/O back-end: the device's inputs and outputs live in an I/O node in another

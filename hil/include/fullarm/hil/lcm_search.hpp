@@ -84,9 +84,9 @@ struct GlobalNodeOptions {
 
 /// What a global node did.
 struct GlobalNodeResult {
-  std::uint64_t queries = 0;       ///< queries answered
-  std::uint64_t stale = 0;         ///< queries not newer than the last answered (ignored)
-  std::uint64_t rejected = 0;      ///< damaged or misshapen queries (ignored)
+  std::uint64_t queries = 0;   ///< queries answered
+  std::uint64_t stale = 0;     ///< queries not newer than the last answered (ignored)
+  std::uint64_t rejected = 0;  ///< damaged or misshapen queries (ignored)
   std::vector<std::string> log;
 };
 

@@ -89,7 +89,8 @@ DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, JointStateRecord
 DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, ValveCommandRecord& out) noexcept;
 /// @copydoc decodeChecked(std::span<const std::uint8_t>, JointStateRecord&)
 DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, HeartbeatRecord& out) noexcept;
-/// One minima-set fragment, checked on its own (checkFragment). @copydoc decodeChecked(std::span<const std::uint8_t>, JointStateRecord&)
+/// One minima-set fragment, checked on its own (checkFragment). @copydoc decodeChecked(std::span<const std::uint8_t>,
+/// JointStateRecord&)
 DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::minima_set_t& out) noexcept;
 
 /// Encodes an LCM message into `out` (resized to the encoded size).
@@ -108,9 +109,9 @@ inline constexpr std::size_t kMaxFragmentBytes = 1400;
 
 /// Options of an LcmPublisher.
 struct LcmPublisherOptions {
-  NodeKind node = NodeKind::kLocal;   ///< the node whose heartbeat this publisher sends
-  double heartbeat_period_s = 0.05;   ///< heartbeat period; <= 0: no heartbeat
-  std::size_t joint_state_capacity = 256;   ///< records the rings hold before dropping
+  NodeKind node = NodeKind::kLocal;        ///< the node whose heartbeat this publisher sends
+  double heartbeat_period_s = 0.05;        ///< heartbeat period; <= 0: no heartbeat
+  std::size_t joint_state_capacity = 256;  ///< records the rings hold before dropping
   std::size_t valve_command_capacity = 256;
   std::size_t minima_set_capacity = 4;
   /// Fault injection: called by the publisher thread with each message's channel and its
@@ -121,14 +122,14 @@ struct LcmPublisherOptions {
 
 /// What an LcmPublisher did.
 struct LcmPublisherCounters {
-  std::uint64_t joint_states = 0;     ///< joint_state_t sent
-  std::uint64_t valve_commands = 0;   ///< valve_command_t sent
-  std::uint64_t minima_sets = 0;      ///< whole sets sent (every fragment)
-  std::uint64_t minima_fragments = 0; ///< minima_set_t fragments sent
-  std::uint64_t heartbeats = 0;       ///< heartbeat_t sent
-  std::uint64_t ring_drops = 0;       ///< records refused because a ring was full
-  std::uint64_t send_errors = 0;      ///< lcm publish calls that failed
-  std::uint64_t injected_drops = 0;   ///< messages the `drop` hook withheld
+  std::uint64_t joint_states = 0;          ///< joint_state_t sent
+  std::uint64_t valve_commands = 0;        ///< valve_command_t sent
+  std::uint64_t minima_sets = 0;           ///< whole sets sent (every fragment)
+  std::uint64_t minima_fragments = 0;      ///< minima_set_t fragments sent
+  std::uint64_t heartbeats = 0;            ///< heartbeat_t sent
+  std::uint64_t ring_drops = 0;            ///< records refused because a ring was full
+  std::uint64_t send_errors = 0;           ///< lcm publish calls that failed
+  std::uint64_t injected_drops = 0;        ///< messages the `drop` hook withheld
   std::size_t largest_fragment_bytes = 0;  ///< largest encoded minima_set_t fragment
 };
 
@@ -178,9 +179,9 @@ class LcmPublisher {
   std::atomic<bool> stop_{false};
   std::atomic<std::int64_t> node_tick_{-1};
   std::atomic<bool> node_safe_{false};
-  std::vector<std::uint8_t> buffer_;            ///< publisher thread only
-  std::int64_t fragment_seq_ = 0;               ///< publisher thread only
-  std::int64_t heartbeat_seq_ = 0;              ///< publisher thread only
+  std::vector<std::uint8_t> buffer_;  ///< publisher thread only
+  std::int64_t fragment_seq_ = 0;     ///< publisher thread only
+  std::int64_t heartbeat_seq_ = 0;    ///< publisher thread only
   std::atomic<std::uint64_t> joint_states_sent_{0}, valve_commands_sent_{0}, minima_sets_sent_{0},
       minima_fragments_sent_{0}, heartbeats_sent_{0}, send_errors_{0}, injected_drops_{0};
   std::atomic<std::size_t> largest_fragment_bytes_{0};
@@ -216,8 +217,8 @@ struct LcmChannelCounters {
 /// What an LcmReceiver saw, per channel, and what became of the minima sets.
 struct LcmReceiverCounters {
   LcmChannelCounters joint_state, valve_command, minima_fragment, heartbeat;
-  std::uint64_t sets_completed = 0;   ///< minima sets reassembled and delivered
-  std::uint64_t sets_incomplete = 0;  ///< sets dropped because a newer set began before they were whole
+  std::uint64_t sets_completed = 0;     ///< minima sets reassembled and delivered
+  std::uint64_t sets_incomplete = 0;    ///< sets dropped because a newer set began before they were whole
   std::uint64_t fragments_ignored = 0;  ///< fragments of an older set than the one in progress, or repeated
 };
 

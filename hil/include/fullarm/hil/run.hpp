@@ -56,7 +56,7 @@ struct RunOptions {
   std::filesystem::path user;   ///< default config/user_reach_valve.yaml
   std::filesystem::path arm_config, plant_config, gains_config, haptics_config, hil_config, daq_config;
   std::string start_posture = "ready";  ///< a posture of the scene
-  std::uint64_t seed = 1;              ///< the plant's sensor noise
+  std::uint64_t seed = 1;               ///< the plant's sensor noise
   /// Lockstep: run the missed-contact oracle on every tick.
   bool oracle = true;
   /// Overrides of the loop configuration.
@@ -103,13 +103,13 @@ struct Percentiles {
 /// Timing of a run.
 struct RunTiming {
   std::uint64_t ticks = 0;
-  double wall_s = 0.0;            ///< wall time of the loop
-  double simulated_s = 0.0;       ///< ticks x period
-  Percentiles compute;            ///< per tick: read, tick, write (and the lockstep search)
-  Percentiles period_jitter;      ///< real time: |wake-up - deadline|
+  double wall_s = 0.0;                          ///< wall time of the loop
+  double simulated_s = 0.0;                     ///< ticks x period
+  Percentiles compute;                          ///< per tick: read, tick, write (and the lockstep search)
+  Percentiles period_jitter;                    ///< real time: |wake-up - deadline|
   std::vector<double> compute_samples_s;        ///< per tick: the samples of `compute`
   std::vector<double> period_jitter_samples_s;  ///< real time, per tick: the samples of `period_jitter`
-  std::uint64_t overruns = 0;     ///< ticks that ended after the next deadline
+  std::uint64_t overruns = 0;                   ///< ticks that ended after the next deadline
   int max_consecutive_overruns = 0;
   // Lockstep breakdown of the wall time [s].
   double plant_s = 0.0;   ///< device reads and writes (the simulated plant)
@@ -158,14 +158,14 @@ struct RunResult {
   std::uint64_t oracle_ticks = 0;
   std::uint64_t missed_contact_ticks = 0;
   std::vector<MissedContact> missed_contacts;
-  std::vector<double> link_min_distance_m;   ///< exact, per link, over the run
+  std::vector<double> link_min_distance_m;  ///< exact, per link, over the run
   std::vector<double> link_max_penetration_m;
   std::vector<double> link_penetration_s;
-  std::uint64_t sweep_exceeded_ticks = 0;    ///< ticks where a link swept beyond L - d_f
+  std::uint64_t sweep_exceeded_ticks = 0;  ///< ticks where a link swept beyond L - d_f
   // The user's task.
-  double hand_to_target_m = 0.0;         ///< final hand point to the path's last via point
+  double hand_to_target_m = 0.0;  ///< final hand point to the path's last via point
   double max_user_force_n = 0.0;
-  std::vector<double> user_force_n;      ///< per tick
+  std::vector<double> user_force_n;       ///< per tick
   std::vector<Eigen::Vector3d> hand_W_m;  ///< true hand point per tick (simulated back-ends)
   // The LCM log.
   std::uint64_t log_events = 0;

@@ -26,7 +26,7 @@ namespace fullarm::hil {
 
 /// joint_state_t.input_flags: bits 0-9 the joints read out of range; then the tick's requests.
 inline constexpr std::uint32_t kInputFlagOutOfRangeMask = 0x3FFu;
-inline constexpr std::uint32_t kInputFlagDeviceFault = 1u << 16;     ///< the read failed
+inline constexpr std::uint32_t kInputFlagDeviceFault = 1u << 16;  ///< the read failed
 inline constexpr std::uint32_t kInputFlagEstopCommand = 1u << 17;
 inline constexpr std::uint32_t kInputFlagEstopSignal = 1u << 18;
 inline constexpr std::uint32_t kInputFlagReset = 1u << 19;
@@ -51,8 +51,8 @@ class RunRecorder {
   RunRecorder& operator=(const RunRecorder&) = delete;
 
   /// One tick: its inputs, its telemetry and what was written to the device. @rt
-  void recordTick(const RecordedTick& inputs, const TickTelemetry& telemetry, const IoVector& written,
-                  bool safe_output, std::int64_t utime_us) noexcept;
+  void recordTick(const RecordedTick& inputs, const TickTelemetry& telemetry, const IoVector& written, bool safe_output,
+                  std::int64_t utime_us) noexcept;
   /// A minima set adopted at `adopted_tick`. @rt
   void recordAdoptedSet(const MinimaSetRecord& set) noexcept;
   /// Lockstep: drains the rings into the file (every few hundred ticks).
@@ -79,16 +79,16 @@ void toSetRecord(const RecordedSet& set, double period_s, MinimaSetRecord& recor
 /// Outcome of replayLog().
 struct ReplayReport {
   std::filesystem::path log;
-  RunOptions options;              ///< rebuilt from the header
-  std::string clock;               ///< the recorded run's clock
-  std::uint64_t ticks = 0;         ///< ticks replayed
-  std::uint64_t sets = 0;          ///< minima sets adopted
+  RunOptions options;       ///< rebuilt from the header
+  std::string clock;        ///< the recorded run's clock
+  std::uint64_t ticks = 0;  ///< ticks replayed
+  std::uint64_t sets = 0;   ///< minima sets adopted
   std::uint64_t valve_mismatches = 0;
   std::uint64_t torque_mismatches = 0;
   std::uint64_t force_mismatches = 0;
-  std::string first_mismatch;      ///< empty when everything matched
+  std::string first_mismatch;  ///< empty when everything matched
   bool truncated = false;
-  std::string warning;             ///< names the offset of a truncated log
+  std::string warning;                     ///< names the offset of a truncated log
   std::vector<std::string> changed_files;  ///< input files whose SHA-256 differs from the header's
   [[nodiscard]] bool identical() const noexcept {
     return valve_mismatches == 0 && torque_mismatches == 0 && force_mismatches == 0 && ticks > 0;

@@ -95,7 +95,7 @@ struct SupervisorEvent {
 /// Constant description of what is supervised: the parameters and each device joint's limits.
 struct SupervisorModel {
   SupervisorParams params;
-  int n = 0;                ///< device joints
+  int n = 0;  ///< device joints
   IoVector min_rad, max_rad, velocity_limit_radps, torque_limit_nm, valve_limit_v;
   double period_s = 1e-3;
 };
@@ -108,12 +108,12 @@ struct SupervisorModel {
 
 /// External requests of one tick.
 struct SupervisorRequests {
-  bool estop_command = false;        ///< E-stop requested by a command
-  bool estop_signal = false;         ///< a signal asked the program to stop
-  bool reset_command = false;        ///< explicit reset of a latched trip
-  bool overrun_fault = false;        ///< the loop saw too many consecutive overruns
-  std::uint64_t heartbeat = 0;       ///< a counter the supervising side increments
-  bool heartbeat_enabled = false;    ///< false: no heartbeat is watched
+  bool estop_command = false;      ///< E-stop requested by a command
+  bool estop_signal = false;       ///< a signal asked the program to stop
+  bool reset_command = false;      ///< explicit reset of a latched trip
+  bool overrun_fault = false;      ///< the loop saw too many consecutive overruns
+  std::uint64_t heartbeat = 0;     ///< a counter the supervising side increments
+  bool heartbeat_enabled = false;  ///< false: no heartbeat is watched
 };
 
 /// Largest number of events recorded in one tick.
