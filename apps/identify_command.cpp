@@ -466,12 +466,19 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
     arm::computeGravityTorques(model, data, q);
     r.start = id::greyModelFromJoint(jp, q_hold, data.mass_matrix(model_joint, model_joint),
                                      data.tau_gravity[model_joint], 1);
-    r.start.spool_hz = jp.valve.natural_frequency_hz;
-    r.start.spool_damping = jp.valve.damping_ratio;
-    r.start.torque_filter_hz = jp.sensor_noise.torque_filter_hz;
+    // The gravity load's gradient at the hold angle (central difference), the known load stiffness.
+    constexpr double kStep_rad = 1.0e-4;
+    Eigen::VectorXd q_step = q;
+    q_step[model_joint] = q_hold + kStep_rad;
+    arm::computeGravityTorques(model, data, q_step);
+    const double tau_up = data.tau_gravity[model_joint];
+    q_step[model_joint] = q_hold - kStep_rad;
+    arm::computeGravityTorques(model, data, q_step);
+    r.start.load_gradient_nm_per_rad = (tau_up - data.tau_gravity[model_joint]) / (2.0 * kStep_rad);
     r.start_source = "the plant's groups of " + r.joint + " (" + plant_config.source.filename().string() + ")";
   }
   r.start.coulomb_smoothing_radps = r.config.coulomb_smoothing_radps;
+  r.start.stribeck_velocity_radps = r.config.stribeck_velocity_radps;
   checkStartInBounds(r.start, r.config, r.start_source);
 
   id::FitOptions fit = r.config.fit;

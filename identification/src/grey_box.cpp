@@ -28,13 +28,27 @@ struct State {
   double tf = 0.0;           // filtered load-cell torque
 };
 
-// The reduced joint's right-hand side, (I1)-(I2) of grey_box.hpp.
-double cellTorque(const GreyModel& m, const State& x) noexcept {
-  const auto& p = m.value;
-  return x.th - p[kViscous] * x.w - p[kCoulomb] * std::tanh(x.w / m.coulomb_smoothing_radps);
+// Edge opening rounded over w (the plant's H2 in volts): 0 below -w, s above w, a quadratic blend
+// between.
+double roundedOpening(double s, double w) noexcept {
+  if (w <= 0.0) return std::max(s, 0.0);
+  if (s <= -w) return 0.0;
+  if (s >= w) return s;
+  return (s + w) * (s + w) / (4.0 * w);
 }
 
-State rhs(const GreyModel& m, const State& x, double u) noexcept {
+// Friction f(w) of (I2): Coulomb and Stribeck level with a tanh-smoothed sign, plus viscous.
+double friction(const GreyModel& m, double w) noexcept {
+  const auto& p = m.value;
+  const double r = w / m.stribeck_velocity_radps;
+  const double level = p[kCoulomb] + p[kStribeck] * std::exp(-r * r);
+  return level * std::tanh(w / m.coulomb_smoothing_radps) + p[kViscous] * w;
+}
+
+// The reduced joint's right-hand side, (I1)-(I2) of grey_box.hpp.
+double cellTorque(const GreyModel& m, const State& x) noexcept { return x.th - friction(m, x.w); }
+
+State rhs(const GreyModel& m, const State& x, double u, double q_ref) noexcept {
   const auto& p = m.value;
   State d;
   double drive = u;
@@ -45,10 +59,23 @@ State rhs(const GreyModel& m, const State& x, double u) noexcept {
     drive = x.x;
   }
   d.q = x.w;
-  d.w = (cellTorque(m, x) - p[kLoadTorque]) / p[kInertia];
-  d.th = p[kStiffness] * (p[kFlowGain] * (drive + p[kValveOffset]) - x.w - p[kLeakage] * x.th);
+  d.w = (cellTorque(m, x) - p[kLoadTorque] - m.load_gradient_nm_per_rad * (x.q - q_ref)) / p[kInertia];
+  d.th = p[kStiffness] * (p[kFlowGain] * valveLoadFlow(m, drive + p[kValveOffset], x.th) - x.w - p[kLeakage] * x.th);
   if (m.torque_filter_hz > 0.0) d.tf = 2.0 * std::numbers::pi * m.torque_filter_hz * (cellTorque(m, x) - x.tf);
   return d;
+}
+
+// The valve position (before the offset) whose flow balances the leakage under the static load:
+// a Q(x + u_0, tau_g) = c tau_g, by bisection (Q rises with x).
+double restingValve(const GreyModel& m) noexcept {
+  const auto& p = m.value;
+  const double target = p[kLeakage] * p[kLoadTorque] / p[kFlowGain];
+  double lo = -100.0, hi = 100.0;
+  for (int i = 0; i < 80; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (valveLoadFlow(m, mid, p[kLoadTorque]) < target ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi) - p[kValveOffset];
 }
 
 State axpy(const State& x, double h, const State& d) noexcept {
@@ -223,6 +250,16 @@ Polished polish(Problem& problem, const Coordinates& c, const GreyModel& start, 
 
 }  // namespace
 
+double valveLoadFlow(const GreyModel& m, double x_v, double tau_h_nm) noexcept {
+  if (m.stall_torque_nm <= 0.0 && m.underlap_v <= 0.0 && m.edge_rounding_v <= 0.0) return x_v;
+  // (I1) Q = r(x + l) sqrt(1 - tau_h / tau_s) - r(l - x) sqrt(1 + tau_h / tau_s).
+  const double load = m.stall_torque_nm > 0.0 ? tau_h_nm / m.stall_torque_nm : 0.0;
+  const double supply_side = std::sqrt(std::max(0.0, 1.0 - load));
+  const double return_side = std::sqrt(std::max(0.0, 1.0 + load));
+  return roundedOpening(x_v + m.underlap_v, m.edge_rounding_v) * supply_side -
+         roundedOpening(m.underlap_v - x_v, m.edge_rounding_v) * return_side;
+}
+
 const char* greyParamName(int index) noexcept {
   switch (index) {
     case kFlowGain:
@@ -237,6 +274,8 @@ const char* greyParamName(int index) noexcept {
       return "viscous_nms_per_rad";
     case kCoulomb:
       return "coulomb_nm";
+    case kStribeck:
+      return "stribeck_nm";
     case kLoadTorque:
       return "load_torque_nm";
     case kValveOffset:
@@ -306,8 +345,9 @@ Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data
   x.q = n > 0 ? data.q_rad[0] - p[kAngleOffset] : 0.0;
   x.th = p[kLoadTorque];
   x.tf = p[kLoadTorque];
-  // At rest the spool sits where the leakage flow balances: a (x + u_0) = c tau_g.
-  x.x = p[kLeakage] * p[kLoadTorque] / p[kFlowGain] - p[kValveOffset];
+  // At rest the spool sits where the valve's flow balances the leakage under the static load.
+  x.x = restingValve(model);
+  const double q_ref = x.q;
   const std::size_t d = static_cast<std::size_t>(std::max(0, model.delay_samples));
   std::vector<double> out_q(n), out_tau(n);
   const int substeps = model.spool_hz > 0.0 ? 2 * kSubsteps : kSubsteps;
@@ -322,10 +362,10 @@ Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data
     const double u = data.hold_gain_v_per_rad * (data.hold_rad - s.q_rad[k]) + data.excitation_v[k];
     s.command_v[k] = u;
     for (int i = 0; i < substeps; ++i) {
-      const State k1 = rhs(model, x, u);
-      const State k2 = rhs(model, axpy(x, 0.5 * h, k1), u);
-      const State k3 = rhs(model, axpy(x, 0.5 * h, k2), u);
-      const State k4 = rhs(model, axpy(x, h, k3), u);
+      const State k1 = rhs(model, x, u, q_ref);
+      const State k2 = rhs(model, axpy(x, 0.5 * h, k1), u, q_ref);
+      const State k3 = rhs(model, axpy(x, 0.5 * h, k2), u, q_ref);
+      const State k4 = rhs(model, axpy(x, h, k3), u, q_ref);
       x = axpy(axpy(axpy(axpy(x, h / 6.0, k1), h / 3.0, k2), h / 3.0, k3), h / 6.0, k4);
     }
     if (!std::isfinite(x.q) || !std::isfinite(x.w) || !std::isfinite(x.th) || std::abs(x.q) > 1e3) {
@@ -345,8 +385,10 @@ FitOptions defaultFitOptions(const GreyModel& nominal, double factor) {
       s = {true, v - 20.0, v + 20.0, false};
     } else if (i == kValveOffset || i == kAngleOffset || i == kTorqueOffset) {
       s = {false, v - 1.0, v + 1.0, false};
-    } else {
+    } else if (v > 0.0) {
       s = {true, v / factor, v * factor, true};
+    } else {
+      s = {false, v, v, true};
     }
   }
   return o;

@@ -25,6 +25,8 @@ IdentificationConfig parseIdentificationConfig(std::string_view yaml_text, const
     const core::YamlMap model = root.map("model");
     c.coulomb_smoothing_radps = model.number("coulomb_smoothing_radps", "rad/s");
     if (!(c.coulomb_smoothing_radps > 0.0)) model.fail("coulomb_smoothing_radps", "expected > 0");
+    c.stribeck_velocity_radps = model.number("stribeck_velocity_radps", "rad/s");
+    if (!(c.stribeck_velocity_radps > 0.0)) model.fail("stribeck_velocity_radps", "expected > 0");
     model.finish();
 
     const core::YamlMap fit = root.map("fit");

@@ -36,6 +36,11 @@ std::string formatIdentifiedModelYaml(const IdentifiedModel& id) {
   s << "spool_hz: " << exact(id.model.spool_hz) << "\n";
   s << "spool_damping: " << exact(id.model.spool_damping) << "\n";
   s << "torque_filter_hz: " << exact(id.model.torque_filter_hz) << "\n";
+  s << "stribeck_velocity_radps: " << exact(id.model.stribeck_velocity_radps) << "\n";
+  s << "stall_torque_nm: " << exact(id.model.stall_torque_nm) << "\n";
+  s << "underlap_v: " << exact(id.model.underlap_v) << "\n";
+  s << "edge_rounding_v: " << exact(id.model.edge_rounding_v) << "\n";
+  s << "load_gradient_nm_per_rad: " << exact(id.model.load_gradient_nm_per_rad) << "\n";
   s << "parameters:\n";
   for (int i = 0; i < kGreyParams; ++i) {
     const auto k = static_cast<std::size_t>(i);
@@ -62,12 +67,22 @@ IdentifiedModel parseIdentifiedModelYaml(std::string_view yaml_text, const std::
     if (!(id.model.spool_damping > 0.0)) root.fail("spool_damping", "expected > 0");
     id.model.torque_filter_hz = root.number("torque_filter_hz", "Hz");
     if (id.model.torque_filter_hz < 0.0) root.fail("torque_filter_hz", "expected >= 0 (0: no filter)");
+    id.model.stribeck_velocity_radps = root.number("stribeck_velocity_radps", "rad/s");
+    if (!(id.model.stribeck_velocity_radps > 0.0)) root.fail("stribeck_velocity_radps", "expected > 0");
+    id.model.stall_torque_nm = root.number("stall_torque_nm", "N m");
+    if (id.model.stall_torque_nm < 0.0) root.fail("stall_torque_nm", "expected >= 0 (0: load-independent flow)");
+    id.model.underlap_v = root.number("underlap_v", "V");
+    if (id.model.underlap_v < 0.0) root.fail("underlap_v", "expected >= 0");
+    id.model.edge_rounding_v = root.number("edge_rounding_v", "V");
+    if (id.model.edge_rounding_v < 0.0) root.fail("edge_rounding_v", "expected >= 0");
+    id.model.load_gradient_nm_per_rad = root.number("load_gradient_nm_per_rad", "N m/rad");
     const core::YamlMap params = root.map("parameters");
     for (int i = 0; i < kGreyParams; ++i) {
       const auto k = static_cast<std::size_t>(i);
       const core::YamlMap p = params.map(greyParamName(i));
       id.model.value[k] = p.number("value");
       if (positiveGroup(i) && !(id.model.value[k] > 0.0)) p.fail("value", "expected > 0");
+      if (i == kStribeck && id.model.value[k] < 0.0) p.fail("value", "expected >= 0");
       id.standard_error[k] = p.number("standard_error");
       if (id.standard_error[k] < 0.0) p.fail("standard_error", "expected >= 0");
       p.finish();

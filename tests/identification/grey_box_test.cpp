@@ -1,7 +1,10 @@
 // Grey-box fit against data from an independent implementation of the reduced joint in closed
-// loop (a fine-step RK4 written here, 40 sub-steps per sample against the fit's 4): noise-free
-// it recovers the parameters within 2 % and the delay exactly, from the nominal start and from
-// corners of a x3 box; with the angle offset freed it names the direction it cannot determine.
+// loop (a fine-step RK4 written here, 40 sub-steps per sample against the fit's 4, the valve's
+// four metering edges written out one by one with the plant's rounded opening, and the loop
+// settled before logging rather than started at its computed rest): noise-free it recovers the
+// parameters within 2 % (the Stribeck friction held at its value) and the delay exactly, from
+// three corners of a x3 box; with the angle offset freed it names the direction it cannot
+// determine.
 
 #include "fullarm/identification/grey_box.hpp"
 
@@ -12,6 +15,7 @@
 #include <numbers>
 
 #include "fullarm/identification/excitation.hpp"
+#include "fullarm/plant/hydraulics.hpp"
 
 namespace fullarm::identification {
 namespace {
@@ -26,13 +30,19 @@ GreyModel truth() {
   m.value[kInertia] = 0.06;
   m.value[kViscous] = 0.8;
   m.value[kCoulomb] = 0.6;
+  m.value[kStribeck] = 0.4;
   m.value[kLoadTorque] = 4.0;
   m.delay_samples = 2;
+  m.stall_torque_nm = 250.0;
+  m.underlap_v = 0.04;
+  m.edge_rounding_v = 0.02;
+  m.load_gradient_nm_per_rad = 5.0;
   return m;
 }
 
 /// The closed loop of the runner (hold u = K (q_hold - q_read) + r, reading d samples old) on
-/// the reduced joint, integrated with 40 RK4 sub-steps per sample.
+/// the reduced joint, integrated with 40 RK4 sub-steps per sample, settled for 2 s with r = 0
+/// before the log starts.
 SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double hold_gain, double start_rad) {
   const auto& p = m.value;
   // State: angle, speed, hydraulic torque, spool, spool rate, filtered load cell.
@@ -40,40 +50,62 @@ SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double 
   const double wn = 2.0 * std::numbers::pi * m.spool_hz;
   const double wf = 2.0 * std::numbers::pi * m.torque_filter_hz;
   auto cell = [&](const X& x) {
-    return x[2] - p[kViscous] * x[1] - p[kCoulomb] * std::tanh(x[1] / m.coulomb_smoothing_radps);
+    const double level =
+        p[kCoulomb] + p[kStribeck] * std::exp(-std::pow(x[1] / m.stribeck_velocity_radps, 2.0));
+    return x[2] - p[kViscous] * x[1] - level * std::tanh(x[1] / m.coulomb_smoothing_radps);
   };
+  // Load flow of the four metering edges (P->A, A->T, P->B, B->T), each through its own pressure
+  // drop as a fraction of the half supply: (1 -+ tau_h / tau_s).
+  auto load_flow = [&](double x, double th) {
+    const double load = m.stall_torque_nm > 0.0 ? th / m.stall_torque_nm : 0.0;
+    auto open = [&](double s) {
+      return m.edge_rounding_v > 0.0 ? plant::roundedRamp(s, m.edge_rounding_v).value : std::max(s, 0.0);
+    };
+    const double pa = open(x + m.underlap_v) * std::sqrt(1.0 - load);
+    const double at = open(m.underlap_v - x) * std::sqrt(1.0 + load);
+    const double pb = open(m.underlap_v - x) * std::sqrt(1.0 + load);
+    const double bt = open(x + m.underlap_v) * std::sqrt(1.0 - load);
+    return 0.5 * ((pa - at) - (pb - bt));
+  };
+  // The load is tau_g at the hold angle; the log starts within a milliradian of it, so the fit's
+  // tau_g (at the first logged angle) differs by k_g times that, well inside the tolerances.
+  const double q_ref = start_rad - p[kAngleOffset];
   auto f = [&](const X& x, double u) {
     const double drive = m.spool_hz > 0.0 ? x[3] : u;
     return X{x[1],
-             (cell(x) - p[kLoadTorque]) / p[kInertia],
-             p[kStiffness] * (p[kFlowGain] * (drive + p[kValveOffset]) - x[1] - p[kLeakage] * x[2]),
+             (cell(x) - p[kLoadTorque] - m.load_gradient_nm_per_rad * (x[0] - q_ref)) / p[kInertia],
+             p[kStiffness] * (p[kFlowGain] * load_flow(drive + p[kValveOffset], x[2]) - x[1] - p[kLeakage] * x[2]),
              x[4],
              wn * wn * (u - x[3]) - 2.0 * m.spool_damping * wn * x[4],
              wf * (cell(x) - x[5])};
   };
-  X x{start_rad - p[kAngleOffset],
-      0.0,
-      p[kLoadTorque],
-      p[kLeakage] * p[kLoadTorque] / p[kFlowGain] - p[kValveOffset],
-      0.0,
-      p[kLoadTorque]};
+  X x{start_rad - p[kAngleOffset], 0.0, p[kLoadTorque], 0.0, 0.0, p[kLoadTorque]};
   SignalTable t;
   t.names = kExperimentColumns;
   t.columns.assign(5, {});
   std::vector<double> q_out, tau_out;
   constexpr int kSub = 40;
+  constexpr std::size_t kSettle = 2000;
   const double h = kT / kSub;
-  for (std::size_t k = 0; k < r.size(); ++k) {
+  for (std::size_t k = 0; k < r.size() + kSettle; ++k) {
     q_out.push_back(x[0] + p[kAngleOffset]);
     tau_out.push_back((m.torque_filter_hz > 0.0 ? x[5] : cell(x)) + p[kTorqueOffset]);
+    if (k == kSettle) {
+      // Readings from before the log show the state it starts from (as the fit's simulation assumes).
+      q_out.assign(q_out.size(), q_out.back());
+      tau_out.assign(tau_out.size(), tau_out.back());
+    }
     const std::size_t seen =
         k >= static_cast<std::size_t>(m.delay_samples) ? k - static_cast<std::size_t>(m.delay_samples) : 0;
-    const double u = hold_gain * (start_rad - q_out[seen]) + r[k];
-    t.columns[0].push_back(static_cast<double>(k) * kT);
-    t.columns[1].push_back(r[k]);
-    t.columns[2].push_back(u);
-    t.columns[3].push_back(q_out[seen]);
-    t.columns[4].push_back(tau_out[seen]);
+    const double excitation = k >= kSettle ? r[k - kSettle] : 0.0;
+    const double u = hold_gain * (start_rad - q_out[seen]) + excitation;
+    if (k >= kSettle) {
+      t.columns[0].push_back(static_cast<double>(k - kSettle) * kT);
+      t.columns[1].push_back(excitation);
+      t.columns[2].push_back(u);
+      t.columns[3].push_back(q_out[seen]);
+      t.columns[4].push_back(tau_out[seen]);
+    }
     for (int i = 0; i < kSub; ++i) {
       auto add = [](const X& a, double s, const X& b) {
         X out{};
@@ -91,15 +123,15 @@ SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double 
 }
 
 std::vector<ExperimentData> twoExperiments(const GreyModel& m) {
-  const SampledSignal prbs_r = prbs(1.5, 10, 3, 2, kT);                  // 6.1 s, band ~170 Hz
-  const Multisine ms = schroederMultisine(2.0, 0.5, 120.0, 2.0, 3, kT);  // 6 s
+  const SampledSignal prbs_r = prbs(1.5, 10, 3, 1, kT);                  // 3.1 s, band ~170 Hz
+  const Multisine ms = schroederMultisine(2.0, 0.5, 120.0, 2.0, 2, kT);  // 4 s
   return {experimentFromLog(experiment(m, prbs_r.value_v, 10.0, 0.3)),
           experimentFromLog(experiment(m, ms.signal.value_v, 15.0, -0.2))};
 }
 
 void expectWithin(const GreyModel& fitted, const GreyModel& want, double rel, const std::string& label) {
   EXPECT_EQ(fitted.delay_samples, want.delay_samples) << label;
-  for (int i : {kFlowGain, kStiffness, kLeakage, kInertia, kViscous, kCoulomb}) {
+  for (int i : {kFlowGain, kStiffness, kLeakage, kInertia, kViscous, kCoulomb, kStribeck}) {
     const double w = want.value[static_cast<std::size_t>(i)];
     EXPECT_NEAR(fitted.value[static_cast<std::size_t>(i)], w, rel * w) << label << ": " << greyParamName(i);
   }
@@ -115,6 +147,12 @@ TEST(GreyBoxTest, HoldLawIsRecoveredFromTheLog) {
   // The fit's own simulation of the truth reproduces the independent one (sub-step error only).
   const Simulation s = simulateClosedLoop(truth(), data[0]);
   ASSERT_TRUE(s.ok);
+  // The load pressure reaches a good part of the supply, so the orifice law's asymmetry shows.
+  double peak = 0.0;
+  for (double tau : data[0].tau_nm) peak = std::max(peak, std::abs(tau));
+  std::printf("peak load-cell torque %.3g N m of a %.3g N m stall torque\n", peak, truth().stall_torque_nm);
+  EXPECT_GT(peak, 0.2 * truth().stall_torque_nm);
+  EXPECT_LT(peak, 0.9 * truth().stall_torque_nm);
   EXPECT_GT(fitPercent(data[0].q_rad, s.q_rad), 99.9);
   EXPECT_GT(fitPercent(data[0].tau_nm, s.tau_nm), 99.9);
 }
@@ -150,8 +188,12 @@ TEST(GreyBoxTest, NoiseFreeFitRecoversTheParametersAndTheDelayFromEveryStart) {
   nominal.delay_samples = 1;
   // A box x3 either side of the truth: bounds x1/3 .. x3 of the nominal = truth.
   FitOptions options = defaultFitOptions(nominal, 3.0);
-  options.global_samples = 60;
-  options.polished_candidates = 2;
+  // The Stribeck term acts only below w_s (0.05 rad/s), which broadband experiments cross in a few
+  // milliseconds: its standard error is several times the others' (tens of per cent with noise),
+  // so it is held at its known value, as config/identification.yaml does.
+  options.params[kStribeck].free = false;
+  options.global_samples = 40;
+  options.polished_candidates = 1;
   options.threads = 2;
   // Starts: the box's low corner, high corner, and a mixed corner (slightly inside).
   std::vector<GreyModel> starts;
@@ -164,12 +206,23 @@ TEST(GreyBoxTest, NoiseFreeFitRecoversTheParametersAndTheDelayFromEveryStart) {
     s.value[kLoadTorque] = corner == 1 ? 15.0 : -10.0;
     starts.push_back(s);
   }
+  std::vector<FitResult> fits;
   for (std::size_t k = 0; k < starts.size(); ++k) {
     const FitResult fit = fitGreyModel(data, starts[k], options);
     std::printf("start %zu: cost %.3g, %d simulations, global %.2f s, polish %.2f s\n", k, fit.cost, fit.evaluations,
                 fit.global_seconds, fit.polish_seconds);
     expectWithin(fit.model, want, 0.02, "start " + std::to_string(k));
     EXPECT_TRUE(fit.unidentifiable.empty()) << fit.unidentifiable.front();
+    fits.push_back(fit);
+  }
+  // The starts reach the same parameters within the standard errors the fit reports.
+  for (std::size_t k = 1; k < fits.size(); ++k) {
+    for (int i : fits[0].free_params) {
+      const auto j = static_cast<std::size_t>(i);
+      EXPECT_LE(std::abs(fits[k].model.value[j] - fits[0].model.value[j]),
+                std::max(fits[0].standard_error[j], fits[k].standard_error[j]))
+          << "start " << k << ": " << greyParamName(i);
+    }
   }
 }
 
@@ -201,8 +254,10 @@ TEST(GreyBoxTest, NoisyFitStandardErrorsCoverTheTruth) {
     for (auto& t : e.tau_nm) t += 0.2 * white();
   }
   FitOptions options = defaultFitOptions(want, 3.0);
+  options.params[kStribeck].free = false;
   options.global_samples = 20;
   options.polished_candidates = 1;
+  options.threads = 2;
   const FitResult fit = fitGreyModel(data, want, options);
   EXPECT_EQ(fit.model.delay_samples, want.delay_samples);
   for (int i : {kFlowGain, kStiffness, kInertia, kViscous, kCoulomb}) {

@@ -50,7 +50,9 @@ TEST(IdentificationConfigTest, ShippedFileLoads) {
   EXPECT_FALSE(c.fit.params[kLoadTorque].log_scaled);
   EXPECT_DOUBLE_EQ(c.validation.min_fit_angle_percent, 90.0);
   EXPECT_EQ(c.validation.max_lag, 25);
-  EXPECT_DOUBLE_EQ(c.coulomb_smoothing_radps, 0.05);
+  EXPECT_DOUBLE_EQ(c.coulomb_smoothing_radps, 0.01);
+  EXPECT_DOUBLE_EQ(c.stribeck_velocity_radps, 0.05);
+  EXPECT_FALSE(c.fit.params[kStribeck].free);
   EXPECT_TRUE(std::filesystem::exists(loadIdentificationConfig(defaultIdentificationConfigPath()).source));
 }
 

@@ -14,12 +14,17 @@ namespace {
 IdentifiedModel sample() {
   IdentifiedModel id;
   id.joint = "R_EB";
-  id.model.value = {0.41234567890123456, 6.6e3 / 3.0, 1.0e-5 / 7.0, 0.3125, 0.5, 1.1, -3.3, 0.01, 0.0, 0.0};
+  id.model.value = {0.41234567890123456, 6.6e3 / 3.0, 1.0e-5 / 7.0, 0.3125, 0.5, 1.1, 0.25 / 3.0, -3.3, 0.01, 0.0, 0.0};
   id.model.delay_samples = 2;
   id.model.coulomb_smoothing_radps = 0.05;
   id.model.spool_hz = 150.0;
   id.model.spool_damping = 0.7;
   id.model.torque_filter_hz = 200.0 / 3.0;
+  id.model.stribeck_velocity_radps = 0.05 / 3.0;
+  id.model.stall_torque_nm = 60.147262717770488;
+  id.model.underlap_v = 0.04 / 3.0;
+  id.model.edge_rounding_v = 0.02 / 7.0;
+  id.model.load_gradient_nm_per_rad = -1.0 / 3.0;
   for (int i = 0; i < kGreyParams; ++i) id.standard_error[static_cast<std::size_t>(i)] = 1.0 / (i + 3.0);
   id.standard_error[kAngleOffset] = 0.0;
   return id;
@@ -34,6 +39,11 @@ TEST(IdentifiedModelTest, ReadsBackTheSameDoubles) {
   EXPECT_EQ(got.model.spool_damping, want.model.spool_damping);
   EXPECT_EQ(got.model.torque_filter_hz, want.model.torque_filter_hz);
   EXPECT_EQ(got.model.coulomb_smoothing_radps, want.model.coulomb_smoothing_radps);
+  EXPECT_EQ(got.model.stribeck_velocity_radps, want.model.stribeck_velocity_radps);
+  EXPECT_EQ(got.model.stall_torque_nm, want.model.stall_torque_nm);
+  EXPECT_EQ(got.model.underlap_v, want.model.underlap_v);
+  EXPECT_EQ(got.model.edge_rounding_v, want.model.edge_rounding_v);
+  EXPECT_EQ(got.model.load_gradient_nm_per_rad, want.model.load_gradient_nm_per_rad);
   for (int i = 0; i < kGreyParams; ++i) {
     const auto k = static_cast<std::size_t>(i);
     EXPECT_EQ(got.model.value[k], want.model.value[k]) << greyParamName(i);

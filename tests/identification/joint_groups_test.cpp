@@ -27,6 +27,12 @@ TEST(JointGroupsTest, RotaryVaneGroupsFollowMerrittsFormulas) {
   j.chambers.dead_volume_b_m3 = 1.0e-6;
   j.chambers.internal_leakage_m3ps_per_pa = 4.0e-13;
   j.friction.coulomb_nm = 0.7;
+  j.friction.static_nm = 0.9;
+  j.friction.stribeck_velocity_radps = 0.04;
+  j.friction.smoothing_velocity_radps = 0.02;
+  j.valve.spool_stroke_m = 2.0e-4;
+  j.valve.lap_pa_m = j.valve.lap_pb_m = j.valve.lap_at_m = j.valve.lap_bt_m = -1.0e-6;
+  j.valve.edge_rounding_m = 4.0e-7;
   j.friction.viscous_nms_per_rad = 0.2;
   j.min_rad = -1.0;
   j.max_rad = 1.0;
@@ -43,6 +49,14 @@ TEST(JointGroupsTest, RotaryVaneGroupsFollowMerrittsFormulas) {
   EXPECT_DOUBLE_EQ(m.value[kInertia], 0.3 + 1.0e-4);
   EXPECT_DOUBLE_EQ(m.value[kViscous], 0.2);
   EXPECT_DOUBLE_EQ(m.value[kCoulomb], 0.7);
+  EXPECT_NEAR(m.value[kStribeck], 0.2, 1e-12);
+  EXPECT_DOUBLE_EQ(m.stribeck_velocity_radps, 0.04);
+  EXPECT_DOUBLE_EQ(m.coulomb_smoothing_radps, 0.02);
+  // The valve's structure: stall torque D (p_s - p_r), the underlap and rounding over the
+  // stroke per volt (2e-4 m x 0.1 / V = 2e-5 m/V).
+  EXPECT_NEAR(m.stall_torque_nm, d * 20.0e6, 1e-9);
+  EXPECT_NEAR(m.underlap_v, 0.05, 1e-12);
+  EXPECT_NEAR(m.edge_rounding_v, 0.02, 1e-12);
   EXPECT_DOUBLE_EQ(m.value[kLoadTorque], 4.0);
   EXPECT_EQ(m.delay_samples, 2);
 }

@@ -2,20 +2,27 @@
 /// @file
 /// Grey-box output-error fit of one hydraulic joint in closed loop.
 ///
-/// The model is the joint reduced to the groups the data can determine (Merritt's linearised
-/// valve-cylinder with the load, docs/identification.md), in joint units:
+/// The model is the joint reduced to the groups the data can determine, with the structure of the
+/// plant's valve and friction (docs/identification.md), in joint units:
 ///
-///   tau_h' = K_h (a (u + u_0) - w - c tau_h)                 hydraulic torque D p_L   (I1)
-///   J w'   = tau_h - b w - tau_c tanh(w / w_eps) - tau_g     link                     (I2)
+///   tau_h' = K_h (a Q(u + u_0, tau_h) - w - c tau_h)              hydraulic torque D p_L   (I1)
+///   Q(x, tau_h) = r(x + l) sqrt(1 - tau_h / tau_s) - r(l - x) sqrt(1 + tau_h / tau_s)
+///   J w'   = tau_h - f(w) - tau_g - k_g (q - q_0)                  link                     (I2)
+///   f(w)   = (tau_c + tau_st exp(-(w / w_s)^2)) tanh(w / w_eps) + b w
 ///   q'     = w
-///   q_meas = q + q_off,   tau_meas = tau_h - b w - tau_c tanh(w / w_eps) + tau_off
+///   q_meas = q + q_off,   tau_meas = tau_h - f(w) + tau_off
 ///
-/// a = K_q / D is the valve's flow gain as a joint speed per volt (amplifier gain x rated flow
-/// over the displacement: one parameter), K_h = 4 beta D^2 / V_t the hydraulic stiffness (bulk
-/// modulus over volume: one parameter), c = C_tl / D^2 the leakage, J the inertia, b, tau_c
-/// viscous and Coulomb friction, tau_g the static load, u_0 the valve null offset and q_off,
-/// tau_off the sensor offsets. The valve command is delayed by d samples between the reading it
-/// was computed from and the reading that shows its effect.
+/// Q is the four-edge orifice law of a matched symmetric valve (the plant's H6 with H10's no-load
+/// gain factored out): r the edge opening rounded over `edge_rounding_v` (H2), l the underlap, and
+/// tau_s = D (p_s - p_r) the stall torque, all known from the plant's file. a = K_q / D is the
+/// valve's flow gain as a joint speed per volt (amplifier gain x rated flow over the
+/// displacement: one parameter), K_h = 4 beta D^2 / V_t the hydraulic stiffness (bulk modulus
+/// over volume: one parameter), c = C_tl / D^2 the leakage, J the inertia, b, tau_c, tau_st
+/// viscous, Coulomb and Stribeck friction (the plant's H7), tau_g the static load at the start
+/// angle q_0 and k_g its known gradient, u_0 the valve null offset and q_off, tau_off the sensor
+/// offsets. The valve command is delayed by d samples between the reading it was computed from
+/// and the reading that shows its effect. With tau_s = 0, l = 0 and no rounding Q(x) = x, the
+/// linearised valve.
 ///
 /// The fit simulates the known closed loop (the logged hold law u = K (q_hold - q_meas) + r
 /// driven by the logged excitation r) and minimises the output error on angle and torque,
@@ -45,6 +52,7 @@ enum GreyParam : int {
   kInertia,       ///< J [kg m^2]
   kViscous,       ///< b [N m s/rad]
   kCoulomb,       ///< tau_c [N m]
+  kStribeck,      ///< tau_st, static minus Coulomb friction [N m]
   kLoadTorque,    ///< tau_g [N m]
   kValveOffset,   ///< u_0 [V]
   kAngleOffset,   ///< q_off [rad]
@@ -57,9 +65,18 @@ enum GreyParam : int {
 
 /// Values of the reduced model.
 struct GreyModel {
-  std::array<double, kGreyParams> value{0.5, 1.0e4, 1.0e-4, 0.05, 0.5, 0.5, 0.0, 0.0, 0.0, 0.0};
+  std::array<double, kGreyParams> value{0.5, 1.0e4, 1.0e-4, 0.05, 0.5, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0};
   int delay_samples = 1;
   double coulomb_smoothing_radps = 0.05;  ///< w_eps (fixed)
+  double stribeck_velocity_radps = 0.05;  ///< w_s (fixed)
+  /// Known valve structure (fixed, not fitted): the stall torque tau_s = D (p_s - p_r) of the
+  /// orifice law (0: flow independent of the load), the underlap l of each metering edge and the
+  /// edges' rounding, both in volts of command (0: critically centred, sharp edges).
+  double stall_torque_nm = 0.0;
+  double underlap_v = 0.0;
+  double edge_rounding_v = 0.0;
+  /// Known gradient k_g of the static load about the start angle [N m/rad] (gravity; fixed).
+  double load_gradient_nm_per_rad = 0.0;
   /// Known channel dynamics (fixed, not fitted; 0 = none): the servovalve spool as a second-order
   /// lag of the command (natural frequency, damping ratio) and the load cell's first-order
   /// analog low-pass.
@@ -88,8 +105,13 @@ struct Simulation {
   bool ok = true;  ///< false when the state diverged (non-finite or beyond 1e3 rad)
 };
 
+/// Valve load flow Q(x, tau_h) of (I1) in volts of command: the orifice law with `model`'s stall
+/// torque, underlap and edge rounding (x itself for a linearised valve).
+[[nodiscard]] double valveLoadFlow(const GreyModel& model, double x_v, double tau_h_nm) noexcept;
+
 /// Simulates the closed loop of `data` (its hold law and excitation) with `model`, from rest at
-/// the first logged angle; 4 RK4 sub-steps per sample (8 with a spool), the command held over
+/// the first logged angle (the spool where the valve's flow balances the leakage under the static
+/// load); 4 RK4 sub-steps per sample (8 with a spool), the command held over
 /// each sample, through the spool and the load-cell filter when the model has them.
 [[nodiscard]] Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data);
 
@@ -116,8 +138,9 @@ struct FitOptions {
   std::function<void(const std::string&)> progress;
 };
 
-/// Bounds spanning x`factor` either side of `model`'s positive values, offsets free in +-`offset`
-/// (sensor offsets fixed at zero); a sensible default around a nominal model.
+/// Bounds spanning x`factor` either side of `model`'s positive values (a group at zero, such as
+/// a Stribeck friction the model leaves out, is fixed), the load free in +-20 N m, offsets fixed;
+/// a sensible default around a nominal model.
 [[nodiscard]] FitOptions defaultFitOptions(const GreyModel& nominal, double factor = 3.0);
 
 /// Result of a fit.

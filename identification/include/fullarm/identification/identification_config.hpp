@@ -18,6 +18,7 @@ struct IdentificationConfig {
   FitOptions fit;  ///< bounds, scaling and stages (no progress callback)
   ValidationThresholds validation;
   double coulomb_smoothing_radps = 0.05;  ///< the reduced model's w_eps
+  double stribeck_velocity_radps = 0.05;  ///< the reduced model's w_s
 };
 
 /// Parses the YAML text; `source` names it in errors.

@@ -12,7 +12,11 @@ namespace fullarm::identification {
 /// Groups of `joint` at `q_rad`: a = amplifier gain x no-load flow gain / D(q) (H10), K_h =
 /// hydraulic stiffness at mean supply-return pressure (H9), c = internal leakage / D(q)^2, J =
 /// `link_inertia_kgm2` + the actuator's inertia, b and tau_c the joint's viscous and Coulomb
-/// friction, tau_g = `load_torque_nm`; offsets zero, delay `delay_samples`. D(q) is the vane's
+/// friction, tau_st = static minus Coulomb friction, tau_g = `load_torque_nm`; offsets zero,
+/// delay `delay_samples`. The known structure comes with them: the friction's smoothing and
+/// Stribeck velocities, the stall torque D(q) (p_s - p_r), the mean underlap and the edge rounding
+/// of the valve's metering edges in volts of command (stroke x amplifier gain per volt), the
+/// spool's natural frequency and damping and the load cell's filter. D(q) is the vane's
 /// displacement or the cylinder's area times its moment arm.
 [[nodiscard]] GreyModel greyModelFromJoint(const plant::JointParams& joint, double q_rad, double link_inertia_kgm2,
                                            double load_torque_nm, int delay_samples);

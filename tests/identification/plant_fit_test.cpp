@@ -1,0 +1,118 @@
+// The grey-box fit on data from the simulated DTS itself (the CVODES-class hydraulic plant of
+// fullarm::plant with its 12-bit sensors and their noise, the elbow alone with its neighbours
+// locked): from a corner of a x3 box the identified flow gain, hydraulic stiffness, leakage,
+// inertia and static load lie within 10 % of the plant's own groups at the operating angle
+// (greyModelFromJoint), the delay is the device's latency, and the model fits a held-out
+// experiment at >= 90 % in angle and torque. The friction is only bounded (see below).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "fullarm/arm/arm_data.hpp"
+#include "fullarm/arm/dynamics.hpp"
+#include "fullarm/hil/sim_io.hpp"
+#include "fullarm/identification/excitation.hpp"
+#include "fullarm/identification/experiment.hpp"
+#include "fullarm/identification/grey_box.hpp"
+#include "fullarm/identification/joint_groups.hpp"
+#include "fullarm/identification/validation.hpp"
+#include "hil_fixture.hpp"
+
+namespace fullarm::identification {
+namespace {
+
+constexpr double kT = 1.0e-3;
+constexpr int kLatency = 1;
+constexpr int kElbow = 3;
+
+// The elbow alone on the simulated DTS (the plant's single-joint mode), at the fixture's posture.
+ExperimentData runOnElbow(const SampledSignal& r, std::uint64_t seed) {
+  plant::PlantConfig config = hil::test::plantConfig();
+  const plant::JointParams elbow = config.joints[kElbow];
+  config.joints = {elbow};
+  config.seed = seed;
+  hil::SimulatedArm arm(hil::test::model(), config, hil::test::restPosture(), kT, kLatency);
+  hil::SimIoDevice device(arm, {}, hil::IoSafetyParams{});
+  ExperimentOptions options;
+  options.joint = 0;
+  options.min_rad = elbow.min_rad;
+  options.max_rad = elbow.max_rad;
+  const ExperimentResult result = runExperiment(device, r, options);
+  EXPECT_TRUE(result.completed) << result.stop_reason;
+  return experimentFromLog(result.log);
+}
+
+// The plant's groups at the experiment's mean angle, with the locked arm's inertia and gravity.
+GreyModel plantGroups(const ExperimentData& data) {
+  const plant::JointParams& elbow = hil::test::plantConfig().joints[kElbow];
+  double q_mean = 0.0;
+  for (double q : data.q_rad) q_mean += q;
+  q_mean /= static_cast<double>(data.q_rad.size());
+  const arm::ArmModel& model = hil::test::model();
+  Eigen::VectorXd q = hil::test::restPosture();
+  q[kElbow] = q_mean;
+  arm::ArmData fk(model);
+  arm::computeMassMatrix(model, fk, q);
+  arm::computeGravityTorques(model, fk, q);
+  GreyModel m = greyModelFromJoint(elbow, q_mean, fk.mass_matrix(kElbow, kElbow), fk.tau_gravity[kElbow], kLatency);
+  q[kElbow] = q_mean + 1e-4;
+  arm::computeGravityTorques(model, fk, q);
+  const double up = fk.tau_gravity[kElbow];
+  q[kElbow] = q_mean - 1e-4;
+  arm::computeGravityTorques(model, fk, q);
+  m.load_gradient_nm_per_rad = (up - fk.tau_gravity[kElbow]) / 2e-4;
+  return m;
+}
+
+TEST(PlantFitTest, TheElbowsGroupsAreRecoveredFromTheSimulatedPlant) {
+  const ExperimentData fit_data = runOnElbow(prbs(1.0, 8, prbsClockSamplesForBand(30.0, kT), 1, kT), 11);
+  const ExperimentData held_out = runOnElbow(schroederMultisine(1.0, 0.25, 30.0, 4.0, 1, kT).signal, 12);
+  const GreyModel truth = plantGroups(fit_data);
+
+  // Start from a corner of a x3 box about the truth (the Stribeck friction held at its value).
+  GreyModel start = truth;
+  start.delay_samples = 0;
+  const std::array<double, 6> corner{2.5, 0.4, 2.5, 0.4, 2.5, 0.4};
+  int c = 0;
+  for (int i : {kFlowGain, kStiffness, kLeakage, kInertia, kViscous, kCoulomb}) {
+    start.value[static_cast<std::size_t>(i)] *= corner[static_cast<std::size_t>(c++)];
+  }
+  FitOptions options = defaultFitOptions(truth, 3.0);
+  options.params[kStribeck].free = false;
+  options.global_samples = 30;
+  options.polished_candidates = 1;
+  options.max_iterations = 30;
+  options.threads = 2;
+  const FitResult fit = fitGreyModel({fit_data}, start, options);
+  std::printf("cost %.4g, %d simulations, global %.1f s, polish %.1f s, delay %d\n", fit.cost, fit.evaluations,
+              fit.global_seconds, fit.polish_seconds, fit.model.delay_samples);
+  for (int i : {kFlowGain, kStiffness, kLeakage, kInertia, kViscous, kCoulomb, kLoadTorque}) {
+    const auto k = static_cast<std::size_t>(i);
+    std::printf("%-32s %.5g (plant %.5g) +- %.3g\n", greyParamName(i), fit.model.value[k], truth.value[k],
+                fit.standard_error[k]);
+  }
+  EXPECT_EQ(fit.model.delay_samples, kLatency);
+  for (int i : {kFlowGain, kStiffness, kLeakage, kInertia, kLoadTorque}) {
+    const auto k = static_cast<std::size_t>(i);
+    EXPECT_NEAR(fit.model.value[k], truth.value[k], 0.10 * truth.value[k]) << greyParamName(i);
+  }
+  // The friction is not recovered to 10 % from these data (Coulomb about 0.7 N m against the
+  // plant's 0.5, viscous about 0.24 against 0.1: docs/identification.md); it stays inside a factor
+  // of three.
+  for (int i : {kViscous, kCoulomb}) {
+    const auto k = static_cast<std::size_t>(i);
+    EXPECT_GT(fit.model.value[k], truth.value[k] / 3.0) << greyParamName(i);
+    EXPECT_LT(fit.model.value[k], truth.value[k] * 3.0) << greyParamName(i);
+  }
+
+  ValidationThresholds thresholds;
+  const ModelValidation v = validateModel(fit.model, held_out, thresholds);
+  std::printf("held-out fit: angle %.1f %%, torque %.1f %%\n", v.angle.fit_percent, v.torque.fit_percent);
+  EXPECT_GE(v.angle.fit_percent, 90.0);
+  EXPECT_GE(v.torque.fit_percent, 90.0);
+}
+
+}  // namespace
+}  // namespace fullarm::identification
