@@ -32,8 +32,8 @@ nlohmann::json readSummary(const std::filesystem::path& dir) {
 TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
   const auto dir = tempDir("sim");
   const Result r = runFullarm("identify --io sim --joint EB --duration 1 --quiet --out " + dir.string());
-  // The reduced model misses its thresholds on the full simulated plant: 1 (fails) is expected,
-  // 0 allowed; anything else is an error.
+  // On the simulated plant the model fits the held-out data but its residuals are not white
+  // (docs/identification.md): 1 (fails) is expected, 0 allowed; anything else is an error.
   ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
   for (const char* f :
        {"experiment_fit.csv", "experiment_validation.csv", "identified.yaml", "summary.json", "report.html"}) {
@@ -59,6 +59,17 @@ TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
   }
   const double fit_angle = result["validation"]["fit_angle_percent"].get<double>();
   EXPECT_TRUE(std::isfinite(fit_angle));
+  // The driven joint alone and the valve's structure in the model: the held-out fit reaches 90 %
+  // in both channels even from 1 s experiments, the delay is the simulated DTS's one-sample
+  // latency, and the flow gain, hydraulic stiffness and inertia lie within 10 % of the plant's
+  // groups the fit started from.
+  EXPECT_GE(fit_angle, 90.0);
+  EXPECT_GE(result["validation"]["fit_torque_percent"].get<double>(), 90.0);
+  EXPECT_EQ(result["delay_samples"].get<int>(), 1);
+  for (const char* name : {"flow_gain_radps_per_v", "hydraulic_stiffness_nm_per_rad", "inertia_kgm2"}) {
+    const double plant = result["parameters"][name]["start"].get<double>();
+    EXPECT_NEAR(result["parameters"][name]["value"].get<double>(), plant, 0.10 * plant) << name;
+  }
   EXPECT_EQ(result["validation"]["pass"].get<bool>(), r.exit_code == 0);
 
   // The same data through --log: the same fit.

@@ -61,7 +61,7 @@ TEST(ValidationTest, CrossCorrelationFindsAFilteredExcitationInTheResidual) {
 
 TEST(ValidationTest, VerdictPassesTheTrueModelAndFailsAWrongOne) {
   GreyModel truth;
-  truth.value = {0.4, 8.0e3, 5.0e-4, 0.06, 0.8, 0.6, 4.0, 0.0, 0.0, 0.0};
+  truth.value = {0.4, 8.0e3, 5.0e-4, 0.06, 0.8, 0.6, 0.0, 4.0, 0.0, 0.0, 0.0};
   truth.delay_samples = 1;
   ExperimentData d;
   d.excitation_v = prbs(1.5, 11, 3, 1, kT).value_v;
