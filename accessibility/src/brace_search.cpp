@@ -93,6 +93,8 @@ struct Search {
     const std::array<haptics::RenderMode, 1> modes{haptics::RenderMode::kFullArm};
     const haptics::QueryResult query = haptics::renderQuery(model, world, global, params, q, modes);
     const haptics::QueryRendering& r = query.renderings.front();
+    arm::computeForwardKinematics(model, fk, q);
+    result.max_hand_error_m = std::max(result.max_hand_error_m, poseError().head<3>().norm());
     for (int l = 0; l < model.numJoints(); ++l) {
       if (haptics::isHandLink(model, l)) continue;
       const auto li = static_cast<std::size_t>(l);
@@ -102,8 +104,6 @@ struct Search {
         return false;
       }
     }
-    arm::computeForwardKinematics(model, fk, q);
-    result.max_hand_error_m = std::max(result.max_hand_error_m, poseError().head<3>().norm());
     out = analysePush(model, human, fk, push_W, query.minima, push_options);
     return true;
   }

@@ -21,6 +21,7 @@
 /// the program chooses it.
 
 #include <Eigen/Core>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
