@@ -7,7 +7,7 @@
 // bar placed under the forearm (60 evaluations: one haptic query and two programs each).
 // Results pass through DoNotOptimize as const values or whole structs: with GCC, the overload for
 // a modifiable double left garbage in the variable it was given.
-// Figures: BENCHMARKS.md; the targets are 1 ms for the program and 2 s for the search.
+// Speed targets: 1 ms for one program, 2 s for one search.
 
 #include <benchmark/benchmark.h>
 
