@@ -2,8 +2,10 @@
 
 #include <ClpSimplex.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -14,7 +16,7 @@ namespace fullarm::accessibility {
 namespace {
 
 const double kInf = COIN_DBL_MAX;  // CLP's infinity
-constexpr double kDropTolerance = 1e-12;
+constexpr double kCertificateTolerance = 1e-7;  // relative, on bounds, activities and reduced costs
 
 /// Two unit vectors completing `d` to a right-handed orthonormal basis.
 void orthogonalBasis(const Eigen::Vector3d& d, Eigen::Vector3d& e1, Eigen::Vector3d& e2) {
@@ -51,6 +53,7 @@ void checkProblem(const ForceProblem& p, const ForceLpOptions& o) {
   }
   if (!(o.friction_mu >= 0.0)) throw std::invalid_argument("force program: friction_mu must be >= 0");
   if (!(o.off_axis_force_max_n >= 0.0)) throw std::invalid_argument("force program: off_axis_force_max_n must be >= 0");
+  if (!(o.drop_tolerance >= 0.0)) throw std::invalid_argument("force program: drop_tolerance must be >= 0");
 }
 
 }  // namespace
@@ -116,9 +119,7 @@ ForceLpResult solveForceLp(const ForceProblem& problem, const ForceLpOptions& op
   std::vector<double> value;
   for (const Eigen::VectorXd& col : columns) {
     for (int r = 0; r < num_rows; ++r) {
-      // Entries this small are rounding noise of the Jacobians; CLP mishandles elements near its
-      // zero tolerance (one of 1e-17 left the optimum at s = 0), so they are dropped.
-      if (std::abs(col[r]) > kDropTolerance) {
+      if (std::abs(col[r]) > options.drop_tolerance) {
         index.push_back(r);
         value.push_back(col[r]);
       }
@@ -134,19 +135,76 @@ ForceLpResult solveForceLp(const ForceProblem& problem, const ForceLpOptions& op
     row_upper[static_cast<std::size_t>(r)] = problem.tau_max_nm[r] - problem.gravity_nm[r];
   }
 
-  ClpSimplex lp;
-  lp.setLogLevel(0);
-  lp.loadProblem(num_cols, num_rows, start.data(), index.data(), value.data(), lower.data(), upper.data(),
-                 objective.data(), row_lower.data(), row_upper.data());
-  if (options.algorithm == LpAlgorithm::kDual) {
-    lp.dual();
-  } else {
-    lp.primal();
+  // CLP's optimum is accepted only with its certificate: the primal point within its bounds, and
+  // the row duals y giving reduced costs c - A^T y of the right sign at every bound (optimality
+  // conditions checked here, not taken from CLP's status). A failed check is retried once with the
+  // other simplex algorithm from scratch.
+  auto certified = [&](const ClpSimplex& lp) {
+    const double* x = lp.getColSolution();
+    const double* y = lp.dualRowSolution();
+    double y_max = 0.0;
+    for (int r = 0; r < num_rows; ++r) y_max = std::max(y_max, std::abs(y[r]));
+    const double dual_tol = kCertificateTolerance * (1.0 + y_max);
+    auto at = [](double v, double bound) { return std::abs(v - bound) <= kCertificateTolerance * (1.0 + std::abs(bound)); };
+    Eigen::VectorXd activity = Eigen::VectorXd::Zero(num_rows);
+    for (int c = 0; c < num_cols; ++c) {
+      const auto cu = static_cast<std::size_t>(c);
+      if (!std::isfinite(x[c])) return false;
+      if (x[c] < lower[cu] - kCertificateTolerance * (1.0 + std::abs(lower[cu])) ||
+          (upper[cu] < kInf && x[c] > upper[cu] + kCertificateTolerance * (1.0 + std::abs(upper[cu])))) {
+        return false;
+      }
+      activity += x[c] * columns[cu];
+      double reduced = objective[cu];
+      for (int r = 0; r < num_rows; ++r) reduced -= columns[cu][r] * y[r];
+      const bool at_lower = at(x[c], lower[cu]);
+      const bool at_upper = upper[cu] < kInf && at(x[c], upper[cu]);
+      if (at_lower && at_upper) continue;
+      if (at_lower ? reduced < -dual_tol : at_upper ? reduced > dual_tol : std::abs(reduced) > dual_tol) return false;
+    }
+    for (int r = 0; r < num_rows; ++r) {
+      const auto ru = static_cast<std::size_t>(r);
+      if (activity[r] < row_lower[ru] - kCertificateTolerance * (1.0 + std::abs(row_lower[ru])) ||
+          activity[r] > row_upper[ru] + kCertificateTolerance * (1.0 + std::abs(row_upper[ru]))) {
+        return false;
+      }
+      const bool at_lower = at(activity[r], row_lower[ru]);
+      const bool at_upper = at(activity[r], row_upper[ru]);
+      if (at_lower && at_upper) continue;
+      if (at_lower ? y[r] < -dual_tol : at_upper ? y[r] > dual_tol : std::abs(y[r]) > dual_tol) return false;
+    }
+    return true;
+  };
+
+  std::optional<ClpSimplex> solved;
+  const LpAlgorithm other = options.algorithm == LpAlgorithm::kDual ? LpAlgorithm::kPrimal : LpAlgorithm::kDual;
+  bool optimum_certified = false;
+  for (const LpAlgorithm algorithm : {options.algorithm, other}) {
+    ClpSimplex& lp = solved.emplace();
+    lp.setLogLevel(0);
+    lp.loadProblem(num_cols, num_rows, start.data(), index.data(), value.data(), lower.data(), upper.data(),
+                   objective.data(), row_lower.data(), row_upper.data());
+    if (algorithm == LpAlgorithm::kDual) {
+      lp.dual();
+    } else {
+      lp.primal();
+    }
+    if (lp.status() != 0) break;
+    optimum_certified = certified(lp);
+    if (optimum_certified) break;
   }
 
+  const ClpSimplex& lp = *solved;
   ForceLpResult result;
   switch (lp.status()) {
-    case 0: result.status = ForceStatus::kOptimal; break;
+    case 0:
+      if (!optimum_certified) {
+        result.status = ForceStatus::kSolverFailed;
+        result.message = "CLP's optimum failed the optimality check with both simplex algorithms";
+        return result;
+      }
+      result.status = ForceStatus::kOptimal;
+      break;
     case 1:
       result.status = ForceStatus::kCannotHold;
       result.message = "infeasible: no muscle torques within the limits hold the arm here, even without a push";

@@ -333,6 +333,18 @@ TEST(ForceLp, RoundingNoiseInAJacobianDoesNotChangeTheOptimum) {
   p.contacts[0].J_c(1, 1) = -1.04e-17;
   EXPECT_NEAR(solveForceLp(p).push_n, clean, kTolerance_n);
   EXPECT_NEAR(clean, 200.0, kTolerance_n);
+  // Given to CLP, the entry makes it report s = 0 as optimal; the optimality check refuses that
+  // answer: the result is the true optimum or a reported failure, never a wrong optimum.
+  ForceLpOptions keep;
+  keep.drop_tolerance = 0.0;
+  const ForceLpResult r = solveForceLp(p, keep);
+  if (r.status == ForceStatus::kOptimal) {
+    EXPECT_NEAR(r.push_n, clean, kTolerance_n);
+  } else {
+    EXPECT_EQ(r.status, ForceStatus::kSolverFailed);
+    EXPECT_TRUE(std::isnan(r.push_n));
+    EXPECT_NE(r.message.find("optimality check"), std::string::npos) << r.message;
+  }
 }
 
 TEST(ForceLp, RejectsInconsistentPrograms) {

@@ -59,6 +59,9 @@ struct ForceLpOptions {
   double friction_mu = 0.0;            ///< 0: frictionless contacts (normal force only); else the pyramid
   double off_axis_force_max_n = 0.0;   ///< bound on each off-axis hand force component [N]; 0: f = s d
   LpAlgorithm algorithm = LpAlgorithm::kDual;
+  /// Matrix entries at most this large are dropped before CLP sees them: rounding noise of the
+  /// Jacobians, which CLP mishandles (an entry of 1e-17 made it report s = 0 as optimal).
+  double drop_tolerance = 1e-12;
 };
 
 /// Outcome of the program.
@@ -66,7 +69,7 @@ enum class ForceStatus {
   kOptimal,       ///< push_n is the largest push
   kCannotHold,    ///< infeasible: the arm cannot even hold itself here (no push >= 0 is possible)
   kUnbounded,     ///< no torque limit binds the push (the push line runs through the joints)
-  kSolverFailed,  ///< CLP stopped for another reason (message says which)
+  kSolverFailed,  ///< CLP stopped for another reason, or its optimum failed the optimality check (message says which)
 };
 
 /// Name of a status ("optimal", "cannot hold", "unbounded", "solver failed").
@@ -99,7 +102,11 @@ struct ForceLpResult {
 /// Tolerance on a torque for reporting a limit as active [N m].
 inline constexpr double kActiveLimitTolerance_nm = 1e-6;
 
-/// Solves max s subject to the balance and the limits (see the file comment) with CLP.
+/// Solves max s subject to the balance and the limits (see the file comment) with CLP. An optimum
+/// is reported only when it passes an optimality check made here (primal point within its bounds;
+/// reduced costs of the row duals of the right sign at every bound); otherwise the problem is
+/// solved again from scratch with the other simplex algorithm, and kSolverFailed reported if that
+/// fails the check too.
 /// @throws std::invalid_argument for inconsistent sizes, a non-unit push direction, a limit
 ///   pair with tau_min > tau_max, a negative mu or off-axis bound
 [[nodiscard]] ForceLpResult solveForceLp(const ForceProblem& problem, const ForceLpOptions& options = {});
