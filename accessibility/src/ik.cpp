@@ -73,6 +73,7 @@ IkSolution solveIk(const arm::ArmModel& model, arm::ArmData& fk, const Eigen::Ve
       arm::computeForwardKinematics(model, fk, qh);
       J(6, j) = wrapAngle(swivelAngle(fk) - psi) / kH;
     }
+    // A1: damped least squares, dq = J^T (J J^T + lambda^2 I)^-1 e.
     const Eigen::Matrix<double, 7, 7> A =
         J * J.transpose() + options.damping * options.damping * Eigen::Matrix<double, 7, 7>::Identity();
     Eigen::Matrix<double, 7, 1> dq = J.transpose() * A.ldlt().solve(e);

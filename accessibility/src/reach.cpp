@@ -284,12 +284,12 @@ ReachResult planWithGoals(const ReachProblem& p, ReachMode mode, const ReachOpti
 
 void validateOptions(const ReachOptions& options, const haptics::HapticsParams& params) {
   validateReachLimits(options.limits, params.force_threshold_m);
-  if (options.max_iterations < 1) throw std::invalid_argument("reach: max_iterations must be at least 1");
+  if (options.max_iterations < 1) throw ReachInputError("reach: max_iterations must be at least 1");
   if (!(options.motion_resolution > 0.0 && options.motion_resolution < 0.1)) {
-    throw std::invalid_argument("reach: motion_resolution must lie in (0, 0.1)");
+    throw ReachInputError("reach: motion_resolution must lie in (0, 0.1)");
   }
   if (options.ik.swivel_samples < 1 || options.ik.roll_samples < 1) {
-    throw std::invalid_argument("reach: the goal sweep needs at least one swivel and one roll sample");
+    throw ReachInputError("reach: the goal sweep needs at least one swivel and one roll sample");
   }
 }
 
@@ -322,7 +322,7 @@ void validateReachLimits(const ReachLimits& limits, double force_threshold_m) {
     if (!std::isfinite(v) || v < 0.0) {
       std::ostringstream s;
       s << "reach limits: " << name << " must be a finite value >= 0, got " << v;
-      throw std::invalid_argument(s.str());
+      throw ReachInputError(s.str());
     }
   };
   check(limits.clearance_margin_m, "clearance_margin_m");
@@ -332,7 +332,7 @@ void validateReachLimits(const ReachLimits& limits, double force_threshold_m) {
     std::ostringstream s;
     s << "reach limits: max_skin_depth_m " << limits.max_skin_depth_m << " m must lie below the force threshold d_f "
       << force_threshold_m << " m (deeper, the link would touch the surface)";
-    throw std::invalid_argument(s.str());
+    throw ReachInputError(s.str());
   }
 }
 
@@ -416,7 +416,7 @@ ReachResult planReach(const ReachProblem& problem, ReachMode mode, const ReachOp
 }
 
 bool ReachStudy::handOnlyFalsePositive() const noexcept {
-  return hand_only.verdict == Verdict::kReachable && contact.verdict != Verdict::kReachable;
+  return hand_only.verdict == Verdict::kReachable && contact.verdict == Verdict::kUnreachable;
 }
 
 ReachStudy studyReach(const ReachProblem& problem, const ReachOptions& options) {

@@ -28,9 +28,9 @@ struct Study {
   haptics::CollisionWorld world;
   ReachProblem problem;
 
-  explicit Study(int env)
-      : scene(haptics::loadScene(sourceDir() / ("scenes/accessibility/env" + std::to_string(env) + ".yaml"))),
-        world(haptics::makeCollisionWorld(scene, model)) {
+  explicit Study(int env) : Study(sourceDir() / ("scenes/accessibility/env" + std::to_string(env) + ".yaml")) {}
+  explicit Study(const std::filesystem::path& file)
+      : scene(haptics::loadScene(file)), world(haptics::makeCollisionWorld(scene, model)) {
     problem.model = &model;
     problem.world = &world;
     problem.params = haptics::loadHapticsParams(haptics::defaultHapticsParamsPath());
@@ -91,6 +91,16 @@ TEST(ReachStudyTest, Environments145NeedContact) {
     }
     EXPECT_LT(touching, s.problem.params.force_threshold_m);  // some link is in the skin: contact
   }
+}
+
+// The DRC valve scene's target (the hand point of its reach_valve posture): the arm gets there
+// only with contact (the truss and the opening's frame), and the path ends on the target.
+TEST(ReachStudyTest, DrcValveSceneTargetIsReachedWithContact) {
+  Study s(sourceDir() / "scenes/valve_wall.yaml");
+  EXPECT_EQ(s.problem.target.name, "wheel_rim");
+  const ReachResult r = planReach(s.problem, ReachMode::kContactAllowed, ReachOptions{});
+  ASSERT_EQ(r.verdict, Verdict::kReachable) << r.reason;
+  expectPathGraspsTarget(s, r);
 }
 
 TEST(ReachStudyTest, SameSeedGivesTheSamePath) {

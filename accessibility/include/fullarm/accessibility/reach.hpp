@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,12 @@ enum class ReachMode { kFree, kContactAllowed, kHandOnly };
 /// "free", "contact-allowed", "hand-only".
 [[nodiscard]] const char* reachModeName(ReachMode mode) noexcept;
 
+/// Bad limits or options of a reach query; the message names the field and the value.
+class ReachInputError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
 /// The limits of the three modes.
 struct ReachLimits {
   /// Clearance every link keeps in free reach, and the hand's links in hand-only reach [m];
@@ -48,7 +55,7 @@ struct ReachLimits {
   double max_skin_depth_m = 0.008;
 };
 
-/// @throws std::invalid_argument naming the field for a non-finite or negative limit, or a skin
+/// @throws ReachInputError naming the field for a non-finite or negative limit, or a skin
 ///   depth not below the force threshold `force_threshold_m` (the link would touch the surface)
 void validateReachLimits(const ReachLimits& limits, double force_threshold_m);
 
@@ -100,6 +107,11 @@ class ReachChecker {
   [[nodiscard]] const arm::ArmModel& model() const noexcept { return model_; }
   [[nodiscard]] const ReachLimits& limits() const noexcept { return limits_; }
   [[nodiscard]] long checks() const noexcept { return checks_; }
+  /// The last check's minima (those of the hand with the grasped object left out), forward
+  /// kinematics and rendered springs (ContactData::f_W and rendered, one per minimum).
+  [[nodiscard]] const std::vector<haptics::LocalMinimum>& lastMinima() const noexcept { return minima_; }
+  [[nodiscard]] const arm::ArmData& lastKinematics() const noexcept { return fk_; }
+  [[nodiscard]] const haptics::ContactData& lastContact() const noexcept { return contact_; }
 
  private:
   const arm::ArmModel& model_;
@@ -170,7 +182,8 @@ struct ReachProblem {
 /// Verdicts: kReachable with the path; kUnreachable when no solved goal is valid (the sweep's
 /// resolution is the certificate's); kUnknown when the budget ran out (closest approach given)
 /// or the start posture is not valid in the mode.
-/// @throws std::invalid_argument for bad limits or options, or a start of the wrong size
+/// @throws ReachInputError for bad limits or options; std::invalid_argument for a start of the wrong
+///   size or a problem without model or world
 [[nodiscard]] ReachResult planReach(const ReachProblem& problem, ReachMode mode, const ReachOptions& options);
 
 /// The three modes on one problem, sharing the goal sweep.
@@ -178,7 +191,7 @@ struct ReachStudy {
   ReachResult free;
   ReachResult contact;
   ReachResult hand_only;
-  /// Hand-only reach says reachable and contact-allowed reach does not: the hand reaches where
+  /// Hand-only reach says reachable and contact-allowed reach proves it unreachable: the hand reaches where
   /// the arm could not be (a false positive of hand-only haptics).
   [[nodiscard]] bool handOnlyFalsePositive() const noexcept;
 };

@@ -1,0 +1,58 @@
+// `fullarm access` end to end: the exit code of each verdict, bad option values, summary.json.
+
+#include "cli_runner.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+
+using fullarm::test::runFullarm;
+
+std::string scene(int env) {
+  return std::string(FULLARM_TEST_SOURCE_DIR) + "/scenes/accessibility/env" + std::to_string(env) + ".yaml";
+}
+
+TEST(AccessCliTest, UnreachableExitsOneAndWritesTheVerdicts) {
+  const std::filesystem::path dir = fullarm::test::cliTempDir("fullarm_access_cli_test", "env2");
+  const auto r = runFullarm("access --scene " + scene(2) + " --out " + dir.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("FALSE POSITIVE"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("access: target 'rim'"), std::string::npos) << r.output;  // progress on stderr
+  std::ifstream in(dir / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in)["results"]["access"];
+  EXPECT_EQ(s["contact_allowed"]["verdict"], "unreachable");
+  EXPECT_EQ(s["hand_only"]["verdict"], "reachable");
+  EXPECT_TRUE(s["hand_only_false_positive"].get<bool>());
+  EXPECT_EQ(s["contact_allowed"]["goals"]["valid"], 0);
+}
+
+TEST(AccessCliTest, ReachableExitsZeroAndBudgetOutExitsFour) {
+  EXPECT_EQ(runFullarm("access --scene " + scene(3)).exit_code, 0);
+  const auto r = runFullarm("access --scene " + scene(4) + " --iterations 2");
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("budget of 2 ran out"), std::string::npos) << r.output;
+}
+
+TEST(AccessCliTest, BadValuesExitTwoNamingTheOption) {
+  for (const char* bad : {"--max-link-force nan", "--max-link-force inf", "--clearance -0.01",
+                          "--max-skin-depth -1", "--seed -3", "--iterations 0"}) {
+    const auto r = runFullarm("access --scene " + scene(3) + " " + bad);
+    EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.output;
+    const std::string option = std::string(bad).substr(0, std::string(bad).find(' '));
+    EXPECT_NE(r.output.find(option), std::string::npos) << r.output;
+  }
+  const auto deep = runFullarm("access --scene " + scene(3) + " --max-skin-depth 0.02");
+  EXPECT_EQ(deep.exit_code, 2) << deep.output;
+  EXPECT_NE(deep.output.find("max_skin_depth_m"), std::string::npos) << deep.output;
+  const auto target = runFullarm("access --scene " + scene(3) + " --target stem");
+  EXPECT_EQ(target.exit_code, 2) << target.output;
+  EXPECT_NE(target.output.find("no target 'stem'"), std::string::npos) << target.output;
+}
+
+}  // namespace
