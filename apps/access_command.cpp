@@ -15,9 +15,9 @@
 #include "fullarm/accessibility/reach.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/kinematics.hpp"
-#include "fullarm/haptics/contact_forces.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/core/data_paths.hpp"
+#include "fullarm/haptics/contact_forces.hpp"
 #include "fullarm/haptics/scene.hpp"
 #include "fullarm/reports/report.hpp"
 #include "output_files.hpp"
@@ -29,7 +29,9 @@ using accessibility::ReachResult;
 using accessibility::Verdict;
 
 // Distance for tables: none within the search cutoff is shown as NaN-free text.
-double finiteOrNegative(double d) { return std::isfinite(d) ? d * 1e3 : -1.0; }
+double finiteOrNegative(double d) {
+  return std::isfinite(d) ? d * 1e3 : -1.0;
+}
 
 nlohmann::json resultJson(const arm::ArmModel& model, const ReachResult& r) {
   nlohmann::json j;
@@ -38,8 +40,10 @@ nlohmann::json resultJson(const arm::ArmModel& model, const ReachResult& r) {
   j["planner"] = r.planner;
   j["iterations"] = r.iterations;
   j["checks"] = r.checks;
-  j["goals"] = {{"swivel_samples", r.goals.swivel_samples}, {"roll_samples", r.goals.roll_samples},
-                {"solved", r.goals.solved}, {"valid", r.goals.valid}};
+  j["goals"] = {{"swivel_samples", r.goals.swivel_samples},
+                {"roll_samples", r.goals.roll_samples},
+                {"solved", r.goals.solved},
+                {"valid", r.goals.valid}};
   if (!r.goals.closest_link.empty()) {
     j["goals"]["closest_link"] = r.goals.closest_link;
     j["goals"]["closest_distance_m"] = r.goals.closest_distance_m;
@@ -52,11 +56,11 @@ nlohmann::json resultJson(const arm::ArmModel& model, const ReachResult& r) {
     j["path_q_rad"] = path;
     nlohmann::json links = nlohmann::json::array();
     for (std::size_t l = 0; l < r.links.size(); ++l) {
-      links.push_back({{"link", model.joints[static_cast<std::size_t>(r.links[l])].name},
-                       {"min_distance_m", std::isfinite(r.path_min_distance_m[l])
-                                              ? nlohmann::json(r.path_min_distance_m[l])
-                                              : nlohmann::json(nullptr)},
-                       {"max_force_n", r.path_max_force_n[l]}});
+      links.push_back(
+          {{"link", model.joints[static_cast<std::size_t>(r.links[l])].name},
+           {"min_distance_m", std::isfinite(r.path_min_distance_m[l]) ? nlohmann::json(r.path_min_distance_m[l])
+                                                                      : nlohmann::json(nullptr)},
+           {"max_force_n", r.path_max_force_n[l]}});
     }
     j["links"] = links;
   }
@@ -65,7 +69,9 @@ nlohmann::json resultJson(const arm::ArmModel& model, const ReachResult& r) {
 
 constexpr double kReplayStep_rad = 0.02;  // joint-space step between replay frames
 
-std::array<double, 3> toArray(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+std::array<double, 3> toArray(const Eigen::Vector3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
 
 // The 3D replay of a reached path: the arm's capsule links along the path (interpolated at
 // kReplayStep_rad), the scene's meshes, the minima as lines coloured by their spring force,
@@ -82,7 +88,8 @@ reports::Replay3d pathReplay(const accessibility::ReachProblem& p, const haptics
     const haptics::CollisionObject& object = p.world->object(i);
     reports::ReplayMesh mesh;
     mesh.name = scene.objects[static_cast<std::size_t>(i)].name;
-    for (int v = 0; v < object.mesh.numVertices(); ++v) mesh.vertices_m.push_back(toArray(object.X_WO * object.mesh.vertex(v)));
+    for (int v = 0; v < object.mesh.numVertices(); ++v)
+      mesh.vertices_m.push_back(toArray(object.X_WO * object.mesh.vertex(v)));
     for (int t = 0; t < object.mesh.numTriangles(); ++t) {
       const Eigen::Vector3i& tri = object.mesh.triangle(t);
       mesh.triangles.push_back(
@@ -98,7 +105,8 @@ reports::Replay3d pathReplay(const accessibility::ReachProblem& p, const haptics
       replay.links.push_back({model.joints[static_cast<std::size_t>(l)].name, g.radius_m});
     }
   }
-  for (int j = 0; j < model.numArmJoints(); ++j) replay.joints.push_back(model.joints[static_cast<std::size_t>(j)].name);
+  for (int j = 0; j < model.numArmJoints(); ++j)
+    replay.joints.push_back(model.joints[static_cast<std::size_t>(j)].name);
   std::vector<Eigen::VectorXd> qs;
   for (std::size_t i = 0; i + 1 < r.path.size(); ++i) {
     const int n = std::max(1, static_cast<int>(std::ceil((r.path[i + 1] - r.path[i]).norm() / kReplayStep_rad)));
@@ -127,9 +135,10 @@ reports::Replay3d pathReplay(const accessibility::ReachProblem& p, const haptics
       const haptics::LocalMinimum& m = minima[i];
       const double force = contact.rendered[i] != 0 ? contact.f_W[i].norm() : 0.0;
       max_force = std::max(max_force, force);
-      if (contact.rendered[i] != 0) haptics::addTailoredJacobianTorques(model, fk, m.link, contact.p_W[i], contact.f_W[i], tau);
-      frame.minima.push_back({toArray(arm::pointInWorld(fk, m.link, m.p_L)),
-                              toArray(p.world->object(m.object).X_WO * m.p_O), force});
+      if (contact.rendered[i] != 0)
+        haptics::addTailoredJacobianTorques(model, fk, m.link, contact.p_W[i], contact.f_W[i], tau);
+      frame.minima.push_back(
+          {toArray(arm::pointInWorld(fk, m.link, m.p_L)), toArray(p.world->object(m.object).X_WO * m.p_O), force});
     }
     for (int j = 0; j < model.numArmJoints(); ++j) {
       frame.torques_nm.push_back(tau[j]);
@@ -190,14 +199,14 @@ int runAccess(const AccessOptions& o) {
   ro.limits.max_link_force_n = o.max_link_force_n;
   ro.limits.max_skin_depth_m = o.max_skin_depth_m;
   ro.limits.clearance_margin_m = o.clearance_m;
-  std::cerr << "access: target '" << p.target.name << "' on '" << p.target.object << "'; goal sweep and "
-            << o.planner << " in three modes (" << o.iterations << " iterations each, seed " << o.seed << ")\n";
+  std::cerr << "access: target '" << p.target.name << "' on '" << p.target.object << "'; goal sweep and " << o.planner
+            << " in three modes (" << o.iterations << " iterations each, seed " << o.seed << ")\n";
   const accessibility::ReachStudy study = accessibility::studyReach(p, ro);
 
   std::cout << "Scene " << scene.name << ", target " << p.target.name << "\n";
   for (const ReachResult* r : {&study.free, &study.contact, &study.hand_only}) {
-    std::cout << "  " << accessibility::reachModeName(r->mode) << ": " << accessibility::verdictName(r->verdict)
-              << " (" << r->reason << ")\n";
+    std::cout << "  " << accessibility::reachModeName(r->mode) << ": " << accessibility::verdictName(r->verdict) << " ("
+              << r->reason << ")\n";
   }
   if (study.handOnlyFalsePositive()) {
     std::cout << "  FALSE POSITIVE of hand-only reach: the hand reaches, the arm cannot be there\n";
@@ -241,7 +250,8 @@ int runAccess(const AccessOptions& o) {
     verdicts.columns = {"Mode", "Verdict", "Valid goals", "Solved goals", "Iterations", "Reason"};
     for (const ReachResult* x : {&study.free, &study.contact, &study.hand_only}) {
       verdicts.rows.push_back({accessibility::reachModeName(x->mode), accessibility::verdictName(x->verdict),
-                               static_cast<double>(x->goals.valid), static_cast<double>(x->goals.solved), static_cast<double>(x->iterations), x->reason});
+                               static_cast<double>(x->goals.valid), static_cast<double>(x->goals.solved),
+                               static_cast<double>(x->iterations), x->reason});
     }
     reports::Section& section = report.addSection("Verdicts");
     section.addTable(std::move(verdicts));
@@ -291,18 +301,19 @@ AccessDemoStep runAccessDemoStep(const arm::ArmModel& model, reports::Report& re
     p.q_start = haptics::scenePosture(scene, "rest", model);
     const accessibility::ReachStudy s = accessibility::studyReach(p, accessibility::ReachOptions{});
     const bool free_ok = (env == 3) == (s.free.verdict == Verdict::kReachable);
-    const bool contact_ok = (env == 2) ? s.contact.verdict == Verdict::kUnreachable
-                                       : s.contact.verdict == Verdict::kReachable;
+    const bool contact_ok =
+        (env == 2) ? s.contact.verdict == Verdict::kUnreachable : s.contact.verdict == Verdict::kReachable;
     const bool designed = free_ok && contact_ok && (env != 2 || s.handOnlyFalsePositive());
     step.pass = step.pass && designed;
     false_positives += s.handOnlyFalsePositive() ? 1 : 0;
     table.rows.push_back({scene.name, accessibility::verdictName(s.free.verdict),
-                          accessibility::verdictName(s.contact.verdict), accessibility::verdictName(s.hand_only.verdict),
-                          s.handOnlyFalsePositive() ? "yes" : "no", designed ? "yes" : "no"});
+                          accessibility::verdictName(s.contact.verdict),
+                          accessibility::verdictName(s.hand_only.verdict), s.handOnlyFalsePositive() ? "yes" : "no",
+                          designed ? "yes" : "no"});
   }
   std::ostringstream detail;
-  detail << (step.pass ? "every environment gives its designed verdicts" : "an environment missed its verdicts")
-         << "; " << false_positives << " hand-only false positive(s)";
+  detail << (step.pass ? "every environment gives its designed verdicts" : "an environment missed its verdicts") << "; "
+         << false_positives << " hand-only false positive(s)";
   step.detail = detail.str();
   report.addSection("Valve study, full-arm vs hand-only").addTable(std::move(table));
   report.results()["access_demo"] = {{"pass", step.pass}, {"hand_only_false_positives", false_positives}};

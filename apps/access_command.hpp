@@ -15,12 +15,12 @@ namespace fullarm::app {
 
 /// Options of `fullarm access`.
 struct AccessOptions {
-  std::string scene;             ///< scene YAML with a `targets:` list (required)
-  std::string target;            ///< target name (default: the scene's first)
-  std::string arm_config;        ///< arm model YAML (default: dts_master.yaml)
-  std::string out_dir;           ///< optional: summary.json and report.html
-  std::int64_t seed = 1;         ///< the planner's seed
-  std::int64_t iterations = 20000;  ///< the planner's budget per mode
+  std::string scene;                    ///< scene YAML with a `targets:` list (required)
+  std::string target;                   ///< target name (default: the scene's first)
+  std::string arm_config;               ///< arm model YAML (default: dts_master.yaml)
+  std::string out_dir;                  ///< optional: summary.json and report.html
+  std::int64_t seed = 1;                ///< the planner's seed
+  std::int64_t iterations = 20000;      ///< the planner's budget per mode
   std::string planner = "rrt-connect";  ///< rrt-connect | sbl
   double max_link_force_n = 40.0;       ///< contact-allowed: largest rendered force per link [N]
   double max_skin_depth_m = 0.008;      ///< contact-allowed: largest depth into the haptic skin [m]

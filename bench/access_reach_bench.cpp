@@ -27,8 +27,7 @@ struct StudyScene {
   acc::ReachProblem problem;
 
   explicit StudyScene(int env)
-      : scene(haptics::loadScene(
-            fullarm::core::defaultScenePath("accessibility/env" + std::to_string(env) + ".yaml"))),
+      : scene(haptics::loadScene(fullarm::core::defaultScenePath("accessibility/env" + std::to_string(env) + ".yaml"))),
         world(haptics::makeCollisionWorld(scene, model)) {
     problem.model = &model;
     problem.world = &world;

@@ -14,7 +14,9 @@ constexpr int kArm = 7;        // the arm chain's joints
 constexpr int kElbowLink = 3;  // origin of joint 4 (R_EB)
 constexpr int kWristLink = 5;  // origin of joint 6 (R_WFE)
 
-double wrapAngle(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
+double wrapAngle(double a) {
+  return std::remainder(a, 2.0 * std::numbers::pi);
+}
 
 Eigen::Matrix<double, 7, 1> residual(const arm::ArmModel& model, const arm::ArmData& fk, const Eigen::Vector3d& p,
                                      const Eigen::Matrix3d& R, double swivel) {

@@ -86,7 +86,9 @@ class WristProjection : public ob::ProjectionEvaluator {
   mutable arm::ArmData fk_;
 };
 
-bool validIn(const PostureCheck& c, ReachMode mode) { return c.valid(mode); }
+bool validIn(const PostureCheck& c, ReachMode mode) {
+  return c.valid(mode);
+}
 
 std::string formatM(double v) {
   std::ostringstream s;
@@ -108,7 +110,8 @@ Goals sweepGoals(const ReachProblem& p, ReachChecker& checker, const ReachOption
   return g;
 }
 
-// How far a check is from valid in `mode` (0: valid), used to pick the closest goal.
+// How far a check is from valid in `mode` (0: valid), used to pick the goal that came closest:
+// metres short of the distance limit, plus 1 mm per newton above the force limit.
 double violation(const PostureCheck& c, const std::vector<int>& links, const arm::ArmModel& model,
                  const ReachLimits& lim, double d_f, ReachMode mode, int& worst_link) {
   double worst = 0.0;
@@ -151,8 +154,7 @@ ReachResult planWithGoals(const ReachProblem& p, ReachMode mode, const ReachOpti
       continue;
     }
     int link = -1;
-    const double v =
-        violation(goals.checks[i], r.links, model, options.limits, p.params.force_threshold_m, mode, link);
+    const double v = violation(goals.checks[i], r.links, model, options.limits, p.params.force_threshold_m, mode, link);
     if (v < best && link >= 0) {
       best = v;
       cert.closest_link = model.joints[static_cast<std::size_t>(link)].name;
@@ -196,8 +198,7 @@ ReachResult planWithGoals(const ReachProblem& p, ReachMode mode, const ReachOpti
   }
   space->setBounds(bounds);
   const std::uint32_t seed = options.seed;
-  space->setStateSamplerAllocator(
-      [seed](const ob::StateSpace* s) { return std::make_shared<SeededSampler>(s, seed); });
+  space->setStateSamplerAllocator([seed](const ob::StateSpace* s) { return std::make_shared<SeededSampler>(s, seed); });
   auto si = std::make_shared<ob::SpaceInformation>(space);
   const Eigen::VectorXd q_base = p.q_start;
   si->setStateValidityChecker(
@@ -249,9 +250,9 @@ ReachResult planWithGoals(const ReachProblem& p, ReachMode mode, const ReachOpti
                         ? std::max(1, static_cast<int>(std::ceil((r.path[i + 1] - r.path[i]).norm() / step)))
                         : 1;
       for (int k = 0; k < n; ++k) {
-        const Eigen::VectorXd q =
-            i + 1 < r.path.size() ? Eigen::VectorXd(r.path[i] + (r.path[i + 1] - r.path[i]) * (double(k) / n))
-                                  : r.path[i];
+        const Eigen::VectorXd q = i + 1 < r.path.size()
+                                      ? Eigen::VectorXd(r.path[i] + (r.path[i + 1] - r.path[i]) * (double(k) / n))
+                                      : r.path[i];
         const PostureCheck c = checker.check(q);
         for (std::size_t l = 0; l < r.links.size(); ++l) {
           const auto li = static_cast<std::size_t>(r.links[l]);
@@ -270,12 +271,12 @@ ReachResult planWithGoals(const ReachProblem& p, ReachMode mode, const ReachOpti
     for (unsigned i = 0; i < data.numVertices(); ++i) {
       const ob::PlannerDataVertex& v = data.getVertex(i);
       if (v.getTag() == 2) continue;  // RRT-Connect's goal tree
-      closest = std::min(closest, (checker.handPoint(fullConfiguration(q_base, v.getState())) - p.target.position_W_m).norm());
+      closest = std::min(closest,
+                         (checker.handPoint(fullConfiguration(q_base, v.getState())) - p.target.position_W_m).norm());
     }
     r.closest_approach_m = closest;
-    why << "iteration budget of " << budget << " ran out (" << r.planner << ", seed " << seed << ") with "
-        << cert.valid << " valid goal configurations; closest approach of the hand to the target "
-        << formatM(closest);
+    why << "iteration budget of " << budget << " ran out (" << r.planner << ", seed " << seed << ") with " << cert.valid
+        << " valid goal configurations; closest approach of the hand to the target " << formatM(closest);
   }
   r.reason = why.str();
   r.checks = checker.checks() - checks_before;
@@ -297,9 +298,12 @@ void validateOptions(const ReachOptions& options, const haptics::HapticsParams& 
 
 const char* reachModeName(ReachMode mode) noexcept {
   switch (mode) {
-    case ReachMode::kFree: return "free";
-    case ReachMode::kContactAllowed: return "contact-allowed";
-    case ReachMode::kHandOnly: return "hand-only";
+    case ReachMode::kFree:
+      return "free";
+    case ReachMode::kContactAllowed:
+      return "contact-allowed";
+    case ReachMode::kHandOnly:
+      return "hand-only";
   }
   return "?";
 }
@@ -310,9 +314,12 @@ const char* reachPlannerName(ReachPlanner planner) noexcept {
 
 const char* verdictName(Verdict verdict) noexcept {
   switch (verdict) {
-    case Verdict::kReachable: return "reachable";
-    case Verdict::kUnreachable: return "unreachable";
-    case Verdict::kUnknown: return "unknown";
+    case Verdict::kReachable:
+      return "reachable";
+    case Verdict::kUnreachable:
+      return "unreachable";
+    case Verdict::kUnknown:
+      return "unknown";
   }
   return "?";
 }
@@ -338,9 +345,12 @@ void validateReachLimits(const ReachLimits& limits, double force_threshold_m) {
 
 bool PostureCheck::valid(ReachMode mode) const noexcept {
   switch (mode) {
-    case ReachMode::kFree: return valid_free;
-    case ReachMode::kContactAllowed: return valid_contact;
-    case ReachMode::kHandOnly: return valid_hand_only;
+    case ReachMode::kFree:
+      return valid_free;
+    case ReachMode::kContactAllowed:
+      return valid_contact;
+    case ReachMode::kHandOnly:
+      return valid_hand_only;
   }
   return false;
 }
@@ -420,7 +430,8 @@ bool ReachStudy::handOnlyFalsePositive() const noexcept {
 }
 
 ReachStudy studyReach(const ReachProblem& problem, const ReachOptions& options) {
-  if (problem.model == nullptr || problem.world == nullptr) throw std::invalid_argument("studyReach: no model or world");
+  if (problem.model == nullptr || problem.world == nullptr)
+    throw std::invalid_argument("studyReach: no model or world");
   if (problem.q_start.size() != problem.model->numJoints()) {
     throw std::invalid_argument("studyReach: start posture of the wrong size");
   }

@@ -11,7 +11,9 @@
 namespace fullarm::accessibility {
 namespace {
 
-arm::ArmModel model() { return arm::loadArmModel(arm::defaultArmModelPath()); }
+arm::ArmModel model() {
+  return arm::loadArmModel(arm::defaultArmModelPath());
+}
 
 // A pose reached by a known configuration is solved again from another seed, at the known
 // configuration's swivel angle: forward kinematics of the answer gives the pose back.

@@ -20,7 +20,9 @@ std::filesystem::path sourceDir() {
   return dir != nullptr ? std::filesystem::path(dir) : std::filesystem::current_path();
 }
 
-std::filesystem::path env3() { return sourceDir() / "scenes/accessibility/env3.yaml"; }
+std::filesystem::path env3() {
+  return sourceDir() / "scenes/accessibility/env3.yaml";
+}
 
 // Parses `text` as if it were env3.yaml and expects a ConfigError whose message holds `what`.
 void expectSceneError(const std::string& text, const std::string& what) {
@@ -72,16 +74,16 @@ TEST(TargetTest, TargetErrorsNameTheKey) {
   expectSceneError(testing::replacedFirst(text, "approach: [0.0, 1.0, 0.0]", "approach: [0.0, 0.0, 0.0]"),
                    "non-zero direction");
   expectSceneError(testing::replacedFirst(text, "    push: [1.0, 0.0, 0.0]\n", ""), "push");
-  expectSceneError(testing::replacedFirst(text, "    push: [1.0, 0.0, 0.0]\n", "    push: [1.0, 0.0, 0.0]\n    grip: 1\n"),
-                   "grip");
+  expectSceneError(
+      testing::replacedFirst(text, "    push: [1.0, 0.0, 0.0]\n", "    push: [1.0, 0.0, 0.0]\n    grip: 1\n"), "grip");
 }
 
 TEST(TargetTest, MissingMeshIsAClearError) {
   const std::string text = testing::fileText(env3());
-  expectSceneError(
-      testing::replacedFirst(text, "shape: {type: cylinder, radius_m: 0.015, length_m: 0.18, segments: 16, max_edge_m: 0.03}",
-                             "shape: {type: mesh, file: meshes/no_such_valve.dae}"),
-      "no_such_valve.dae");
+  expectSceneError(testing::replacedFirst(
+                       text, "shape: {type: cylinder, radius_m: 0.015, length_m: 0.18, segments: 16, max_edge_m: 0.03}",
+                       "shape: {type: mesh, file: meshes/no_such_valve.dae}"),
+                   "no_such_valve.dae");
 }
 
 TEST(TargetTest, ImpossibleDimensionsAreAClearError) {

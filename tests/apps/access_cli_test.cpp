@@ -40,8 +40,8 @@ TEST(AccessCliTest, ReachableExitsZeroAndBudgetOutExitsFour) {
 }
 
 TEST(AccessCliTest, BadValuesExitTwoNamingTheOption) {
-  for (const char* bad : {"--max-link-force nan", "--max-link-force inf", "--clearance -0.01",
-                          "--max-skin-depth -1", "--seed -3", "--iterations 0"}) {
+  for (const char* bad : {"--max-link-force nan", "--max-link-force inf", "--clearance -0.01", "--max-skin-depth -1",
+                          "--seed -3", "--iterations 0"}) {
     const auto r = runFullarm("access --scene " + scene(3) + " " + bad);
     EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.output;
     const std::string option = std::string(bad).substr(0, std::string(bad).find(' '));

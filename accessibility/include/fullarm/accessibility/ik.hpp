@@ -19,11 +19,11 @@ namespace fullarm::accessibility {
 
 /// Settings of one solve and of the sweep.
 struct IkOptions {
-  int swivel_samples = 72;        ///< swivel angles over [-pi, pi) (5 degree steps)
-  int roll_samples = 12;          ///< hand rolls about the pointing axis over [-pi, pi) (30 degree steps)
-  int max_iterations = 200;       ///< damped-least-squares steps per solve
-  double damping = 0.02;          ///< lambda of (J J^T + lambda^2 I)
-  double max_step_rad = 0.2;      ///< largest joint step per iteration [rad]
+  int swivel_samples = 72;    ///< swivel angles over [-pi, pi) (5 degree steps)
+  int roll_samples = 12;      ///< hand rolls about the pointing axis over [-pi, pi) (30 degree steps)
+  int max_iterations = 200;   ///< damped-least-squares steps per solve
+  double damping = 0.02;      ///< lambda of (J J^T + lambda^2 I)
+  double max_step_rad = 0.2;  ///< largest joint step per iteration [rad]
   double position_tolerance_m = 1e-4;
   double angle_tolerance_rad = 1e-3;  ///< hand orientation and swivel angle
 };
@@ -42,8 +42,8 @@ struct IkSolution {
   double angle_error_rad = 0.0;   ///< hand orientation error [rad]
   double swivel_error_rad = 0.0;  ///< swivel angle error [rad]
   int iterations = 0;
-  double swivel_rad = 0.0;        ///< the swivel angle asked for
-  double roll_rad = 0.0;          ///< the hand roll asked for
+  double swivel_rad = 0.0;  ///< the swivel angle asked for
+  double roll_rad = 0.0;    ///< the hand roll asked for
 };
 
 /// Solves for the configuration whose hand point is at `position_W_m` with link-frame

@@ -82,8 +82,9 @@ struct ReachOptions {
 
 /// One posture's distances and forces.
 struct PostureCheck {
-  std::vector<double> link_distance_m;  ///< per link, smallest exact distance to any object (inf: none within the search cutoff)
-  std::vector<double> link_force_n;     ///< per link, summed magnitude of its rendered spring forces [N]
+  std::vector<double>
+      link_distance_m;  ///< per link, smallest exact distance to any object (inf: none within the search cutoff)
+  std::vector<double> link_force_n;  ///< per link, summed magnitude of its rendered spring forces [N]
   bool valid_free = false;
   bool valid_contact = false;
   bool valid_hand_only = false;
@@ -152,10 +153,12 @@ struct GoalCertificate {
 struct ReachResult {
   ReachMode mode = ReachMode::kFree;
   Verdict verdict = Verdict::kUnknown;
-  std::string reason;        ///< one sentence: why this verdict
-  std::string planner;       ///< reachPlannerName of the planner that ran ("" when it did not run)
-  long iterations = 0;       ///< planner iterations used
-  long checks = 0;           ///< posture checks made (goals, planner, path profile)
+  std::string reason;   ///< one sentence: why this verdict
+  std::string planner;  ///< reachPlannerName of the planner that ran ("" when it did not run)
+  long iterations = 0;  ///< planner iterations used
+  /// Posture checks of this mode: the start's, the planner's and the path profile's (the goal
+  /// sweep's, one per solved goal, are shared by the modes and not counted here).
+  long checks = 0;
   GoalCertificate goals;
   /// Reachable: the path, start to goal, as planned (not smoothed), each a full configuration.
   std::vector<Eigen::VectorXd> path;

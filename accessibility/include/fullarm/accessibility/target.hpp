@@ -15,9 +15,9 @@ namespace fullarm::accessibility {
 
 /// A grasp target in the arm's world frame W.
 struct GraspTarget {
-  std::string name;                                 ///< the scene target's name
-  std::string object;                               ///< the object grasped
-  int object_index = -1;                            ///< its index in the scene (and collision world)
+  std::string name;                                        ///< the scene target's name
+  std::string object;                                      ///< the object grasped
+  int object_index = -1;                                   ///< its index in the scene (and collision world)
   Eigen::Vector3d position_W_m = Eigen::Vector3d::Zero();  ///< the hand point at the grasp [m]
   Eigen::Vector3d approach_W = Eigen::Vector3d::UnitX();   ///< unit: the hand's pointing axis
   Eigen::Vector3d push_W = Eigen::Vector3d::UnitX();       ///< unit: the push on the object
@@ -27,8 +27,7 @@ struct GraspTarget {
 /// (haptics::armBasePose places W in the scene).
 /// @throws core::ConfigError (file = scene.source, key `targets`) when the scene has no target or
 ///   none of that name (the message lists the names)
-[[nodiscard]] GraspTarget resolveTarget(const haptics::Scene& scene, const arm::ArmModel& model,
-                                        std::string_view name);
+[[nodiscard]] GraspTarget resolveTarget(const haptics::Scene& scene, const arm::ArmModel& model, std::string_view name);
 
 /// Orientation of the hand's link frame at the grasp with roll `roll_rad` about the pointing
 /// axis: x = approach_W; roll 0 puts y in the plane of x and the world's vertical (y the
