@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
@@ -53,6 +54,9 @@ IkSolution solveIk(const arm::ArmModel& model, arm::ArmData& fk, const Eigen::Ve
   Eigen::Matrix<double, 7, 7> J;
   Eigen::VectorXd qh = sol.q_rad;
   constexpr double kH = 1e-7;
+  constexpr int kStallWindow = 20;
+  constexpr double kStallRatio = 0.8;
+  double window_residual = std::numeric_limits<double>::infinity();
   for (int it = 0; it <= options.max_iterations; ++it) {
     arm::computeForwardKinematics(model, fk, sol.q_rad);
     const Eigen::Matrix<double, 7, 1> e = residual(model, fk, position_W_m, R_W, swivel_rad);
@@ -66,6 +70,13 @@ IkSolution solveIk(const arm::ArmModel& model, arm::ArmData& fk, const Eigen::Ve
       return sol;
     }
     if (it == options.max_iterations) break;
+    // Stalled (typically against a joint limit): the residual has not shrunk by a fifth over the
+    // last kStallWindow steps. A converging solve gains far more than that per window.
+    if (it % kStallWindow == 0) {
+      const double residual_norm = e.norm();
+      if (it > 0 && residual_norm > kStallRatio * window_residual) break;
+      window_residual = residual_norm;
+    }
     const double psi = swivelAngle(fk);
     arm::computePointJacobian(model, fk, model.tool_link, fk.X_WT.translation(), Jp);
     J.topRows<6>() = Jp.leftCols<kArm>();
