@@ -312,8 +312,8 @@ AccessDemoStep runAccessDemoStep(const arm::ArmModel& model, reports::Report& re
                           designed ? "yes" : "no"});
   }
   std::ostringstream detail;
-  detail << (step.pass ? "every environment gives its designed verdicts" : "an environment missed its verdicts") << "; "
-         << false_positives << " hand-only false positive(s)";
+  detail << (step.pass ? "every environment gives its designed verdicts" : "an environment missed its verdicts")
+         << "; hand-only false positives: " << false_positives;
   step.detail = detail.str();
   report.addSection("Valve study, full-arm vs hand-only").addTable(std::move(table));
   report.results()["access_demo"] = {{"pass", step.pass}, {"hand_only_false_positives", false_positives}};
