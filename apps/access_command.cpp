@@ -5,19 +5,26 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "cli_values.hpp"
 #include "exit_codes.hpp"
+#include "fullarm/accessibility/brace_search.hpp"
+#include "fullarm/accessibility/force_lp.hpp"
+#include "fullarm/accessibility/human_strength.hpp"
 #include "fullarm/accessibility/reach.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/core/data_paths.hpp"
 #include "fullarm/haptics/contact_forces.hpp"
+#include "fullarm/haptics/query.hpp"
 #include "fullarm/haptics/scene.hpp"
 #include "fullarm/reports/report.hpp"
 #include "output_files.hpp"
@@ -151,6 +158,58 @@ reports::Replay3d pathReplay(const accessibility::ReachProblem& p, const haptics
   return replay;
 }
 
+// The push of one program in words: "412.3 N", "unbounded" (no torque limit binds), or why there
+// is none.
+std::string pushText(const accessibility::ForceLpResult& r) {
+  if (r.status == accessibility::ForceStatus::kOptimal) {
+    std::ostringstream s;
+    s << std::fixed << std::setprecision(1) << r.push_n << " N";
+    return s.str();
+  }
+  return accessibility::toString(r.status);
+}
+
+// The joints whose torque limit binds the push, e.g. "R_SFE max, R_EB min".
+std::string limitingText(const arm::ArmModel& model, const accessibility::HumanArm& human,
+                         const accessibility::ForceLpResult& r) {
+  const std::vector<int> joints = human.jointIndices();
+  std::string text;
+  for (const accessibility::ActiveLimit& a : r.active) {
+    if (a.joint < 0 || a.joint >= static_cast<int>(joints.size())) continue;
+    text += (text.empty() ? "" : ", ") +
+            model.joints[static_cast<std::size_t>(joints[static_cast<std::size_t>(a.joint)])].name +
+            (a.upper ? " max" : " min");
+  }
+  return text.empty() ? "none" : text;
+}
+
+nlohmann::json programJson(const arm::ArmModel& model, const accessibility::HumanArm& human,
+                           const accessibility::ForceLpResult& r) {
+  nlohmann::json j;
+  j["status"] = accessibility::toString(r.status);
+  j["push_n"] = r.status == accessibility::ForceStatus::kOptimal ? nlohmann::json(r.push_n) : nlohmann::json(nullptr);
+  j["limiting"] = limitingText(model, human, r);
+  return j;
+}
+
+nlohmann::json pushJson(const arm::ArmModel& model, const accessibility::HumanArm& human,
+                        const accessibility::PushAnalysis& a) {
+  nlohmann::json j;
+  j["braced"] = programJson(model, human, a.braced);
+  j["unbraced"] = programJson(model, human, a.unbraced);
+  j["contacts"] = a.contacts.size();
+  j["leverage"] = std::isfinite(a.leverage) ? nlohmann::json(a.leverage) : nlohmann::json(nullptr);
+  j["leverage_unbounded"] = std::isinf(a.leverage);
+  return j;
+}
+
+// Whether the best push meets the required force: an optimal push at least `force_n`, or a push
+// no torque limit bounds.
+bool strongEnough(const accessibility::ForceLpResult& best, double force_n) {
+  if (best.status == accessibility::ForceStatus::kUnbounded) return true;
+  return best.status == accessibility::ForceStatus::kOptimal && best.push_n >= force_n;
+}
+
 int exitCode(Verdict v) {
   return v == Verdict::kReachable ? kExitPass : v == Verdict::kUnreachable ? kExitFail : kExitInconclusive;
 }
@@ -175,6 +234,13 @@ CLI::App* addAccessCommand(CLI::App& app, AccessOptions& o, OptionTable& table) 
   declare.number("--max-skin-depth", o.max_skin_depth_m,
                  "Contact allowed: largest depth into the haptic skin (below d_f) [m]", {0.0, 1.0, "m"});
   declare.number("--clearance", o.clearance_m, "Free and hand-only reach: clearance margin [m]", {0.0, 1.0, "m"});
+  declare.number("--force", o.force_n,
+                 "The push the task needs along the target's push direction [N]: exit 1 when the best push is smaller",
+                 {0.0, 1e6, "N"});
+  declare.file("--human", o.human_config,
+               "The person's arm: strength and weight YAML (default: config/human_arm.yaml)");
+  declare.integer("--brace-evaluations", o.brace_evaluations, "Budget of the brace-posture search (postures evaluated)",
+                  1, 100000);
   return cmd;
 }
 
@@ -192,6 +258,8 @@ int runAccess(const AccessOptions& o) {
     throw core::ConfigError(scene.source, "arm.postures", "the scene has no posture 'rest' (the start of the reach)");
   }
   p.q_start = haptics::scenePosture(scene, "rest", model);
+  const accessibility::HumanArm human =
+      accessibility::loadHumanArm(configPathOr(o.human_config, accessibility::defaultHumanArmPath), model);
   accessibility::ReachOptions ro;
   ro.seed = static_cast<std::uint32_t>(o.seed);
   ro.max_iterations = static_cast<long>(o.iterations);
@@ -202,6 +270,22 @@ int runAccess(const AccessOptions& o) {
   std::cerr << "access: target '" << p.target.name << "' on '" << p.target.object << "'; goal sweep and " << o.planner
             << " in three modes (" << o.iterations << " iterations each, seed " << o.seed << ")\n";
   const accessibility::ReachStudy study = accessibility::studyReach(p, ro);
+
+  // The push at the reached grasp (the contact-allowed path's end) and the brace posture.
+  std::optional<accessibility::BraceSearchResult> brace;
+  if (study.contact.verdict == Verdict::kReachable) {
+    std::cerr << "access: push along the target's push direction, brace-posture search (" << o.brace_evaluations
+              << " postures, seed " << o.seed << ")\n";
+    const std::unique_ptr<haptics::GlobalSearch> search = haptics::makeGlobalSearch(haptics::SearchKind::kSnch, world);
+    accessibility::BraceSearchOptions bo;
+    bo.max_evaluations = static_cast<int>(o.brace_evaluations);
+    bo.seed = static_cast<std::uint64_t>(o.seed);
+    bo.contact_force_max_n = ro.limits.max_link_force_n;
+    bo.penetration_max_m = ro.limits.max_skin_depth_m;
+    brace = accessibility::searchBracePosture(model, human, world, *search, p.params, study.contact.path.back(),
+                                              p.target.push_W, bo);
+  }
+  const bool strong = !brace || !o.force_n || strongEnough(brace->best.braced, *o.force_n);
 
   std::cout << "Scene " << scene.name << ", target " << p.target.name << "\n";
   for (const ReachResult* r : {&study.free, &study.contact, &study.hand_only}) {
@@ -224,12 +308,26 @@ int runAccess(const AccessOptions& o) {
     }
   }
 
+  if (brace) {
+    std::cout << "  push along the target's push direction (" << human.source.filename().string() << "):\n"
+              << "    at the reached grasp: " << pushText(brace->start.braced) << " braced ("
+              << brace->start.contacts.size() << " contacts), " << pushText(brace->start.unbraced) << " unbraced\n"
+              << "    at the brace posture (" << brace->evaluations
+              << " postures searched): " << pushText(brace->best.braced) << " braced (" << brace->best.contacts.size()
+              << " contacts), " << pushText(brace->best.unbraced) << " unbraced; limited by "
+              << limitingText(model, human, brace->best.braced) << "\n";
+    if (o.force_n) {
+      std::cout << "    the task needs " << *o.force_n << " N: " << (strong ? "strong enough" : "TOO WEAK") << "\n";
+    }
+  }
+
   if (!o.out_dir.empty()) {
     const bool reachable = study.contact.verdict == Verdict::kReachable;
     reports::Report report("access", "Accessibility: " + scene.name + ", target " + p.target.name);
-    report.setVerdict(reachable, std::string("Contact-allowed reach: ") +
-                                     accessibility::verdictName(study.contact.verdict) +
-                                     (study.handOnlyFalsePositive() ? " (hand-only reach is a false positive)" : ""));
+    report.setVerdict(reachable && strong,
+                      std::string("Contact-allowed reach: ") + accessibility::verdictName(study.contact.verdict) +
+                          (study.handOnlyFalsePositive() ? " (hand-only reach is a false positive)" : "") +
+                          (reachable && !strong ? "; the person is too weak for the task's push" : ""));
     nlohmann::json& r = report.results()["access"];
     r["scene"] = scene.name;
     r["scene_file"] = std::filesystem::absolute(scene.source).string();
@@ -244,6 +342,20 @@ int runAccess(const AccessOptions& o) {
     r["contact_allowed"] = resultJson(model, study.contact);
     r["hand_only"] = resultJson(model, study.hand_only);
     r["hand_only_false_positive"] = study.handOnlyFalsePositive();
+    if (brace) {
+      nlohmann::json& f = r["force"];
+      f["human_file"] = std::filesystem::absolute(human.source).string();
+      f["push_direction_W"] = {p.target.push_W.x(), p.target.push_W.y(), p.target.push_W.z()};
+      f["required_push_n"] = o.force_n ? nlohmann::json(*o.force_n) : nlohmann::json(nullptr);
+      f["strong_enough"] = strong;
+      f["at_grasp"] = pushJson(model, human, brace->start);
+      f["at_grasp"]["q_rad"] = std::vector<double>(brace->q_start_rad.data(), brace->q_start_rad.data() + 7);
+      f["brace_posture"] = pushJson(model, human, brace->best);
+      f["brace_posture"]["q_rad"] = std::vector<double>(brace->q_best_rad.data(), brace->q_best_rad.data() + 7);
+      f["evaluations"] = brace->evaluations;
+      f["rejected_contact"] = brace->rejected_contact;
+      f["rejected_limits"] = brace->rejected_limits;
+    }
 
     reports::Table verdicts;
     verdicts.caption = "Reach in three modes";
@@ -267,6 +379,20 @@ int runAccess(const AccessOptions& o) {
       }
       section.addTable(std::move(links));
     }
+    if (brace) {
+      reports::Table push;
+      push.caption = "Push along the target's push direction (the person's arm: " + human.source.filename().string() +
+                     "); the brace posture is the best of " + std::to_string(brace->evaluations) +
+                     " postures along the self-motion";
+      push.columns = {"Posture", "Braced", "Unbraced", "Contacts", "Limited by (braced)"};
+      push.rows.push_back({"reached grasp", pushText(brace->start.braced), pushText(brace->start.unbraced),
+                           static_cast<double>(brace->start.contacts.size()),
+                           limitingText(model, human, brace->start.braced)});
+      push.rows.push_back({"brace posture", pushText(brace->best.braced), pushText(brace->best.unbraced),
+                           static_cast<double>(brace->best.contacts.size()),
+                           limitingText(model, human, brace->best.braced)});
+      report.addSection("Force with bracing").addTable(std::move(push));
+    }
     // The path in 3D: contact-allowed reach's, else hand-only reach's (the false positive shown).
     const ReachResult* shown = study.contact.verdict == Verdict::kReachable     ? &study.contact
                                : study.hand_only.verdict == Verdict::kReachable ? &study.hand_only
@@ -278,6 +404,7 @@ int runAccess(const AccessOptions& o) {
     writeReport(report, o.out_dir);
     std::cout << "\nReport: " << (std::filesystem::absolute(o.out_dir) / "report.html").string() << "\n";
   }
+  if (!strong) return kExitFail;
   return exitCode(study.contact.verdict);
 }
 
