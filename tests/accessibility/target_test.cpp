@@ -37,7 +37,7 @@ void expectSceneError(const std::string& text, const std::string& what) {
 TEST(TargetTest, SceneTargetIsReadAndPlacedInTheArmFrame) {
   const arm::ArmModel model = arm::loadArmModel(arm::defaultArmModelPath());
   const haptics::Scene scene = haptics::loadScene(env3());
-  ASSERT_EQ(scene.targets.size(), 1u);
+  ASSERT_EQ(scene.targets.size(), 2u);
   EXPECT_EQ(scene.targets[0].object, "handwheel");
   const GraspTarget t = resolveTarget(scene, model, "");
   EXPECT_EQ(t.name, "rim");
@@ -73,9 +73,9 @@ TEST(TargetTest, TargetErrorsNameTheKey) {
   expectSceneError(testing::replacedFirst(text, "object: handwheel", "object: wheel"), "no object 'wheel'");
   expectSceneError(testing::replacedFirst(text, "approach: [0.0, 1.0, 0.0]", "approach: [0.0, 0.0, 0.0]"),
                    "non-zero direction");
-  expectSceneError(testing::replacedFirst(text, "    push: [1.0, 0.0, 0.0]\n", ""), "push");
+  expectSceneError(testing::replacedFirst(text, "    push: [0.0, 1.0, 0.0]\n", ""), "push");
   expectSceneError(
-      testing::replacedFirst(text, "    push: [1.0, 0.0, 0.0]\n", "    push: [1.0, 0.0, 0.0]\n    grip: 1\n"), "grip");
+      testing::replacedFirst(text, "    push: [0.0, 1.0, 0.0]\n", "    push: [1.0, 0.0, 0.0]\n    grip: 1\n"), "grip");
 }
 
 TEST(TargetTest, MissingMeshIsAClearError) {

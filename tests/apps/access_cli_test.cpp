@@ -59,6 +59,21 @@ TEST(AccessCliTest, ForceDecidesTheExitWhenTheTargetIsReached) {
   EXPECT_NE(weak.output.find("TOO WEAK"), std::string::npos) << weak.output;
 }
 
+// Pushing the wheel towards its valve in environment 4, the forearm resting on the pipe carries
+// part of the load: the braced push exceeds the unbraced one by more than a fifth.
+TEST(AccessCliTest, BracingOnTheMemberRaisesThePush) {
+  const std::filesystem::path dir = fullarm::test::cliTempDir("fullarm_access_cli_test", "brace");
+  const auto r =
+      runFullarm("access --scene " + scene(4) + " --target rim_push --brace-evaluations 20 --out " + dir.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir / "summary.json");
+  const nlohmann::json f = nlohmann::json::parse(in)["results"]["access"]["force"];
+  ASSERT_EQ(f["at_grasp"]["braced"]["status"], "optimal") << f.dump();
+  ASSERT_EQ(f["at_grasp"]["unbraced"]["status"], "optimal") << f.dump();
+  EXPECT_GE(f["at_grasp"]["braced"]["push_n"].get<double>(), 1.2 * f["at_grasp"]["unbraced"]["push_n"].get<double>());
+  EXPECT_GE(f["at_grasp"]["contacts"].get<int>(), 1);
+}
+
 TEST(AccessCliTest, BadValuesExitTwoNamingTheOption) {
   for (const char* bad : {"--max-link-force nan", "--max-link-force inf", "--clearance -0.01", "--max-skin-depth -1",
                           "--seed -3", "--iterations 0"}) {
