@@ -1,6 +1,8 @@
 #include "fullarm/haptics/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <set>
@@ -11,6 +13,7 @@
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/core/yaml_reader.hpp"
+#include "fullarm/haptics/geometry.hpp"
 #include "fullarm/haptics/mesh_import.hpp"
 #include "fullarm/haptics/primitives.hpp"
 
@@ -79,6 +82,9 @@ class SceneReader {
         object.fail("name", "duplicate object name '" + scene.objects.back().name + "' (names must be unique)");
       }
     }
+    if (const auto targets = root.optionalList("targets")) {
+      for (std::size_t i = 0; i < targets->size(); ++i) readTarget(targets->map(i), scene);
+    }
     root.finish();
     return scene;
   }
@@ -109,6 +115,45 @@ class SceneReader {
       }
     }
     m.finish();
+  }
+
+  // {name, object, position_m, approach, push}: checked against the objects already read.
+  static void readTarget(const core::YamlMap& m, Scene& scene) {
+    SceneTarget target;
+    target.name = m.string("name");
+    if (scene.target(target.name) != nullptr) m.fail("name", "duplicate target name '" + target.name + "'");
+    target.object = m.string("object");
+    const int object = scene.objectIndex(target.object);
+    if (object < 0) {
+      std::string names;
+      for (const SceneObject& o : scene.objects) names += (names.empty() ? "" : ", ") + o.name;
+      m.fail("object", "no object '" + target.object + "' in the scene (objects: " + names + ")");
+    }
+    target.position_S_m = m.vector3("position_m", "metres, scene frame");
+    const auto unit = [&m](const char* key) {
+      const Eigen::Vector3d v = m.vector3(key, "a direction in the scene frame");
+      if (!(v.norm() > 1e-9)) m.fail(key, "expected a non-zero direction, got a zero vector");
+      return Eigen::Vector3d(v.normalized());
+    };
+    target.approach_S = unit("approach");
+    target.push_S = unit("push");
+    m.finish();
+    const SceneObject& o = scene.objects[static_cast<std::size_t>(object)];
+    const Eigen::Vector3d p_O = o.X_SO.inverse() * target.position_S_m;
+    double best_sq = std::numeric_limits<double>::infinity();
+    for (int t = 0; t < o.mesh.numTriangles(); ++t) {
+      const Eigen::Vector3i& tri = o.mesh.triangle(t);
+      best_sq = std::min(best_sq, squaredDistancePointTriangle(p_O, o.mesh.vertex(tri[0]), o.mesh.vertex(tri[1]),
+                                                               o.mesh.vertex(tri[2])));
+    }
+    const double distance = std::sqrt(best_sq);
+    if (distance > kTargetMaxObjectDistance_m) {
+      std::ostringstream msg;
+      msg << "target '" << target.name << "' lies " << distance << " m from the surface of its object '"
+          << target.object << "' (at most " << kTargetMaxObjectDistance_m << " m: a grasp is on the object)";
+      m.fail("position_m", msg.str());
+    }
+    scene.targets.push_back(std::move(target));
   }
 
   SceneObject readObject(const core::YamlMap& m) {
@@ -228,6 +273,13 @@ int Scene::objectIndex(std::string_view object_name) const noexcept {
 const ScenePosture* Scene::posture(std::string_view posture_name) const noexcept {
   for (const ScenePosture& p : postures) {
     if (p.name == posture_name) return &p;
+  }
+  return nullptr;
+}
+
+const SceneTarget* Scene::target(std::string_view target_name) const noexcept {
+  for (const SceneTarget& t : targets) {
+    if (t.name == target_name) return &t;
   }
   return nullptr;
 }

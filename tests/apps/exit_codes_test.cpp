@@ -12,6 +12,7 @@
 
 #include "cli.hpp"
 #include "exit_codes.hpp"
+#include "fullarm/accessibility/reach.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/haptics/tri_mesh.hpp"
 #include "output_files.hpp"
@@ -41,6 +42,7 @@ TEST(ExitCodes, InputTheUserCanFixIsBadInput) {
   EXPECT_NE(message.find("joints[2].mass_kg"), std::string::npos) << message;
   EXPECT_EQ(message.find("internal"), std::string::npos) << message;
   EXPECT_EQ(codeOf(haptics::MeshError("wall.dae", "no valid triangle")), kExitBadInput);
+  EXPECT_EQ(codeOf(accessibility::ReachInputError("reach limits: max_link_force_n must be >= 0")), kExitBadInput);
   EXPECT_EQ(codeOf(OutputError("cannot write out/report.html: No space left on device")), kExitBadInput);
   EXPECT_EQ(codeOf(std::filesystem::filesystem_error("create_directories", "/proc/x",
                                                      std::make_error_code(std::errc::permission_denied))),

@@ -119,7 +119,7 @@ INSTANTIATE_TEST_SUITE_P(
                                    "shoulder_m"},
                       BadSceneCase{"unknown_key", "heading_deg: 0.0", "heading_degrees: 0.0", "heading_degrees"},
                       BadSceneCase{"yaml_syntax", "name: valve_wall", "name: [valve_wall", "YAML syntax error"},
-                      BadSceneCase{"truncated", "schema_version", "schema_version", "YAML syntax error", 40},
+                      BadSceneCase{"truncated", "schema_version", "schema_version", "YAML syntax error", 36},
                       BadSceneCase{"missing_mesh", "five_dice_wall.dae", "no_such_mesh.dae", "no_such_mesh.dae"}),
     [](const ::testing::TestParamInfo<BadSceneCase>& param_info) { return std::string(param_info.param.name); });
 

@@ -281,6 +281,49 @@ TEST(SceneTest, StrictYamlErrorsNameTheKeyPath) {
   }
 }
 
+// Targets name an object of the scene and lie on it: a grasp on the block's top face is read
+// (directions normalised), and a target on an unknown object, with a zero direction, a second
+// one of the same name or 0.3 m above the block is an error naming its key.
+TEST(SceneTest, TargetsAreReadAndCheckedAgainstTheirObject) {
+  const std::string target =
+      "targets:\n  - name: top\n    object: block\n    position_m: [0.0, 0.5, 1.2]\n"
+      "    approach: [0.0, 0.0, -2.0]\n    push: [1.0, 1.0, 0.0]\n";
+  const Scene scene = parseScene(std::string(kSmallScene) + target, "small.yaml");
+  ASSERT_EQ(scene.targets.size(), 1u);
+  ASSERT_NE(scene.target("top"), nullptr);
+  EXPECT_EQ(scene.target("top")->object, "block");
+  EXPECT_TRUE(matricesNear(scene.target("top")->approach_S, Eigen::Vector3d(0.0, 0.0, -1.0), kTight));
+  EXPECT_NEAR(scene.target("top")->push_S.norm(), 1.0, kTight);
+  EXPECT_EQ(scene.target("none"), nullptr);
+  EXPECT_TRUE(parseScene(kSmallScene, "small.yaml").targets.empty());  // the key is optional
+
+  const auto replaced = [&target](const std::string& from, const std::string& to) {
+    std::string text = target;
+    const std::size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    return std::string(kSmallScene) + text;
+  };
+  const std::vector<BadCase> cases = {
+      {replaced("object: block", "object: wall"), "targets[0].object", "no object 'wall'"},
+      {replaced("approach: [0.0, 0.0, -2.0]", "approach: [0.0, 0.0, 0.0]"), "targets[0].approach", "non-zero"},
+      {replaced("position_m: [0.0, 0.5, 1.2]", "position_m: [0.0, 0.5, 1.45]"), "targets[0].position_m",
+       "from the surface of its object 'block'"},
+      {std::string(kSmallScene) + target + target.substr(std::string("targets:\n").size()), "targets[1].name",
+       "duplicate target name"},
+  };
+  for (const BadCase& c : cases) {
+    SCOPED_TRACE(c.text);
+    try {
+      (void)parseScene(c.text, "bad_scene.yaml");
+      ADD_FAILURE() << "no error; expected " << c.key_path;
+    } catch (const core::ConfigError& e) {
+      EXPECT_EQ(e.keyPath(), c.key_path) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(SceneTest, ErrorsCarryTheLineOfTheBadValue) {
   try {
     (void)parseScene(edited("segments: 12", "segments: 12.5"), "bad_scene.yaml");

@@ -38,6 +38,23 @@ struct ScenePosture {
   Eigen::VectorXd q_rad;
 };
 
+/// A task target named by the scene: where the hand grasps an object and which way it pushes
+/// there (the accessibility question: can the arm get the hand here, and push how hard).
+struct SceneTarget {
+  std::string name;    ///< unique within the scene
+  std::string object;  ///< the object grasped (a scene object's name)
+  /// The hand point (the arm model's tool point) at the grasp, scene frame [m].
+  Eigen::Vector3d position_S_m = Eigen::Vector3d::Zero();
+  /// Unit: the hand's pointing axis at the grasp (the tool link's x axis), scene frame.
+  Eigen::Vector3d approach_S = Eigen::Vector3d::UnitY();
+  /// Unit: the direction the hand pushes on the object, scene frame.
+  Eigen::Vector3d push_S = Eigen::Vector3d::UnitY();
+};
+
+/// Farthest a target's hand point may lie from the surface of its object [m]: a grasp is on
+/// the object (the hand point sits inside the hand, a few centimetres from the skin).
+inline constexpr double kTargetMaxObjectDistance_m = 0.08;
+
 /// A loaded scene. Treat as constant after loading.
 struct Scene {
   std::string name;
@@ -49,6 +66,7 @@ struct Scene {
   double heading_rad = 0.0;
   std::vector<SceneObject> objects;
   std::vector<ScenePosture> postures;
+  std::vector<SceneTarget> targets;  ///< optional key `targets`, in file order
   /// Folder where the objects' hierarchies are saved and reloaded (hierarchy_cache.hpp), from
   /// the optional key `hierarchy_cache` (relative to the scene file); empty: none.
   std::filesystem::path hierarchy_cache_dir;
@@ -57,14 +75,18 @@ struct Scene {
   [[nodiscard]] int objectIndex(std::string_view name) const noexcept;
   /// The posture called `name`, or nullptr.
   [[nodiscard]] const ScenePosture* posture(std::string_view name) const noexcept;
+  /// The target called `name`, or nullptr.
+  [[nodiscard]] const SceneTarget* target(std::string_view name) const noexcept;
   /// Sum of the objects' triangle counts.
   [[nodiscard]] long numTriangles() const noexcept;
 };
 
 /// Reads a scene file. Mesh files are resolved relative to the scene file's folder.
 /// @throws core::ConfigError naming the file, the key path and what was expected, for YAML
-///   errors, unknown or missing keys, bad values, duplicate object names, and meshes that
-///   cannot be imported (the MeshError text is included).
+///   errors, unknown or missing keys, bad values, duplicate object names, meshes that
+///   cannot be imported (the MeshError text is included), and targets that name an unknown
+///   object, have a zero direction or lie farther than kTargetMaxObjectDistance_m from their
+///   object's surface.
 [[nodiscard]] Scene loadScene(const std::filesystem::path& file);
 
 /// Same from text. `file` names the source in errors; relative mesh paths are resolved
