@@ -23,6 +23,7 @@
 #include "global_command.hpp"
 #include "haptics_command.hpp"
 #include "identify_command.hpp"
+#include "local_command.hpp"
 #include "output_files.hpp"
 #include "plant_command.hpp"
 #include "plant_serve_command.hpp"
@@ -208,6 +209,8 @@ struct CommandLine {
   HapticsQueryOptions haptics_options;
   CLI::App* run = nullptr;
   RunCommandOptions run_options;
+  CLI::App* local = nullptr;
+  RunCommandOptions local_options = localDefaults();
   CLI::App* replay = nullptr;
   ReplayCommandOptions replay_options;
   CLI::App* identify = nullptr;
@@ -243,6 +246,7 @@ struct CommandLine {
     validate = addValidateCommand(app, validate_options, table);
     haptics_query = addHapticsCommand(app, haptics_options, table);
     run = addRunCommand(app, run_options, table);
+    local = addLocalCommand(app, local_options, table);
     replay = addReplayCommand(app, replay_options, table);
     identify = addIdentifyCommand(app, identify_options, table);
   }
@@ -268,10 +272,10 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
     return runTune(cli.tune_options);
   }
   if (cli.haptics_query->parsed()) return runHapticsQuery(cli.haptics_options);
-  if (cli.run->parsed()) {
+  if (cli.run->parsed() || cli.local->parsed()) {
     std::string command_line = "fullarm";
     for (const std::string& arg : args) command_line.append(" ").append(arg);
-    return runRun(cli.run_options, command_line);
+    return cli.run->parsed() ? runRun(cli.run_options, command_line) : runLocal(cli.local_options, command_line);
   }
   if (cli.replay->parsed()) return runReplay(cli.replay_options);
   if (cli.identify->parsed()) {

@@ -1,33 +1,16 @@
 #include "fullarm/hil/lcm_search.hpp"
 
 #include <algorithm>
-#include <chrono>
-#include <cstdio>
 
 #include "fullarm/hil/io_device.hpp"
-#include "lcm_subscribe.hpp"
+#include "lcm_node.hpp"
 
 namespace fullarm::hil {
-namespace {
 
-using Clock = std::chrono::steady_clock;
-
-Clock::time_point after(double s) {
-  return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
-}
-
-int millisUntil(Clock::time_point deadline) {
-  const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
-  return static_cast<int>(std::clamp<long long>(left, 0, 1000)) + 1;
-}
-
-std::string seconds(double s) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g s", s);
-  return text;
-}
-
-}  // namespace
+using detail::after;
+using detail::Clock;
+using detail::millisUntil;
+using detail::seconds;
 
 // --- the tick's side ---------------------------------------------------------------------------
 
@@ -40,7 +23,7 @@ LcmSearchClient::LcmSearchClient(const std::string& url, double connect_timeout_
   receiver_ = std::make_unique<LcmReceiver>(*lcm_, o);
   const auto deadline = after(connect_timeout_s);
   while (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0 && Clock::now() < deadline) {
-    receiver_->drainWait(static_cast<double>(millisUntil(deadline)) * 1e-3);
+    receiver_->drainWait(static_cast<double>(millisUntil(deadline) + 1) * 1e-3);
   }
   if (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0) {
     throw DeviceError("remote search: no global node answered on " + url + " within " + seconds(connect_timeout_s) +
@@ -69,7 +52,7 @@ bool LcmSearchClient::await(std::int64_t set_id, std::uint64_t query_tick, std::
   const auto deadline = after(lost_ ? 0.0 : reply_timeout_s_);
   const std::uint64_t beats_before = receiver_->heartbeatsFrom(NodeKind::kGlobal);
   for (;;) {
-    const int wait_ms = lost_ ? 0 : millisUntil(deadline);
+    const int wait_ms = lost_ ? 0 : millisUntil(deadline) + 1;
     if (lcm_->handleTimeout(wait_ms) <= 0) {
       if (lost_ || Clock::now() >= deadline) break;
       continue;
@@ -103,16 +86,9 @@ LcmGlobalNode::LcmGlobalNode(GlobalSearchRunner& search, int num_config, GlobalN
 
 GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
   GlobalNodeResult result;
-  lcm::LCM rx(options_.url);
-  lcm::LCM tx(options_.url);
-  if (!rx.good() || !tx.good()) throw DeviceError("global node: cannot open the LCM URL " + options_.url);
-  const auto start = Clock::now();
-  auto log = [&](const std::string& what) {
-    char stamp[32];
-    std::snprintf(stamp, sizeof stamp, "%.3f s: ", std::chrono::duration<double>(Clock::now() - start).count());
-    result.log.push_back(stamp + what);
-    if (options_.on_log) options_.on_log(result.log.back());
-  };
+  detail::NodeLcm node("global node", options_.url, result.log, options_.on_log);
+  lcm::LCM& rx = node.rx;
+  const auto log = [&node](const std::string& what) { node.log(what); };
 
   struct Sink {
     JointStateRecord query;
@@ -124,14 +100,13 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
     }
   } sink;
   sink.rejected = &result.rejected;
-  lcm_subscription_t* sub = detail::subscribeRaw(rx, channel::kSearchQuery, &sink, 256);
-  if (sub == nullptr) throw DeviceError("global node: cannot subscribe on " + options_.url);
+  node.subscribe(channel::kSearchQuery, &sink, 256);
 
   LcmPublisherOptions po;
   po.node = NodeKind::kGlobal;
   po.heartbeat_period_s = options_.heartbeat_period_s;
   po.drop = options_.drop;
-  LcmPublisher publisher(tx, po);
+  LcmPublisher publisher(node.tx, po);
   log("serving the global search on " + options_.url);
 
   auto set = std::make_unique<MinimaSetRecord>();
@@ -182,7 +157,6 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
     ++result.queries;
   }
   publisher.stop();
-  lcm_unsubscribe(rx.getUnderlyingLCM(), sub);
   return result;
 }
 

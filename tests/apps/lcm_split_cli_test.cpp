@@ -1,7 +1,7 @@
-// `fullarm plant serve` and `fullarm run --io lcm` as separate processes over LCM udpm, inside a
-// private network namespace the test makes (loopback only). A lockstep run over the plant node
-// writes the in-process run's log bit for bit (every event but the header, which names the I/O
-// back-end); killing the plant node faults the run (communication lost, supervisor trip, exit 1);
+// `fullarm plant serve`, `fullarm global`, `fullarm run --io lcm` and `fullarm local` as separate
+// processes over LCM udpm, inside a private network namespace the test makes (loopback only). A
+// lockstep run over the plant node, and the local node over the plant and global nodes, write the
+// in-process run's log bit for bit (every event but the header, which names the I/O back-end); killing the plant node faults the run (communication lost, supervisor trip, exit 1);
 // killing the run makes the plant node's watchdog put out the safe outputs.
 
 #include <fcntl.h>
@@ -140,7 +140,8 @@ TEST_F(LcmSplitCli, ALockstepRunOverThePlantNodeWritesTheInProcessRunsLog) {
 TEST_F(LcmSplitCli, ThreeProcessesInLockstepWriteTheInProcessRunsLog) {
   Process plant(plantArgs("5"), dir_ / "plant.txt");
   Process global({"--quiet", "global", "--lcm-url", kUrl, "--idle-exit", "5"}, dir_ / "global.txt");
-  const test::CliResult remote = test::runFullarm("--quiet run --io lcm --search lcm --lcm-url '" + std::string(kUrl) +
+  // The local node: `fullarm local` (the run with the global node's search, remote I/O by default).
+  const test::CliResult remote = test::runFullarm("--quiet local --lcm-url '" + std::string(kUrl) +
                                                   "' --clock lockstep --duration 1.5 --no-oracle " + scenario() +
                                                   " --out " + (dir_ / "lcm").string());
   ASSERT_EQ(remote.exit_code, 0) << remote.output;

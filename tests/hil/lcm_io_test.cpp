@@ -102,37 +102,23 @@ struct GlobalThread {
   std::thread thread;
 };
 
-TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
-  RunOptions local = holdAtTheWheel(1.5);
-  const RunResult in_process = runHil(local);
-
-  RunOptions plant_options = local;  // the plant node's session: the same files and seed
-  HilSession plant(plant_options);
-  PlantNodeOptions node_options;
-  node_options.url = kUrl;
-  node_options.idle_exit_s = 20.0;
-  LcmPlantNode node(plant.device(), node_options);
-  std::atomic<bool> stop{false};
-  PlantNodeResult served;
-  std::thread plant_thread([&] { served = node.serve([&] { return stop.load(); }); });
-
-  local.io = IoKind::kLcm;
-  local.lcm_url = kUrl;
-  RunResult remote;
-  try {
-    remote = runHil(local);
-  } catch (...) {
-    stop = true;
-    plant_thread.join();
-    throw;
+/// A plant node serving a run's simulated arm (its files and seed) from a thread.
+struct SessionPlantThread {
+  SessionPlantThread(const RunOptions& options, PlantNodeOptions node_options)
+      : session(options), node(session.device(), std::move(node_options)) {
+    thread = std::thread([this] { result = node.serve([this] { return stop.load(); }); });
   }
-  stop = true;
-  plant_thread.join();
-
-  EXPECT_EQ(remote.io_name, "lcm");
-  EXPECT_EQ(served.commands, remote.telemetry.size());
-  expectSameRun(in_process, remote);
-}
+  ~SessionPlantThread() { join(); }
+  void join() {
+    stop = true;
+    if (thread.joinable()) thread.join();
+  }
+  HilSession session;
+  LcmPlantNode node;
+  std::atomic<bool> stop{false};
+  PlantNodeResult result;
+  std::thread thread;
+};
 
 PlantNodeOptions plantOptions() {
   PlantNodeOptions o;
@@ -149,32 +135,37 @@ GlobalNodeOptions globalOptions() {
   return o;
 }
 
+/// `local` over the nodes: remote I/O, and the global node's search if `remote_search`.
+RunOptions overTheNodes(RunOptions local, bool remote_search) {
+  local.io = IoKind::kLcm;
+  local.lcm_url = kUrl;
+  if (remote_search) local.search_url = kUrl;
+  return local;
+}
+
+TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
+  RunOptions local = holdAtTheWheel(1.5);
+  const RunResult in_process = runHil(local);
+
+  SessionPlantThread plant(local, plantOptions());  // the same files and seed
+  const RunResult remote = runHil(overTheNodes(local, false));
+  plant.join();
+
+  EXPECT_EQ(remote.io_name, "lcm");
+  EXPECT_EQ(plant.result.commands, remote.telemetry.size());
+  expectSameRun(in_process, remote);
+}
+
 TEST_F(LcmIo, ThreeNodesInLockstepEqualTheInProcessRunBitForBit) {
   RunOptions local = holdAtTheWheel(1.5);
   const RunResult in_process = runHil(local);
 
-  HilSession plant(local);
-  LcmPlantNode plant_node(plant.device(), plantOptions());
-  std::atomic<bool> stop{false};
-  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
-  RunResult remote;
-  {
-    GlobalThread global(local, globalOptions());
-    local.io = IoKind::kLcm;
-    local.lcm_url = kUrl;
-    local.search_url = kUrl;
-    try {
-      remote = runHil(local);
-    } catch (...) {
-      stop = true;
-      plant_thread.join();
-      throw;
-    }
-    global.join();
-    EXPECT_EQ(global.result.queries, in_process.sets.size());
-  }
-  stop = true;
-  plant_thread.join();
+  SessionPlantThread plant(local, plantOptions());
+  GlobalThread global(local, globalOptions());
+  const RunResult remote = runHil(overTheNodes(local, true));
+  global.join();
+  plant.join();
+  EXPECT_EQ(global.result.queries, in_process.sets.size());
 
   ASSERT_EQ(in_process.sets.size(), remote.sets.size());
   for (std::size_t i = 0; i < remote.sets.size(); ++i) {
@@ -203,22 +194,15 @@ TEST_F(LcmIo, TheGlobalNodeStoppedMidContactFadesTheForcesWithinTheRate) {
   }
   ASSERT_GT(stall, 0u) << "the held hand must touch the wheel's surroundings";
 
-  HilSession plant(local);
-  LcmPlantNode plant_node(plant.device(), plantOptions());
-  std::atomic<bool> stop{false};
-  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  SessionPlantThread plant(local, plantOptions());
   GlobalThread global(local, globalOptions());
-  local.io = IoKind::kLcm;
-  local.lcm_url = kUrl;
-  local.search_url = kUrl;
-  HilSession session(local);
+  HilSession session(overTheNodes(local, true));
   RunHooks hooks;
   hooks.before_tick = [&](std::uint64_t k, JointSample&, SupervisorRequests&) {
     if (k == stall) global.join();  // the global node is gone from here on
   };
   const RunResult r = session.run(hooks);
-  stop = true;
-  plant_thread.join();
+  plant.join();
 
   EXPECT_FALSE(r.tripped) << supervisorCauseName(r.trip_cause);
   ASSERT_GT(maxContact(r.telemetry[stall - 1]), 2.0) << "in contact when the global node stops";
@@ -243,10 +227,7 @@ TEST_F(LcmIo, TheGlobalNodeStoppedMidContactFadesTheForcesWithinTheRate) {
 TEST_F(LcmIo, MinimaDelayed50msAreStillAdoptedOnTimeInLockstep) {
   RunOptions local = holdAtTheWheel(1.5);
   const RunResult in_process = runHil(local);
-  HilSession plant(local);
-  LcmPlantNode plant_node(plant.device(), plantOptions());
-  std::atomic<bool> stop{false};
-  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  SessionPlantThread plant(local, plantOptions());
   GlobalNodeOptions go = globalOptions();
   std::atomic<int> delayed{0};
   // One fragment in twenty held back 50 ms on the wire (the publisher thread waits before it).
@@ -258,20 +239,9 @@ TEST_F(LcmIo, MinimaDelayed50msAreStillAdoptedOnTimeInLockstep) {
     return false;
   };
   GlobalThread global(local, go);
-  local.io = IoKind::kLcm;
-  local.lcm_url = kUrl;
-  local.search_url = kUrl;
-  RunResult r;
-  try {
-    r = runHil(local);
-  } catch (...) {
-    stop = true;
-    plant_thread.join();
-    throw;
-  }
+  const RunResult r = runHil(overTheNodes(local, true));
   global.join();
-  stop = true;
-  plant_thread.join();
+  plant.join();
   EXPECT_GT(delayed.load(), 3);
   // Lockstep waits for each set at its delivery tick: a late set changes nothing.
   expectSameRun(in_process, r);
@@ -279,28 +249,14 @@ TEST_F(LcmIo, MinimaDelayed50msAreStillAdoptedOnTimeInLockstep) {
 
 TEST_F(LcmIo, MinimaFragmentsDroppedAreSetsNotAdoptedAndTheRunStaysSafe) {
   RunOptions local = holdAtTheWheel(1.5);
-  HilSession plant(local);
-  LcmPlantNode plant_node(plant.device(), plantOptions());
-  std::atomic<bool> stop{false};
-  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  SessionPlantThread plant(local, plantOptions());
   GlobalNodeOptions go = globalOptions();
   // One fragment in ten lost, deterministically (a lost fragment loses its set).
   go.drop = [](std::string_view ch, std::int64_t seq) { return ch == channel::kMinimaSet && seq % 10 == 3; };
   GlobalThread global(local, go);
-  local.io = IoKind::kLcm;
-  local.lcm_url = kUrl;
-  local.search_url = kUrl;
-  RunResult r;
-  try {
-    r = runHil(local);
-  } catch (...) {
-    stop = true;
-    plant_thread.join();
-    throw;
-  }
+  const RunResult r = runHil(overTheNodes(local, true));
   global.join();
-  stop = true;
-  plant_thread.join();
+  plant.join();
   std::size_t adopted = 0;
   for (const RecordedSet& s : r.sets) adopted += s.adopted_tick >= 0 ? 1 : 0;
   EXPECT_LT(adopted, r.sets.size()) << "some sets lost a fragment";
