@@ -9,7 +9,9 @@ namespace fullarm::app {
 
 CLI::App* addGlobalCommand(CLI::App& app, GlobalCommandOptions& o, OptionTable& table) {
   CLI::App* cmd = app.add_subcommand(
-      "global", "Serve the global search as an LCM node for `fullarm run --search lcm` (one minima set per query)");
+      "global",
+      "Serve the global search as an LCM node for `fullarm local` and `fullarm run --search lcm` (a minima set per "
+      "lockstep query; in real time, sets on the newest live joint state)");
   OptionDeclarer declare(*cmd, table);
   declare.name("--lcm-url", o.lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0: this machine only)");
   declare.choice("--mode", o.mode, "Haptic rendering (as the run's)", {"full-arm", "hand-only"})->capture_default_str();
@@ -39,8 +41,8 @@ int runGlobal(const GlobalCommandOptions& o, std::ostream& out) {
     const StopSignalGuard stop;
     r = node.serve([] { return StopSignalGuard::requested(); });
   }
-  out << "fullarm global: " << r.queries << " queries answered, " << r.stale << " stale, " << r.rejected
-      << " rejected\n";
+  out << "fullarm global: " << r.queries << " queries answered, " << r.live_states << " live joint states ("
+      << r.live_sets << " sets sent), " << r.stale << " stale, " << r.rejected << " rejected\n";
   return kExitPass;
 }
 

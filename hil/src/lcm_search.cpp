@@ -1,6 +1,7 @@
 #include "fullarm/hil/lcm_search.hpp"
 
 #include <algorithm>
+#include <string_view>
 
 #include "fullarm/hil/io_device.hpp"
 #include "lcm_node.hpp"
@@ -79,6 +80,55 @@ bool LcmSearchClient::await(std::int64_t set_id, std::uint64_t query_tick, std::
   return false;
 }
 
+// --- the tick's side, real time --------------------------------------------------------------
+
+LcmLiveSearchClient::LcmLiveSearchClient(const std::string& url, double connect_timeout_s, double heartbeat_period_s)
+    : tx_(std::make_unique<lcm::LCM>(url)), rx_(std::make_unique<lcm::LCM>(url)) {
+  if (!tx_->good() || !rx_->good()) throw DeviceError("remote search: cannot open the LCM URL " + url);
+  LcmReceiverOptions o;
+  o.minima_set = true;
+  o.heartbeat = true;
+  receiver_ = std::make_unique<LcmReceiver>(*rx_, o);
+  const auto deadline = after(connect_timeout_s);
+  while (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0 && Clock::now() < deadline) {
+    receiver_->drainWait(static_cast<double>(millisUntil(deadline) + 1) * 1e-3);
+  }
+  if (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0) {
+    throw DeviceError("remote search: no global node answered on " + url + " within " + seconds(connect_timeout_s) +
+                      " (start `fullarm global` with the same --lcm-url)");
+  }
+  LcmPublisherOptions po;
+  po.node = NodeKind::kLocal;
+  po.heartbeat_period_s = heartbeat_period_s;
+  publisher_ = std::make_unique<LcmPublisher>(*tx_, po);
+}
+
+LcmLiveSearchClient::~LcmLiveSearchClient() {
+  stop();
+}
+
+bool LcmLiveSearchClient::pushConfiguration(std::int64_t tick, const double* q_rad, int n) noexcept {
+  JointStateRecord r;
+  r.seq = tick;
+  r.tick = tick;
+  r.num_joints = std::min(n, kMaxRecordJoints);
+  for (int j = 0; j < r.num_joints; ++j) r.q_rad[static_cast<std::size_t>(j)] = q_rad[j];
+  return publisher_->pushJointState(r);
+}
+
+void LcmLiveSearchClient::setNodeState(std::int64_t tick, bool safe_output) noexcept {
+  publisher_->setNodeState(tick, safe_output);
+}
+
+const MinimaSetRecord* LcmLiveSearchClient::waitForSet(double timeout_s) {
+  (void)receiver_->drainWait(timeout_s);
+  return receiver_->takeMinimaSet();
+}
+
+void LcmLiveSearchClient::stop() {
+  if (publisher_) publisher_->stop();
+}
+
 // --- the global node ---------------------------------------------------------------------------
 
 LcmGlobalNode::LcmGlobalNode(GlobalSearchRunner& search, int num_config, GlobalNodeOptions options)
@@ -90,17 +140,38 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
   lcm::LCM& rx = node.rx;
   const auto log = [&node](const std::string& what) { node.log(what); };
 
+  // Lockstep queries are answered each, in order; live joint states (a real-time run) only the
+  // newest of those waiting.
   struct Sink {
-    JointStateRecord query;
-    bool have = false;
-    std::uint64_t* rejected = nullptr;
-    void onMessage(std::span<const std::uint8_t> bytes, const char* /*channel*/) {
-      have = decodeChecked(bytes, query) == DecodeStatus::kOk;
-      if (!have) ++*rejected;
+    JointStateRecord scratch;
+    std::vector<JointStateRecord> queries;  ///< lockstep queries waiting, in arrival order
+    JointStateRecord live;                  ///< the newest live joint state
+    bool live_new = false;
+    std::int64_t live_seq = -1;
+    GlobalNodeResult* result = nullptr;
+    void onMessage(std::span<const std::uint8_t> bytes, const char* channel) {
+      if (decodeChecked(bytes, scratch) != DecodeStatus::kOk) {
+        ++result->rejected;
+        return;
+      }
+      if (std::string_view(channel) != channel::kJointState) {
+        queries.push_back(scratch);
+        return;
+      }
+      ++result->live_states;
+      if (scratch.seq <= live_seq) {
+        ++result->stale;
+        return;
+      }
+      live_seq = scratch.seq;
+      live = scratch;
+      live_new = true;
     }
   } sink;
-  sink.rejected = &result.rejected;
+  sink.result = &result;
+  sink.queries.reserve(256);
   node.subscribe(channel::kSearchQuery, &sink, 256);
+  node.subscribe(channel::kJointState, &sink, 256);
 
   LcmPublisherOptions po;
   po.node = NodeKind::kGlobal;
@@ -115,31 +186,25 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
   std::int64_t last_id = -1;
   auto last_query = Clock::now();
   bool queried = false;
-  const auto idle = std::chrono::duration<double>(options_.idle_exit_s);
-  for (;;) {
-    if (stop && stop()) break;
-    if (options_.idle_exit_s > 0.0 && Clock::now() - last_query > idle) {
-      log(queried ? "no query for " + seconds(options_.idle_exit_s) + ": stopped"
-                  : "no tick connected within " + seconds(options_.idle_exit_s) + ": stopped");
-      break;
-    }
-    sink.have = false;
-    if (rx.handleTimeout(5) <= 0 || !sink.have) continue;
-    const JointStateRecord& query = sink.query;
-    if (query.seq <= last_id) {
+  bool live = false;
+  // The set at `query`'s joint angles, with the query's seq as its id.
+  const auto answer = [&](const JointStateRecord& query, bool lockstep) {
+    if (lockstep && query.seq <= last_id) {
       ++result.stale;
-      continue;
+      return;
     }
     if (query.num_joints != num_config_) {
       ++result.rejected;
       log("a query with " + std::to_string(query.num_joints) + " joint angles ignored: the arm model has " +
           std::to_string(num_config_));
-      continue;
+      return;
     }
-    if (!queried) log("first query");
+    if (lockstep && !queried) log("first query");
+    if (!lockstep && !live) log("first live joint state: answering the newest, as fast as the search runs");
     queried = true;
+    live = live || !lockstep;
     last_query = Clock::now();
-    last_id = query.seq;
+    if (lockstep) last_id = query.seq;
     for (int j = 0; j < num_config_; ++j) q[j] = query.q_rad[static_cast<std::size_t>(j)];
     const int found = search_.run(q, minima);
     set->utime_us = query.utime_us;
@@ -152,9 +217,27 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
     set->q_rad = query.q_rad;
     fillMinima(minima, *set);
     set->num_minima_dropped = found - set->num_minima;
-    while (!publisher.pushMinimaSet(*set)) publisher.flush();  // answer every query, in order
+    while (!publisher.pushMinimaSet(*set)) publisher.flush();  // every set goes out, in order
     publisher.setNodeState(query.tick, false);
-    ++result.queries;
+    ++(lockstep ? result.queries : result.live_sets);
+  };
+  const auto idle = std::chrono::duration<double>(options_.idle_exit_s);
+  for (;;) {
+    if (stop && stop()) break;
+    if (options_.idle_exit_s > 0.0 && Clock::now() - last_query > idle) {
+      log(queried ? "no query for " + seconds(options_.idle_exit_s) + ": stopped"
+                  : "no tick connected within " + seconds(options_.idle_exit_s) + ": stopped");
+      break;
+    }
+    if (rx.handleTimeout(5) <= 0) continue;
+    while (rx.handleTimeout(0) > 0) {
+    }
+    for (const JointStateRecord& query : sink.queries) answer(query, true);
+    sink.queries.clear();
+    if (sink.live_new) {
+      sink.live_new = false;
+      answer(sink.live, false);
+    }
   }
   publisher.stop();
   return result;
