@@ -223,6 +223,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
   device_.configure();  // safe outputs
   bool safe = true;
   std::int64_t last_seq = 0;
+  SequenceTracker command_seq(1);  ///< the device counts its reads from 1: a new run is heard at once
   auto last_command = Clock::now();
   bool commanded = false;
 
@@ -274,9 +275,13 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     }
     have_command = false;
     if (rx.handleTimeout(5) <= 0 || !have_command) continue;
-    if (command.seq <= last_seq) {
+    const SequenceTracker::Verdict verdict = command_seq.accept(command.seq);
+    if (verdict == SequenceTracker::Verdict::kStale) {
       ++result.stale_commands;
       continue;
+    }
+    if (verdict == SequenceTracker::Verdict::kRestart) {
+      log("commands restarted at seq " + std::to_string(command.seq) + ": a new tick connected");
     }
     if (command.num_valves != device_.numJoints()) {
       ++result.rejected;

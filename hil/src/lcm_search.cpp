@@ -147,7 +147,7 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
     std::vector<JointStateRecord> queries;  ///< lockstep queries waiting, in arrival order
     JointStateRecord live;                  ///< the newest live joint state
     bool live_new = false;
-    std::int64_t live_seq = -1;
+    SequenceTracker live_seq;  ///< a restarted local node is heard again
     GlobalNodeResult* result = nullptr;
     void onMessage(std::span<const std::uint8_t> bytes, const char* channel) {
       if (decodeChecked(bytes, scratch) != DecodeStatus::kOk) {
@@ -159,11 +159,10 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
         return;
       }
       ++result->live_states;
-      if (scratch.seq <= live_seq) {
+      if (live_seq.accept(scratch.seq) == SequenceTracker::Verdict::kStale) {
         ++result->stale;
         return;
       }
-      live_seq = scratch.seq;
       live = scratch;
       live_new = true;
     }
@@ -183,15 +182,19 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
   auto set = std::make_unique<MinimaSetRecord>();
   std::vector<haptics::LocalMinimum> minima;
   Eigen::VectorXd q(num_config_);
-  std::int64_t last_id = -1;
+  SequenceTracker query_ids(1);  ///< a lockstep run's set ids start at 1: a new run is heard at once
   auto last_query = Clock::now();
   bool queried = false;
   bool live = false;
   // The set at `query`'s joint angles, with the query's seq as its id.
   const auto answer = [&](const JointStateRecord& query, bool lockstep) {
-    if (lockstep && query.seq <= last_id) {
+    const SequenceTracker::Verdict verdict = lockstep ? query_ids.accept(query.seq) : SequenceTracker::Verdict::kNewer;
+    if (verdict == SequenceTracker::Verdict::kStale) {
       ++result.stale;
       return;
+    }
+    if (verdict == SequenceTracker::Verdict::kRestart) {
+      log("queries restarted at set " + std::to_string(query.seq) + ": a new tick connected");
     }
     if (query.num_joints != num_config_) {
       ++result.rejected;
@@ -204,7 +207,6 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
     queried = true;
     live = live || !lockstep;
     last_query = Clock::now();
-    if (lockstep) last_id = query.seq;
     for (int j = 0; j < num_config_; ++j) q[j] = query.q_rad[static_cast<std::size_t>(j)];
     const int found = search_.run(q, minima);
     set->utime_us = query.utime_us;

@@ -296,13 +296,19 @@ int LcmReceiver::drainWait(double timeout_s) {
   return 1 + drain();
 }
 
-bool LcmReceiver::acceptSeq(std::int64_t seq, std::int64_t& newest, LcmChannelCounters& c) noexcept {
-  if (newest >= 0 && seq <= newest) {
-    ++c.stale;
-    return false;
+bool LcmReceiver::acceptSeq(std::int64_t seq, SequenceTracker& tracker, LcmChannelCounters& c) noexcept {
+  const std::int64_t newest = tracker.newest();
+  switch (tracker.accept(seq)) {
+    case SequenceTracker::Verdict::kStale:
+      ++c.stale;
+      return false;
+    case SequenceTracker::Verdict::kRestart:
+      ++c.restarts;
+      break;
+    case SequenceTracker::Verdict::kNewer:
+      if (newest >= 0 && seq > newest + 1) c.gaps += static_cast<std::uint64_t>(seq - newest - 1);
+      break;
   }
-  if (newest >= 0 && seq > newest + 1) c.gaps += static_cast<std::uint64_t>(seq - newest - 1);
-  newest = seq;
   ++c.accepted;
   return true;
 }

@@ -154,12 +154,24 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
   device_->configure();
   device_->activate();
 
-  // Sets from the global node over LCM: each whole set that arrives is handed to the tick.
+  // Sets from the global node over LCM: each whole set that arrives is handed to the tick. Its
+  // heartbeat is watched here: none for peer_heartbeat_timeout_s is communication loss.
+  std::atomic<bool> peer_lost{false};
   const auto receive_remote_sets = [&] {
     search_note = "global search: the global node over LCM at " + options_.search_url +
                   " (live joint states every global period, sets adopted as they arrive)";
+    const auto timeout = std::chrono::duration<double>(config_.supervisor.peer_heartbeat_timeout_s);
+    std::uint64_t beats = remote->receiver().heartbeatsFrom(NodeKind::kGlobal);
+    auto last_beat = std::chrono::steady_clock::now();
     while (!stop_search.load(std::memory_order_relaxed)) {
       const MinimaSetRecord* s = remote->waitForSet(0.005);
+      const auto now = std::chrono::steady_clock::now();
+      if (remote->receiver().heartbeatsFrom(NodeKind::kGlobal) != beats) {
+        beats = remote->receiver().heartbeatsFrom(NodeKind::kGlobal);
+        last_beat = now;
+      } else if (now - last_beat > timeout) {
+        peer_lost.store(true, std::memory_order_relaxed);
+      }
       if (s == nullptr) continue;
       if (hooks.search_stalled && hooks.search_stalled(static_cast<std::uint64_t>(s->computed_tick))) continue;
       RecordedSet set;
@@ -264,6 +276,7 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
       requests.heartbeat_enabled = true;
       requests.estop_signal = g_stop_signal.load(std::memory_order_relaxed);
       requests.overrun_fault = overrun_fault;
+      requests.peer_heartbeat_lost = peer_lost.load(std::memory_order_relaxed);
       if (hooks.before_tick) hooks.before_tick(k, rec.sample, requests);
       MinimaDelivery delivery;
       TickInputs in;

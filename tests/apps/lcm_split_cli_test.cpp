@@ -272,11 +272,32 @@ TEST_F(LcmSplitCli, ThreeProcessesInRealTimeAgreeWithTheInProcessRunWithinTheLat
       }
     }
   }
-  std::cout << "latency p50 " << quantile(age_s, 0.5) * 1e3 << " ms, p99 " << latency_p99_s * 1e3 << " ms over " << age_s.size() << " sets; hand speed "
-            << hand_speed_mps << " m/s; tolerance " << tolerance_n << " N; largest difference " << worst_n
+  std::cout << "latency p50 " << quantile(age_s, 0.5) * 1e3 << " ms, p99 " << latency_p99_s * 1e3 << " ms over "
+            << age_s.size() << " sets; hand speed " << hand_speed_mps << " m/s; tolerance " << tolerance_n << " N; largest difference " << worst_n
             << " N at tick " << worst_tick << " (largest force " << largest_n << " N)\n";
   EXPECT_GT(largest_n, 1.0) << "the scenario should bring the arm into contact";
   EXPECT_LE(worst_n, tolerance_n);
+}
+
+// The global node killed during a real-time run of the local node: its heartbeat stops, and
+// after peer_heartbeat_timeout_s the supervisor trips with communication lost (exit 1).
+TEST_F(LcmSplitCli, KillingTheGlobalNodeInRealTimeIsCommunicationLoss) {
+  Process global({"--quiet", "global", "--lcm-url", kUrl, "--idle-exit", "10"}, dir_ / "global.txt");
+  Process local({"--quiet", "local", "--io", "sim", "--lcm-url", kUrl, "--clock", "realtime", "--duration", "4",
+                 "--user", (dir_ / "hold.yaml").string(), "--start-posture", "reach_valve", "--seed", "3", "--out",
+                 (dir_ / "local").string()},
+                dir_ / "local.txt");
+  ASSERT_TRUE(global.waitForOutput("first live joint state", 20.0)) << global.output();
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  global.kill();
+  EXPECT_EQ(global.wait(), -SIGKILL);
+  EXPECT_EQ(local.wait(), 1) << local.output();
+  std::ifstream summary(dir_ / "local" / "summary.json");
+  std::stringstream s;
+  s << summary.rdbuf();
+  EXPECT_NE(s.str().find("\"tripped\": true"), std::string::npos) << s.str().substr(0, 2000);
+  EXPECT_NE(s.str().find("\"trip_cause\": \"communication lost: a peer node's heartbeat stopped\""), std::string::npos)
+      << s.str().substr(0, 2000);
 }
 
 TEST_F(LcmSplitCli, KillingThePlantNodeFaultsTheRun) {

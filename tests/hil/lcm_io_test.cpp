@@ -15,6 +15,7 @@
 #include "fullarm/hil/lcm_io.hpp"
 #include "fullarm/hil/lcm_search.hpp"
 #include "fullarm/hil/run.hpp"
+#include "fullarm/hil/run_recording.hpp"
 #include "fullarm/hil/sim_io.hpp"
 #include "hil_fixture.hpp"
 #include "private_network.hpp"
@@ -264,6 +265,27 @@ TEST_F(LcmIo, MinimaFragmentsDroppedAreSetsNotAdoptedAndTheRunStaysSafe) {
   EXPECT_FALSE(r.tripped) << supervisorCauseName(r.trip_cause);
 }
 
+// A second run against the same global node restarts the set numbering at 1: the node hears it
+// at once (a restarted producer), so the second run is served exactly as the first.
+TEST_F(LcmIo, TwoLockstepRunsInARowAreBothServedByOneGlobalNode) {
+  RunOptions local = holdAtTheWheel(0.6);
+  const RunResult in_process = runHil(local);
+  GlobalThread global(local, globalOptions());
+  RunOptions remote = local;
+  remote.search_url = kUrl;
+  const RunResult first = runHil(remote);
+  const RunResult second = runHil(remote);
+  global.join();
+  EXPECT_EQ(global.result.queries, 2 * in_process.sets.size());
+  EXPECT_EQ(global.result.stale, 0u);
+  bool restart_logged = false;
+  for (const std::string& line : global.result.log)
+    restart_logged = restart_logged || line.find("restarted") != std::string::npos;
+  EXPECT_TRUE(restart_logged);
+  expectSameRun(in_process, first);
+  expectSameRun(in_process, second);
+}
+
 // Real time: the tick sends its joint angles live every global period (100 Hz) through the
 // publisher thread; the global node answers the newest with a set, and the tick adopts each set
 // as it arrives, later than its query.
@@ -299,6 +321,60 @@ TEST_F(LcmIo, ARealTimeRunAdoptsTheGlobalNodesSetsLive) {
     for (const double tau : t.tau_contact_nm) touched = touched || tau != 0.0;
   }
   EXPECT_TRUE(touched) << "the scenario should bring the arm into contact";
+}
+
+// The global node stops mid-contact in a real-time run: its sets stop, the contact forces fade
+// at their rate, and when its heartbeat has been missing for peer_heartbeat_timeout_s the
+// supervisor trips with communication lost: every valve at null, the cause in the log, and the
+// log replays bit for bit.
+TEST_F(LcmIo, ALostGlobalNodeHeartbeatInRealTimeIsCommunicationLossAfterTheFade) {
+  RunOptions local = holdAtTheWheel(1.6);
+  local.clock = ClockKind::kRealtime;
+  local.log = fullarm::test::scratchDir("hil_lcm_io_peer") / "run.lcmlog";
+  GlobalThread global(local, globalOptions());
+  RunOptions remote = local;
+  remote.search_url = kUrl;
+  HilSession session(remote);
+  const std::uint64_t stop_tick = 700;
+  RunHooks hooks;
+  hooks.before_tick = [&](std::uint64_t k, JointSample&, SupervisorRequests&) {
+    if (k == stop_tick) global.stop = true;  // the node stops serving: no set, no heartbeat
+  };
+  const RunResult r = session.run(hooks);
+  global.join();
+
+  ASSERT_TRUE(r.tripped);
+  EXPECT_EQ(r.trip_cause, SupervisorCause::kPeerHeartbeatLost) << supervisorCauseName(r.trip_cause);
+  const SupervisorEvent* trip = nullptr;
+  for (const SupervisorEvent& e : r.events) {
+    if (e.trip && trip == nullptr) trip = &e;
+  }
+  ASSERT_NE(trip, nullptr);
+  const double dt = session.config().control_period_s;
+  const double timeout_s = session.config().supervisor.peer_heartbeat_timeout_s;
+  // The node's last heartbeat is at most one heartbeat period before it stopped; the watcher
+  // and the tick add a few milliseconds.
+  const double silent_s = static_cast<double>(trip->tick - stop_tick) * dt;
+  EXPECT_GE(silent_s, timeout_s - globalOptions().heartbeat_period_s);
+  EXPECT_LE(silent_s, timeout_s + 0.2);
+  // Before the trip the contact forces faded at their rate (once stale) and were gone.
+  const double max_step = session.config().supervisor.max_fade_rate_nm_per_s * dt;
+  const TickTelemetry& before = r.telemetry[trip->tick - 2];
+  EXPECT_EQ(before.contact_scale, 0.0);
+  for (std::size_t k = stop_tick; k + 1 < trip->tick; ++k) {
+    if (r.telemetry[k].contact_scale == 1.0) continue;  // not fading yet: the minima are fresh enough
+    for (int j = 0; j < r.telemetry[k].num_config; ++j) {
+      const auto i = static_cast<std::size_t>(j);
+      EXPECT_LE(std::abs(r.telemetry[k].tau_contact_nm[i] - r.telemetry[k - 1].tau_contact_nm[i]), max_step + 1e-12)
+          << "tick " << k + 1;
+    }
+  }
+  // From the trip on, the safe outputs: every valve at null.
+  for (std::size_t k = trip->tick - 1; k < r.telemetry.size(); ++k) {
+    for (const double v : r.telemetry[k].valve_v) ASSERT_EQ(v, 0.0) << "tick " << k + 1;
+  }
+  const ReplayReport replay = replayLog(local.log);
+  EXPECT_TRUE(replay.identical()) << replay.first_mismatch;
 }
 
 /// A plant node serving a simulated arm from a thread.

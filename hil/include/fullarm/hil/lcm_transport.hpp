@@ -101,6 +101,56 @@ void encodeMessage(const Message& message, std::vector<std::uint8_t>& out) {
   message.encode(out.data(), 0, n);
 }
 
+/// The newest sequence number of one producer, deciding whether a message is newer. A producer
+/// that restarts (its node restarted) counts from the beginning again; it is heard again, as a
+/// restart, when its message carries the producer's first sequence number, when its sequence
+/// jumps back by more than kRestartJump, or after kRestartRun increasing messages in a row that
+/// are all older than the newest. A single old, repeated or reordered message is stale.
+class SequenceTracker {
+ public:
+  /// A backwards jump larger than this is a restart.
+  static constexpr std::int64_t kRestartJump = 1000;
+  /// This many increasing messages in a row, all older than the newest, are a restart.
+  static constexpr int kRestartRun = 3;
+
+  enum class Verdict : std::uint8_t { kNewer, kStale, kRestart };
+
+  /// A producer whose first sequence number is 0 (LcmPublisher's).
+  SequenceTracker() noexcept = default;
+  /// `first_seq`: the first sequence number the producer sends.
+  explicit SequenceTracker(std::int64_t first_seq) noexcept : first_(first_seq) {}
+
+  /// The verdict on `seq`; kNewer and kRestart make it the newest. @rt
+  Verdict accept(std::int64_t seq) noexcept {
+    if (!have_ || seq > newest_) return take(seq, Verdict::kNewer);
+    if (seq == first_ && newest_ != first_) return take(seq, Verdict::kRestart);
+    if (newest_ - seq > kRestartJump) return take(seq, Verdict::kRestart);
+    run_ = run_ > 0 && seq > run_last_ ? run_ + 1 : 1;
+    run_last_ = seq;
+    if (run_ >= kRestartRun) return take(seq, Verdict::kRestart);
+    return Verdict::kStale;
+  }
+  /// The newest sequence number accepted; -1 if none.
+  [[nodiscard]] std::int64_t newest() const noexcept { return have_ ? newest_ : -1; }
+  /// Restarts heard.
+  [[nodiscard]] std::uint64_t restarts() const noexcept { return restarts_; }
+
+ private:
+  Verdict take(std::int64_t seq, Verdict v) noexcept {
+    newest_ = seq;
+    have_ = true;
+    run_ = 0;
+    if (v == Verdict::kRestart) ++restarts_;
+    return v;
+  }
+  std::int64_t first_ = 0;
+  std::int64_t newest_ = 0;
+  bool have_ = false;
+  std::int64_t run_last_ = 0;
+  int run_ = 0;
+  std::uint64_t restarts_ = 0;
+};
+
 /// Datagram payload bound of a minima-set fragment: under a 1,500-byte MTU less the IP, UDP
 /// and LCM headers, with margin.
 inline constexpr std::size_t kMaxFragmentBytes = 1400;
@@ -210,6 +260,7 @@ struct LcmChannelCounters {
   std::uint64_t malformed = 0;   ///< DecodeStatus::kMalformed (and fragments whose header disagrees with their set's)
   std::uint64_t stale = 0;       ///< not newer than the newest accepted (older or repeated seq)
   std::uint64_t gaps = 0;        ///< sequence numbers skipped between accepted messages (lost)
+  std::uint64_t restarts = 0;    ///< the producer started counting again (SequenceTracker): heard again
   /// Sum of the rejections (truncated, wrong hash, malformed).
   [[nodiscard]] std::uint64_t rejected() const noexcept { return truncated + wrong_hash + malformed; }
 };
@@ -256,8 +307,8 @@ class LcmReceiver {
 
  private:
   struct RawHandler;
-  /// Accepts `seq` on a channel whose newest accepted is `newest` (-1: none); counts.
-  static bool acceptSeq(std::int64_t seq, std::int64_t& newest, LcmChannelCounters& c) noexcept;
+  /// Accepts `seq` on a channel whose producer `tracker` follows; counts.
+  static bool acceptSeq(std::int64_t seq, SequenceTracker& tracker, LcmChannelCounters& c) noexcept;
 
   lcm::LCM& lcm_;
   std::vector<lcm_subscription_t*> subscriptions_;
@@ -265,13 +316,13 @@ class LcmReceiver {
   LcmReceiverCounters counters_;
 
   JointStateRecord joint_state_{}, joint_state_scratch_{};
-  std::int64_t joint_state_seq_ = -1;
+  SequenceTracker joint_state_seq_;
   bool joint_state_new_ = false;
   ValveCommandRecord valve_command_{}, valve_command_scratch_{};
-  std::int64_t valve_command_seq_ = -1;
+  SequenceTracker valve_command_seq_;
   bool valve_command_new_ = false;
   std::array<HeartbeatRecord, kNodeKinds> heartbeats_{};
-  std::array<std::int64_t, kNodeKinds> heartbeat_seq_{-1, -1, -1};
+  std::array<SequenceTracker, kNodeKinds> heartbeat_seq_{};
   std::array<std::uint64_t, kNodeKinds> heartbeat_count_{};
   fullarm_lcm::minima_set_t fragment_;
   std::int64_t fragment_seq_ = -1;
