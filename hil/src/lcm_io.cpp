@@ -161,7 +161,9 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
       while (!handler_->have_reading && lcm_->handleTimeout(0) > 0) {
       }
     }
-    while (!handler_->have_reading && Clock::now() < deadline) lcm_->handleTimeout(detail::millisUntil(deadline) + 1);
+    while (!handler_->have_reading && Clock::now() < deadline) {
+      (void)detail::handleWithin(*lcm_, std::chrono::duration<double>(deadline - Clock::now()).count());
+    }
     if (!handler_->have_reading) {
       lost_ = true;
       ++counters_.timeouts;

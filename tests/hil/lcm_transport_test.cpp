@@ -352,5 +352,41 @@ TEST(LcmTransport, PushingDoesNotAllocate) {
   EXPECT_EQ(pub.counters().minima_sets, 1u);
 }
 
+// While records keep coming the publisher thread polls its rings: a push at the loop's pace does
+// not wake it (no futex call on the real-time side); only the first push after an idle pause
+// does. Every record is still sent.
+TEST(LcmTransport, PushesAtTheLoopsPaceDoNotWakeThePublisherThread) {
+  lcm::LCM lcm("memq://");
+  LcmPublisherOptions options = publisherOptions(NodeKind::kLocal, 0.0);
+  options.poll_period_s = 100e-6;
+  options.poll_window_s = 0.5;  // wide: a loaded machine may delay the pushing thread
+  LcmPublisher pub(lcm, options);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the thread is idle, asleep
+  const int n = 200;
+  auto next = std::chrono::steady_clock::now();
+  for (int k = 1; k <= n; ++k) {
+    ASSERT_TRUE(pub.pushJointState(makeJointState(k)));
+    next += std::chrono::milliseconds(1);
+    std::this_thread::sleep_until(next);
+  }
+  pub.flush();
+  EXPECT_EQ(pub.counters().joint_states, static_cast<std::uint64_t>(n));
+  // The first push found the thread asleep (a second may race with its going to sleep).
+  EXPECT_GE(pub.counters().push_wakeups, 1u);
+  EXPECT_LE(pub.counters().push_wakeups, 2u);
+
+  // Without polling every push may have to wake it.
+  options.poll_period_s = 0.0;
+  LcmPublisher blocking(lcm, options);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  for (int k = 1; k <= 20; ++k) {
+    ASSERT_TRUE(blocking.pushJointState(makeJointState(k)));
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  blocking.flush();
+  EXPECT_EQ(blocking.counters().joint_states, 20u);
+  EXPECT_GT(blocking.counters().push_wakeups, 10u);
+}
+
 }  // namespace
 }  // namespace fullarm::hil

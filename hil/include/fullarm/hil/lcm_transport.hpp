@@ -5,8 +5,9 @@
 /// its channels every cycle and keeps the newest message of each.
 ///
 /// **Publishing off the real-time path.** The tick (or the search) pushes fixed-size records
-/// into SpscRings (`LcmPublisher::pushJointState` and friends, @rt: no lock, no allocation; the
-/// wake-up is an atomic add on a semaphore and at most one futex wake); the publisher thread
+/// into SpscRings (`LcmPublisher::pushJointState` and friends, @rt: no lock, no allocation, and
+/// no system call while records keep coming: the publisher thread then polls its rings every
+/// poll_period_s; only the first push after an idle pause wakes it, one futex wake); the publisher thread
 /// turns them into LCM messages, encodes and sends them, and sends the node's heartbeat at a
 /// fixed period. A minima set travels as fragments of at most kMaxMinimaPerFragment minima
 /// (toFragment), each under 1,400 bytes so the kernel never splits a datagram at the IP level
@@ -164,6 +165,11 @@ struct LcmPublisherOptions {
   std::size_t joint_state_capacity = 256;  ///< records the rings hold before dropping
   std::size_t valve_command_capacity = 256;
   std::size_t minima_set_capacity = 4;
+  /// While records are coming (one within poll_window_s), the thread looks at its rings every
+  /// poll_period_s instead of waiting to be woken, so a push makes no system call; idle, it
+  /// blocks and the first push wakes it. <= 0: always block (every push may wake the thread).
+  double poll_period_s = 100e-6;
+  double poll_window_s = 0.05;  ///< see poll_period_s
   /// Fault injection: called by the publisher thread with each message's channel and its
   /// sequence number (the fragment's for a minima set); true drops the message unsent
   /// (counted in `injected_drops`). Empty: nothing is dropped.
@@ -181,6 +187,7 @@ struct LcmPublisherCounters {
   std::uint64_t send_errors = 0;           ///< lcm publish calls that failed
   std::uint64_t injected_drops = 0;        ///< messages the `drop` hook withheld
   std::size_t largest_fragment_bytes = 0;  ///< largest encoded minima_set_t fragment
+  std::uint64_t push_wakeups = 0;          ///< pushes that had to wake the sleeping thread (a futex wake)
 };
 
 /// Publishes what the real-time side pushes, from its own thread, plus the node's heartbeat.
@@ -216,6 +223,8 @@ class LcmPublisher {
  private:
   void run();
   void wake() noexcept;
+  void wakeIfAsleep() noexcept;
+  [[nodiscard]] bool ringsEmpty() const noexcept;
   bool sendQueued();
   void sendHeartbeat();
   void publishBytes(const char* channel, std::int64_t seq, std::atomic<std::uint64_t>& sent);
@@ -227,13 +236,14 @@ class LcmPublisher {
   SpscRing<MinimaSetRecord> minima_sets_;
   std::counting_semaphore<> wake_{0};
   std::atomic<bool> stop_{false};
+  std::atomic<bool> asleep_{false};  ///< the thread blocks on wake_: a push must wake it
   std::atomic<std::int64_t> node_tick_{-1};
   std::atomic<bool> node_safe_{false};
   std::vector<std::uint8_t> buffer_;  ///< publisher thread only
   std::int64_t fragment_seq_ = 0;     ///< publisher thread only
   std::int64_t heartbeat_seq_ = 0;    ///< publisher thread only
   std::atomic<std::uint64_t> joint_states_sent_{0}, valve_commands_sent_{0}, minima_sets_sent_{0},
-      minima_fragments_sent_{0}, heartbeats_sent_{0}, send_errors_{0}, injected_drops_{0};
+      minima_fragments_sent_{0}, heartbeats_sent_{0}, send_errors_{0}, injected_drops_{0}, push_wakeups_{0};
   std::atomic<std::size_t> largest_fragment_bytes_{0};
   std::thread thread_;
 };
