@@ -326,9 +326,9 @@ void declareRunOptions(CLI::App& cmd, RunCommandOptions& o, OptionTable& table, 
                 {"in-process", "lcm"})
         ->capture_default_str();
   }
-  declare.name(
-      "--lcm-url", o.lcm_url,
-      "--io lcm, --search lcm: LCM URL of the plant and global nodes (default udpm://239.255.76.67:7667?ttl=0)");
+  declare.name("--lcm-url", o.lcm_url,
+               std::string(flavour == RunFlavour::kRun ? "--io lcm, --search lcm: " : "") +
+                   "LCM URL of the plant and global nodes (default udpm://239.255.76.67:7667?ttl=0)");
   if (flavour == RunFlavour::kRun) {
     declare
         .choice("--mode", o.mode,
