@@ -377,7 +377,9 @@ bool MinimaSetAssembler::add(const fullarm_lcm::minima_set_t& f) {
       ++older_run_;  // another fragment of the same older set leaves the run as it is
     }
     older_last_id_ = f.set_id;
-    const bool restart = building_id_ - f.set_id > kSetRestartJump || older_run_ >= kSetRestartRun;
+    std::int64_t back = 0;  // a difference beyond int64 (a damaged id) is far back too
+    const bool restart = __builtin_sub_overflow(building_id_, f.set_id, &back) || back > kSetRestartJump ||
+                         older_run_ >= kSetRestartRun;
     if (!restart) {
       ++ignored_;
       return false;

@@ -125,7 +125,8 @@ class SequenceTracker {
   Verdict accept(std::int64_t seq) noexcept {
     if (!have_ || seq > newest_) return take(seq, Verdict::kNewer);
     if (seq == first_ && newest_ != first_) return take(seq, Verdict::kRestart);
-    if (newest_ - seq > kRestartJump) return take(seq, Verdict::kRestart);
+    std::int64_t back = 0;  // a difference beyond int64 (a damaged number) is far back too
+    if (__builtin_sub_overflow(newest_, seq, &back) || back > kRestartJump) return take(seq, Verdict::kRestart);
     run_ = run_ > 0 && seq > run_last_ ? run_ + 1 : 1;
     run_last_ = seq;
     if (run_ >= kRestartRun) return take(seq, Verdict::kRestart);
