@@ -130,11 +130,11 @@ void LcmPublisher::wake() noexcept {
 }
 
 void LcmPublisher::wakeIfAsleep() noexcept {
-  // The record is in its ring (release store); the fence orders that before reading `asleep_`,
-  // against the thread's store of `asleep_` and its fence before it looks at the rings: one of
-  // the two sees the other. While the thread polls, nothing more happens here: no system call.
-  std::atomic_thread_fence(std::memory_order_seq_cst);
-  if (asleep_.load(std::memory_order_relaxed) && asleep_.exchange(false, std::memory_order_acq_rel)) {
+  // The record is in its ring (release store). Both sides exchange `asleep_` (read-modify-write,
+  // acquire-release): if this exchange comes first, the thread's exchange reads it and then sees
+  // the record; if the thread's comes first, this one reads true and wakes it. While the thread
+  // polls, nothing more happens here: no system call.
+  if (asleep_.exchange(false, std::memory_order_acq_rel)) {
     increment(push_wakeups_);
     wake();
   }
@@ -252,8 +252,7 @@ void LcmPublisher::run() {
     }
     // Idle: block until a push wakes the thread (the first push after the pause pays one
     // futex wake-up), the next heartbeat, or stop().
-    asleep_.store(true, std::memory_order_relaxed);
-    std::atomic_thread_fence(std::memory_order_seq_cst);
+    (void)asleep_.exchange(true, std::memory_order_acq_rel);
     if (ringsEmpty()) (void)wake_.try_acquire_until(until);
     asleep_.store(false, std::memory_order_relaxed);
   }
