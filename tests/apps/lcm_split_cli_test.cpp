@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -186,25 +187,39 @@ double quantile(std::vector<double> v, double p) {
 }
 
 TEST_F(LcmSplitCli, ThreeProcessesInRealTimeAgreeWithTheInProcessRunWithinTheLatencyBound) {
-  Process plant(plantArgs("5"), dir_ / "plant.txt");
-  Process global({"--quiet", "global", "--lcm-url", kUrl, "--idle-exit", "5"}, dir_ / "global.txt");
   const double duration_s = 2.0;
-  const test::CliResult remote = test::runFullarm("--quiet local --lcm-url '" + std::string(kUrl) +
-                                                  "' --clock realtime --duration 2 " + scenario() + " --out " +
-                                                  (dir_ / "lcm").string());
-  plant.kill();
-  global.terminate();
-  (void)plant.wait();
-  EXPECT_EQ(global.wait(), 0);
-  ASSERT_EQ(remote.exit_code, 0) << remote.output << "\nplant:\n"
-                                 << plant.output() << "\nglobal:\n"
-                                 << global.output();
+  // In real time the local node waits at most 0.6 ms for each reading and trips with
+  // `communication lost` after 20 late ones in a row: a stall of the plant process beyond 20 ms
+  // (the test machine is shared) ends the run safely, as it should (KillingThePlantNodeFaultsTheRun
+  // tests that outcome). The agreement is measured on a run that was not cut short: up to three
+  // attempts, each with fresh nodes; any other failure fails at once.
+  std::string global_output;
+  test::CliResult remote;
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    Process plant(plantArgs("5"), dir_ / "plant.txt");
+    Process global({"--quiet", "global", "--lcm-url", kUrl, "--idle-exit", "5"}, dir_ / "global.txt");
+    remote = test::runFullarm("--quiet local --lcm-url '" + std::string(kUrl) + "' --clock realtime --duration 2 " +
+                              scenario() + " --out " + (dir_ / "lcm").string());
+    plant.kill();
+    global.terminate();
+    (void)plant.wait();
+    EXPECT_EQ(global.wait(), 0);
+    global_output = global.output();
+    if (remote.exit_code == 0) break;
+    ASSERT_NE(remote.output.find("TRIPPED (communication lost)"), std::string::npos)
+        << remote.output << "\nplant:\n"
+        << plant.output() << "\nglobal:\n"
+        << global_output;
+    std::cout << "attempt " << attempt + 1 << ": the plant node's readings came late 20 times in a row (a loaded "
+              << "machine): the run tripped safely; again\n";
+  }
+  ASSERT_EQ(remote.exit_code, 0) << remote.output;
   const test::CliResult local = test::runFullarm("--quiet run --io sim --clock lockstep --duration 2 --no-oracle " +
                                                  scenario() + " --out " + (dir_ / "sim").string());
   ASSERT_EQ(local.exit_code, 0) << local.output;
-  EXPECT_NE(global.output().find("first live joint state"), std::string::npos) << global.output();
+  EXPECT_NE(global_output.find("first live joint state"), std::string::npos) << global_output;
   // The local node sent its joint angles live every global period: >= 100 Hz.
-  const std::string out = global.output();
+  const std::string& out = global_output;
   const std::size_t at = out.find(" live joint states");
   ASSERT_NE(at, std::string::npos) << out;
   const std::size_t from = out.rfind(' ', at - 1) + 1;
@@ -257,8 +272,22 @@ TEST_F(LcmSplitCli, ThreeProcessesInRealTimeAgreeWithTheInProcessRunWithinTheLat
   double worst_n = 0.0;
   double largest_n = 0.0;
   std::size_t worst_tick = 0;
+  // Before its first set a run renders nothing: the first set's forces appear as a step, in each
+  // run at its own first adoption. Those ticks differ by less than the latency bound's time; the
+  // forces are compared from the later of the two on, when both runs track minima.
+  const auto first_adopted = [](const hil::RunResult& r) {
+    std::int64_t first = std::numeric_limits<std::int64_t>::max();
+    for (const hil::RecordedSet& s : r.sets) {
+      if (s.adopted_tick > 0) first = std::min(first, s.adopted_tick);
+    }
+    return first;
+  };
+  const std::int64_t first_in_process = first_adopted(in_process);
+  const std::int64_t first_split = first_adopted(split);
+  EXPECT_LE(static_cast<double>(std::abs(first_split - first_in_process)) * dt,
+            latency_p99_s + search_period_s + lockstep_delay_s);
   const std::size_t n = std::min(in_process.telemetry.size(), split.telemetry.size());
-  for (std::size_t k = 0; k < n; ++k) {
+  for (auto k = static_cast<std::size_t>(std::max(first_in_process, first_split) - 1); k < n; ++k) {
     const hil::TickTelemetry& a = in_process.telemetry[k];
     const hil::TickTelemetry& b = split.telemetry[k];
     ASSERT_EQ(a.tick, b.tick);
