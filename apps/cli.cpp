@@ -25,6 +25,7 @@
 #include "global_command.hpp"
 #include "haptics_command.hpp"
 #include "identify_command.hpp"
+#include "local_command.hpp"
 #include "output_files.hpp"
 #include "plant_command.hpp"
 #include "plant_serve_command.hpp"
@@ -212,6 +213,8 @@ struct CommandLine {
   AccessOptions access_options;
   CLI::App* run = nullptr;
   RunCommandOptions run_options;
+  CLI::App* local = nullptr;
+  RunCommandOptions local_options = localDefaults();
   CLI::App* replay = nullptr;
   ReplayCommandOptions replay_options;
   CLI::App* identify = nullptr;
@@ -248,6 +251,7 @@ struct CommandLine {
     haptics_query = addHapticsCommand(app, haptics_options, table);
     access = addAccessCommand(app, access_options, table);
     run = addRunCommand(app, run_options, table);
+    local = addLocalCommand(app, local_options, table);
     replay = addReplayCommand(app, replay_options, table);
     identify = addIdentifyCommand(app, identify_options, table);
   }
@@ -274,10 +278,10 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
   }
   if (cli.haptics_query->parsed()) return runHapticsQuery(cli.haptics_options);
   if (cli.access->parsed()) return runAccess(cli.access_options);
-  if (cli.run->parsed()) {
+  if (cli.run->parsed() || cli.local->parsed()) {
     std::string command_line = "fullarm";
     for (const std::string& arg : args) command_line.append(" ").append(arg);
-    return runRun(cli.run_options, command_line);
+    return cli.run->parsed() ? runRun(cli.run_options, command_line) : runLocal(cli.local_options, command_line);
   }
   if (cli.replay->parsed()) return runReplay(cli.replay_options);
   if (cli.identify->parsed()) {

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "cli_options.hpp"
+#include "loop_options.hpp"
 
 namespace fullarm::app {
 
@@ -13,9 +14,8 @@ namespace fullarm::app {
 struct GlobalCommandOptions {
   std::string lcm_url;            ///< empty: the default URL (udpm, ttl=0: this machine only)
   std::string mode = "full-arm";  ///< full-arm | hand-only
-  std::string scene;              ///< scene YAML (default scenes/valve_wall.yaml)
-  std::string arm_config, plant_config, gains_config, haptics_config, hil_config;
-  double idle_exit_s = 30.0;  ///< no query for this long: stop serving
+  LoopFileOptions files;          ///< scene and configuration files
+  double idle_exit_s = 30.0;      ///< no query for this long: stop serving
 };
 
 /// Adds `global`; returns it.

@@ -1,27 +1,11 @@
 #include "plant_serve_command.hpp"
 
-#include <atomic>
-#include <csignal>
-#include <filesystem>
-
 #include "exit_codes.hpp"
 #include "fullarm/hil/lcm_io.hpp"
 #include "fullarm/hil/run.hpp"
+#include "loop_options.hpp"
 
 namespace fullarm::app {
-namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-
-extern "C" void onPlantServeStopSignal(int /*signal*/) {
-  g_stop = 1;
-}
-
-std::filesystem::path pathOr(const std::string& s) {
-  return s.empty() ? std::filesystem::path() : std::filesystem::path(s);
-}
-
-}  // namespace
 
 CLI::App* addPlantServeCommand(CLI::App& app, PlantServeOptions& o, OptionTable& table) {
   CLI::App* plant = app.get_subcommand("plant");
@@ -30,15 +14,10 @@ CLI::App* addPlantServeCommand(CLI::App& app, PlantServeOptions& o, OptionTable&
       "Serve the simulated DTS as an LCM I/O node for `fullarm run --io lcm` (each command advances it one period)");
   OptionDeclarer declare(*cmd, table);
   declare.name("--lcm-url", o.lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0: this machine only)");
-  declare.file("--scene", o.scene, "Scene YAML (default: scenes/valve_wall.yaml)");
+  declareLoopFiles(declare, o.files);
   declare.file("--user", o.user, "Scripted user YAML (default: config/user_reach_valve.yaml)");
   declare.name("--start-posture", o.start_posture, "Scene posture the simulated arm starts in")->capture_default_str();
   declare.integer("--seed", o.seed, "Seed of the simulated sensors' noise", 0, 2147483647);
-  declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
-  declare.file("--plant-config", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)");
-  declare.file("--gains", o.gains_config, "Gains YAML (default: config/dts_gains.yaml)");
-  declare.file("--haptics-config", o.haptics_config, "Haptics YAML (default: config/haptics.yaml)");
-  declare.file("--hil-config", o.hil_config, "Loop YAML (default: config/hil.yaml)");
   declare
       .number("--watchdog", o.watchdog_s, "No command for this long: safe outputs (null valves)", {0.002, 10.0, "s"})
       ->capture_default_str();
@@ -53,13 +32,8 @@ int runPlantServe(const PlantServeOptions& o, std::ostream& out) {
   hil::RunOptions ro;
   ro.io = hil::IoKind::kSim;
   ro.clock = hil::ClockKind::kLockstep;
-  ro.scene = pathOr(o.scene);
+  applyLoopFiles(o.files, ro);
   ro.user = pathOr(o.user);
-  ro.arm_config = pathOr(o.arm_config);
-  ro.plant_config = pathOr(o.plant_config);
-  ro.gains_config = pathOr(o.gains_config);
-  ro.haptics_config = pathOr(o.haptics_config);
-  ro.hil_config = pathOr(o.hil_config);
   ro.seed = o.seed;
   ro.start_posture = o.start_posture;
   hil::HilSession session(ro);  // the simulated arm, its user and the sim device
@@ -70,12 +44,11 @@ int runPlantServe(const PlantServeOptions& o, std::ostream& out) {
   node_options.idle_exit_s = o.idle_exit_s;
   node_options.on_log = [&out](const std::string& line) { out << "fullarm plant serve: " << line << std::endl; };
   hil::LcmPlantNode node(session.device(), node_options);
-  g_stop = 0;
-  const auto previous_int = std::signal(SIGINT, onPlantServeStopSignal);
-  const auto previous_term = std::signal(SIGTERM, onPlantServeStopSignal);
-  const hil::PlantNodeResult r = node.serve([] { return g_stop != 0; });
-  std::signal(SIGINT, previous_int);
-  std::signal(SIGTERM, previous_term);
+  hil::PlantNodeResult r;
+  {
+    const StopSignalGuard stop;
+    r = node.serve([] { return StopSignalGuard::requested(); });
+  }
   out << "fullarm plant serve: " << r.commands << " commands served, " << r.stale_commands << " stale, " << r.rejected
       << " rejected, " << r.watchdog_trips << " watchdog trips; outputs " << (r.safe_at_exit ? "safe" : "NOT safe")
       << " at exit\n";

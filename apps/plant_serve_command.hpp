@@ -6,17 +6,17 @@
 #include <string>
 
 #include "cli_options.hpp"
+#include "loop_options.hpp"
 
 namespace fullarm::app {
 
 /// Options of `fullarm plant serve`.
 struct PlantServeOptions {
-  std::string lcm_url;  ///< empty: the default URL (udpm, ttl=0: this machine only)
-  std::string scene;    ///< scene YAML (default scenes/valve_wall.yaml)
-  std::string user;     ///< scripted user YAML (default config/user_reach_valve.yaml)
+  std::string lcm_url;    ///< empty: the default URL (udpm, ttl=0: this machine only)
+  LoopFileOptions files;  ///< scene and configuration files
+  std::string user;       ///< scripted user YAML (default config/user_reach_valve.yaml)
   std::string start_posture = "ready";
   std::uint64_t seed = 1;
-  std::string arm_config, plant_config, gains_config, haptics_config, hil_config;
   double watchdog_s = 0.1;    ///< no command for this long: safe outputs
   double idle_exit_s = 30.0;  ///< no command for this long: stop serving
 };

@@ -41,10 +41,6 @@ reports::Series seriesOf(const std::string& name, const std::vector<hil::TickTel
   return s;
 }
 
-std::filesystem::path pathOr(const std::string& s) {
-  return s.empty() ? std::filesystem::path() : std::filesystem::path(s);
-}
-
 nlohmann::json percentilesJson(const hil::Percentiles& p) {
   return {{"p50_s", p.p50_s}, {"p99_s", p.p99_s}, {"max_s", p.max_s}};
 }
@@ -321,27 +317,32 @@ void addRunReport(const hil::RunResult& r, const hil::HilSession& session, repor
 
 }  // namespace
 
-CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table) {
-  CLI::App* cmd = app.add_subcommand("run",
-                                     "Run the 1 kHz haptic loop on a simulated, fake-DAQ or real DTS; write an "
-                                     "LCM log, summary.json and report.html");
-  OptionDeclarer declare(*cmd, table);
+void declareRunOptions(CLI::App& cmd, RunCommandOptions& o, OptionTable& table, RunFlavour flavour) {
+  OptionDeclarer declare(cmd, table);
   declare.choice("--io", o.io, "I/O back-end", {"sim", "fakedaq", "comedi", "lcm"})->capture_default_str();
-  declare
-      .choice("--search", o.search,
-              "Global search: in this process, or the global node `fullarm global` over LCM (lockstep)",
-              {"in-process", "lcm"})
-      ->capture_default_str();
-  declare.name(
-      "--lcm-url", o.lcm_url,
-      "--io lcm, --search lcm: LCM URL of the plant and global nodes (default udpm://239.255.76.67:7667?ttl=0)");
-  declare
-      .choice("--mode", o.mode,
-              "Haptic rendering (both: the run in each mode, in full-arm/ and hand-only/, and a report of the two "
-              "side by side)",
-              {"full-arm", "hand-only", "both"})
-      ->capture_default_str();
-  declare.file("--scene", o.scene, "Scene YAML (default: scenes/valve_wall.yaml)");
+  if (flavour == RunFlavour::kRun) {
+    declare
+        .choice("--search", o.search, "Global search: in this process, or the global node `fullarm global` over LCM",
+                {"in-process", "lcm"})
+        ->capture_default_str();
+  }
+  declare.name("--lcm-url", o.lcm_url,
+               std::string(flavour == RunFlavour::kRun ? "--io lcm, --search lcm: " : "") +
+                   "LCM URL of the plant and global nodes (default udpm://239.255.76.67:7667?ttl=0)");
+  if (flavour == RunFlavour::kRun) {
+    declare
+        .choice("--mode", o.mode,
+                "Haptic rendering (both: the run in each mode, in full-arm/ and hand-only/, and a report of the two "
+                "side by side)",
+                {"full-arm", "hand-only", "both"})
+        ->capture_default_str();
+  } else {
+    declare
+        .choice("--mode", o.mode, "Haptic rendering (the global node's --mode must be the same)",
+                {"full-arm", "hand-only"})
+        ->capture_default_str();
+  }
+  declareLoopFiles(declare, o.files);
   // Every tick's inputs and telemetry stay in memory for the report and the replay check (the
   // LCM log holds them too): the duration is bounded before the run starts.
   declare.number("--duration", o.duration_s, "Run time (every tick is kept in memory: at most 600 s)",
@@ -354,16 +355,18 @@ CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table)
   declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
   declare.integer("--seed", o.seed, "Seed of the simulated sensors' noise", 0, 2147483647);
   declare.name("--start-posture", o.start_posture, "Scene posture the simulated arm starts in")->capture_default_str();
-  declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
-  declare.file("--plant-config", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)");
-  declare.file("--gains", o.gains_config, "Gains YAML (default: config/dts_gains.yaml)");
-  declare.file("--haptics-config", o.haptics_config, "Haptics YAML (default: config/haptics.yaml)");
-  declare.file("--hil-config", o.hil_config, "Loop YAML (default: config/hil.yaml)");
   declare.file("--daq-config", o.daq_config, "Channel map YAML (default: config/dts_daq.yaml)");
   declare.integer("--delivery-delay-ticks", o.delivery_delay_ticks,
                   "Lockstep: ticks between a global query and the adoption of its result (default: the loop YAML's)", 1,
                   1000000);
   declare.flag("--no-oracle", o.no_oracle, "Lockstep: skip the missed-contact oracle");
+}
+
+CLI::App* addRunCommand(CLI::App& app, RunCommandOptions& o, OptionTable& table) {
+  CLI::App* cmd = app.add_subcommand("run",
+                                     "Run the 1 kHz haptic loop on a simulated, fake-DAQ or real DTS; write an "
+                                     "LCM log, summary.json and report.html");
+  declareRunOptions(*cmd, o, table, RunFlavour::kRun);
   return cmd;
 }
 
@@ -381,13 +384,8 @@ hil::RunOptions runOptionsOf(const RunCommandOptions& o, const std::string& comm
   ro.mode = o.mode == "hand-only" ? haptics::RenderMode::kHandOnly : haptics::RenderMode::kFullArm;
   ro.clock = o.clock == "lockstep" ? hil::ClockKind::kLockstep : hil::ClockKind::kRealtime;
   ro.duration_s = o.duration_s;
-  ro.scene = pathOr(o.scene);
+  applyLoopFiles(o.files, ro);
   ro.user = pathOr(o.user);
-  ro.arm_config = pathOr(o.arm_config);
-  ro.plant_config = pathOr(o.plant_config);
-  ro.gains_config = pathOr(o.gains_config);
-  ro.haptics_config = pathOr(o.haptics_config);
-  ro.hil_config = pathOr(o.hil_config);
   ro.daq_config = pathOr(o.daq_config);
   ro.seed = o.seed;
   ro.start_posture = o.start_posture;
@@ -479,7 +477,7 @@ int runBothModes(const RunCommandOptions& o, const std::string& command_line) {
 
 }  // namespace
 
-int runRun(const RunCommandOptions& o, const std::string& command_line) {
+int runRun(const RunCommandOptions& o, const std::string& command_line, const std::string& command_name) {
   if (o.mode == "both") return runBothModes(o, command_line);
   const hil::RunOptions ro = runOptionsOf(o, command_line);
   std::filesystem::create_directories(o.out_dir);
@@ -487,9 +485,9 @@ int runRun(const RunCommandOptions& o, const std::string& command_line) {
   hil::HilSession session(ro);
   // The lines below set fixed notation on std::cout; each run's header starts from the default
   // (`--mode both` prints two runs).
-  std::cout << std::defaultfloat << std::setprecision(6) << "fullarm run: " << o.io << ", " << o.mode << ", " << o.clock
-            << " clock, " << o.duration_s << " s at " << 1.0 / session.config().control_period_s << " Hz, scene "
-            << session.scene().name << "\n";
+  std::cout << std::defaultfloat << std::setprecision(6) << "fullarm " << command_name << ": " << o.io << ", " << o.mode
+            << ", " << o.clock << " clock, " << o.duration_s << " s at " << 1.0 / session.config().control_period_s
+            << " Hz, scene " << session.scene().name << "\n";
   const hil::RunResult r = session.run();
   const hil::RunTiming& tm = r.timing;
   for (const std::string& note : tm.realtime_notes) std::cout << "  " << note << "\n";

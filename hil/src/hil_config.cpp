@@ -79,6 +79,7 @@ HilConfig readHilConfig(const core::YamlMap& root) {
   p.fade_s = positive(s, "fade_s", "s");
   p.max_fade_rate_nm_per_s = positive(s, "max_fade_rate_nm_per_s", "N m/s");
   p.heartbeat_timeout_s = positive(s, "heartbeat_timeout_s", "s");
+  p.peer_heartbeat_timeout_s = positive(s, "peer_heartbeat_timeout_s", "s");
   s.finish();
   p.global_period_s = c.global_period_ticks * c.control_period_s;
   if (p.velocity_filter_hz >= 0.5 / c.control_period_s) {
@@ -86,6 +87,14 @@ HilConfig readHilConfig(const core::YamlMap& root) {
   }
   if (p.heartbeat_timeout_s <= c.heartbeat_period_s) {
     s.fail("heartbeat_timeout_s", "expected a timeout longer than realtime.heartbeat_period_s");
+  }
+  // The contact forces fade out before communication loss puts the valves at null.
+  const double faded_s = p.stale_global_periods * p.global_period_s + p.fade_s;
+  if (p.peer_heartbeat_timeout_s <= faded_s) {
+    s.fail("peer_heartbeat_timeout_s",
+           "expected a timeout longer than the stale-minima fade (stale_global_periods x "
+           "the global period + fade_s = " +
+               std::to_string(faded_s) + " s)");
   }
   root.finish();
   return c;

@@ -8,12 +8,14 @@
 #include <exception>
 #include <string_view>
 
-#include "lcm_subscribe.hpp"
+#include "lcm_node.hpp"
 
 namespace fullarm::hil {
-namespace {
 
-using Clock = std::chrono::steady_clock;
+using detail::Clock;
+using detail::seconds;
+
+namespace {
 
 std::int64_t wallMicros() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
@@ -36,17 +38,6 @@ DecodeStatus decodeIo(std::span<const std::uint8_t> bytes, Message& m) noexcept 
     return DecodeStatus::kMalformed;  // a negative count: the generated decoder's resize throws
   }
   return DecodeStatus::kOk;
-}
-
-std::string seconds(double s) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g s", s);
-  return text;
-}
-
-int waitMillis(Clock::time_point deadline) {
-  const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
-  return static_cast<int>(std::clamp<long long>(left, 0, 1000));
 }
 
 }  // namespace
@@ -129,9 +120,8 @@ void LcmIoDevice::onConfigure() {
   lcm_subscription_t* r = detail::subscribeRaw(*lcm_, channel::kIoReading, handler_.get(), 64);
   lcm_subscription_t* h = detail::subscribeRaw(*lcm_, channel::kHeartbeat, handler_.get(), 64);
   if (r == nullptr || h == nullptr) throw DeviceError("lcm I/O: cannot subscribe on " + options_.url);
-  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                           std::chrono::duration<double>(options_.connect_timeout_s));
-  while (handler_->heartbeats == 0 && Clock::now() < deadline) lcm_->handleTimeout(waitMillis(deadline) + 1);
+  const auto deadline = detail::after(options_.connect_timeout_s);
+  while (handler_->heartbeats == 0 && Clock::now() < deadline) lcm_->handleTimeout(detail::millisUntil(deadline) + 1);
   if (handler_->heartbeats == 0) {
     throw DeviceError("lcm I/O: no plant node answered on " + options_.url + " within " +
                       std::to_string(options_.connect_timeout_s) +
@@ -166,13 +156,14 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
     // the whole timeout. A timeout within the period (real time) is always waited for.
     const bool poll_only = lost_ && options_.reply_timeout_s > period();
     const double wait_s = poll_only ? 0.0 : options_.reply_timeout_s;
-    const auto deadline =
-        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait_s));
+    const auto deadline = detail::after(wait_s);
     if (poll_only) {
       while (!handler_->have_reading && lcm_->handleTimeout(0) > 0) {
       }
     }
-    while (!handler_->have_reading && Clock::now() < deadline) lcm_->handleTimeout(waitMillis(deadline) + 1);
+    while (!handler_->have_reading && Clock::now() < deadline) {
+      (void)detail::handleWithin(*lcm_, std::chrono::duration<double>(deadline - Clock::now()).count());
+    }
     if (!handler_->have_reading) {
       lost_ = true;
       ++counters_.timeouts;
@@ -226,20 +217,15 @@ LcmPlantNode::LcmPlantNode(IoDevice& device, PlantNodeOptions options)
 
 PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
   PlantNodeResult result;
-  lcm::LCM rx(options_.url);
-  lcm::LCM tx(options_.url);
-  if (!rx.good() || !tx.good()) throw DeviceError("plant node: cannot open the LCM URL " + options_.url);
-  const auto start = Clock::now();
-  auto log = [&](const std::string& what) {
-    char stamp[32];
-    std::snprintf(stamp, sizeof stamp, "%.3f s: ", std::chrono::duration<double>(Clock::now() - start).count());
-    result.log.push_back(stamp + what);
-    if (options_.on_log) options_.on_log(result.log.back());
-  };
+  detail::NodeLcm node("plant node", options_.url, result.log, options_.on_log);
+  lcm::LCM& rx = node.rx;
+  lcm::LCM& tx = node.tx;
+  const auto log = [&node](const std::string& what) { node.log(what); };
 
   device_.configure();  // safe outputs
   bool safe = true;
   std::int64_t last_seq = 0;
+  SequenceTracker command_seq(1);  ///< the device counts its reads from 1: a new run is heard at once
   auto last_command = Clock::now();
   bool commanded = false;
 
@@ -258,8 +244,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
       *have = true;
     }
   } sink{&command, &have_command, &result.rejected};
-  lcm_subscription_t* sub = detail::subscribeRaw(rx, channel::kIoCommand, &sink, 64);
-  if (sub == nullptr) throw DeviceError("plant node: cannot subscribe on " + options_.url);
+  node.subscribe(channel::kIoCommand, &sink, 64);
 
   LcmPublisherOptions beat;
   beat.node = NodeKind::kPlant;
@@ -292,9 +277,13 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     }
     have_command = false;
     if (rx.handleTimeout(5) <= 0 || !have_command) continue;
-    if (command.seq <= last_seq) {
+    const SequenceTracker::Verdict verdict = command_seq.accept(command.seq);
+    if (verdict == SequenceTracker::Verdict::kStale) {
       ++result.stale_commands;
       continue;
+    }
+    if (verdict == SequenceTracker::Verdict::kRestart) {
+      log("commands restarted at seq " + std::to_string(command.seq) + ": a new tick connected");
     }
     if (command.num_valves != device_.numJoints()) {
       ++result.rejected;
@@ -336,7 +325,6 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     safe = true;
   }
   result.safe_at_exit = safe;
-  lcm_unsubscribe(rx.getUnderlyingLCM(), sub);
   return result;
 }
 

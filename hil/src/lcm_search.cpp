@@ -1,33 +1,17 @@
 #include "fullarm/hil/lcm_search.hpp"
 
 #include <algorithm>
-#include <chrono>
-#include <cstdio>
+#include <string_view>
 
 #include "fullarm/hil/io_device.hpp"
-#include "lcm_subscribe.hpp"
+#include "lcm_node.hpp"
 
 namespace fullarm::hil {
-namespace {
 
-using Clock = std::chrono::steady_clock;
-
-Clock::time_point after(double s) {
-  return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
-}
-
-int millisUntil(Clock::time_point deadline) {
-  const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
-  return static_cast<int>(std::clamp<long long>(left, 0, 1000)) + 1;
-}
-
-std::string seconds(double s) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g s", s);
-  return text;
-}
-
-}  // namespace
+using detail::after;
+using detail::Clock;
+using detail::millisUntil;
+using detail::seconds;
 
 // --- the tick's side ---------------------------------------------------------------------------
 
@@ -40,7 +24,7 @@ LcmSearchClient::LcmSearchClient(const std::string& url, double connect_timeout_
   receiver_ = std::make_unique<LcmReceiver>(*lcm_, o);
   const auto deadline = after(connect_timeout_s);
   while (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0 && Clock::now() < deadline) {
-    receiver_->drainWait(static_cast<double>(millisUntil(deadline)) * 1e-3);
+    receiver_->drainWait(static_cast<double>(millisUntil(deadline) + 1) * 1e-3);
   }
   if (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0) {
     throw DeviceError("remote search: no global node answered on " + url + " within " + seconds(connect_timeout_s) +
@@ -69,7 +53,7 @@ bool LcmSearchClient::await(std::int64_t set_id, std::uint64_t query_tick, std::
   const auto deadline = after(lost_ ? 0.0 : reply_timeout_s_);
   const std::uint64_t beats_before = receiver_->heartbeatsFrom(NodeKind::kGlobal);
   for (;;) {
-    const int wait_ms = lost_ ? 0 : millisUntil(deadline);
+    const int wait_ms = lost_ ? 0 : millisUntil(deadline) + 1;
     if (lcm_->handleTimeout(wait_ms) <= 0) {
       if (lost_ || Clock::now() >= deadline) break;
       continue;
@@ -96,6 +80,55 @@ bool LcmSearchClient::await(std::int64_t set_id, std::uint64_t query_tick, std::
   return false;
 }
 
+// --- the tick's side, real time --------------------------------------------------------------
+
+LcmLiveSearchClient::LcmLiveSearchClient(const std::string& url, double connect_timeout_s, double heartbeat_period_s)
+    : tx_(std::make_unique<lcm::LCM>(url)), rx_(std::make_unique<lcm::LCM>(url)) {
+  if (!tx_->good() || !rx_->good()) throw DeviceError("remote search: cannot open the LCM URL " + url);
+  LcmReceiverOptions o;
+  o.minima_set = true;
+  o.heartbeat = true;
+  receiver_ = std::make_unique<LcmReceiver>(*rx_, o);
+  const auto deadline = after(connect_timeout_s);
+  while (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0 && Clock::now() < deadline) {
+    receiver_->drainWait(static_cast<double>(millisUntil(deadline) + 1) * 1e-3);
+  }
+  if (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0) {
+    throw DeviceError("remote search: no global node answered on " + url + " within " + seconds(connect_timeout_s) +
+                      " (start `fullarm global` with the same --lcm-url)");
+  }
+  LcmPublisherOptions po;
+  po.node = NodeKind::kLocal;
+  po.heartbeat_period_s = heartbeat_period_s;
+  publisher_ = std::make_unique<LcmPublisher>(*tx_, po);
+}
+
+LcmLiveSearchClient::~LcmLiveSearchClient() {
+  stop();
+}
+
+bool LcmLiveSearchClient::pushConfiguration(std::int64_t tick, const double* q_rad, int n) noexcept {
+  JointStateRecord r;
+  r.seq = tick;
+  r.tick = tick;
+  r.num_joints = std::min(n, kMaxRecordJoints);
+  for (int j = 0; j < r.num_joints; ++j) r.q_rad[static_cast<std::size_t>(j)] = q_rad[j];
+  return publisher_->pushJointState(r);
+}
+
+void LcmLiveSearchClient::setNodeState(std::int64_t tick, bool safe_output) noexcept {
+  publisher_->setNodeState(tick, safe_output);
+}
+
+const MinimaSetRecord* LcmLiveSearchClient::waitForSet(double timeout_s) {
+  (void)receiver_->drainWait(timeout_s);
+  return receiver_->takeMinimaSet();
+}
+
+void LcmLiveSearchClient::stop() {
+  if (publisher_) publisher_->stop();
+}
+
 // --- the global node ---------------------------------------------------------------------------
 
 LcmGlobalNode::LcmGlobalNode(GlobalSearchRunner& search, int num_config, GlobalNodeOptions options)
@@ -103,68 +136,77 @@ LcmGlobalNode::LcmGlobalNode(GlobalSearchRunner& search, int num_config, GlobalN
 
 GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
   GlobalNodeResult result;
-  lcm::LCM rx(options_.url);
-  lcm::LCM tx(options_.url);
-  if (!rx.good() || !tx.good()) throw DeviceError("global node: cannot open the LCM URL " + options_.url);
-  const auto start = Clock::now();
-  auto log = [&](const std::string& what) {
-    char stamp[32];
-    std::snprintf(stamp, sizeof stamp, "%.3f s: ", std::chrono::duration<double>(Clock::now() - start).count());
-    result.log.push_back(stamp + what);
-    if (options_.on_log) options_.on_log(result.log.back());
-  };
+  detail::NodeLcm node("global node", options_.url, result.log, options_.on_log);
+  lcm::LCM& rx = node.rx;
+  const auto log = [&node](const std::string& what) { node.log(what); };
 
+  // Lockstep queries are answered each, in order; live joint states (a real-time run) only the
+  // newest of those waiting.
   struct Sink {
-    JointStateRecord query;
-    bool have = false;
-    std::uint64_t* rejected = nullptr;
-    void onMessage(std::span<const std::uint8_t> bytes, const char* /*channel*/) {
-      have = decodeChecked(bytes, query) == DecodeStatus::kOk;
-      if (!have) ++*rejected;
+    JointStateRecord scratch;
+    std::vector<JointStateRecord> queries;  ///< lockstep queries waiting, in arrival order
+    JointStateRecord live;                  ///< the newest live joint state
+    bool live_new = false;
+    SequenceTracker live_seq;  ///< a restarted local node is heard again
+    GlobalNodeResult* result = nullptr;
+    void onMessage(std::span<const std::uint8_t> bytes, const char* channel) {
+      if (decodeChecked(bytes, scratch) != DecodeStatus::kOk) {
+        ++result->rejected;
+        return;
+      }
+      if (std::string_view(channel) != channel::kJointState) {
+        queries.push_back(scratch);
+        return;
+      }
+      ++result->live_states;
+      if (live_seq.accept(scratch.seq) == SequenceTracker::Verdict::kStale) {
+        ++result->stale;
+        return;
+      }
+      live = scratch;
+      live_new = true;
     }
   } sink;
-  sink.rejected = &result.rejected;
-  lcm_subscription_t* sub = detail::subscribeRaw(rx, channel::kSearchQuery, &sink, 256);
-  if (sub == nullptr) throw DeviceError("global node: cannot subscribe on " + options_.url);
+  sink.result = &result;
+  sink.queries.reserve(256);
+  node.subscribe(channel::kSearchQuery, &sink, 256);
+  node.subscribe(channel::kJointState, &sink, 256);
 
   LcmPublisherOptions po;
   po.node = NodeKind::kGlobal;
   po.heartbeat_period_s = options_.heartbeat_period_s;
   po.drop = options_.drop;
-  LcmPublisher publisher(tx, po);
+  LcmPublisher publisher(node.tx, po);
   log("serving the global search on " + options_.url);
 
   auto set = std::make_unique<MinimaSetRecord>();
   std::vector<haptics::LocalMinimum> minima;
   Eigen::VectorXd q(num_config_);
-  std::int64_t last_id = -1;
+  SequenceTracker query_ids(1);  ///< a lockstep run's set ids start at 1: a new run is heard at once
   auto last_query = Clock::now();
   bool queried = false;
-  const auto idle = std::chrono::duration<double>(options_.idle_exit_s);
-  for (;;) {
-    if (stop && stop()) break;
-    if (options_.idle_exit_s > 0.0 && Clock::now() - last_query > idle) {
-      log(queried ? "no query for " + seconds(options_.idle_exit_s) + ": stopped"
-                  : "no tick connected within " + seconds(options_.idle_exit_s) + ": stopped");
-      break;
-    }
-    sink.have = false;
-    if (rx.handleTimeout(5) <= 0 || !sink.have) continue;
-    const JointStateRecord& query = sink.query;
-    if (query.seq <= last_id) {
+  bool live = false;
+  // The set at `query`'s joint angles, with the query's seq as its id.
+  const auto answer = [&](const JointStateRecord& query, bool lockstep) {
+    const SequenceTracker::Verdict verdict = lockstep ? query_ids.accept(query.seq) : SequenceTracker::Verdict::kNewer;
+    if (verdict == SequenceTracker::Verdict::kStale) {
       ++result.stale;
-      continue;
+      return;
+    }
+    if (verdict == SequenceTracker::Verdict::kRestart) {
+      log("queries restarted at set " + std::to_string(query.seq) + ": a new tick connected");
     }
     if (query.num_joints != num_config_) {
       ++result.rejected;
       log("a query with " + std::to_string(query.num_joints) + " joint angles ignored: the arm model has " +
           std::to_string(num_config_));
-      continue;
+      return;
     }
-    if (!queried) log("first query");
+    if (lockstep && !queried) log("first query");
+    if (!lockstep && !live) log("first live joint state: answering the newest, as fast as the search runs");
     queried = true;
+    live = live || !lockstep;
     last_query = Clock::now();
-    last_id = query.seq;
     for (int j = 0; j < num_config_; ++j) q[j] = query.q_rad[static_cast<std::size_t>(j)];
     const int found = search_.run(q, minima);
     set->utime_us = query.utime_us;
@@ -177,12 +219,29 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
     set->q_rad = query.q_rad;
     fillMinima(minima, *set);
     set->num_minima_dropped = found - set->num_minima;
-    while (!publisher.pushMinimaSet(*set)) publisher.flush();  // answer every query, in order
+    while (!publisher.pushMinimaSet(*set)) publisher.flush();  // every set goes out, in order
     publisher.setNodeState(query.tick, false);
-    ++result.queries;
+    ++(lockstep ? result.queries : result.live_sets);
+  };
+  const auto idle = std::chrono::duration<double>(options_.idle_exit_s);
+  for (;;) {
+    if (stop && stop()) break;
+    if (options_.idle_exit_s > 0.0 && Clock::now() - last_query > idle) {
+      log(queried ? "no query for " + seconds(options_.idle_exit_s) + ": stopped"
+                  : "no tick connected within " + seconds(options_.idle_exit_s) + ": stopped");
+      break;
+    }
+    if (rx.handleTimeout(5) <= 0) continue;
+    while (rx.handleTimeout(0) > 0) {
+    }
+    for (const JointStateRecord& query : sink.queries) answer(query, true);
+    sink.queries.clear();
+    if (sink.live_new) {
+      sink.live_new = false;
+      answer(sink.live, false);
+    }
   }
   publisher.stop();
-  lcm_unsubscribe(rx.getUnderlyingLCM(), sub);
   return result;
 }
 

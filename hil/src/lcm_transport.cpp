@@ -125,25 +125,36 @@ LcmPublisher::LcmPublisher(lcm::LCM& lcm, LcmPublisherOptions options)
 LcmPublisher::~LcmPublisher() { stop(); }
 
 void LcmPublisher::wake() noexcept {
-  // The count only grows by one per push and the thread takes one per pass: far below max().
+  // The count only grows by one per wake and the thread takes one per pass: far below max().
   wake_.release();
+}
+
+void LcmPublisher::wakeIfAsleep() noexcept {
+  // The record is in its ring (release store). Both sides exchange `asleep_` (read-modify-write,
+  // acquire-release): if this exchange comes first, the thread's exchange reads it and then sees
+  // the record; if the thread's comes first, this one reads true and wakes it. While the thread
+  // polls, nothing more happens here: no system call.
+  if (asleep_.exchange(false, std::memory_order_acq_rel)) {
+    increment(push_wakeups_);
+    wake();
+  }
 }
 
 bool LcmPublisher::pushJointState(const JointStateRecord& record) noexcept {
   const bool ok = joint_states_.tryPush(record);
-  if (ok) wake();
+  if (ok) wakeIfAsleep();
   return ok;
 }
 
 bool LcmPublisher::pushValveCommand(const ValveCommandRecord& record) noexcept {
   const bool ok = valve_commands_.tryPush(record);
-  if (ok) wake();
+  if (ok) wakeIfAsleep();
   return ok;
 }
 
 bool LcmPublisher::pushMinimaSet(const MinimaSetRecord& record) noexcept {
   const bool ok = minima_sets_.tryPush(record);
-  if (ok) wake();
+  if (ok) wakeIfAsleep();
   return ok;
 }
 
@@ -206,22 +217,44 @@ void LcmPublisher::sendHeartbeat() {
   publishBytes(channel::kHeartbeat, heartbeat_seq_++, heartbeats_sent_);
 }
 
+bool LcmPublisher::ringsEmpty() const noexcept {
+  return joint_states_.pushed() == joint_states_.popped() && valve_commands_.pushed() == valve_commands_.popped() &&
+         minima_sets_.pushed() == minima_sets_.popped();
+}
+
 void LcmPublisher::run() {
   using Clock = std::chrono::steady_clock;
+  const auto seconds = [](double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  };
   const bool beat = options_.heartbeat_period_s > 0.0;
-  const auto period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(beat ? options_.heartbeat_period_s : 1.0));
+  const auto period = seconds(beat ? options_.heartbeat_period_s : 1.0);
+  const auto poll = seconds(options_.poll_period_s);
+  const auto poll_window = seconds(options_.poll_window_s);
   auto next_beat = Clock::now();
+  auto last_record = Clock::now() - poll_window;
   for (;;) {
     const bool stopping = stop_.load(std::memory_order_acquire);
-    sendQueued();
+    if (sendQueued()) last_record = Clock::now();
     if (beat && Clock::now() >= next_beat) {
       sendHeartbeat();
       next_beat += period;
       if (next_beat < Clock::now()) next_beat = Clock::now() + period;  // no burst after a stall
     }
     if (stopping) break;
-    (void)wake_.try_acquire_until(beat ? next_beat : Clock::now() + period);
+    const auto now = Clock::now();
+    const auto until = beat ? next_beat : now + period;
+    if (options_.poll_period_s > 0.0 && now - last_record < poll_window) {
+      // Records are coming: look again after one poll period, so that the pushing side never
+      // has to wake this thread (no system call on the real-time side).
+      std::this_thread::sleep_until(std::min(until, now + poll));
+      continue;
+    }
+    // Idle: block until a push wakes the thread (the first push after the pause pays one
+    // futex wake-up), the next heartbeat, or stop().
+    (void)asleep_.exchange(true, std::memory_order_acq_rel);
+    if (ringsEmpty()) (void)wake_.try_acquire_until(until);
+    asleep_.store(false, std::memory_order_relaxed);
   }
   sendQueued();
 }
@@ -256,6 +289,7 @@ LcmPublisherCounters LcmPublisher::counters() const noexcept {
   c.send_errors = send_errors_.load(std::memory_order_relaxed);
   c.injected_drops = injected_drops_.load(std::memory_order_relaxed);
   c.largest_fragment_bytes = largest_fragment_bytes_.load(std::memory_order_relaxed);
+  c.push_wakeups = push_wakeups_.load(std::memory_order_relaxed);
   return c;
 }
 
@@ -291,18 +325,23 @@ int LcmReceiver::drain() {
 }
 
 int LcmReceiver::drainWait(double timeout_s) {
-  const int ms = std::max(0, static_cast<int>(std::ceil(timeout_s * 1000.0)));
-  if (lcm_.handleTimeout(ms) <= 0) return 0;
+  if (detail::handleWithin(lcm_, timeout_s) <= 0) return 0;
   return 1 + drain();
 }
 
-bool LcmReceiver::acceptSeq(std::int64_t seq, std::int64_t& newest, LcmChannelCounters& c) noexcept {
-  if (newest >= 0 && seq <= newest) {
-    ++c.stale;
-    return false;
+bool LcmReceiver::acceptSeq(std::int64_t seq, SequenceTracker& tracker, LcmChannelCounters& c) noexcept {
+  const std::int64_t newest = tracker.newest();
+  switch (tracker.accept(seq)) {
+    case SequenceTracker::Verdict::kStale:
+      ++c.stale;
+      return false;
+    case SequenceTracker::Verdict::kRestart:
+      ++c.restarts;
+      break;
+    case SequenceTracker::Verdict::kNewer:
+      if (newest >= 0 && seq > newest + 1) c.gaps += static_cast<std::uint64_t>(seq - newest - 1);
+      break;
   }
-  if (newest >= 0 && seq > newest + 1) c.gaps += static_cast<std::uint64_t>(seq - newest - 1);
-  newest = seq;
   ++c.accepted;
   return true;
 }

@@ -369,9 +369,25 @@ bool MinimaSetAssembler::add(const fullarm_lcm::minima_set_t& f) {
   const int count = fragmentCount(f.num_minima_total);
   const int first = f.fragment_index * kMaxMinimaPerFragment;
   if (building_ && f.set_id < building_id_) {
-    ++ignored_;
-    return false;
+    // An older set, unless its producer restarted its numbering (SequenceTracker's rules, by
+    // set: a jump back beyond kRestartJump, or kRestartRun older sets in a row, increasing).
+    if (older_run_ == 0 || f.set_id < older_last_id_) {
+      older_run_ = 1;
+    } else if (f.set_id > older_last_id_) {
+      ++older_run_;  // another fragment of the same older set leaves the run as it is
+    }
+    older_last_id_ = f.set_id;
+    std::int64_t back = 0;  // a difference beyond int64 (a damaged id) is far back too
+    const bool restart = __builtin_sub_overflow(building_id_, f.set_id, &back) || back > kSetRestartJump ||
+                         older_run_ >= kSetRestartRun;
+    if (!restart) {
+      ++ignored_;
+      return false;
+    }
+    ++restarts_;
+    building_ = false;  // begins the restarted producer's set below
   }
+  if (f.set_id >= building_id_) older_run_ = 0;
   if (!building_ || f.set_id != building_id_) {
     if (building_ && have_count_ < expected_fragments_) ++abandoned_;
     building_ = true;

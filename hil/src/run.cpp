@@ -71,9 +71,6 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
   if (build_device && options.io == IoKind::kComedi && options.clock == ClockKind::kLockstep) {
     throw core::ConfigError({}, "--clock", "lockstep runs in simulated time: the real board (--io comedi) needs --clock realtime");
   }
-  if (!options.search_url.empty() && options.clock != ClockKind::kLockstep) {
-    throw core::ConfigError({}, "--search", "the global search over LCM runs in lockstep (--clock lockstep)");
-  }
   model_ = std::make_unique<arm::ArmModel>(arm::loadArmModel(options_.arm_config));
   scene_ = std::make_unique<haptics::Scene>(haptics::loadScene(options_.scene));
   world_ = std::make_unique<haptics::CollisionWorld>(haptics::makeCollisionWorld(*scene_, *model_));

@@ -2,8 +2,9 @@
 // CLOCK_MONOTONIC, next += period, missed periods skipped rather than burst), SCHED_FIFO,
 // mlockall and CPU pinning when the system permits them (a note says so, or why not), the
 // global search in its own thread handing sets over through the MinimaExchange, the latest joint
-// angles going the other way through an SpscRing, the heartbeat beaten by the thread that waits
-// for the run, and SIGINT / SIGTERM as an E-stop.
+// angles going the other way through an SpscRing (or, with the global node over LCM, the joint
+// angles out through the publisher thread and the node's sets in through a receiving thread),
+// the heartbeat beaten by the thread that waits for the run, and SIGINT / SIGTERM as an E-stop.
 
 #include <errno.h>
 #include <pthread.h>
@@ -22,6 +23,7 @@
 #include <utility>
 
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/hil/lcm_search.hpp"
 #include "fullarm/hil/log_records.hpp"
 #include "fullarm/hil/minima_exchange.hpp"
 #include "fullarm/hil/run.hpp"
@@ -142,12 +144,62 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
 
   std::unique_ptr<RunRecorder> recorder;
   if (!options_.log.empty()) recorder = std::make_unique<RunRecorder>(options_.log, *this, options_.command_line, true);
+  // The global node over LCM, when the search is remote: no node is an error before any thread
+  // starts.
+  std::unique_ptr<LcmLiveSearchClient> remote;
+  if (!options_.search_url.empty()) {
+    remote = std::make_unique<LcmLiveSearchClient>(options_.search_url, 5.0, config_.heartbeat_period_s);
+  }
   // The device first: a missing board ends the run before any thread starts.
   device_->configure();
   device_->activate();
 
+  // Sets from the global node over LCM: each whole set that arrives is handed to the tick. Its
+  // heartbeat is watched here: none for peer_heartbeat_timeout_s is communication loss.
+  std::atomic<bool> peer_lost{false};
+  const auto receive_remote_sets = [&] {
+    search_note = "global search: the global node over LCM at " + options_.search_url +
+                  " (live joint states every global period, sets adopted as they arrive)";
+    const auto timeout = std::chrono::duration<double>(config_.supervisor.peer_heartbeat_timeout_s);
+    std::uint64_t beats = remote->receiver().heartbeatsFrom(NodeKind::kGlobal);
+    auto last_beat = std::chrono::steady_clock::now();
+    while (!stop_search.load(std::memory_order_relaxed)) {
+      const MinimaSetRecord* s = remote->waitForSet(0.005);
+      const auto now = std::chrono::steady_clock::now();
+      if (remote->receiver().heartbeatsFrom(NodeKind::kGlobal) != beats) {
+        beats = remote->receiver().heartbeatsFrom(NodeKind::kGlobal);
+        last_beat = now;
+      } else if (now - last_beat > timeout) {
+        peer_lost.store(true, std::memory_order_relaxed);
+      }
+      if (s == nullptr) continue;
+      if (hooks.search_stalled && hooks.search_stalled(static_cast<std::uint64_t>(s->computed_tick))) continue;
+      RecordedSet set;
+      set.id = static_cast<std::int64_t>(sets.size()) + 1;
+      set.query_tick = static_cast<std::uint64_t>(s->computed_tick);
+      set.query_q_rad.assign(s->q_rad.begin(), s->q_rad.begin() + s->num_joints);
+      set.minima.reserve(static_cast<std::size_t>(s->num_minima));
+      for (int i = 0; i < s->num_minima; ++i) {
+        set.minima.push_back(toLocalMinimum(s->minima[static_cast<std::size_t>(i)]));
+      }
+      set.found = s->num_minima + s->num_minima_dropped;
+      ++searches;
+      MinimaSetRecord& slot = exchange.writeSlot();
+      slot = *s;
+      slot.set_id = set.id;  // the run's own numbering, as the in-process search's
+      slot.computed_utime_us = std::llround(static_cast<double>(s->computed_tick) * period * 1e6);
+      slot.adopted_tick = -1;
+      sets.push_back(std::move(set));
+      exchange.publish();
+    }
+  };
+
   // The global search: every global period, on the newest joint angles the tick sent.
   std::thread search_thread([&] {
+    if (remote) {
+      receive_remote_sets();
+      return;
+    }
     bool fifo = false;
     search_note = "global search thread: " + makeRealtime(config_.search_priority, -1, fifo);
     GlobalSearchRunner runner(*model_, *world_, haptics_);
@@ -206,6 +258,7 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
     std::vector<double> adopted_q(static_cast<std::size_t>(model_->numJoints()));
     MinimaSetRecord adopted_record;
     arm::ArmData hand_fk(*model_);
+    std::vector<double> live_q(posture_.data(), posture_.data() + posture_.size());
     bool overrun_fault = false;
     std::uint64_t stop_at = ticks;
     const std::int64_t start = nowNs() + period_ns;
@@ -223,6 +276,7 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
       requests.heartbeat_enabled = true;
       requests.estop_signal = g_stop_signal.load(std::memory_order_relaxed);
       requests.overrun_fault = overrun_fault;
+      requests.peer_heartbeat_lost = peer_lost.load(std::memory_order_relaxed);
       if (hooks.before_tick) hooks.before_tick(k, rec.sample, requests);
       MinimaDelivery delivery;
       TickInputs in;
@@ -266,11 +320,23 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
       }
       (void)device_->write(valve);
       // The search's next query uses these angles.
-      angles.tryPushWith([&](JointStateRecord& a) {
-        a.tick = static_cast<std::int64_t>(k);
-        a.num_joints = static_cast<int>(sample.q_rad.size());
-        for (int j = 0; j < sample.q_rad.size(); ++j) a.q_rad[static_cast<std::size_t>(j)] = sample.q_rad[j];
-      });
+      if (remote) {
+        // Live to the global node every global period: the model configuration (the posture
+        // with the device's joints read), through the publisher thread's ring.
+        if (k % static_cast<std::uint64_t>(config_.global_period_ticks) == 0) {
+          for (int j = 0; j < sample.q_rad.size(); ++j) {
+            live_q[static_cast<std::size_t>(tick_.device_joints.modelIndex(j))] = sample.q_rad[j];
+          }
+          (void)remote->pushConfiguration(static_cast<std::int64_t>(k), live_q.data(), static_cast<int>(live_q.size()));
+        }
+        remote->setNodeState(static_cast<std::int64_t>(k), device_->state() != IoState::kActive);
+      } else {
+        angles.tryPushWith([&](JointStateRecord& a) {
+          a.tick = static_cast<std::int64_t>(k);
+          a.num_joints = static_cast<int>(sample.q_rad.size());
+          for (int j = 0; j < sample.q_rad.size(); ++j) a.q_rad[static_cast<std::size_t>(j)] = sample.q_rad[j];
+        });
+      }
       if (recorder) {
         recorder->recordTick(rec, telemetry, device_->appliedCommand(), device_->state() != IoState::kActive,
                              (wake - start) / 1000);
@@ -314,6 +380,7 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
   tick_thread.join();
   stop_search.store(true);
   search_thread.join();
+  if (remote) remote->stop();
   device_->deactivate();
   if (locked) munlockall();
 

@@ -66,6 +66,7 @@ std::uint32_t encodeInputFlags(const RecordedTick& tick, std::uint64_t previous_
   if (tick.requests.overrun_fault) f |= kInputFlagOverrunFault;
   if (tick.requests.heartbeat_enabled) f |= kInputFlagHeartbeatWatched;
   if (tick.requests.heartbeat != previous_heartbeat) f |= kInputFlagHeartbeatBeat;
+  if (tick.requests.peer_heartbeat_lost) f |= kInputFlagPeerHeartbeatLost;
   return f;
 }
 
@@ -347,6 +348,7 @@ ReplayReport replayLog(const std::filesystem::path& log) {
     in.requests.heartbeat_enabled = (flags & kInputFlagHeartbeatWatched) != 0;
     if ((flags & kInputFlagHeartbeatBeat) != 0) ++heartbeat;
     in.requests.heartbeat = heartbeat;
+    in.requests.peer_heartbeat_lost = (flags & kInputFlagPeerHeartbeatLost) != 0;
     MinimaDelivery delivery;
     if (const auto it = adopted.find(js.tick); it != adopted.end()) {
       const MinimaSetRecord& set = it->second;

@@ -49,6 +49,8 @@ const char* supervisorCauseName(SupervisorCause cause) noexcept {
       return "reset by command";
     case SupervisorCause::kCommunicationLost:
       return "communication lost";
+    case SupervisorCause::kPeerHeartbeatLost:
+      return "communication lost: a peer node's heartbeat stopped";
   }
   return "unknown";
 }
@@ -142,6 +144,9 @@ bool supervisorCheckInputs(const SupervisorModel& model, SupervisorData& data, s
     } else if (t_s - data.heartbeat_changed_s > p.heartbeat_timeout_s) {
       supervisorTrip(data, SupervisorCause::kHeartbeatLost, -1, t_s - data.heartbeat_changed_s);
     }
+  }
+  if (requests.peer_heartbeat_lost) {
+    supervisorTrip(data, SupervisorCause::kPeerHeartbeatLost, -1, p.peer_heartbeat_timeout_s);
   }
   if (!device_status.ok()) {
     const bool link = (device_status.faults & kFaultLinkLost) != 0;

@@ -168,5 +168,54 @@ TEST(OptionTableTest, ValuesAtTheBoundsAreAccepted) {
   }
 }
 
+std::vector<OptionSpec> optionsOf(const OptionTable& table, const std::string& command) {
+  std::vector<OptionSpec> out;
+  for (const OptionSpec& spec : table.specs()) {
+    if (spec.command == command) out.push_back(spec);
+  }
+  return out;
+}
+
+bool sameDeclaration(const OptionSpec& a, const OptionSpec& b) {
+  return a.name == b.name && a.kind == b.kind && a.min == b.min && a.max == b.max && a.unit == b.unit;
+}
+
+// `fullarm local` is `fullarm run` with the global node's search: the run's options, declared by
+// the same code, less --search; its modes are the run's less `both`.
+TEST(OptionTableTest, TheLocalNodeHasTheRunsOptionsButTheSearch) {
+  const OptionTable table = declaredOptions();
+  const std::vector<OptionSpec> run = optionsOf(table, "run");
+  const std::vector<OptionSpec> local = optionsOf(table, "local");
+  ASSERT_FALSE(run.empty());
+  std::size_t i = 0;
+  for (const OptionSpec& spec : run) {
+    if (spec.name == "--search") continue;
+    ASSERT_LT(i, local.size()) << spec.name << " missing from local";
+    EXPECT_TRUE(sameDeclaration(spec, local[i])) << spec.name << " vs " << local[i].name;
+    if (spec.name == "--mode") {
+      EXPECT_EQ(local[i].choices, (std::vector<std::string>{"full-arm", "hand-only"}));
+    } else {
+      EXPECT_EQ(spec.choices, local[i].choices) << spec.name;
+    }
+    ++i;
+  }
+  EXPECT_EQ(i, local.size()) << "local declares an option run does not";
+}
+
+// The loop's commands read the same input files through the same options.
+TEST(OptionTableTest, TheLoopCommandsDeclareTheSameFileOptions) {
+  const OptionTable table = declaredOptions();
+  const std::vector<std::string> files = {"--scene", "--config",         "--plant-config",
+                                          "--gains", "--haptics-config", "--hil-config"};
+  for (const char* command : {"run", "local", "global", "plant serve"}) {
+    const std::vector<OptionSpec> options = optionsOf(table, command);
+    for (const std::string& name : files) {
+      const auto it = std::find_if(options.begin(), options.end(), [&](const OptionSpec& s) { return s.name == name; });
+      ASSERT_NE(it, options.end()) << command << " lacks " << name;
+      EXPECT_EQ(it->kind, OptionKind::kFile) << command << " " << name;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace fullarm::app

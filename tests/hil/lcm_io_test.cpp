@@ -15,6 +15,7 @@
 #include "fullarm/hil/lcm_io.hpp"
 #include "fullarm/hil/lcm_search.hpp"
 #include "fullarm/hil/run.hpp"
+#include "fullarm/hil/run_recording.hpp"
 #include "fullarm/hil/sim_io.hpp"
 #include "hil_fixture.hpp"
 #include "private_network.hpp"
@@ -102,37 +103,23 @@ struct GlobalThread {
   std::thread thread;
 };
 
-TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
-  RunOptions local = holdAtTheWheel(1.5);
-  const RunResult in_process = runHil(local);
-
-  RunOptions plant_options = local;  // the plant node's session: the same files and seed
-  HilSession plant(plant_options);
-  PlantNodeOptions node_options;
-  node_options.url = kUrl;
-  node_options.idle_exit_s = 20.0;
-  LcmPlantNode node(plant.device(), node_options);
-  std::atomic<bool> stop{false};
-  PlantNodeResult served;
-  std::thread plant_thread([&] { served = node.serve([&] { return stop.load(); }); });
-
-  local.io = IoKind::kLcm;
-  local.lcm_url = kUrl;
-  RunResult remote;
-  try {
-    remote = runHil(local);
-  } catch (...) {
-    stop = true;
-    plant_thread.join();
-    throw;
+/// A plant node serving a run's simulated arm (its files and seed) from a thread.
+struct SessionPlantThread {
+  SessionPlantThread(const RunOptions& options, PlantNodeOptions node_options)
+      : session(options), node(session.device(), std::move(node_options)) {
+    thread = std::thread([this] { result = node.serve([this] { return stop.load(); }); });
   }
-  stop = true;
-  plant_thread.join();
-
-  EXPECT_EQ(remote.io_name, "lcm");
-  EXPECT_EQ(served.commands, remote.telemetry.size());
-  expectSameRun(in_process, remote);
-}
+  ~SessionPlantThread() { join(); }
+  void join() {
+    stop = true;
+    if (thread.joinable()) thread.join();
+  }
+  HilSession session;
+  LcmPlantNode node;
+  std::atomic<bool> stop{false};
+  PlantNodeResult result;
+  std::thread thread;
+};
 
 PlantNodeOptions plantOptions() {
   PlantNodeOptions o;
@@ -149,32 +136,37 @@ GlobalNodeOptions globalOptions() {
   return o;
 }
 
+/// `local` over the nodes: remote I/O, and the global node's search if `remote_search`.
+RunOptions overTheNodes(RunOptions local, bool remote_search) {
+  local.io = IoKind::kLcm;
+  local.lcm_url = kUrl;
+  if (remote_search) local.search_url = kUrl;
+  return local;
+}
+
+TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
+  RunOptions local = holdAtTheWheel(1.5);
+  const RunResult in_process = runHil(local);
+
+  SessionPlantThread plant(local, plantOptions());  // the same files and seed
+  const RunResult remote = runHil(overTheNodes(local, false));
+  plant.join();
+
+  EXPECT_EQ(remote.io_name, "lcm");
+  EXPECT_EQ(plant.result.commands, remote.telemetry.size());
+  expectSameRun(in_process, remote);
+}
+
 TEST_F(LcmIo, ThreeNodesInLockstepEqualTheInProcessRunBitForBit) {
   RunOptions local = holdAtTheWheel(1.5);
   const RunResult in_process = runHil(local);
 
-  HilSession plant(local);
-  LcmPlantNode plant_node(plant.device(), plantOptions());
-  std::atomic<bool> stop{false};
-  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
-  RunResult remote;
-  {
-    GlobalThread global(local, globalOptions());
-    local.io = IoKind::kLcm;
-    local.lcm_url = kUrl;
-    local.search_url = kUrl;
-    try {
-      remote = runHil(local);
-    } catch (...) {
-      stop = true;
-      plant_thread.join();
-      throw;
-    }
-    global.join();
-    EXPECT_EQ(global.result.queries, in_process.sets.size());
-  }
-  stop = true;
-  plant_thread.join();
+  SessionPlantThread plant(local, plantOptions());
+  GlobalThread global(local, globalOptions());
+  const RunResult remote = runHil(overTheNodes(local, true));
+  global.join();
+  plant.join();
+  EXPECT_EQ(global.result.queries, in_process.sets.size());
 
   ASSERT_EQ(in_process.sets.size(), remote.sets.size());
   for (std::size_t i = 0; i < remote.sets.size(); ++i) {
@@ -203,22 +195,15 @@ TEST_F(LcmIo, TheGlobalNodeStoppedMidContactFadesTheForcesWithinTheRate) {
   }
   ASSERT_GT(stall, 0u) << "the held hand must touch the wheel's surroundings";
 
-  HilSession plant(local);
-  LcmPlantNode plant_node(plant.device(), plantOptions());
-  std::atomic<bool> stop{false};
-  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  SessionPlantThread plant(local, plantOptions());
   GlobalThread global(local, globalOptions());
-  local.io = IoKind::kLcm;
-  local.lcm_url = kUrl;
-  local.search_url = kUrl;
-  HilSession session(local);
+  HilSession session(overTheNodes(local, true));
   RunHooks hooks;
   hooks.before_tick = [&](std::uint64_t k, JointSample&, SupervisorRequests&) {
     if (k == stall) global.join();  // the global node is gone from here on
   };
   const RunResult r = session.run(hooks);
-  stop = true;
-  plant_thread.join();
+  plant.join();
 
   EXPECT_FALSE(r.tripped) << supervisorCauseName(r.trip_cause);
   ASSERT_GT(maxContact(r.telemetry[stall - 1]), 2.0) << "in contact when the global node stops";
@@ -243,10 +228,7 @@ TEST_F(LcmIo, TheGlobalNodeStoppedMidContactFadesTheForcesWithinTheRate) {
 TEST_F(LcmIo, MinimaDelayed50msAreStillAdoptedOnTimeInLockstep) {
   RunOptions local = holdAtTheWheel(1.5);
   const RunResult in_process = runHil(local);
-  HilSession plant(local);
-  LcmPlantNode plant_node(plant.device(), plantOptions());
-  std::atomic<bool> stop{false};
-  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  SessionPlantThread plant(local, plantOptions());
   GlobalNodeOptions go = globalOptions();
   std::atomic<int> delayed{0};
   // One fragment in twenty held back 50 ms on the wire (the publisher thread waits before it).
@@ -258,20 +240,9 @@ TEST_F(LcmIo, MinimaDelayed50msAreStillAdoptedOnTimeInLockstep) {
     return false;
   };
   GlobalThread global(local, go);
-  local.io = IoKind::kLcm;
-  local.lcm_url = kUrl;
-  local.search_url = kUrl;
-  RunResult r;
-  try {
-    r = runHil(local);
-  } catch (...) {
-    stop = true;
-    plant_thread.join();
-    throw;
-  }
+  const RunResult r = runHil(overTheNodes(local, true));
   global.join();
-  stop = true;
-  plant_thread.join();
+  plant.join();
   EXPECT_GT(delayed.load(), 3);
   // Lockstep waits for each set at its delivery tick: a late set changes nothing.
   expectSameRun(in_process, r);
@@ -279,33 +250,131 @@ TEST_F(LcmIo, MinimaDelayed50msAreStillAdoptedOnTimeInLockstep) {
 
 TEST_F(LcmIo, MinimaFragmentsDroppedAreSetsNotAdoptedAndTheRunStaysSafe) {
   RunOptions local = holdAtTheWheel(1.5);
-  HilSession plant(local);
-  LcmPlantNode plant_node(plant.device(), plantOptions());
-  std::atomic<bool> stop{false};
-  std::thread plant_thread([&] { (void)plant_node.serve([&] { return stop.load(); }); });
+  SessionPlantThread plant(local, plantOptions());
   GlobalNodeOptions go = globalOptions();
   // One fragment in ten lost, deterministically (a lost fragment loses its set).
   go.drop = [](std::string_view ch, std::int64_t seq) { return ch == channel::kMinimaSet && seq % 10 == 3; };
   GlobalThread global(local, go);
-  local.io = IoKind::kLcm;
-  local.lcm_url = kUrl;
-  local.search_url = kUrl;
-  RunResult r;
-  try {
-    r = runHil(local);
-  } catch (...) {
-    stop = true;
-    plant_thread.join();
-    throw;
-  }
+  const RunResult r = runHil(overTheNodes(local, true));
   global.join();
-  stop = true;
-  plant_thread.join();
+  plant.join();
   std::size_t adopted = 0;
   for (const RecordedSet& s : r.sets) adopted += s.adopted_tick >= 0 ? 1 : 0;
   EXPECT_LT(adopted, r.sets.size()) << "some sets lost a fragment";
   EXPECT_GT(adopted, r.sets.size() * 3 / 4);
   EXPECT_FALSE(r.tripped) << supervisorCauseName(r.trip_cause);
+}
+
+// A second run against the same global node restarts the set numbering at 1: the node hears it
+// at once (a restarted producer), so the second run is served exactly as the first.
+TEST_F(LcmIo, TwoLockstepRunsInARowAreBothServedByOneGlobalNode) {
+  RunOptions local = holdAtTheWheel(0.6);
+  const RunResult in_process = runHil(local);
+  GlobalThread global(local, globalOptions());
+  RunOptions remote = local;
+  remote.search_url = kUrl;
+  const RunResult first = runHil(remote);
+  const RunResult second = runHil(remote);
+  global.join();
+  EXPECT_EQ(global.result.queries, 2 * in_process.sets.size());
+  EXPECT_EQ(global.result.stale, 0u);
+  bool restart_logged = false;
+  for (const std::string& line : global.result.log)
+    restart_logged = restart_logged || line.find("restarted") != std::string::npos;
+  EXPECT_TRUE(restart_logged);
+  expectSameRun(in_process, first);
+  expectSameRun(in_process, second);
+}
+
+// Real time: the tick sends its joint angles live every global period (100 Hz) through the
+// publisher thread; the global node answers the newest with a set, and the tick adopts each set
+// as it arrives, later than its query.
+TEST_F(LcmIo, ARealTimeRunAdoptsTheGlobalNodesSetsLive) {
+  RunOptions local = holdAtTheWheel(1.0);
+  local.clock = ClockKind::kRealtime;
+  GlobalThread global(local, globalOptions());
+  RunOptions remote = local;
+  remote.search_url = kUrl;
+  HilSession session(remote);
+  const RunResult r = session.run();
+  global.join();
+
+  const auto period_ticks = static_cast<std::uint64_t>(session.config().global_period_ticks);
+  const std::uint64_t queries = r.telemetry.size() / period_ticks;
+  const double run_s = static_cast<double>(r.telemetry.size()) * session.config().control_period_s;
+  ASSERT_GT(queries, 50u);
+  // Every query the tick pushed reached the node: >= 100 Hz of live joint states.
+  EXPECT_GE(global.result.live_states, queries - 1);
+  EXPECT_GE(static_cast<double>(global.result.live_states) / run_s, 0.99 * 100.0 - 1.0 / run_s);
+  EXPECT_GT(global.result.live_sets, 0u);
+  EXPECT_EQ(global.result.queries, 0u) << "no lockstep query in a real-time run";
+  std::uint64_t adopted = 0;
+  for (const RecordedSet& s : r.sets) {
+    if (s.adopted_tick < 0) continue;
+    ++adopted;
+    EXPECT_EQ(s.query_tick % period_ticks, 0u);
+    EXPECT_GT(static_cast<std::uint64_t>(s.adopted_tick), s.query_tick) << "a set is adopted after its query";
+  }
+  EXPECT_GT(adopted, queries / 2) << "most sets arrive before the next one";
+  bool touched = false;
+  for (const TickTelemetry& t : r.telemetry) {
+    for (const double tau : t.tau_contact_nm) touched = touched || tau != 0.0;
+  }
+  EXPECT_TRUE(touched) << "the scenario should bring the arm into contact";
+}
+
+// The global node stops mid-contact in a real-time run: its sets stop, the contact forces fade
+// at their rate, and when its heartbeat has been missing for peer_heartbeat_timeout_s the
+// supervisor trips with communication lost: every valve at null, the cause in the log, and the
+// log replays bit for bit.
+TEST_F(LcmIo, ALostGlobalNodeHeartbeatInRealTimeIsCommunicationLossAfterTheFade) {
+  RunOptions local = holdAtTheWheel(1.6);
+  local.clock = ClockKind::kRealtime;
+  local.log = fullarm::test::scratchDir("hil_lcm_io_peer") / "run.lcmlog";
+  GlobalThread global(local, globalOptions());
+  RunOptions remote = local;
+  remote.search_url = kUrl;
+  HilSession session(remote);
+  const std::uint64_t stop_tick = 700;
+  RunHooks hooks;
+  hooks.before_tick = [&](std::uint64_t k, JointSample&, SupervisorRequests&) {
+    if (k == stop_tick) global.stop = true;  // the node stops serving: no set, no heartbeat
+  };
+  const RunResult r = session.run(hooks);
+  global.join();
+
+  ASSERT_TRUE(r.tripped);
+  EXPECT_EQ(r.trip_cause, SupervisorCause::kPeerHeartbeatLost) << supervisorCauseName(r.trip_cause);
+  const SupervisorEvent* trip = nullptr;
+  for (const SupervisorEvent& e : r.events) {
+    if (e.trip && trip == nullptr) trip = &e;
+  }
+  ASSERT_NE(trip, nullptr);
+  const double dt = session.config().control_period_s;
+  const double timeout_s = session.config().supervisor.peer_heartbeat_timeout_s;
+  // The node's last heartbeat is at most one heartbeat period before it stopped; the watcher
+  // and the tick add a few milliseconds.
+  const double silent_s = static_cast<double>(trip->tick - stop_tick) * dt;
+  EXPECT_GE(silent_s, timeout_s - globalOptions().heartbeat_period_s);
+  EXPECT_LE(silent_s, timeout_s + 0.2);
+  // Before the trip the contact forces faded at their rate (once stale) and were gone.
+  const double max_step = session.config().supervisor.max_fade_rate_nm_per_s * dt;
+  const TickTelemetry& before = r.telemetry[trip->tick - 2];
+  EXPECT_EQ(before.contact_scale, 0.0);
+  for (std::size_t k = stop_tick; k + 1 < trip->tick; ++k) {
+    if (r.telemetry[k].contact_scale == 1.0) continue;  // not fading yet: the minima are fresh enough
+    for (int j = 0; j < r.telemetry[k].num_config; ++j) {
+      const auto i = static_cast<std::size_t>(j);
+      EXPECT_LE(std::abs(r.telemetry[k].tau_contact_nm[i] - r.telemetry[k - 1].tau_contact_nm[i]), max_step + 1e-12)
+          << "tick " << k + 1;
+    }
+  }
+  // From the trip on, the safe outputs: every valve at null.
+  for (std::size_t k = trip->tick - 1; k < r.telemetry.size(); ++k) {
+    for (const double v : r.telemetry[k].valve_v) ASSERT_EQ(v, 0.0) << "tick " << k + 1;
+  }
+  const ReplayReport replay = replayLog(local.log);
+  EXPECT_TRUE(replay.identical()) << replay.first_mismatch;
 }
 
 /// A plant node serving a simulated arm from a thread.

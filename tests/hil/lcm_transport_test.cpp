@@ -167,6 +167,86 @@ TEST(LcmTransport, OlderAndRepeatedJointStatesAreDroppedAndGapsCounted) {
   EXPECT_EQ(rx.takeJointState(), nullptr);
 }
 
+// A producer that restarts (its node restarted) counts from its first sequence number again.
+TEST(LcmTransport, ASequenceTrackerHearsARestartedProducerButNotAnOldMessage) {
+  using V = SequenceTracker::Verdict;
+  SequenceTracker t;
+  for (std::int64_t seq = 0; seq < 50; ++seq) ASSERT_EQ(t.accept(seq), V::kNewer) << seq;
+  EXPECT_EQ(t.accept(47), V::kStale);  // a reordered or repeated message, alone
+  EXPECT_EQ(t.accept(49), V::kStale);
+  EXPECT_EQ(t.accept(50), V::kNewer);
+  EXPECT_EQ(t.accept(0), V::kRestart);  // the producer's first number: restarted
+  EXPECT_EQ(t.newest(), 0);
+  EXPECT_EQ(t.accept(1), V::kNewer);
+  EXPECT_EQ(t.restarts(), 1u);
+
+  // Without its first message: heard after kRestartRun increasing older ones in a row.
+  SequenceTracker u;
+  for (std::int64_t seq = 0; seq < 500; ++seq) ASSERT_EQ(u.accept(seq), V::kNewer);
+  EXPECT_EQ(u.accept(3), V::kStale);
+  EXPECT_EQ(u.accept(4), V::kStale);
+  static_assert(SequenceTracker::kRestartRun == 3);
+  EXPECT_EQ(u.accept(6), V::kRestart);
+  EXPECT_EQ(u.accept(7), V::kNewer);
+  // A jump back beyond kRestartJump is a restart at once.
+  SequenceTracker w;
+  ASSERT_EQ(w.accept(SequenceTracker::kRestartJump + 10), V::kNewer);
+  EXPECT_EQ(w.accept(5), V::kRestart);
+  // A producer whose first number is 1 (a run's queries and commands).
+  SequenceTracker q(1);
+  ASSERT_EQ(q.accept(1), V::kNewer);
+  ASSERT_EQ(q.accept(2), V::kNewer);
+  EXPECT_EQ(q.accept(1), V::kRestart);
+}
+
+TEST(LcmTransport, ARestartedNodesHeartbeatsAreHeardAgain) {
+  lcm::LCM lcm("memq://");
+  LcmReceiver rx(lcm, {.heartbeat = true});
+  std::vector<std::uint8_t> b;
+  const auto beat = [&](std::int64_t seq, std::int64_t tick) {
+    HeartbeatRecord h;
+    h.seq = seq;
+    h.node = NodeKind::kGlobal;
+    h.tick = tick;
+    encodeMessage(toMessage(h), b);
+    rx.handle(channel::kHeartbeat, b);
+  };
+  for (std::int64_t seq = 0; seq < 40; ++seq) beat(seq, 100 + seq);
+  ASSERT_EQ(rx.lastHeartbeat(NodeKind::kGlobal)->tick, 139);
+  beat(0, 7);  // the node restarted: its numbering starts again
+  beat(1, 8);
+  EXPECT_EQ(rx.heartbeatsFrom(NodeKind::kGlobal), 42u);
+  EXPECT_EQ(rx.lastHeartbeat(NodeKind::kGlobal)->tick, 8);
+  EXPECT_EQ(rx.counters().heartbeat.restarts, 1u);
+  EXPECT_EQ(rx.counters().heartbeat.stale, 0u);
+}
+
+TEST(LcmTransport, ARestartedProducersMinimaSetsAreReassembledAgain) {
+  lcm::LCM lcm("memq://");
+  LcmReceiver rx(lcm, {.minima_set = true});
+  for (const auto& f : fragments(makeSet(50, 25), 0)) rx.handle(channel::kMinimaSet, f);
+  ASSERT_NE(rx.takeMinimaSet(), nullptr);
+  // The producer restarted its set numbering: set 1, 2 are older than 50 (dropped), the third
+  // older set in a row, increasing, is a restart and is delivered, and the next one too.
+  for (std::int64_t id : {1, 2}) {
+    for (const auto& f : fragments(makeSet(id, 25), 10 * id)) rx.handle(channel::kMinimaSet, f);
+    EXPECT_EQ(rx.takeMinimaSet(), nullptr) << "set " << id;
+  }
+  for (std::int64_t id : {3, 4}) {
+    for (const auto& f : fragments(makeSet(id, 25), 10 * id)) rx.handle(channel::kMinimaSet, f);
+    const MinimaSetRecord* got = rx.takeMinimaSet();
+    ASSERT_NE(got, nullptr) << "set " << id;
+    expectSameSet(makeSet(id, 25), *got);
+  }
+  // A jump back beyond kSetRestartJump is a restart at once.
+  for (const auto& f : fragments(makeSet(5000, 25), 100)) rx.handle(channel::kMinimaSet, f);
+  ASSERT_NE(rx.takeMinimaSet(), nullptr);
+  for (const auto& f : fragments(makeSet(1, 25), 200)) rx.handle(channel::kMinimaSet, f);
+  const MinimaSetRecord* got = rx.takeMinimaSet();
+  ASSERT_NE(got, nullptr);
+  EXPECT_EQ(got->set_id, 1);
+}
+
 TEST(LcmTransport, ASetMissingAFragmentIsDroppedAndCounted) {
   lcm::LCM lcm("memq://");
   LcmReceiver rx(lcm, {.minima_set = true});
@@ -270,6 +350,42 @@ TEST(LcmTransport, PushingDoesNotAllocate) {
   EXPECT_EQ(pub.counters().joint_states, 1u);
   EXPECT_EQ(pub.counters().valve_commands, 1u);
   EXPECT_EQ(pub.counters().minima_sets, 1u);
+}
+
+// While records keep coming the publisher thread polls its rings: a push at the loop's pace does
+// not wake it (no futex call on the real-time side); only the first push after an idle pause
+// does. Every record is still sent.
+TEST(LcmTransport, PushesAtTheLoopsPaceDoNotWakeThePublisherThread) {
+  lcm::LCM lcm("memq://");
+  LcmPublisherOptions options = publisherOptions(NodeKind::kLocal, 0.0);
+  options.poll_period_s = 100e-6;
+  options.poll_window_s = 0.5;  // wide: a loaded machine may delay the pushing thread
+  LcmPublisher pub(lcm, options);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the thread is idle, asleep
+  const int n = 200;
+  auto next = std::chrono::steady_clock::now();
+  for (int k = 1; k <= n; ++k) {
+    ASSERT_TRUE(pub.pushJointState(makeJointState(k)));
+    next += std::chrono::milliseconds(1);
+    std::this_thread::sleep_until(next);
+  }
+  pub.flush();
+  EXPECT_EQ(pub.counters().joint_states, static_cast<std::uint64_t>(n));
+  // The first push found the thread asleep (a second may race with its going to sleep).
+  EXPECT_GE(pub.counters().push_wakeups, 1u);
+  EXPECT_LE(pub.counters().push_wakeups, 2u);
+
+  // Without polling every push may have to wake it.
+  options.poll_period_s = 0.0;
+  LcmPublisher blocking(lcm, options);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  for (int k = 1; k <= 20; ++k) {
+    ASSERT_TRUE(blocking.pushJointState(makeJointState(k)));
+    blocking.flush();  // sent: the thread goes back to sleep
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_EQ(blocking.counters().joint_states, 20u);
+  EXPECT_GE(blocking.counters().push_wakeups, 10u);
 }
 
 }  // namespace

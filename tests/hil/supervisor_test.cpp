@@ -202,6 +202,20 @@ TEST_F(SupervisorTest, LostHeartbeatTrips) {
   EXPECT_EQ(data_.trip_cause, SupervisorCause::kHeartbeatLost);
 }
 
+TEST_F(SupervisorTest, ALostPeerHeartbeatIsCommunicationLoss) {
+  ASSERT_TRUE(run(20));
+  SupervisorRequests r;
+  EXPECT_TRUE(run(5, r));  // heard: nothing happens
+  r.peer_heartbeat_lost = true;
+  EXPECT_FALSE(run(1, r));
+  expectTrip(SupervisorCause::kPeerHeartbeatLost, -1);
+  EXPECT_STRNE(supervisorCauseName(SupervisorCause::kPeerHeartbeatLost), "unknown");
+  // Latched: the peer heard again does not release it; a reset does.
+  r.peer_heartbeat_lost = false;
+  EXPECT_FALSE(run(5, r));
+  EXPECT_EQ(data_.trip_cause, SupervisorCause::kPeerHeartbeatLost);
+}
+
 TEST_F(SupervisorTest, OverrunAndDeviceFaultsTrip) {
   ASSERT_TRUE(run(20));
   SupervisorRequests r;

@@ -39,7 +39,7 @@ struct LcmSearchCounters {
   std::uint64_t missed = 0;   ///< sets that did not come in time (not adopted)
 };
 
-/// The tick's side of the global search over LCM (lockstep).
+/// The tick's side of the global search over LCM in a lockstep run.
 class LcmSearchClient {
  public:
   /// Opens `url` and waits up to `connect_timeout_s` for the global node's heartbeat.
@@ -70,6 +70,40 @@ class LcmSearchClient {
   LcmSearchCounters counters_;
 };
 
+/// The tick's side of the global search over LCM in a real-time run. The tick pushes its
+/// configuration every global period (`pushConfiguration`, @rt: into the publisher's ring; the
+/// publisher thread sends it as a live joint_state_t on FULLARM_JOINT_STATE, with the local
+/// node's heartbeat); the global node searches on the newest it has and answers with sets as
+/// fast as it searches; the receiving thread (not real time) waits for them (`waitForSet`).
+class LcmLiveSearchClient {
+ public:
+  /// Opens `url` and waits up to `connect_timeout_s` for the global node's heartbeat.
+  /// @throws DeviceError when the URL cannot be opened or no global node answers
+  LcmLiveSearchClient(const std::string& url, double connect_timeout_s, double heartbeat_period_s);
+  ~LcmLiveSearchClient();
+  LcmLiveSearchClient(const LcmLiveSearchClient&) = delete;
+  LcmLiveSearchClient& operator=(const LcmLiveSearchClient&) = delete;
+
+  /// Queues the arm model's configuration `q_rad` (`n` angles, model order) of tick `tick`;
+  /// false (counted) if the ring is full. The query's seq is the tick, so the sets' ids
+  /// increase with the ticks they answer. @rt
+  bool pushConfiguration(std::int64_t tick, const double* q_rad, int n) noexcept;
+  /// The local node's state in its heartbeat (the newest tick, safe outputs). @rt
+  void setNodeState(std::int64_t tick, bool safe_output) noexcept;
+  /// Waits up to `timeout_s` for a whole set; the newest arrived, or nullptr. Receiving thread.
+  const MinimaSetRecord* waitForSet(double timeout_s);
+  /// Sends what is queued and stops the publisher thread.
+  void stop();
+
+  [[nodiscard]] const LcmReceiver& receiver() const noexcept { return *receiver_; }
+  [[nodiscard]] LcmPublisherCounters publisherCounters() const noexcept { return publisher_->counters(); }
+
+ private:
+  std::unique_ptr<lcm::LCM> tx_, rx_;
+  std::unique_ptr<LcmReceiver> receiver_;
+  std::unique_ptr<LcmPublisher> publisher_;
+};
+
 /// Options of the global node.
 struct GlobalNodeOptions {
   std::string url = kDefaultLcmUrl;
@@ -84,13 +118,17 @@ struct GlobalNodeOptions {
 
 /// What a global node did.
 struct GlobalNodeResult {
-  std::uint64_t queries = 0;   ///< queries answered
-  std::uint64_t stale = 0;     ///< queries not newer than the last answered (ignored)
-  std::uint64_t rejected = 0;  ///< damaged or misshapen queries (ignored)
+  std::uint64_t queries = 0;      ///< lockstep queries answered
+  std::uint64_t live_states = 0;  ///< live joint states received (real-time runs)
+  std::uint64_t live_sets = 0;    ///< sets answered to live joint states (the newest waiting each time)
+  std::uint64_t stale = 0;        ///< queries or live states not newer than the last (ignored)
+  std::uint64_t rejected = 0;     ///< damaged or misshapen queries (ignored)
   std::vector<std::string> log;
 };
 
-/// Serves a GlobalSearchRunner over LCM: answers every new query with its set.
+/// Serves a GlobalSearchRunner over LCM: answers every new lockstep query (FULLARM_SEARCH_QUERY)
+/// with its set, in order, and in real-time runs the newest live joint state
+/// (FULLARM_JOINT_STATE, model configuration in q_rad) each time the search is free.
 class LcmGlobalNode {
  public:
   /// `search` must outlive the node; `num_config` is the model configuration's size.

@@ -5,8 +5,9 @@
 /// its channels every cycle and keeps the newest message of each.
 ///
 /// **Publishing off the real-time path.** The tick (or the search) pushes fixed-size records
-/// into SpscRings (`LcmPublisher::pushJointState` and friends, @rt: no lock, no allocation; the
-/// wake-up is an atomic add on a semaphore and at most one futex wake); the publisher thread
+/// into SpscRings (`LcmPublisher::pushJointState` and friends, @rt: no lock, no allocation, and
+/// no system call while records keep coming: the publisher thread then polls its rings every
+/// poll_period_s; only the first push after an idle pause wakes it, one futex wake); the publisher thread
 /// turns them into LCM messages, encodes and sends them, and sends the node's heartbeat at a
 /// fixed period. A minima set travels as fragments of at most kMaxMinimaPerFragment minima
 /// (toFragment), each under 1,400 bytes so the kernel never splits a datagram at the IP level
@@ -101,6 +102,57 @@ void encodeMessage(const Message& message, std::vector<std::uint8_t>& out) {
   message.encode(out.data(), 0, n);
 }
 
+/// The newest sequence number of one producer, deciding whether a message is newer. A producer
+/// that restarts (its node restarted) counts from the beginning again; it is heard again, as a
+/// restart, when its message carries the producer's first sequence number, when its sequence
+/// jumps back by more than kRestartJump, or after kRestartRun increasing messages in a row that
+/// are all older than the newest. A single old, repeated or reordered message is stale.
+class SequenceTracker {
+ public:
+  /// A backwards jump larger than this is a restart.
+  static constexpr std::int64_t kRestartJump = 1000;
+  /// This many increasing messages in a row, all older than the newest, are a restart.
+  static constexpr int kRestartRun = 3;
+
+  enum class Verdict : std::uint8_t { kNewer, kStale, kRestart };
+
+  /// A producer whose first sequence number is 0 (LcmPublisher's).
+  SequenceTracker() noexcept = default;
+  /// `first_seq`: the first sequence number the producer sends.
+  explicit SequenceTracker(std::int64_t first_seq) noexcept : first_(first_seq) {}
+
+  /// The verdict on `seq`; kNewer and kRestart make it the newest. @rt
+  Verdict accept(std::int64_t seq) noexcept {
+    if (!have_ || seq > newest_) return take(seq, Verdict::kNewer);
+    if (seq == first_ && newest_ != first_) return take(seq, Verdict::kRestart);
+    std::int64_t back = 0;  // a difference beyond int64 (a damaged number) is far back too
+    if (__builtin_sub_overflow(newest_, seq, &back) || back > kRestartJump) return take(seq, Verdict::kRestart);
+    run_ = run_ > 0 && seq > run_last_ ? run_ + 1 : 1;
+    run_last_ = seq;
+    if (run_ >= kRestartRun) return take(seq, Verdict::kRestart);
+    return Verdict::kStale;
+  }
+  /// The newest sequence number accepted; -1 if none.
+  [[nodiscard]] std::int64_t newest() const noexcept { return have_ ? newest_ : -1; }
+  /// Restarts heard.
+  [[nodiscard]] std::uint64_t restarts() const noexcept { return restarts_; }
+
+ private:
+  Verdict take(std::int64_t seq, Verdict v) noexcept {
+    newest_ = seq;
+    have_ = true;
+    run_ = 0;
+    if (v == Verdict::kRestart) ++restarts_;
+    return v;
+  }
+  std::int64_t first_ = 0;
+  std::int64_t newest_ = 0;
+  bool have_ = false;
+  std::int64_t run_last_ = 0;
+  int run_ = 0;
+  std::uint64_t restarts_ = 0;
+};
+
 /// Datagram payload bound of a minima-set fragment: under a 1,500-byte MTU less the IP, UDP
 /// and LCM headers, with margin.
 inline constexpr std::size_t kMaxFragmentBytes = 1400;
@@ -114,6 +166,11 @@ struct LcmPublisherOptions {
   std::size_t joint_state_capacity = 256;  ///< records the rings hold before dropping
   std::size_t valve_command_capacity = 256;
   std::size_t minima_set_capacity = 4;
+  /// While records are coming (one within poll_window_s), the thread looks at its rings every
+  /// poll_period_s instead of waiting to be woken, so a push makes no system call; idle, it
+  /// blocks and the first push wakes it. <= 0: always block (every push may wake the thread).
+  double poll_period_s = 100e-6;
+  double poll_window_s = 0.05;  ///< see poll_period_s
   /// Fault injection: called by the publisher thread with each message's channel and its
   /// sequence number (the fragment's for a minima set); true drops the message unsent
   /// (counted in `injected_drops`). Empty: nothing is dropped.
@@ -131,6 +188,7 @@ struct LcmPublisherCounters {
   std::uint64_t send_errors = 0;           ///< lcm publish calls that failed
   std::uint64_t injected_drops = 0;        ///< messages the `drop` hook withheld
   std::size_t largest_fragment_bytes = 0;  ///< largest encoded minima_set_t fragment
+  std::uint64_t push_wakeups = 0;          ///< pushes that had to wake the sleeping thread (a futex wake)
 };
 
 /// Publishes what the real-time side pushes, from its own thread, plus the node's heartbeat.
@@ -166,6 +224,8 @@ class LcmPublisher {
  private:
   void run();
   void wake() noexcept;
+  void wakeIfAsleep() noexcept;
+  [[nodiscard]] bool ringsEmpty() const noexcept;
   bool sendQueued();
   void sendHeartbeat();
   void publishBytes(const char* channel, std::int64_t seq, std::atomic<std::uint64_t>& sent);
@@ -177,13 +237,14 @@ class LcmPublisher {
   SpscRing<MinimaSetRecord> minima_sets_;
   std::counting_semaphore<> wake_{0};
   std::atomic<bool> stop_{false};
+  std::atomic<bool> asleep_{false};  ///< the thread blocks on wake_: a push must wake it
   std::atomic<std::int64_t> node_tick_{-1};
   std::atomic<bool> node_safe_{false};
   std::vector<std::uint8_t> buffer_;  ///< publisher thread only
   std::int64_t fragment_seq_ = 0;     ///< publisher thread only
   std::int64_t heartbeat_seq_ = 0;    ///< publisher thread only
   std::atomic<std::uint64_t> joint_states_sent_{0}, valve_commands_sent_{0}, minima_sets_sent_{0},
-      minima_fragments_sent_{0}, heartbeats_sent_{0}, send_errors_{0}, injected_drops_{0};
+      minima_fragments_sent_{0}, heartbeats_sent_{0}, send_errors_{0}, injected_drops_{0}, push_wakeups_{0};
   std::atomic<std::size_t> largest_fragment_bytes_{0};
   std::thread thread_;
 };
@@ -210,6 +271,7 @@ struct LcmChannelCounters {
   std::uint64_t malformed = 0;   ///< DecodeStatus::kMalformed (and fragments whose header disagrees with their set's)
   std::uint64_t stale = 0;       ///< not newer than the newest accepted (older or repeated seq)
   std::uint64_t gaps = 0;        ///< sequence numbers skipped between accepted messages (lost)
+  std::uint64_t restarts = 0;    ///< the producer started counting again (SequenceTracker): heard again
   /// Sum of the rejections (truncated, wrong hash, malformed).
   [[nodiscard]] std::uint64_t rejected() const noexcept { return truncated + wrong_hash + malformed; }
 };
@@ -256,8 +318,8 @@ class LcmReceiver {
 
  private:
   struct RawHandler;
-  /// Accepts `seq` on a channel whose newest accepted is `newest` (-1: none); counts.
-  static bool acceptSeq(std::int64_t seq, std::int64_t& newest, LcmChannelCounters& c) noexcept;
+  /// Accepts `seq` on a channel whose producer `tracker` follows; counts.
+  static bool acceptSeq(std::int64_t seq, SequenceTracker& tracker, LcmChannelCounters& c) noexcept;
 
   lcm::LCM& lcm_;
   std::vector<lcm_subscription_t*> subscriptions_;
@@ -265,13 +327,13 @@ class LcmReceiver {
   LcmReceiverCounters counters_;
 
   JointStateRecord joint_state_{}, joint_state_scratch_{};
-  std::int64_t joint_state_seq_ = -1;
+  SequenceTracker joint_state_seq_;
   bool joint_state_new_ = false;
   ValveCommandRecord valve_command_{}, valve_command_scratch_{};
-  std::int64_t valve_command_seq_ = -1;
+  SequenceTracker valve_command_seq_;
   bool valve_command_new_ = false;
   std::array<HeartbeatRecord, kNodeKinds> heartbeats_{};
-  std::array<std::int64_t, kNodeKinds> heartbeat_seq_{-1, -1, -1};
+  std::array<SequenceTracker, kNodeKinds> heartbeat_seq_{};
   std::array<std::uint64_t, kNodeKinds> heartbeat_count_{};
   fullarm_lcm::minima_set_t fragment_;
   std::int64_t fragment_seq_ = -1;

@@ -214,9 +214,16 @@ void checkFragment(const fullarm_lcm::minima_set_t& fragment);
 
 /// Reassembles minima sets from their fragments, in the order they arrive. Fragments of one
 /// set may come in any order; a fragment of a newer set abandons an incomplete older one
-/// (counted), and a fragment of an older set than the one in progress is ignored (counted).
+/// (counted), and a fragment of an older set than the one in progress is ignored (counted),
+/// unless the producer restarted its numbering: a set id more than kSetRestartJump back, or
+/// kSetRestartRun older sets in a row with increasing ids, begin anew (counted in restarts()).
 class MinimaSetAssembler {
  public:
+  /// A set id this far back is a restarted producer's.
+  static constexpr std::int64_t kSetRestartJump = 1000;
+  /// This many older sets in a row, with increasing ids, are a restarted producer's.
+  static constexpr int kSetRestartRun = 3;
+
   /// Adds one fragment. Returns true when it completes its set, which is then in `set()`
   /// (valid until the next call).
   /// @throws RecordError for an inconsistent fragment (counts beyond bounds, an index outside
@@ -229,6 +236,8 @@ class MinimaSetAssembler {
   [[nodiscard]] std::uint64_t abandoned() const noexcept { return abandoned_; }
   /// Fragments ignored: of a set older than the one in progress, or repeated.
   [[nodiscard]] std::uint64_t ignored() const noexcept { return ignored_; }
+  /// Restarts of the producer's set numbering heard.
+  [[nodiscard]] std::uint64_t restarts() const noexcept { return restarts_; }
 
  private:
   MinimaSetRecord set_{};
@@ -239,6 +248,9 @@ class MinimaSetAssembler {
   int have_count_ = 0;
   std::uint64_t abandoned_ = 0;
   std::uint64_t ignored_ = 0;
+  std::uint64_t restarts_ = 0;
+  std::int64_t older_last_id_ = -1;  ///< the last older set's id seen
+  int older_run_ = 0;                ///< older sets in a row, increasing
 };
 
 }  // namespace fullarm::hil

@@ -71,8 +71,10 @@ struct RunOptions {
   /// lcm: the LCM URL shared with the plant node (empty: kDefaultLcmUrl, which stays on this
   /// machine).
   std::string lcm_url;
-  /// Lockstep: the global search runs in a global node (`fullarm global`, lcm_search.hpp)
-  /// reached over this LCM URL (empty: in this process).
+  /// The global search runs in a global node (`fullarm global`, lcm_search.hpp) reached over
+  /// this LCM URL (empty: in this process): in lockstep each query waits for its set
+  /// (LcmSearchClient), in real time the tick's joint angles go out live and sets are adopted
+  /// as they arrive (LcmLiveSearchClient).
   std::string search_url;
   /// The run's LCM log (empty: none) and the command line its header records.
   std::filesystem::path log;

@@ -34,6 +34,7 @@ inline constexpr std::uint32_t kInputFlagOverrunFault = 1u << 20;
 inline constexpr std::uint32_t kInputFlagHeartbeatWatched = 1u << 21;
 inline constexpr std::uint32_t kInputFlagHeartbeatBeat = 1u << 22;  ///< the heartbeat changed at this tick
 inline constexpr std::uint32_t kInputFlagLinkLost = 1u << 23;  ///< the failed read was a lost link (kFaultLinkLost)
+inline constexpr std::uint32_t kInputFlagPeerHeartbeatLost = 1u << 24;  ///< a peer node's heartbeat stopped
 
 /// The flags of one tick's inputs; `previous_heartbeat` is the last tick's counter. @rt
 [[nodiscard]] std::uint32_t encodeInputFlags(const RecordedTick& tick, std::uint64_t previous_heartbeat) noexcept;

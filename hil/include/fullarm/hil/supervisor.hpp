@@ -51,6 +51,10 @@ struct SupervisorParams {
   double max_fade_rate_nm_per_s = 100.0;
   /// E-stop when the heartbeat counter has not changed for this long [s].
   double heartbeat_timeout_s = 0.25;
+  /// Communication lost when a peer node's heartbeat (the global node's, in a real-time run
+  /// over LCM) has not come for this long [s]; longer than the stale-minima fade, so the contact
+  /// forces have faded at their rate when the valves go to null.
+  double peer_heartbeat_timeout_s = 0.5;
 };
 
 /// Why the supervisor acted.
@@ -75,6 +79,7 @@ enum class SupervisorCause : std::uint8_t {
   kMinimaFresh,        ///< (event) a new minima set arrived: the contact forces come back
   kReset,              ///< (event) reset by command
   kCommunicationLost,  ///< the link to a remote I/O node is lost (the device's kFaultLinkLost)
+  kPeerHeartbeatLost,  ///< communication lost: a peer node's heartbeat stopped (peer_heartbeat_timeout_s)
 };
 
 /// Name of a cause ("sensor NaN", ...). @rt
@@ -114,6 +119,9 @@ struct SupervisorRequests {
   bool overrun_fault = false;      ///< the loop saw too many consecutive overruns
   std::uint64_t heartbeat = 0;     ///< a counter the supervising side increments
   bool heartbeat_enabled = false;  ///< false: no heartbeat is watched
+  /// A peer node's heartbeat has not come for peer_heartbeat_timeout_s (the side that receives
+  /// it decides): communication lost.
+  bool peer_heartbeat_lost = false;
 };
 
 /// Largest number of events recorded in one tick.
