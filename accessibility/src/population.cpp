@@ -15,7 +15,7 @@ constexpr double kZ95 = 1.6448536269514722;  // standard normal 95th percentile
 // Log-normal through p50 with the log spread of the 5th-95th range.
 double logSigma(const Percentiles& p) { return std::log(p.p95_m / p.p5_m) / (2.0 * kZ95); }
 
-// A standard normal pair from two uniforms (Box and Muller 1958).
+// P1: a standard normal pair from two uniforms (Box and Muller 1958).
 void boxMuller(core::RandomStream& rng, double& z0, double& z1) noexcept {
   const double u1 = 1.0 - rng.uniform01();  // (0, 1]
   const double u2 = rng.uniform01();
@@ -97,6 +97,7 @@ Technician drawTechnician(const PopulationOptions& options, std::int64_t index, 
   double z_free = 0.0;
   boxMuller(rng, z_upper, z_free);
   const double r = s.upper_arm_forearm_correlation;
+  // P1: the forearm score correlated with the upper arm's; log-normal lengths.
   const double z_fore = r * z_upper + std::sqrt(1.0 - r * r) * z_free;
   t.upper_arm_m = s.upper_arm.p50_m * std::exp(logSigma(s.upper_arm) * z_upper);
   t.forearm_m = s.forearm.p50_m * std::exp(logSigma(s.forearm) * z_fore);

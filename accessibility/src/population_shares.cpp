@@ -59,6 +59,7 @@ ShareInterval wilsonInterval(std::int64_t successes, std::int64_t trials, double
   const double z = normalQuantile(0.5 + 0.5 * confidence);
   const auto n = static_cast<double>(trials);
   const double p = static_cast<double>(successes) / n;
+  // P2: the Wilson score interval.
   const double z2n = z * z / n;
   const double centre = (p + 0.5 * z2n) / (1.0 + z2n);
   const double half = z / (1.0 + z2n) * std::sqrt(p * (1.0 - p) / n + 0.25 * z2n / n);
@@ -72,6 +73,7 @@ ShareInterval clopperPearsonInterval(std::int64_t successes, std::int64_t trials
   checkCounts(successes, trials, confidence);
   const double alpha2 = 0.5 * (1.0 - confidence);
   ShareInterval s{successes, trials, static_cast<double>(successes) / static_cast<double>(trials), 0.0, 1.0, confidence};
+  // P3: the Clopper-Pearson bounds from the binomial tails.
   // P(X >= x | p) increases with p: the lower bound is where it reaches alpha/2.
   if (successes > 0) {
     double lo = 0.0;
@@ -142,7 +144,7 @@ CriterionSummary summariseCriterion(const std::vector<Technician>& technicians, 
   Eigen::VectorXd y(n);
   for (Eigen::Index i = 0; i < n; ++i) y[i] = success[static_cast<std::size_t>(i)] ? 1.0 : 0.0;
 
-  // Newton on the penalised log-likelihood l(b) - lambda sum_{k>0} b_k^2.
+  // P4: Newton on the penalised log-likelihood l(b) - lambda sum_{k>0} b_k^2.
   constexpr double kLambda = 1e-3;
   Eigen::VectorXd b = Eigen::VectorXd::Zero(kPopulationFactors + 1);
   const double p0 = static_cast<double>(wins) / static_cast<double>(n);
