@@ -24,7 +24,7 @@ fs::path sourceDir() {
 
 std::vector<fs::path> codeDirs(const fs::path& root) {
   std::vector<fs::path> dirs;
-  for (const char* d : {"core", "arm", "plant", "haptics", "controllers", "design", "identification", "reports", "apps", "tests"}) {
+  for (const char* d : {"core", "arm", "plant", "haptics", "controllers", "design", "identification", "accessibility", "reports", "apps", "tests"}) {
     dirs.push_back(root / d);
   }
   return dirs;
