@@ -74,8 +74,8 @@ struct Technician {
 };
 
 /// Draws technician `index` from `rng` (the sample's own stream: core::RandomStream(seed,
-/// core::nameSlot("technicians"), index) in a population sweep). Five uniforms: the sex, two
-/// normals for the lengths (Box-Muller), one for strength. The link radii scale with the geometric
+/// core::nameSlot("technicians"), index) in a population sweep). Five uniforms: one for the sex,
+/// two (Box-Muller) for the two length scores, two (Box-Muller, one normal used) for strength. The link radii scale with the geometric
 /// mean of the two length ratios to `nominal_upper_arm_m` and `nominal_forearm_m` (the arm model's
 /// own segments, whose capsules are taken as the girth of a person of that size).
 /// Options are not validated here (validatePopulationOptions). @rt
