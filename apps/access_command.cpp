@@ -28,6 +28,7 @@
 #include "fullarm/haptics/scene.hpp"
 #include "fullarm/reports/report.hpp"
 #include "output_files.hpp"
+#include "run_replay3d.hpp"
 
 namespace fullarm::app {
 namespace {
@@ -93,25 +94,9 @@ reports::Replay3d pathReplay(const accessibility::ReachProblem& p, const haptics
                    " rad steps (the time axis is the frame count at 25 frames per second, not a motion's timing).";
   for (int i = 0; i < p.world->numObjects(); ++i) {
     const haptics::CollisionObject& object = p.world->object(i);
-    reports::ReplayMesh mesh;
-    mesh.name = scene.objects[static_cast<std::size_t>(i)].name;
-    for (int v = 0; v < object.mesh.numVertices(); ++v)
-      mesh.vertices_m.push_back(toArray(object.X_WO * object.mesh.vertex(v)));
-    for (int t = 0; t < object.mesh.numTriangles(); ++t) {
-      const Eigen::Vector3i& tri = object.mesh.triangle(t);
-      mesh.triangles.push_back(
-          {static_cast<std::uint32_t>(tri[0]), static_cast<std::uint32_t>(tri[1]), static_cast<std::uint32_t>(tri[2])});
-    }
-    replay.meshes.push_back(std::move(mesh));
+    replay.meshes.push_back(replayMesh(scene.objects[static_cast<std::size_t>(i)].name, object.mesh, object.X_WO));
   }
-  std::vector<int> links;
-  for (int l = 0; l < model.numJoints(); ++l) {
-    const arm::LinkGeometry& g = model.joints[static_cast<std::size_t>(l)].geometry;
-    if (g.type == arm::LinkGeometry::Type::kCapsule) {
-      links.push_back(l);
-      replay.links.push_back({model.joints[static_cast<std::size_t>(l)].name, g.radius_m});
-    }
-  }
+  const std::vector<int> links = addReplayCapsuleLinks(model, replay);
   for (int j = 0; j < model.numArmJoints(); ++j)
     replay.joints.push_back(model.joints[static_cast<std::size_t>(j)].name);
   std::vector<Eigen::VectorXd> qs;

@@ -21,6 +21,30 @@ std::array<double, 3> toArray(const Eigen::Vector3d& v) {
 
 }  // namespace
 
+reports::ReplayMesh replayMesh(const std::string& name, const haptics::TriMesh& mesh, const Eigen::Isometry3d& X_WO) {
+  reports::ReplayMesh out;
+  out.name = name;
+  for (int v = 0; v < mesh.numVertices(); ++v) out.vertices_m.push_back(toArray(X_WO * mesh.vertex(v)));
+  for (int t = 0; t < mesh.numTriangles(); ++t) {
+    const Eigen::Vector3i& tri = mesh.triangle(t);
+    out.triangles.push_back(
+        {static_cast<std::uint32_t>(tri[0]), static_cast<std::uint32_t>(tri[1]), static_cast<std::uint32_t>(tri[2])});
+  }
+  return out;
+}
+
+std::vector<int> addReplayCapsuleLinks(const arm::ArmModel& model, reports::Replay3d& replay) {
+  std::vector<int> links;
+  for (int l = 0; l < model.numJoints(); ++l) {
+    const arm::LinkGeometry& g = model.joints[static_cast<std::size_t>(l)].geometry;
+    if (g.type == arm::LinkGeometry::Type::kCapsule) {
+      links.push_back(l);
+      replay.links.push_back({model.joints[static_cast<std::size_t>(l)].name, g.radius_m});
+    }
+  }
+  return links;
+}
+
 reports::Replay3d runReplay3d(const hil::RunResult& r, const hil::HilSession& session, double frame_rate_hz) {
   const arm::ArmModel& model = session.model();
   const haptics::Scene& scene = session.scene();
@@ -35,27 +59,10 @@ reports::Replay3d runReplay3d(const hil::RunResult& r, const hil::HilSession& se
   std::vector<Eigen::Isometry3d> X_WO;
   for (const haptics::SceneObject& object : scene.objects) {
     X_WO.push_back(X_WS * object.X_SO);
-    reports::ReplayMesh mesh;
-    mesh.name = object.name;
-    for (int v = 0; v < object.mesh.numVertices(); ++v)
-      mesh.vertices_m.push_back(toArray(X_WO.back() * object.mesh.vertex(v)));
-    for (int t = 0; t < object.mesh.numTriangles(); ++t) {
-      const Eigen::Vector3i& tri = object.mesh.triangle(t);
-      mesh.triangles.push_back(
-          {static_cast<std::uint32_t>(tri[0]), static_cast<std::uint32_t>(tri[1]), static_cast<std::uint32_t>(tri[2])});
-    }
-    replay.meshes.push_back(std::move(mesh));
+    replay.meshes.push_back(replayMesh(object.name, object.mesh, X_WO.back()));
   }
 
-  // The capsule links (links without geometry carry nothing to draw).
-  std::vector<int> links;
-  for (int l = 0; l < model.numJoints(); ++l) {
-    const arm::LinkGeometry& g = model.joints[static_cast<std::size_t>(l)].geometry;
-    if (g.type == arm::LinkGeometry::Type::kCapsule) {
-      links.push_back(l);
-      replay.links.push_back({model.joints[static_cast<std::size_t>(l)].name, g.radius_m});
-    }
-  }
+  const std::vector<int> links = addReplayCapsuleLinks(model, replay);
   replay.joints = r.joint_names;
 
   double max_torque_nm = 0.0;

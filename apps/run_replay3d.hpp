@@ -6,9 +6,13 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "fullarm/arm/arm_model.hpp"
+#include "fullarm/haptics/tri_mesh.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/reports/replay3d.hpp"
 
@@ -19,6 +23,14 @@ inline constexpr double kReplayFrameRate_hz = 25.0;
 /// The most frames a replay holds: runs longer than 120 s are shown at a lower frame rate, so
 /// that the report stays small (a frame holds up to 128 minima, about 3.7 kB).
 inline constexpr std::size_t kMaxReplayFrames = 3000;
+
+/// A scene object's mesh for a replay, its vertices placed in the arm's world frame by `X_WO`.
+[[nodiscard]] reports::ReplayMesh replayMesh(const std::string& name, const haptics::TriMesh& mesh,
+                                             const Eigen::Isometry3d& X_WO);
+
+/// Adds the arm's capsule links to `replay` (name and radius; links without geometry carry
+/// nothing to draw) and returns their indices in the arm model, in the order added.
+std::vector<int> addReplayCapsuleLinks(const arm::ArmModel& model, reports::Replay3d& replay);
 
 /// The replay of run `r` of `session`, in the arm's world frame W, at `frame_rate_hz` (lower
 /// when the run would need more than kMaxReplayFrames frames). A frame stands for the

@@ -15,21 +15,32 @@ using detail::seconds;
 
 // --- the tick's side ---------------------------------------------------------------------------
 
-LcmSearchClient::LcmSearchClient(const std::string& url, double connect_timeout_s, double reply_timeout_s)
-    : lcm_(std::make_unique<lcm::LCM>(url)), reply_timeout_s_(reply_timeout_s) {
-  if (!lcm_->good()) throw DeviceError("remote search: cannot open the LCM URL " + url);
+namespace {
+
+// A receiver of minima sets and heartbeats on `lcm`, once a global node's heartbeat has been heard
+// (it waits up to `connect_timeout_s`; DeviceError naming the URL otherwise).
+std::unique_ptr<LcmReceiver> connectToGlobalNode(lcm::LCM& lcm, const std::string& url, double connect_timeout_s) {
   LcmReceiverOptions o;
   o.minima_set = true;
   o.heartbeat = true;
-  receiver_ = std::make_unique<LcmReceiver>(*lcm_, o);
+  auto receiver = std::make_unique<LcmReceiver>(lcm, o);
   const auto deadline = after(connect_timeout_s);
-  while (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0 && Clock::now() < deadline) {
-    receiver_->drainWait(static_cast<double>(millisUntil(deadline) + 1) * 1e-3);
+  while (receiver->heartbeatsFrom(NodeKind::kGlobal) == 0 && Clock::now() < deadline) {
+    receiver->drainWait(static_cast<double>(millisUntil(deadline) + 1) * 1e-3);
   }
-  if (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0) {
+  if (receiver->heartbeatsFrom(NodeKind::kGlobal) == 0) {
     throw DeviceError("remote search: no global node answered on " + url + " within " + seconds(connect_timeout_s) +
                       " (start `fullarm global` with the same --lcm-url)");
   }
+  return receiver;
+}
+
+}  // namespace
+
+LcmSearchClient::LcmSearchClient(const std::string& url, double connect_timeout_s, double reply_timeout_s)
+    : lcm_(std::make_unique<lcm::LCM>(url)), reply_timeout_s_(reply_timeout_s) {
+  if (!lcm_->good()) throw DeviceError("remote search: cannot open the LCM URL " + url);
+  receiver_ = connectToGlobalNode(*lcm_, url, connect_timeout_s);
 }
 
 LcmSearchClient::~LcmSearchClient() = default;
@@ -85,18 +96,7 @@ bool LcmSearchClient::await(std::int64_t set_id, std::uint64_t query_tick, std::
 LcmLiveSearchClient::LcmLiveSearchClient(const std::string& url, double connect_timeout_s, double heartbeat_period_s)
     : tx_(std::make_unique<lcm::LCM>(url)), rx_(std::make_unique<lcm::LCM>(url)) {
   if (!tx_->good() || !rx_->good()) throw DeviceError("remote search: cannot open the LCM URL " + url);
-  LcmReceiverOptions o;
-  o.minima_set = true;
-  o.heartbeat = true;
-  receiver_ = std::make_unique<LcmReceiver>(*rx_, o);
-  const auto deadline = after(connect_timeout_s);
-  while (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0 && Clock::now() < deadline) {
-    receiver_->drainWait(static_cast<double>(millisUntil(deadline) + 1) * 1e-3);
-  }
-  if (receiver_->heartbeatsFrom(NodeKind::kGlobal) == 0) {
-    throw DeviceError("remote search: no global node answered on " + url + " within " + seconds(connect_timeout_s) +
-                      " (start `fullarm global` with the same --lcm-url)");
-  }
+  receiver_ = connectToGlobalNode(*rx_, url, connect_timeout_s);
   LcmPublisherOptions po;
   po.node = NodeKind::kLocal;
   po.heartbeat_period_s = heartbeat_period_s;
