@@ -151,11 +151,23 @@ BraceSearchResult searchBracePosture(const arm::ArmModel& model, const HumanArm&
   }
   if (options.max_evaluations < 1) throw std::invalid_argument("brace search: max_evaluations must be >= 1");
   if (!(options.step_rad > 0.0)) throw std::invalid_argument("brace search: step_rad must be > 0");
-  Search s{model, human, world, search, params, push_direction_W.normalized(), options, options.push,
-           arm::ArmData(model), Eigen::Isometry3d::Identity(), model.numArmJoints(), model.lowerLimits(),
-           model.upperLimits(), {}};
+  Search s{model,
+           human,
+           world,
+           search,
+           params,
+           push_direction_W.normalized(),
+           options,
+           options.push,
+           arm::ArmData(model),
+           Eigen::Isometry3d::Identity(),
+           model.numArmJoints(),
+           model.lowerLimits(),
+           model.upperLimits(),
+           {}};
   s.push_options.contact_distance_m = params.force_threshold_m;
-  if (!s.withinLimits(q_start)) throw std::invalid_argument("brace search: the start configuration is outside the joint limits");
+  if (!s.withinLimits(q_start))
+    throw std::invalid_argument("brace search: the start configuration is outside the joint limits");
   arm::computeForwardKinematics(model, s.fk, q_start);
   s.X_WT_target = s.fk.X_WT;
   s.result.q_start_rad = q_start;

@@ -15,7 +15,7 @@
 namespace fullarm::accessibility {
 namespace {
 
-const double kInf = COIN_DBL_MAX;  // CLP's infinity
+const double kInf = COIN_DBL_MAX;               // CLP's infinity
 constexpr double kCertificateTolerance = 1e-7;  // relative, on bounds, activities and reduced costs
 
 /// Two unit vectors completing `d` to a right-handed orthonormal basis.
@@ -60,10 +60,14 @@ void checkProblem(const ForceProblem& p, const ForceLpOptions& o) {
 
 const char* toString(ForceStatus status) noexcept {
   switch (status) {
-    case ForceStatus::kOptimal: return "optimal";
-    case ForceStatus::kCannotHold: return "cannot hold";
-    case ForceStatus::kUnbounded: return "unbounded";
-    case ForceStatus::kSolverFailed: return "solver failed";
+    case ForceStatus::kOptimal:
+      return "optimal";
+    case ForceStatus::kCannotHold:
+      return "cannot hold";
+    case ForceStatus::kUnbounded:
+      return "unbounded";
+    case ForceStatus::kSolverFailed:
+      return "solver failed";
   }
   return "solver failed";
 }
@@ -145,7 +149,9 @@ ForceLpResult solveForceLp(const ForceProblem& problem, const ForceLpOptions& op
     double y_max = 0.0;
     for (int r = 0; r < num_rows; ++r) y_max = std::max(y_max, std::abs(y[r]));
     const double dual_tol = kCertificateTolerance * (1.0 + y_max);
-    auto at = [](double v, double bound) { return std::abs(v - bound) <= kCertificateTolerance * (1.0 + std::abs(bound)); };
+    auto at = [](double v, double bound) {
+      return std::abs(v - bound) <= kCertificateTolerance * (1.0 + std::abs(bound));
+    };
     Eigen::VectorXd activity = Eigen::VectorXd::Zero(num_rows);
     for (int c = 0; c < num_cols; ++c) {
       const auto cu = static_cast<std::size_t>(c);

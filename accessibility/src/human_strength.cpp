@@ -66,8 +66,8 @@ JointAction readAction(const core::YamlMap& m, const arm::ArmModel& model) {
                                   " then " + std::to_string(angle_deg[k]));
         }
         if (!(f.factor[k] > 0.0)) {
-          p.fail("factor", "element " + std::to_string(k) + " is " + std::to_string(f.factor[k]) +
-                               ", expected a factor > 0");
+          p.fail("factor",
+                 "element " + std::to_string(k) + " is " + std::to_string(f.factor[k]) + ", expected a factor > 0");
         }
         f.angle_rad.push_back(angle_deg[k] * kDegToRad);
       }
@@ -176,7 +176,9 @@ HumanArm parseHumanArm(std::string_view yaml_text, const std::filesystem::path& 
   return core::withKeyPathLines(root, [&] { return buildHumanArm(root, model); });
 }
 
-std::filesystem::path defaultHumanArmPath() { return core::defaultConfigPath("human_arm.yaml"); }
+std::filesystem::path defaultHumanArmPath() {
+  return core::defaultConfigPath("human_arm.yaml");
+}
 
 double postureFactor(const JointAction& action, const Eigen::VectorXd& q) {
   double factor = 1.0;

@@ -13,7 +13,9 @@ namespace {
 constexpr double kZ95 = 1.6448536269514722;  // standard normal 95th percentile
 
 // Log-normal through p50 with the log spread of the 5th-95th range.
-double logSigma(const Percentiles& p) { return std::log(p.p95_m / p.p5_m) / (2.0 * kZ95); }
+double logSigma(const Percentiles& p) {
+  return std::log(p.p95_m / p.p5_m) / (2.0 * kZ95);
+}
 
 // P1: a standard normal pair from two uniforms (Box and Muller 1958).
 void boxMuller(core::RandomStream& rng, double& z0, double& z1) noexcept {
@@ -26,7 +28,8 @@ void boxMuller(core::RandomStream& rng, double& z0, double& z1) noexcept {
 
 void requireFinite(double v, const std::string& key, bool positive) {
   if (!std::isfinite(v) || (positive && v <= 0.0)) {
-    throw core::ConfigError({}, key, std::to_string(v) + (positive ? ": expected a positive finite number" : ": expected a finite number"));
+    throw core::ConfigError(
+        {}, key, std::to_string(v) + (positive ? ": expected a positive finite number" : ": expected a finite number"));
   }
 }
 
@@ -37,8 +40,9 @@ void validateSex(const SexFigures& s, const std::string& key) {
     requireFinite(p->p50_m, k + ".p50_m", true);
     requireFinite(p->p95_m, k + ".p95_m", true);
     if (!(p->p5_m < p->p50_m && p->p50_m < p->p95_m)) {
-      throw core::ConfigError({}, k, std::to_string(p->p5_m) + " / " + std::to_string(p->p50_m) + " / " +
-                                        std::to_string(p->p95_m) + ": expected p5 < p50 < p95");
+      throw core::ConfigError({}, k,
+                              std::to_string(p->p5_m) + " / " + std::to_string(p->p50_m) + " / " +
+                                  std::to_string(p->p95_m) + ": expected p5 < p50 < p95");
     }
   }
   const double r = s.upper_arm_forearm_correlation;
@@ -69,11 +73,12 @@ PopulationFigures ansur2Figures() {
 
 void validatePopulationOptions(const PopulationOptions& options) {
   if (options.technicians < 1) {
-    throw core::ConfigError({}, "--population", std::to_string(options.technicians) + ": expected at least 1 technician");
+    throw core::ConfigError({}, "--population",
+                            std::to_string(options.technicians) + ": expected at least 1 technician");
   }
   if (!std::isfinite(options.female_share) || options.female_share < 0.0 || options.female_share > 1.0) {
-    throw core::ConfigError({}, "--mix", std::to_string(options.female_share) +
-                                             ": expected the share of women, a number in [0, 1]");
+    throw core::ConfigError({}, "--mix",
+                            std::to_string(options.female_share) + ": expected the share of women, a number in [0, 1]");
   }
   validateSex(options.figures.men, "population.figures.men");
   validateSex(options.figures.women, "population.figures.women");
@@ -83,7 +88,8 @@ void validatePopulationOptions(const PopulationOptions& options) {
   }
   const double rs = options.figures.strength_size_correlation;
   if (!std::isfinite(rs) || rs <= -1.0 || rs >= 1.0) {
-    throw core::ConfigError({}, "population.figures.strength_size_correlation", std::to_string(rs) + ": expected -1 < r < 1");
+    throw core::ConfigError({}, "population.figures.strength_size_correlation",
+                            std::to_string(rs) + ": expected -1 < r < 1");
   }
 }
 

@@ -72,7 +72,8 @@ ShareInterval wilsonInterval(std::int64_t successes, std::int64_t trials, double
 ShareInterval clopperPearsonInterval(std::int64_t successes, std::int64_t trials, double confidence) {
   checkCounts(successes, trials, confidence);
   const double alpha2 = 0.5 * (1.0 - confidence);
-  ShareInterval s{successes, trials, static_cast<double>(successes) / static_cast<double>(trials), 0.0, 1.0, confidence};
+  ShareInterval s{successes, trials, static_cast<double>(successes) / static_cast<double>(trials),
+                  0.0,       1.0,    confidence};
   // P3: the Clopper-Pearson bounds from the binomial tails.
   // P(X >= x | p) increases with p: the lower bound is where it reaches alpha/2.
   if (successes > 0) {
@@ -99,9 +100,12 @@ ShareInterval clopperPearsonInterval(std::int64_t successes, std::int64_t trials
 
 const char* factorName(PopulationFactor factor) noexcept {
   switch (factor) {
-    case PopulationFactor::kUpperArm: return "upper arm";
-    case PopulationFactor::kForearm: return "forearm";
-    case PopulationFactor::kStrength: return "strength";
+    case PopulationFactor::kUpperArm:
+      return "upper arm";
+    case PopulationFactor::kForearm:
+      return "forearm";
+    case PopulationFactor::kStrength:
+      return "strength";
   }
   return "?";
 }

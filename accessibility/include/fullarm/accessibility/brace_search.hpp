@@ -40,13 +40,13 @@ struct BraceSearchOptions {
 
 /// Result of searchBracePosture().
 struct BraceSearchResult {
-  Eigen::VectorXd q_start_rad;  ///< the start configuration
-  PushAnalysis start;           ///< the push at the start
-  Eigen::VectorXd q_best_rad;   ///< the configuration with the largest braced push (the start if none beats it)
-  PushAnalysis best;            ///< the push there
-  int evaluations = 0;          ///< candidates evaluated
-  int rejected_contact = 0;     ///< candidates whose contact was not allowed (F_c or delta exceeded)
-  int rejected_limits = 0;      ///< self-motion steps stopped by a joint limit or the hand's tolerance
+  Eigen::VectorXd q_start_rad;    ///< the start configuration
+  PushAnalysis start;             ///< the push at the start
+  Eigen::VectorXd q_best_rad;     ///< the configuration with the largest braced push (the start if none beats it)
+  PushAnalysis best;              ///< the push there
+  int evaluations = 0;            ///< candidates evaluated
+  int rejected_contact = 0;       ///< candidates whose contact was not allowed (F_c or delta exceeded)
+  int rejected_limits = 0;        ///< self-motion steps stopped by a joint limit or the hand's tolerance
   double max_hand_error_m = 0.0;  ///< largest hand position error over the evaluated candidates [m]
   /// The best braced push [N]; NaN when no evaluated candidate had an optimal program.
   [[nodiscard]] double bestPush() const noexcept { return best.braced.push_n; }
@@ -60,10 +60,8 @@ struct BraceSearchResult {
 /// @throws std::invalid_argument for a `q_start` of the wrong size, outside the joint limits, or
 ///   a non-positive budget or step
 [[nodiscard]] BraceSearchResult searchBracePosture(const arm::ArmModel& model, const HumanArm& human,
-                                                   const haptics::CollisionWorld& world,
-                                                   haptics::GlobalSearch& search,
-                                                   const haptics::HapticsParams& params,
-                                                   const Eigen::VectorXd& q_start,
+                                                   const haptics::CollisionWorld& world, haptics::GlobalSearch& search,
+                                                   const haptics::HapticsParams& params, const Eigen::VectorXd& q_start,
                                                    const Eigen::Vector3d& push_direction_W,
                                                    const BraceSearchOptions& options = {});
 

@@ -35,15 +35,15 @@ namespace fullarm::accessibility {
 
 /// One contact of the arm with the structure.
 struct ForceContact {
-  Eigen::MatrixXd J_c;                            ///< linear point Jacobian, 3 x k (the program's joints)
-  Eigen::Vector3d n_W = Eigen::Vector3d::UnitX(); ///< unit normal from the link into the structure
-  int link = -1;                                  ///< arm-model link (for reports)
-  int minimum = -1;                               ///< index of the minimum it came from (for reports)
+  Eigen::MatrixXd J_c;                             ///< linear point Jacobian, 3 x k (the program's joints)
+  Eigen::Vector3d n_W = Eigen::Vector3d::UnitX();  ///< unit normal from the link into the structure
+  int link = -1;                                   ///< arm-model link (for reports)
+  int minimum = -1;                                ///< index of the minimum it came from (for reports)
 };
 
 /// The data of one program, over k joints (the person's joints).
 struct ForceProblem {
-  Eigen::MatrixXd J_hand;                                     ///< linear Jacobian of the hand point, 3 x k
+  Eigen::MatrixXd J_hand;                                       ///< linear Jacobian of the hand point, 3 x k
   Eigen::Vector3d push_direction_W = Eigen::Vector3d::UnitX();  ///< unit push direction d
   std::vector<ForceContact> contacts;
   Eigen::VectorXd gravity_nm;  ///< g_human(q) on the k joints [N m]
@@ -56,8 +56,8 @@ enum class LpAlgorithm { kDual, kPrimal };
 
 /// Options of the program.
 struct ForceLpOptions {
-  double friction_mu = 0.0;            ///< 0: frictionless contacts (normal force only); else the pyramid
-  double off_axis_force_max_n = 0.0;   ///< bound on each off-axis hand force component [N]; 0: f = s d
+  double friction_mu = 0.0;           ///< 0: frictionless contacts (normal force only); else the pyramid
+  double off_axis_force_max_n = 0.0;  ///< bound on each off-axis hand force component [N]; 0: f = s d
   LpAlgorithm algorithm = LpAlgorithm::kDual;
   /// Matrix entries at most this large are dropped before CLP sees them: rounding noise of the
   /// Jacobians, which CLP mishandles (an entry of 1e-17 made it report s = 0 as optimal).
@@ -83,7 +83,7 @@ struct ActiveLimit {
 
 /// Per contact at the optimum.
 struct ContactForce {
-  double normal_n = 0.0;                           ///< lambda_c: the push on the structure along n_c [N]
+  double normal_n = 0.0;                              ///< lambda_c: the push on the structure along n_c [N]
   Eigen::Vector3d force_W = Eigen::Vector3d::Zero();  ///< whole force of the arm on the structure [N]
 };
 
@@ -93,10 +93,10 @@ struct ForceLpResult {
   ForceStatus status = ForceStatus::kSolverFailed;
   double push_n = std::numeric_limits<double>::quiet_NaN();  ///< s* [N]
   Eigen::Vector3d hand_force_W = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-  Eigen::VectorXd tau_nm;            ///< muscle torques at the optimum [N m]
-  std::vector<ActiveLimit> active;   ///< the limits that bind, in joint order
+  Eigen::VectorXd tau_nm;           ///< muscle torques at the optimum [N m]
+  std::vector<ActiveLimit> active;  ///< the limits that bind, in joint order
   std::vector<ContactForce> contacts;
-  std::string message;               ///< CLP's status in words when not optimal
+  std::string message;  ///< CLP's status in words when not optimal
 };
 
 /// Tolerance on a torque for reporting a limit as active [N m].

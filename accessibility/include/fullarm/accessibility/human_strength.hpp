@@ -37,9 +37,9 @@ struct JointAction {
 
 /// The two actions of one joint.
 struct JointStrength {
-  int joint = -1;       ///< arm-model joint index
-  JointAction positive; ///< turns the joint toward +q
-  JointAction negative; ///< turns the joint toward -q
+  int joint = -1;        ///< arm-model joint index
+  JointAction positive;  ///< turns the joint toward +q
+  JointAction negative;  ///< turns the joint toward -q
 };
 
 /// Which stretch of the arm model a body segment lies along.
@@ -59,10 +59,10 @@ struct HumanSegment {
 
 /// The person's arm: strength and weight. Load with loadHumanArm().
 struct HumanArm {
-  std::filesystem::path source;        ///< file it was read from (empty if built in code)
+  std::filesystem::path source;  ///< file it was read from (empty if built in code)
   double body_mass_kg = 0.0;
-  double strength_scale = 1.0;         ///< multiplies every torque limit (a population draw)
-  std::vector<JointStrength> joints;   ///< the joints the person drives, in arm-model order
+  double strength_scale = 1.0;        ///< multiplies every torque limit (a population draw)
+  std::vector<JointStrength> joints;  ///< the joints the person drives, in arm-model order
   std::vector<HumanSegment> segments;
 
   /// Arm-model indices of `joints`, in order (the columns of the force program).

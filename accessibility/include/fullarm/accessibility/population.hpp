@@ -30,18 +30,18 @@ struct Percentiles {
 
 /// The figures of one sex.
 struct SexFigures {
-  Percentiles upper_arm;                  ///< acromion-radiale length
-  Percentiles forearm;                    ///< radiale-stylion length
+  Percentiles upper_arm;  ///< acromion-radiale length
+  Percentiles forearm;    ///< radiale-stylion length
   double upper_arm_forearm_correlation = 0.0;
-  double strength_median = 1.0;           ///< median strength_scale (1: the human arm file's men's figures)
+  double strength_median = 1.0;  ///< median strength_scale (1: the human arm file's men's figures)
 };
 
 /// What the population is drawn from.
 struct PopulationFigures {
   SexFigures men;
   SexFigures women;
-  double strength_cv = 0.25;                ///< coefficient of variation of strength within a sex
-  double strength_size_correlation = 0.3;   ///< of log strength with the arm-size score
+  double strength_cv = 0.25;               ///< coefficient of variation of strength within a sex
+  double strength_size_correlation = 0.3;  ///< of log strength with the arm-size score
 };
 
 /// The ANSUR II figures (men n = 4,082, women n = 1,986), the women's strength ratio 0.45 (the
@@ -51,9 +51,9 @@ struct PopulationFigures {
 
 /// Population options.
 struct PopulationOptions {
-  std::int64_t technicians = 1000;           ///< how many (>= 1)
-  double female_share = 0.5;                 ///< the mix: share of women in [0, 1]
-  std::uint64_t seed = 1;                    ///< the sweep's seed
+  std::int64_t technicians = 1000;  ///< how many (>= 1)
+  double female_share = 0.5;        ///< the mix: share of women in [0, 1]
+  std::uint64_t seed = 1;           ///< the sweep's seed
   PopulationFigures figures = ansur2Figures();
 };
 
@@ -65,18 +65,18 @@ void validatePopulationOptions(const PopulationOptions& options);
 
 /// One technician.
 struct Technician {
-  std::int64_t index = 0;         ///< sample number
+  std::int64_t index = 0;  ///< sample number
   bool female = false;
-  double upper_arm_m = 0.0;       ///< shoulder to elbow joint centre
-  double forearm_m = 0.0;         ///< elbow to wrist joint centre
-  double link_radius_scale = 1.0; ///< on every capsule radius of the arm model
-  double strength_scale = 1.0;    ///< on every torque limit of the human arm
+  double upper_arm_m = 0.0;        ///< shoulder to elbow joint centre
+  double forearm_m = 0.0;          ///< elbow to wrist joint centre
+  double link_radius_scale = 1.0;  ///< on every capsule radius of the arm model
+  double strength_scale = 1.0;     ///< on every torque limit of the human arm
 };
 
 /// Draws technician `index` from `rng` (the sample's own stream: core::RandomStream(seed,
 /// core::nameSlot("technicians"), index) in a population sweep). Five uniforms: one for the sex,
-/// two (Box-Muller) for the two length scores, two (Box-Muller, one normal used) for strength. The link radii scale with the geometric
-/// mean of the two length ratios to `nominal_upper_arm_m` and `nominal_forearm_m` (the arm model's
+/// two (Box-Muller) for the two length scores, two (Box-Muller, one normal used) for strength. The link radii scale
+/// with the geometric mean of the two length ratios to `nominal_upper_arm_m` and `nominal_forearm_m` (the arm model's
 /// own segments, whose capsules are taken as the girth of a person of that size).
 /// Options are not validated here (validatePopulationOptions). @rt
 [[nodiscard]] Technician drawTechnician(const PopulationOptions& options, std::int64_t index, core::RandomStream& rng,

@@ -18,7 +18,7 @@ namespace fullarm::accessibility {
 struct ShareInterval {
   std::int64_t successes = 0;
   std::int64_t trials = 0;
-  double share = 0.0;       ///< successes / trials
+  double share = 0.0;  ///< successes / trials
   double lower = 0.0;
   double upper = 1.0;
   double confidence = 0.95;
@@ -53,8 +53,8 @@ struct CriterionSummary {
   /// deviation): b_k, the change in log-odds per standard deviation of factor k. Zero when every
   /// technician succeeds or every one fails.
   std::array<double, kPopulationFactors> log_odds_per_sd{};
-  double intercept = 0.0;                  ///< b0
-  bool fit_separated = false;              ///< the factors separate successes from failures (b stopped by the penalty)
+  double intercept = 0.0;      ///< b0
+  bool fit_separated = false;  ///< the factors separate successes from failures (b stopped by the penalty)
   /// Failures split by their limiting factor: for each failed technician, the factor k with the
   /// most negative b_k x_k (the one that lowers that technician's odds most below a technician
   /// with the population's mean factors).
