@@ -24,8 +24,8 @@ fs::path sourceDir() {
 
 std::vector<fs::path> codeDirs(const fs::path& root) {
   std::vector<fs::path> dirs;
-  for (const char* d : {"core", "arm", "plant", "haptics", "controllers", "design", "identification", "accessibility",
-                        "reports", "apps", "tests"}) {
+  for (const char* d : {"core", "arm", "plant", "haptics", "controllers", "design", "identification", "hil",
+                        "accessibility", "mpi", "reports", "apps", "bench", "tests"}) {
     dirs.push_back(root / d);
   }
   return dirs;
