@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "scratch_dir.hpp"
+
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
@@ -74,11 +76,12 @@ inline std::vector<double> chartValues(const nlohmann::json& array) {
 // A fresh, empty folder for the running test.
 inline std::filesystem::path freshTempDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) /
-                              ("fullarm_reports_" + std::to_string(::getpid())) /
-                              (std::string(info->test_suite_name()) + "." + info->name());
+  const std::filesystem::path parent =
+      std::filesystem::path(::testing::TempDir()) / ("fullarm_reports_" + std::to_string(::getpid()));
+  std::filesystem::path dir = parent / (std::string(info->test_suite_name()) + "." + info->name());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  fullarm::test::ScratchRegistry::instance().add(parent);
   return dir;
 }
 
