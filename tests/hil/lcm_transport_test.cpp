@@ -136,7 +136,7 @@ TEST(LcmTransport, PublishedSetAndJointStatesArriveBitForBit) {
   ASSERT_NE(got, nullptr);
   expectSameSet(sent, *got);
   EXPECT_EQ(rx.takeMinimaSet(), nullptr);  // taken once
-  EXPECT_EQ(pub.counters().minima_fragments, 7u);  // ceil(64 / 10)
+  EXPECT_EQ(pub.counters().minima_fragments, 6u);  // ceil(64 / 11)
   EXPECT_LT(pub.counters().largest_fragment_bytes, kMaxFragmentBytes);
 
   // Five joint states drained at once: the newest is kept, the others count as accepted.
