@@ -7,6 +7,8 @@
 #include <exception>
 #include <string>
 
+#include <sys/prctl.h>
+
 #include "lcm_subscribe.hpp"
 
 namespace fullarm::hil {
@@ -154,7 +156,14 @@ bool LcmPublisher::pushValveCommand(const ValveCommandRecord& record) noexcept {
 
 bool LcmPublisher::pushMinimaSet(const MinimaSetRecord& record) noexcept {
   const bool ok = minima_sets_.tryPush(record);
-  if (ok) wakeIfAsleep();
+  if (!ok) return ok;
+  if (options_.wake_on_minima_set) {
+    // The thread waits on wake_ both idle and between polls: a release ends either wait now.
+    if (asleep_.exchange(false, std::memory_order_acq_rel)) increment(push_wakeups_);
+    wake();
+  } else {
+    wakeIfAsleep();
+  }
   return ok;
 }
 
@@ -223,6 +232,9 @@ bool LcmPublisher::ringsEmpty() const noexcept {
 }
 
 void LcmPublisher::run() {
+  // The kernel lets a timed wait of an ordinary thread end up to 50 µs late (its default timer
+  // slack), half the poll period again; this thread's waits end on time.
+  (void)::prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
   using Clock = std::chrono::steady_clock;
   const auto seconds = [](double s) {
     return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
@@ -246,8 +258,9 @@ void LcmPublisher::run() {
     const auto until = beat ? next_beat : now + period;
     if (options_.poll_period_s > 0.0 && now - last_record < poll_window) {
       // Records are coming: look again after one poll period, so that the pushing side never
-      // has to wake this thread (no system call on the real-time side).
-      std::this_thread::sleep_until(std::min(until, now + poll));
+      // has to wake this thread (no system call on the real-time side). A push that does wake
+      // it (wake_on_minima_set) ends the wait at once.
+      (void)wake_.try_acquire_until(std::min(until, now + poll));
       continue;
     }
     // Idle: block until a push wakes the thread (the first push after the pause pays one

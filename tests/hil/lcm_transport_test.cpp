@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <random>
 #include <thread>
 
@@ -386,6 +387,40 @@ TEST(LcmTransport, PushesAtTheLoopsPaceDoNotWakeThePublisherThread) {
   }
   EXPECT_EQ(blocking.counters().joint_states, 20u);
   EXPECT_GE(blocking.counters().push_wakeups, 10u);
+}
+
+// A set pushed while the publisher thread waits out a poll period goes out at that poll, unless
+// the publisher wakes on every set (the global node's setting): then it goes out at once.
+TEST(LcmTransport, WakeOnMinimaSetEndsThePollWait) {
+  lcm::LCM lcm("memq://");
+  using Clock = std::chrono::steady_clock;
+  const auto set = std::make_unique<MinimaSetRecord>(makeSet(1, 64));
+  for (const bool wake : {false, true}) {
+    LcmPublisherOptions options = publisherOptions(NodeKind::kGlobal, 0.0);
+    options.poll_period_s = 0.6;  // far longer than any wake-up, even on a loaded machine
+    options.poll_window_s = 10.0;
+    options.wake_on_minima_set = wake;
+    LcmPublisher pub(lcm, options);
+    ASSERT_TRUE(pub.pushJointState(makeJointState(1)));
+    pub.flush();  // a record went out: the thread now polls
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // flush's extra wakes are spent
+    const std::uint64_t wakeups_before = pub.counters().push_wakeups;
+    const auto pushed = Clock::now();
+    ASSERT_TRUE(pub.pushMinimaSet(*set));
+    const auto deadline = pushed + std::chrono::milliseconds(300);
+    while (pub.counters().minima_sets == 0 && Clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    if (wake) {
+      EXPECT_EQ(pub.counters().minima_sets, 1u) << "the push did not end the poll wait";
+    } else {
+      EXPECT_EQ(pub.counters().minima_sets, 0u) << "sent before the poll period ended";
+      EXPECT_EQ(pub.counters().push_wakeups, wakeups_before);  // no system call on the pushing side
+    }
+    pub.flush();
+    EXPECT_EQ(pub.counters().minima_sets, 1u);
+    EXPECT_EQ(pub.counters().minima_fragments, static_cast<std::uint64_t>(fragmentCount(64)));
+  }
 }
 
 }  // namespace

@@ -7,8 +7,9 @@
 /// **Publishing off the real-time path.** The tick (or the search) pushes fixed-size records
 /// into SpscRings (`LcmPublisher::pushJointState` and friends, @rt: no lock, no allocation, and
 /// no system call while records keep coming: the publisher thread then polls its rings every
-/// poll_period_s; only the first push after an idle pause wakes it, one futex wake); the publisher thread
-/// turns them into LCM messages, encodes and sends them, and sends the node's heartbeat at a
+/// poll_period_s, with a timer slack of 1 ns so that a poll period is not stretched by the
+/// kernel's default 50 µs; only the first push after an idle pause wakes it, one futex wake); the
+/// publisher thread turns them into LCM messages, encodes and sends them, and sends the node's heartbeat at a
 /// fixed period. A minima set travels as fragments of at most kMaxMinimaPerFragment minima
 /// (toFragment), each under 1,400 bytes so the kernel never splits a datagram at the IP level
 /// (one lost IP fragment loses the datagram), each with its own sequence number.
@@ -171,6 +172,10 @@ struct LcmPublisherOptions {
   /// blocks and the first push wakes it. <= 0: always block (every push may wake the thread).
   double poll_period_s = 100e-6;
   double poll_window_s = 0.05;  ///< see poll_period_s
+  /// Every pushMinimaSet wakes the thread at once (one futex wake, a system call on the pushing
+  /// thread), so a set does not wait for the next poll. For a producer off the real-time path
+  /// (the global node's search); false keeps pushMinimaSet free of system calls while polling.
+  bool wake_on_minima_set = false;
   /// Fault injection: called by the publisher thread with each message's channel and its
   /// sequence number (the fragment's for a minima set); true drops the message unsent
   /// (counted in `injected_drops`). Empty: nothing is dropped.
@@ -207,7 +212,8 @@ class LcmPublisher {
   bool pushJointState(const JointStateRecord& record) noexcept;
   /// Queues a valve command; false (counted) if the ring is full. @rt
   bool pushValveCommand(const ValveCommandRecord& record) noexcept;
-  /// Queues a minima set (sent as fragments); false (counted) if the ring is full. @rt
+  /// Queues a minima set (sent as fragments, back to back); false (counted) if the ring is
+  /// full. @rt unless `wake_on_minima_set` (then one futex wake per set).
   bool pushMinimaSet(const MinimaSetRecord& record) noexcept;
   /// The tick and safe-output state the next heartbeats report. A heartbeat goes out only
   /// after everything pushed before this call. @rt
@@ -258,7 +264,7 @@ struct LcmReceiverOptions {
   bool minima_set = false;
   bool heartbeat = false;
   /// Messages LCM queues per channel between two drains; beyond it LCM drops new ones. Large
-  /// enough for a 128-minima set's 13 fragments several times over.
+  /// enough for a 128-minima set's 12 fragments several times over.
   int queue_capacity = 256;
 };
 
