@@ -389,38 +389,60 @@ TEST(LcmTransport, PushesAtTheLoopsPaceDoNotWakeThePublisherThread) {
   EXPECT_GE(blocking.counters().push_wakeups, 10u);
 }
 
-// A set pushed while the publisher thread waits out a poll period goes out at that poll, unless
-// the publisher wakes on every set (the global node's setting): then it goes out at once.
-TEST(LcmTransport, WakeOnMinimaSetEndsThePollWait) {
+// A set pushed while the publisher thread waits out a poll period goes out at that poll; a
+// publisher that sends sets inline (the global node's setting) has sent every fragment when the
+// push returns, in the same order and numbering, and with the same drop hook.
+TEST(LcmTransport, InlineMinimaSetsAreSentBeforeThePushReturns) {
   lcm::LCM lcm("memq://");
-  using Clock = std::chrono::steady_clock;
+  ASSERT_TRUE(lcm.good());
+  LcmReceiver rx(lcm, {.minima_set = true});
   const auto set = std::make_unique<MinimaSetRecord>(makeSet(1, 64));
-  for (const bool wake : {false, true}) {
+  const auto k = static_cast<std::uint64_t>(fragmentCount(64));
+  {
     LcmPublisherOptions options = publisherOptions(NodeKind::kGlobal, 0.0);
     options.poll_period_s = 0.6;  // far longer than any wake-up, even on a loaded machine
     options.poll_window_s = 10.0;
-    options.wake_on_minima_set = wake;
     LcmPublisher pub(lcm, options);
     ASSERT_TRUE(pub.pushJointState(makeJointState(1)));
     pub.flush();  // a record went out: the thread now polls
     std::this_thread::sleep_for(std::chrono::milliseconds(50));  // flush's extra wakes are spent
     const std::uint64_t wakeups_before = pub.counters().push_wakeups;
-    const auto pushed = Clock::now();
     ASSERT_TRUE(pub.pushMinimaSet(*set));
-    const auto deadline = pushed + std::chrono::milliseconds(300);
-    while (pub.counters().minima_sets == 0 && Clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    }
-    if (wake) {
-      EXPECT_EQ(pub.counters().minima_sets, 1u) << "the push did not end the poll wait";
-    } else {
-      EXPECT_EQ(pub.counters().minima_sets, 0u) << "sent before the poll period ended";
-      EXPECT_EQ(pub.counters().push_wakeups, wakeups_before);  // no system call on the pushing side
-    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    EXPECT_EQ(pub.counters().minima_sets, 0u) << "sent before the poll period ended";
+    EXPECT_EQ(pub.counters().push_wakeups, wakeups_before);  // no system call on the pushing side
     pub.flush();
-    EXPECT_EQ(pub.counters().minima_sets, 1u);
-    EXPECT_EQ(pub.counters().minima_fragments, static_cast<std::uint64_t>(fragmentCount(64)));
+    EXPECT_EQ(pub.counters().minima_fragments, k);
   }
+  (void)rx.drain();
+  ASSERT_NE(rx.takeMinimaSet(), nullptr);
+
+  LcmPublisherOptions options = publisherOptions(NodeKind::kGlobal, 0.05);  // heartbeats beside
+  options.send_minima_sets_inline = true;
+  std::vector<std::int64_t> seen;
+  options.drop = [&](std::string_view channel, std::int64_t seq) {
+    if (channel == channel::kMinimaSet) seen.push_back(seq);
+    return channel == channel::kMinimaSet && seq == static_cast<std::int64_t>(k) + 1;  // the second set loses one
+  };
+  LcmPublisher pub(lcm, options);
+  for (int id = 2; id <= 4; ++id) {
+    MinimaSetRecord s = makeSet(id, 64);
+    ASSERT_TRUE(pub.pushMinimaSet(s));
+    EXPECT_EQ(pub.counters().minima_sets, static_cast<std::uint64_t>(id - 1));  // already sent
+    (void)rx.drain();
+    const MinimaSetRecord* got = rx.takeMinimaSet();
+    if (id == 3) {
+      EXPECT_EQ(got, nullptr);
+      continue;
+    }
+    ASSERT_NE(got, nullptr);
+    expectSameSet(s, *got);
+  }
+  EXPECT_EQ(pub.counters().minima_fragments, 3 * k - 1);
+  EXPECT_EQ(pub.counters().injected_drops, 1u);
+  pub.stop();
+  ASSERT_EQ(seen.size(), 3 * k);
+  for (std::size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], static_cast<std::int64_t>(i));
 }
 
 }  // namespace

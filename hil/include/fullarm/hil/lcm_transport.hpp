@@ -35,6 +35,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <semaphore>
 #include <span>
 #include <string_view>
@@ -172,12 +173,14 @@ struct LcmPublisherOptions {
   /// blocks and the first push wakes it. <= 0: always block (every push may wake the thread).
   double poll_period_s = 100e-6;
   double poll_window_s = 0.05;  ///< see poll_period_s
-  /// Every pushMinimaSet wakes the thread at once (one futex wake, a system call on the pushing
-  /// thread), so a set does not wait for the next poll. For a producer off the real-time path
-  /// (the global node's search); false keeps pushMinimaSet free of system calls while polling.
-  bool wake_on_minima_set = false;
-  /// Fault injection: called by the publisher thread with each message's channel and its
-  /// sequence number (the fragment's for a minima set); true drops the message unsent
+  /// pushMinimaSet encodes the set's fragments and publishes them on the calling thread, back to
+  /// back, before it returns (allocates, locks, makes system calls): a set skips the hand-over to
+  /// the publisher thread (its wake-up or poll, and that thread's scheduling while it sends). For
+  /// a producer off the real-time path (the global node's search); false keeps pushMinimaSet @rt.
+  bool send_minima_sets_inline = false;
+  /// Fault injection: called with each message's channel and its sequence number (the
+  /// fragment's for a minima set) just before it is sent, by the publisher thread or, for a set
+  /// sent inline, by the pushing thread (never by both at once); true drops the message unsent
   /// (counted in `injected_drops`). Empty: nothing is dropped.
   std::function<bool(std::string_view channel, std::int64_t seq)> drop;
 };
@@ -213,7 +216,8 @@ class LcmPublisher {
   /// Queues a valve command; false (counted) if the ring is full. @rt
   bool pushValveCommand(const ValveCommandRecord& record) noexcept;
   /// Queues a minima set (sent as fragments, back to back); false (counted) if the ring is
-  /// full. @rt unless `wake_on_minima_set` (then one futex wake per set).
+  /// full. @rt, unless `send_minima_sets_inline`: then it sends the set itself (false if it
+  /// could not be encoded).
   bool pushMinimaSet(const MinimaSetRecord& record) noexcept;
   /// The tick and safe-output state the next heartbeats report. A heartbeat goes out only
   /// after everything pushed before this call. @rt
@@ -232,9 +236,13 @@ class LcmPublisher {
   void wake() noexcept;
   void wakeIfAsleep() noexcept;
   [[nodiscard]] bool ringsEmpty() const noexcept;
+  /// Sends what the rings hold; true if it sent anything. Under send_mutex_.
   bool sendQueued();
+  /// Sends one set's fragments, back to back. Under send_mutex_.
+  void sendSet(const MinimaSetRecord& set);
   void sendHeartbeat();
-  void publishBytes(const char* channel, std::int64_t seq, std::atomic<std::uint64_t>& sent);
+  void publishBytes(const char* channel, const std::vector<std::uint8_t>& bytes, std::int64_t seq,
+                    std::atomic<std::uint64_t>& sent);
 
   lcm::LCM& lcm_;
   LcmPublisherOptions options_;
@@ -246,9 +254,13 @@ class LcmPublisher {
   std::atomic<bool> asleep_{false};  ///< the thread blocks on wake_: a push must wake it
   std::atomic<std::int64_t> node_tick_{-1};
   std::atomic<bool> node_safe_{false};
-  std::vector<std::uint8_t> buffer_;  ///< publisher thread only
-  std::int64_t fragment_seq_ = 0;     ///< publisher thread only
-  std::int64_t heartbeat_seq_ = 0;    ///< publisher thread only
+  /// Held while sending: by the publisher thread, and by a pushing thread that sends its sets
+  /// inline. It guards the buffers, the sequence numbers, the counters' writes and `drop`.
+  std::mutex send_mutex_;
+  std::vector<std::uint8_t> buffer_;
+  std::vector<std::vector<std::uint8_t>> fragment_buffers_;  ///< one per fragment of a set
+  std::int64_t fragment_seq_ = 0;
+  std::int64_t heartbeat_seq_ = 0;
   std::atomic<std::uint64_t> joint_states_sent_{0}, valve_commands_sent_{0}, minima_sets_sent_{0},
       minima_fragments_sent_{0}, heartbeats_sent_{0}, send_errors_{0}, injected_drops_{0}, push_wakeups_{0};
   std::atomic<std::size_t> largest_fragment_bytes_{0};
