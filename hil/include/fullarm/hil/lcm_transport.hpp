@@ -10,7 +10,9 @@
 /// poll_period_s, with a timer slack of 1 ns so that a poll period is not stretched by the
 /// kernel's default 50 µs; only the first push after an idle pause wakes it, one futex wake); the
 /// publisher thread turns them into LCM messages, encodes and sends them, and sends the node's heartbeat at a
-/// fixed period. A minima set travels as fragments of at most kMaxMinimaPerFragment minima
+/// fixed period. A producer off the real-time path (the global node) may send its minima sets
+/// itself instead (LcmPublisherOptions::send_minima_sets_inline), which spares a set the hand-over
+/// to the publisher thread. A minima set travels as fragments of at most kMaxMinimaPerFragment minima
 /// (toFragment), each under 1,400 bytes so the kernel never splits a datagram at the IP level
 /// (one lost IP fragment loses the datagram), each with its own sequence number.
 ///
