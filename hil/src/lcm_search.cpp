@@ -176,6 +176,7 @@ GlobalNodeResult LcmGlobalNode::serve(const std::function<bool()>& stop) {
   po.node = NodeKind::kGlobal;
   po.heartbeat_period_s = options_.heartbeat_period_s;
   po.drop = options_.drop;
+  po.send_minima_sets_inline = true;  // the search is not the real-time loop: its sets go out at once
   LcmPublisher publisher(node.tx, po);
   log("serving the global search on " + options_.url);
 

@@ -5,7 +5,10 @@
 #include <climits>
 #include <cmath>
 #include <exception>
+#include <mutex>
 #include <string>
+
+#include <sys/prctl.h>
 
 #include "lcm_subscribe.hpp"
 
@@ -118,7 +121,8 @@ LcmPublisher::LcmPublisher(lcm::LCM& lcm, LcmPublisherOptions options)
       options_(std::move(options)),
       joint_states_(options_.joint_state_capacity),
       valve_commands_(options_.valve_command_capacity),
-      minima_sets_(options_.minima_set_capacity) {
+      minima_sets_(options_.minima_set_capacity),
+      fragment_buffers_(static_cast<std::size_t>(fragmentCount(kMaxMinimaPerSet))) {
   thread_ = std::thread([this] { run(); });
 }
 
@@ -153,6 +157,15 @@ bool LcmPublisher::pushValveCommand(const ValveCommandRecord& record) noexcept {
 }
 
 bool LcmPublisher::pushMinimaSet(const MinimaSetRecord& record) noexcept {
+  if (options_.send_minima_sets_inline) {
+    try {
+      const std::lock_guard lock(send_mutex_);
+      sendSet(record);
+    } catch (const std::exception&) {
+      return false;  // could not encode (an allocation failed)
+    }
+    return true;
+  }
   const bool ok = minima_sets_.tryPush(record);
   if (ok) wakeIfAsleep();
   return ok;
@@ -163,12 +176,13 @@ void LcmPublisher::setNodeState(std::int64_t tick, bool safe_output) noexcept {
   node_tick_.store(tick, std::memory_order_release);
 }
 
-void LcmPublisher::publishBytes(const char* channel, std::int64_t seq, std::atomic<std::uint64_t>& sent) {
+void LcmPublisher::publishBytes(const char* channel, const std::vector<std::uint8_t>& bytes, std::int64_t seq,
+                                std::atomic<std::uint64_t>& sent) {
   if (options_.drop && options_.drop(channel, seq)) {
     increment(injected_drops_);
     return;
   }
-  if (lcm_.publish(channel, buffer_.data(), static_cast<unsigned int>(buffer_.size())) != 0) {
+  if (lcm_.publish(channel, bytes.data(), static_cast<unsigned int>(bytes.size())) != 0) {
     increment(send_errors_);
     return;
   }
@@ -179,24 +193,32 @@ bool LcmPublisher::sendQueued() {
   std::size_t n = 0;
   n += joint_states_.consumeAll([this](const JointStateRecord& r) {
     encodeMessage(toMessage(r), buffer_);
-    publishBytes(channel::kJointState, r.seq, joint_states_sent_);
+    publishBytes(channel::kJointState, buffer_, r.seq, joint_states_sent_);
   });
   n += valve_commands_.consumeAll([this](const ValveCommandRecord& r) {
     encodeMessage(toMessage(r), buffer_);
-    publishBytes(channel::kValveCommand, r.seq, valve_commands_sent_);
+    publishBytes(channel::kValveCommand, buffer_, r.seq, valve_commands_sent_);
   });
-  n += minima_sets_.consumeAll([this](const MinimaSetRecord& set) {
-    const int count = fragmentCount(set.num_minima);
-    for (int i = 0; i < count; ++i) {
-      encodeMessage(toFragment(set, i, fragment_seq_), buffer_);
-      if (buffer_.size() > largest_fragment_bytes_.load(std::memory_order_relaxed)) {
-        largest_fragment_bytes_.store(buffer_.size(), std::memory_order_relaxed);
-      }
-      publishBytes(channel::kMinimaSet, fragment_seq_++, minima_fragments_sent_);
-    }
-    increment(minima_sets_sent_);
-  });
+  n += minima_sets_.consumeAll([this](const MinimaSetRecord& set) { sendSet(set); });
   return n > 0;
+}
+
+void LcmPublisher::sendSet(const MinimaSetRecord& set) {
+  // Every fragment is encoded first, then they go out back to back: the datagrams of a set
+  // follow each other with nothing but the send calls between them.
+  const int count = fragmentCount(set.num_minima);
+  for (int i = 0; i < count; ++i) {
+    std::vector<std::uint8_t>& bytes = fragment_buffers_[static_cast<std::size_t>(i)];
+    encodeMessage(toFragment(set, i, fragment_seq_ + i), bytes);
+    if (bytes.size() > largest_fragment_bytes_.load(std::memory_order_relaxed)) {
+      largest_fragment_bytes_.store(bytes.size(), std::memory_order_relaxed);
+    }
+  }
+  for (int i = 0; i < count; ++i) {
+    const std::vector<std::uint8_t>& bytes = fragment_buffers_[static_cast<std::size_t>(i)];
+    publishBytes(channel::kMinimaSet, bytes, fragment_seq_++, minima_fragments_sent_);
+  }
+  increment(minima_sets_sent_);
 }
 
 void LcmPublisher::sendHeartbeat() {
@@ -214,7 +236,7 @@ void LcmPublisher::sendHeartbeat() {
   h.tick = tick;
   h.safe_output = safe;
   encodeMessage(toMessage(h), buffer_);
-  publishBytes(channel::kHeartbeat, heartbeat_seq_++, heartbeats_sent_);
+  publishBytes(channel::kHeartbeat, buffer_, heartbeat_seq_++, heartbeats_sent_);
 }
 
 bool LcmPublisher::ringsEmpty() const noexcept {
@@ -223,6 +245,9 @@ bool LcmPublisher::ringsEmpty() const noexcept {
 }
 
 void LcmPublisher::run() {
+  // The kernel lets a timed wait of an ordinary thread end up to 50 µs late (its default timer
+  // slack), half the poll period again; this thread's waits end on time.
+  (void)::prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
   using Clock = std::chrono::steady_clock;
   const auto seconds = [](double s) {
     return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
@@ -235,19 +260,22 @@ void LcmPublisher::run() {
   auto last_record = Clock::now() - poll_window;
   for (;;) {
     const bool stopping = stop_.load(std::memory_order_acquire);
+    std::unique_lock lock(send_mutex_);  // a set sent inline by its pushing thread sends too
     if (sendQueued()) last_record = Clock::now();
     if (beat && Clock::now() >= next_beat) {
       sendHeartbeat();
       next_beat += period;
       if (next_beat < Clock::now()) next_beat = Clock::now() + period;  // no burst after a stall
     }
+    lock.unlock();
     if (stopping) break;
     const auto now = Clock::now();
     const auto until = beat ? next_beat : now + period;
     if (options_.poll_period_s > 0.0 && now - last_record < poll_window) {
       // Records are coming: look again after one poll period, so that the pushing side never
-      // has to wake this thread (no system call on the real-time side).
-      std::this_thread::sleep_until(std::min(until, now + poll));
+      // has to wake this thread (no system call on the real-time side); flush() and stop() end
+      // the wait early.
+      (void)wake_.try_acquire_until(std::min(until, now + poll));
       continue;
     }
     // Idle: block until a push wakes the thread (the first push after the pause pays one
@@ -256,6 +284,7 @@ void LcmPublisher::run() {
     if (ringsEmpty()) (void)wake_.try_acquire_until(until);
     asleep_.store(false, std::memory_order_relaxed);
   }
+  const std::lock_guard lock(send_mutex_);
   sendQueued();
 }
 

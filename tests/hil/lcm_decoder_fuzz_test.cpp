@@ -221,7 +221,7 @@ TEST(LcmDecoderFuzz, CountsBeyondTheirBoundsOrNegativeAreRejected) {
   // minima_set_t: num_minima (int16) right after q_rad; a negative count is never valid.
   Bytes f = fragmentBytes();
   const std::size_t num_minima_at = 8 + 8 * 3 + 2 * 5 + 8 * 3 + 1 + 8 * 7;
-  ASSERT_EQ(f[num_minima_at + 1], 10);  // the fragment carries 10 minima
+  ASSERT_EQ(f[num_minima_at + 1], kMaxMinimaPerFragment);  // the fragment is full
   f[num_minima_at] = 0xFF;
   f[num_minima_at + 1] = 0xFF;
   EXPECT_NE(cases()[3].decode(f), DecodeStatus::kOk);

@@ -95,6 +95,11 @@ struct GlobalThread {
     stop = true;
     if (thread.joinable()) thread.join();
   }
+  /// Waits for the node to stop by itself (idle_exit_s after its last query), so that every
+  /// query it received has been answered.
+  void joinWhenIdle() {
+    if (thread.joinable()) thread.join();
+  }
   HilSession session;
   GlobalSearchRunner search;
   LcmGlobalNode node;
@@ -112,6 +117,11 @@ struct SessionPlantThread {
   ~SessionPlantThread() { join(); }
   void join() {
     stop = true;
+    if (thread.joinable()) thread.join();
+  }
+  /// Waits for the node to stop by itself (idle_exit_s after its last query), so that every
+  /// query it received has been answered.
+  void joinWhenIdle() {
     if (thread.joinable()) thread.join();
   }
   HilSession session;
@@ -270,12 +280,16 @@ TEST_F(LcmIo, MinimaFragmentsDroppedAreSetsNotAdoptedAndTheRunStaysSafe) {
 TEST_F(LcmIo, TwoLockstepRunsInARowAreBothServedByOneGlobalNode) {
   RunOptions local = holdAtTheWheel(0.6);
   const RunResult in_process = runHil(local);
-  GlobalThread global(local, globalOptions());
+  GlobalNodeOptions go = globalOptions();
+  // A run's last queries are for sets due after its end, which it does not wait for: the node
+  // stops by itself once idle, after answering them, rather than when the second run ends.
+  go.idle_exit_s = 1.0;
+  GlobalThread global(local, go);
   RunOptions remote = local;
   remote.search_url = kUrl;
   const RunResult first = runHil(remote);
   const RunResult second = runHil(remote);
-  global.join();
+  global.joinWhenIdle();
   EXPECT_EQ(global.result.queries, 2 * in_process.sets.size());
   EXPECT_EQ(global.result.stale, 0u);
   bool restart_logged = false;
@@ -386,6 +400,11 @@ struct PlantThread {
   ~PlantThread() { join(); }
   void join() {
     stop = true;
+    if (thread.joinable()) thread.join();
+  }
+  /// Waits for the node to stop by itself (idle_exit_s after its last query), so that every
+  /// query it received has been answered.
+  void joinWhenIdle() {
     if (thread.joinable()) thread.join();
   }
   std::unique_ptr<SimulatedArm> arm;

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <random>
 #include <thread>
 
@@ -136,7 +137,7 @@ TEST(LcmTransport, PublishedSetAndJointStatesArriveBitForBit) {
   ASSERT_NE(got, nullptr);
   expectSameSet(sent, *got);
   EXPECT_EQ(rx.takeMinimaSet(), nullptr);  // taken once
-  EXPECT_EQ(pub.counters().minima_fragments, 7u);  // ceil(64 / 10)
+  EXPECT_EQ(pub.counters().minima_fragments, 6u);  // ceil(64 / 11)
   EXPECT_LT(pub.counters().largest_fragment_bytes, kMaxFragmentBytes);
 
   // Five joint states drained at once: the newest is kept, the others count as accepted.
@@ -386,6 +387,62 @@ TEST(LcmTransport, PushesAtTheLoopsPaceDoNotWakeThePublisherThread) {
   }
   EXPECT_EQ(blocking.counters().joint_states, 20u);
   EXPECT_GE(blocking.counters().push_wakeups, 10u);
+}
+
+// A set pushed while the publisher thread waits out a poll period goes out at that poll; a
+// publisher that sends sets inline (the global node's setting) has sent every fragment when the
+// push returns, in the same order and numbering, and with the same drop hook.
+TEST(LcmTransport, InlineMinimaSetsAreSentBeforeThePushReturns) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  LcmReceiver rx(lcm, {.minima_set = true});
+  const auto set = std::make_unique<MinimaSetRecord>(makeSet(1, 64));
+  const auto k = static_cast<std::uint64_t>(fragmentCount(64));
+  {
+    LcmPublisherOptions options = publisherOptions(NodeKind::kGlobal, 0.0);
+    options.poll_period_s = 0.6;  // far longer than any wake-up, even on a loaded machine
+    options.poll_window_s = 10.0;
+    LcmPublisher pub(lcm, options);
+    ASSERT_TRUE(pub.pushJointState(makeJointState(1)));
+    pub.flush();  // a record went out: the thread now polls
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // flush's extra wakes are spent
+    const std::uint64_t wakeups_before = pub.counters().push_wakeups;
+    ASSERT_TRUE(pub.pushMinimaSet(*set));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    EXPECT_EQ(pub.counters().minima_sets, 0u) << "sent before the poll period ended";
+    EXPECT_EQ(pub.counters().push_wakeups, wakeups_before);  // no system call on the pushing side
+    pub.flush();
+    EXPECT_EQ(pub.counters().minima_fragments, k);
+  }
+  (void)rx.drain();
+  ASSERT_NE(rx.takeMinimaSet(), nullptr);
+
+  LcmPublisherOptions options = publisherOptions(NodeKind::kGlobal, 0.05);  // heartbeats beside
+  options.send_minima_sets_inline = true;
+  std::vector<std::int64_t> seen;
+  options.drop = [&](std::string_view channel, std::int64_t seq) {
+    if (channel == channel::kMinimaSet) seen.push_back(seq);
+    return channel == channel::kMinimaSet && seq == static_cast<std::int64_t>(k) + 1;  // the second set loses one
+  };
+  LcmPublisher pub(lcm, options);
+  for (int id = 2; id <= 4; ++id) {
+    MinimaSetRecord s = makeSet(id, 64);
+    ASSERT_TRUE(pub.pushMinimaSet(s));
+    EXPECT_EQ(pub.counters().minima_sets, static_cast<std::uint64_t>(id - 1));  // already sent
+    (void)rx.drain();
+    const MinimaSetRecord* got = rx.takeMinimaSet();
+    if (id == 3) {
+      EXPECT_EQ(got, nullptr);
+      continue;
+    }
+    ASSERT_NE(got, nullptr);
+    expectSameSet(s, *got);
+  }
+  EXPECT_EQ(pub.counters().minima_fragments, 3 * k - 1);
+  EXPECT_EQ(pub.counters().injected_drops, 1u);
+  pub.stop();
+  ASSERT_EQ(seen.size(), 3 * k);
+  for (std::size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], static_cast<std::int64_t>(i));
 }
 
 }  // namespace

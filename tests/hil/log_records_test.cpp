@@ -220,7 +220,7 @@ TEST(LogRecords, AFullFragmentFitsOneDatagram) {
   set.num_joints = kMaxRecordJoints;
   const fullarm_lcm::minima_set_t f = toFragment(set, 0, 0);
   EXPECT_EQ(f.num_minima, kMaxMinimaPerFragment);
-  EXPECT_EQ(f.getEncodedSize(), 1249);
+  EXPECT_EQ(f.getEncodedSize(), 1359);
   // On the wire LCM adds its short-message header (8 bytes) and the channel with its NUL.
   const int datagram = f.getEncodedSize() + 8 + static_cast<int>(std::strlen(channel::kMinimaSet)) + 1;
   EXPECT_LT(datagram, 1400);

@@ -7,9 +7,12 @@
 /// **Publishing off the real-time path.** The tick (or the search) pushes fixed-size records
 /// into SpscRings (`LcmPublisher::pushJointState` and friends, @rt: no lock, no allocation, and
 /// no system call while records keep coming: the publisher thread then polls its rings every
-/// poll_period_s; only the first push after an idle pause wakes it, one futex wake); the publisher thread
-/// turns them into LCM messages, encodes and sends them, and sends the node's heartbeat at a
-/// fixed period. A minima set travels as fragments of at most kMaxMinimaPerFragment minima
+/// poll_period_s, with a timer slack of 1 ns so that a poll period is not stretched by the
+/// kernel's default 50 µs; only the first push after an idle pause wakes it, one futex wake); the
+/// publisher thread turns them into LCM messages, encodes and sends them, and sends the node's heartbeat at a
+/// fixed period. A producer off the real-time path (the global node) may send its minima sets
+/// itself instead (LcmPublisherOptions::send_minima_sets_inline), which spares a set the hand-over
+/// to the publisher thread. A minima set travels as fragments of at most kMaxMinimaPerFragment minima
 /// (toFragment), each under 1,400 bytes so the kernel never splits a datagram at the IP level
 /// (one lost IP fragment loses the datagram), each with its own sequence number.
 ///
@@ -34,6 +37,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <semaphore>
 #include <span>
 #include <string_view>
@@ -171,8 +175,14 @@ struct LcmPublisherOptions {
   /// blocks and the first push wakes it. <= 0: always block (every push may wake the thread).
   double poll_period_s = 100e-6;
   double poll_window_s = 0.05;  ///< see poll_period_s
-  /// Fault injection: called by the publisher thread with each message's channel and its
-  /// sequence number (the fragment's for a minima set); true drops the message unsent
+  /// pushMinimaSet encodes the set's fragments and publishes them on the calling thread, back to
+  /// back, before it returns (allocates, locks, makes system calls): a set skips the hand-over to
+  /// the publisher thread (its wake-up or poll, and that thread's scheduling while it sends). For
+  /// a producer off the real-time path (the global node's search); false keeps pushMinimaSet @rt.
+  bool send_minima_sets_inline = false;
+  /// Fault injection: called with each message's channel and its sequence number (the
+  /// fragment's for a minima set) just before it is sent, by the publisher thread or, for a set
+  /// sent inline, by the pushing thread (never by both at once); true drops the message unsent
   /// (counted in `injected_drops`). Empty: nothing is dropped.
   std::function<bool(std::string_view channel, std::int64_t seq)> drop;
 };
@@ -207,7 +217,9 @@ class LcmPublisher {
   bool pushJointState(const JointStateRecord& record) noexcept;
   /// Queues a valve command; false (counted) if the ring is full. @rt
   bool pushValveCommand(const ValveCommandRecord& record) noexcept;
-  /// Queues a minima set (sent as fragments); false (counted) if the ring is full. @rt
+  /// Queues a minima set (sent as fragments, back to back); false (counted) if the ring is
+  /// full. @rt, unless `send_minima_sets_inline`: then it sends the set itself (false if it
+  /// could not be encoded).
   bool pushMinimaSet(const MinimaSetRecord& record) noexcept;
   /// The tick and safe-output state the next heartbeats report. A heartbeat goes out only
   /// after everything pushed before this call. @rt
@@ -226,9 +238,13 @@ class LcmPublisher {
   void wake() noexcept;
   void wakeIfAsleep() noexcept;
   [[nodiscard]] bool ringsEmpty() const noexcept;
+  /// Sends what the rings hold; true if it sent anything. Under send_mutex_.
   bool sendQueued();
+  /// Sends one set's fragments, back to back. Under send_mutex_.
+  void sendSet(const MinimaSetRecord& set);
   void sendHeartbeat();
-  void publishBytes(const char* channel, std::int64_t seq, std::atomic<std::uint64_t>& sent);
+  void publishBytes(const char* channel, const std::vector<std::uint8_t>& bytes, std::int64_t seq,
+                    std::atomic<std::uint64_t>& sent);
 
   lcm::LCM& lcm_;
   LcmPublisherOptions options_;
@@ -240,9 +256,13 @@ class LcmPublisher {
   std::atomic<bool> asleep_{false};  ///< the thread blocks on wake_: a push must wake it
   std::atomic<std::int64_t> node_tick_{-1};
   std::atomic<bool> node_safe_{false};
-  std::vector<std::uint8_t> buffer_;  ///< publisher thread only
-  std::int64_t fragment_seq_ = 0;     ///< publisher thread only
-  std::int64_t heartbeat_seq_ = 0;    ///< publisher thread only
+  /// Held while sending: by the publisher thread, and by a pushing thread that sends its sets
+  /// inline. It guards the buffers, the sequence numbers, the counters' writes and `drop`.
+  std::mutex send_mutex_;
+  std::vector<std::uint8_t> buffer_;
+  std::vector<std::vector<std::uint8_t>> fragment_buffers_;  ///< one per fragment of a set
+  std::int64_t fragment_seq_ = 0;
+  std::int64_t heartbeat_seq_ = 0;
   std::atomic<std::uint64_t> joint_states_sent_{0}, valve_commands_sent_{0}, minima_sets_sent_{0},
       minima_fragments_sent_{0}, heartbeats_sent_{0}, send_errors_{0}, injected_drops_{0}, push_wakeups_{0};
   std::atomic<std::size_t> largest_fragment_bytes_{0};
@@ -258,7 +278,7 @@ struct LcmReceiverOptions {
   bool minima_set = false;
   bool heartbeat = false;
   /// Messages LCM queues per channel between two drains; beyond it LCM drops new ones. Large
-  /// enough for a 128-minima set's 13 fragments several times over.
+  /// enough for a 128-minima set's 12 fragments several times over.
   int queue_capacity = 256;
 };
 

@@ -36,9 +36,12 @@ namespace fullarm::hil {
 inline constexpr int kMaxRecordJoints = arm::kMaxJoints;
 /// Minima a set holds at most (MinimaSetRecord, MinimaExchange).
 inline constexpr int kMaxMinimaPerSet = 128;
-/// Minima one minima_set_t fragment carries at most: a full fragment encodes to 1,249 bytes,
-/// under the 1,400 bytes that fit one UDP datagram on a 1,500-byte MTU.
-inline constexpr int kMaxMinimaPerFragment = 10;
+/// Minima one minima_set_t fragment carries at most: a full fragment (kMaxRecordJoints joint
+/// angles) encodes to 1,359 bytes, 1,386 with LCM's short-message header and the channel name:
+/// under the 1,400 bytes that fit one UDP datagram on a 1,500-byte MTU (and under LCM's own
+/// short-message bound, beyond which LCM would split the message itself). One more minimum
+/// (110 bytes) would cross it; a 64-minimum set travels in 6 fragments.
+inline constexpr int kMaxMinimaPerFragment = 11;
 /// Characters of a supervisor event's message kept in its record (longer text is cut).
 inline constexpr int kMaxEventMessageChars = 119;
 
