@@ -242,7 +242,7 @@ CLI::App* addAccessCommand(CLI::App& app, AccessOptions& o, AccessMergeOptions& 
   OptionDeclarer merge_declare(*merge, table);
   merge_declare.folder("--out", m.out_dir, "Write the merged summary.json, technicians.csv and report.html here")
       ->required();
-  merge_declare.files("shards", m.shards, "The shards' output folders (each holds technicians.sweep)")->required();
+  merge_declare.files("shards", m.shards, "The shards' technicians.sweep files (population.json beside each)")->required();
   return cmd;
 }
 

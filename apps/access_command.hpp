@@ -46,7 +46,7 @@ struct AccessOptions {
 /// Options of `fullarm access merge`.
 struct AccessMergeOptions {
   std::string out_dir;              ///< the merged population's folder (required)
-  std::vector<std::string> shards;  ///< the shards' output folders
+  std::vector<std::string> shards;  ///< the shards' technicians.sweep files
 };
 
 /// The reach options the access options give (limits, planner, budget, seed).

@@ -373,7 +373,9 @@ int runAccessPopulation(const AccessOptions& o) {
     int argc = 0;
     char** argv = nullptr;
     const mpi::Session session(argc, argv);
-    std::cerr << "access: rank " << session.rank() << " of " << session.size() << ", " << threads << " threads\n";
+    std::ostringstream line;
+    line << "access: rank " << session.rank() << " of " << session.size() << ", " << threads << " threads\n";
+    std::cerr << line.str() << std::flush;
     const core::SampleRange mine = core::shardRange(s.spec.samples, {session.rank() + 1, session.size()});
     progress.begin("access population (rank " + std::to_string(session.rank()) + ")",
                    static_cast<std::size_t>(mine.end - mine.begin));
@@ -394,7 +396,7 @@ int runAccessPopulation(const AccessOptions& o) {
     writeTextFile(dir / kTaskFile, s.description.dump(2) + "\n");
     std::cout << "Shard " << shard->index << "/" << shard->count << " of " << s.spec.samples << " technicians: "
               << results.sample.size() << " written to " << (dir / kSweepFile).string()
-              << "; merge the shards with `fullarm access merge --out DIR SHARD_FOLDER...`\n";
+              << "; merge the shards with `fullarm access merge --out DIR SHARD_DIR/technicians.sweep...`\n";
     return kExitPass;
   }
   writePopulation(s.description, results, o.out_dir);
@@ -404,12 +406,13 @@ int runAccessPopulation(const AccessOptions& o) {
 int runAccessMerge(const AccessMergeOptions& o) {
   std::vector<core::SweepResults> shards;
   nlohmann::json task;
-  for (const std::string& folder : o.shards) {
-    const std::filesystem::path dir(folder);
-    const std::filesystem::path task_file = dir / kTaskFile;
-    if (!std::filesystem::is_regular_file(task_file) || !std::filesystem::is_regular_file(dir / kSweepFile)) {
-      throw core::ConfigError(dir, "shards", std::string("is not a shard folder (it needs ") + kTaskFile + " and " +
-                                                 kSweepFile + ", written by `fullarm access --population N --shard i/N`)");
+  for (const std::string& shard_file : o.shards) {
+    const std::filesystem::path file(shard_file);
+    const std::filesystem::path task_file = file.parent_path() / kTaskFile;
+    if (file.filename() != kSweepFile || !std::filesystem::is_regular_file(task_file)) {
+      throw core::ConfigError(file, "shards", std::string("is not a shard (a shard is the ") + kSweepFile +
+                                                  " that `fullarm access --population N --shard i/N --out DIR` "
+                                                  "writes, with its " + kTaskFile + " beside it)");
     }
     nlohmann::json t;
     try {
@@ -427,7 +430,7 @@ int runAccessMerge(const AccessMergeOptions& o) {
       throw core::ConfigError(task_file, "", "belongs to another population than " + o.shards.front() +
                                                  " (scene, target, options or nominal reach differ)");
     }
-    shards.push_back(core::readSweepResults(dir / kSweepFile));
+    shards.push_back(core::readSweepResults(file));
   }
   const core::SweepResults all = core::mergeSweepResults(shards);
   if (all.spec.name != kSweepName || all.spec.values_per_sample != static_cast<int>(kColumns)) {
