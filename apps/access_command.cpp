@@ -14,7 +14,6 @@
 #include <vector>
 
 #include "cli_values.hpp"
-#include "access_population.hpp"
 #include "exit_codes.hpp"
 #include "fullarm/accessibility/brace_search.hpp"
 #include "fullarm/accessibility/force_lp.hpp"
@@ -242,7 +241,8 @@ CLI::App* addAccessCommand(CLI::App& app, AccessOptions& o, AccessMergeOptions& 
   OptionDeclarer merge_declare(*merge, table);
   merge_declare.folder("--out", m.out_dir, "Write the merged summary.json, technicians.csv and report.html here")
       ->required();
-  merge_declare.files("shards", m.shards, "The shards' technicians.sweep files (population.json beside each)")->required();
+  merge_declare.files("shards", m.shards, "The shards' technicians.sweep files (population.json beside each)")
+      ->required();
   return cmd;
 }
 
@@ -268,7 +268,7 @@ accessibility::BraceSearchOptions accessBraceOptions(const AccessOptions& o) {
 
 int runAccess(const AccessOptions& o) {
   if (o.scene.empty()) throw core::ConfigError("", "--scene", "access needs a scene (--scene FILE)");
-  if (o.population) return runAccessPopulation(o);
+  if (o.population) throw core::ConfigError("", "--population", "a population runs with runAccessPopulation");
   if (!o.shard.empty()) throw core::ConfigError("", "--shard", "--shard needs --population");
   const arm::ArmModel model = arm::loadArmModel(configPathOr(o.arm_config, arm::defaultArmModelPath));
   std::cerr << "access: loading scene " << o.scene << "\n";

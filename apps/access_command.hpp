@@ -36,11 +36,11 @@ struct AccessOptions {
   std::int64_t brace_evaluations = 120;  ///< the brace-posture search's budget
   /// Population: the number of technicians (unset: the nominal arm alone)
   std::optional<std::int64_t> population;
-  double mix = 0.5;                      ///< population: the share of women in [0, 1]
-  int threads = 0;                       ///< population: worker threads (0: one per core; 1 per MPI rank)
-  std::string shard;                     ///< population: `i/N`, this run's shard
-  std::int64_t repair_iterations = 2000; ///< population: planner budget of each re-planned stretch
-  core::Progress* progress = nullptr;    ///< population: progress lines (null: none)
+  double mix = 0.5;                       ///< population: the share of women in [0, 1]
+  int threads = 0;                        ///< population: worker threads (0: one per core; 1 per MPI rank)
+  std::string shard;                      ///< population: `i/N`, this run's shard
+  std::int64_t repair_iterations = 2000;  ///< population: planner budget of each re-planned stretch
+  core::Progress* progress = nullptr;     ///< population: progress lines (null: none)
 };
 
 /// Options of `fullarm access merge`.
@@ -57,14 +57,14 @@ struct AccessMergeOptions {
 
 /// Adds `access` to `app`, and its `merge` subcommand (the population's shards) with
 /// `merge_options`; `merge` receives the merge subcommand.
-CLI::App* addAccessCommand(CLI::App& app, AccessOptions& options, AccessMergeOptions& merge_options,
-                           CLI::App*& merge, OptionTable& table);
+CLI::App* addAccessCommand(CLI::App& app, AccessOptions& options, AccessMergeOptions& merge_options, CLI::App*& merge,
+                           OptionTable& table);
 
 /// Runs `fullarm access`: prints progress on stderr, the three verdicts and, when contact-allowed
 /// reach finds a path, the push along the target's push direction at the reached grasp and at the
 /// brace posture (with and without bracing) on stdout; with --out also summary.json and
 /// report.html.
-/// With --population, runs the population instead (runAccessPopulation, access_population.hpp).
+/// A population (--population) is runAccessPopulation's (access_population.hpp).
 /// @return 0 when contact-allowed reach (the arm feeling its way in with full-arm haptics) says
 ///   reachable and, with --force, the best push reaches the force; 1 when the target is proven
 ///   unreachable or the person is too weak; 4 when the reach budget ran out.

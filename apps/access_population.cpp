@@ -106,8 +106,9 @@ Setup makeSetup(const AccessOptions& o) {
   s.model = arm::loadArmModel(arm_file);
   const arm::ArmSize size = arm::armSizeOf(s.model);
   if (!size.upper_arm_length_m || !size.forearm_length_m) {
-    throw core::ConfigError(arm_file, "upper_arm_joint", "a population needs an arm model that names its upper-arm and "
-                                                         "forearm joints");
+    throw core::ConfigError(arm_file, "upper_arm_joint",
+                            "a population needs an arm model that names its upper-arm and "
+                            "forearm joints");
   }
   s.nominal_upper_arm_m = *size.upper_arm_length_m;
   s.nominal_forearm_m = *size.forearm_length_m;
@@ -249,19 +250,19 @@ void writePopulation(const nlohmann::json& task, const core::SweepResults& all, 
   f << force_n;
   const std::array<std::string, 5> keys = {"reach_free", "reach_contact_allowed", "reach_hand_only", "push_unbraced",
                                            "push_braced"};
-  const std::array<std::string, 5> labels = {
-      "reach, free", "reach, contact allowed", "reach, hand only",
-      "reach (contact allowed) and push " + f.str() + " N without bracing",
-      "reach (contact allowed) and push " + f.str() + " N with bracing"};
+  const std::array<std::string, 5> labels = {"reach, free", "reach, contact allowed", "reach, hand only",
+                                             "reach (contact allowed) and push " + f.str() + " N without bracing",
+                                             "reach (contact allowed) and push " + f.str() + " N with bracing"};
   std::array<acc::CriterionSummary, 5> criteria;
   for (std::size_t c = 0; c < 5; ++c) criteria[c] = acc::summariseCriterion(technicians, success[c]);
 
   reports::Report report("access", "Accessibility of a population: " + task.at("scene").get<std::string>() +
                                        ", target " + task.at("target").get<std::string>());
   const acc::CriterionSummary& braced = criteria[4];
-  report.setVerdict(true, percent(braced.wilson.share) + " of " + std::to_string(n) + " technicians reach the target (" +
-                              "contact allowed) and push " + f.str() + " N with bracing (95 % Wilson interval " +
-                              percent(braced.wilson.lower) + " to " + percent(braced.wilson.upper) + ")");
+  report.setVerdict(true, percent(braced.wilson.share) + " of " + std::to_string(n) +
+                              " technicians reach the target (" + "contact allowed) and push " + f.str() +
+                              " N with bracing (95 % Wilson interval " + percent(braced.wilson.lower) + " to " +
+                              percent(braced.wilson.upper) + ")");
   report.addHeadlineNumber("share_push_braced", "Reach and push with bracing", braced.wilson.share * 100.0, "%");
   report.addHeadlineNumber("share_reach_contact", "Reach, contact allowed", criteria[1].wilson.share * 100.0, "%");
   nlohmann::json& r = report.results()["population"];
@@ -275,11 +276,20 @@ void writePopulation(const nlohmann::json& task, const core::SweepResults& all, 
   }
 
   reports::Table shares;
-  shares.caption = "Shares of the population with 95 % intervals, and the failures split by the factor that limits "
-                   "each (a logistic fit on the standardised log segment lengths and log strength)";
-  shares.columns = {"Criterion",      "Successes",          "Share",       "Wilson low",    "Wilson high",
-                    "Clopper-Pearson low", "Clopper-Pearson high", "Limited by upper arm", "Limited by forearm",
-                    "Limited by strength", "Unexplained"};
+  shares.caption =
+      "Shares of the population with 95 % intervals, and the failures split by the factor that limits "
+      "each (a logistic fit on the standardised log segment lengths and log strength)";
+  shares.columns = {"Criterion",
+                    "Successes",
+                    "Share",
+                    "Wilson low",
+                    "Wilson high",
+                    "Clopper-Pearson low",
+                    "Clopper-Pearson high",
+                    "Limited by upper arm",
+                    "Limited by forearm",
+                    "Limited by strength",
+                    "Unexplained"};
   std::cout << "Population of " << n << " technicians (" << women << " women), scene "
             << task.at("scene").get<std::string>() << ", target " << task.at("target").get<std::string>() << "\n";
   for (std::size_t c = 0; c < 5; ++c) {
@@ -300,9 +310,9 @@ void writePopulation(const nlohmann::json& task, const core::SweepResults& all, 
   repair.caption = "How each technician's reach was answered: the nominal arm's path repaired, or planned afresh";
   repair.columns = {"Mode", "Nominal arm", "Repaired", "Fresh"};
   for (std::size_t m = 0; m < acc::kReachModes; ++m) {
-    repair.rows.push_back({acc::reachModeName(acc::kReachModeOrder[m]),
-                           task.at("nominal_reach").at(kModeKeys[m]).get<std::string>(),
-                           static_cast<double>(repaired[m]), static_cast<double>(n - static_cast<std::size_t>(repaired[m]))});
+    repair.rows.push_back(
+        {acc::reachModeName(acc::kReachModeOrder[m]), task.at("nominal_reach").at(kModeKeys[m]).get<std::string>(),
+         static_cast<double>(repaired[m]), static_cast<double>(n - static_cast<std::size_t>(repaired[m]))});
   }
   section.addTable(std::move(repair));
 
@@ -354,13 +364,16 @@ int threadCount(int requested, bool under_mpi) {
 }  // namespace
 
 int runAccessPopulation(const AccessOptions& o) {
+  if (o.scene.empty()) throw core::ConfigError("", "--scene", "access needs a scene (--scene FILE)");
+  if (!o.population) throw core::ConfigError("", "--population", "the number of technicians is missing");
   // OpenMPI's mpirun sets OMPI_COMM_WORLD_SIZE in every process it starts.
   const bool under_mpi = std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr;
   std::optional<core::ShardSpec> shard;
   if (!o.shard.empty()) {
     shard = core::parseShardSpec(o.shard);
     if (o.out_dir.empty()) throw core::ConfigError("", "--shard", "a shard needs --out (the folder its file goes to)");
-    if (under_mpi) throw core::ConfigError("", "--shard", "--shard and mpirun do not combine: mpirun spreads the shards");
+    if (under_mpi)
+      throw core::ConfigError("", "--shard", "--shard and mpirun do not combine: mpirun spreads the shards");
   }
   if (!(o.mix >= 0.0 && o.mix <= 1.0)) throw core::ConfigError("", "--mix", "must lie in [0, 1]");
   const Setup s = makeSetup(o);
@@ -394,8 +407,8 @@ int runAccessPopulation(const AccessOptions& o) {
     createOutputFolder(dir);
     core::writeSweepResults(results, dir / kSweepFile);
     writeTextFile(dir / kTaskFile, s.description.dump(2) + "\n");
-    std::cout << "Shard " << shard->index << "/" << shard->count << " of " << s.spec.samples << " technicians: "
-              << results.sample.size() << " written to " << (dir / kSweepFile).string()
+    std::cout << "Shard " << shard->index << "/" << shard->count << " of " << s.spec.samples
+              << " technicians: " << results.sample.size() << " written to " << (dir / kSweepFile).string()
               << "; merge the shards with `fullarm access merge --out DIR SHARD_DIR/technicians.sweep...`\n";
     return kExitPass;
   }
@@ -410,9 +423,11 @@ int runAccessMerge(const AccessMergeOptions& o) {
     const std::filesystem::path file(shard_file);
     const std::filesystem::path task_file = file.parent_path() / kTaskFile;
     if (file.filename() != kSweepFile || !std::filesystem::is_regular_file(task_file)) {
-      throw core::ConfigError(file, "shards", std::string("is not a shard (a shard is the ") + kSweepFile +
-                                                  " that `fullarm access --population N --shard i/N --out DIR` "
-                                                  "writes, with its " + kTaskFile + " beside it)");
+      throw core::ConfigError(file, "shards",
+                              std::string("is not a shard (a shard is the ") + kSweepFile +
+                                  " that `fullarm access --population N --shard i/N --out DIR` "
+                                  "writes, with its " +
+                                  kTaskFile + " beside it)");
     }
     nlohmann::json t;
     try {
@@ -421,14 +436,15 @@ int runAccessMerge(const AccessMergeOptions& o) {
       throw core::ConfigError(task_file, "", std::string("is not valid JSON: ") + e.what());
     }
     if (!t.is_object() || t.value("format", "") != kTaskFormat) {
-      throw core::ConfigError(task_file, "format", std::string("is not a population task (expected format '") +
-                                                       kTaskFormat + "')");
+      throw core::ConfigError(task_file, "format",
+                              std::string("is not a population task (expected format '") + kTaskFormat + "')");
     }
     if (task.is_null()) {
       task = t;
     } else if (withoutPaths(t) != withoutPaths(task)) {
-      throw core::ConfigError(task_file, "", "belongs to another population than " + o.shards.front() +
-                                                 " (scene, target, options or nominal reach differ)");
+      throw core::ConfigError(task_file, "",
+                              "belongs to another population than " + o.shards.front() +
+                                  " (scene, target, options or nominal reach differ)");
     }
     shards.push_back(core::readSweepResults(file));
   }

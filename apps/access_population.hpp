@@ -19,8 +19,8 @@ namespace fullarm::app {
 ///   a bad mix) or inputs (exit 2)
 int runAccessPopulation(const AccessOptions& options);
 
-/// `fullarm access merge`: reads the shards (each technicians.sweep with its population.json), checks that they are the shards of one
-/// population (the same task, every shard once) and writes the population's outputs to --out.
+/// `fullarm access merge`: reads the shards (each technicians.sweep with its population.json), checks that they are the
+/// shards of one population (the same task, every shard once) and writes the population's outputs to --out.
 /// @return 0
 /// @throws core::ConfigError naming the folder and what is wrong (exit 2)
 int runAccessMerge(const AccessMergeOptions& options);

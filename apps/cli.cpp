@@ -283,7 +283,7 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
   if (cli.access_merge->parsed()) return runAccessMerge(cli.access_merge_options);
   if (cli.access->parsed()) {
     cli.access_options.progress = &progress;
-    return runAccess(cli.access_options);
+    return cli.access_options.population ? runAccessPopulation(cli.access_options) : runAccess(cli.access_options);
   }
   if (cli.run->parsed() || cli.local->parsed()) {
     std::string command_line = "fullarm";

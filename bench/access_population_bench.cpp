@@ -75,11 +75,7 @@ void BM_Population(benchmark::State& state) {
   state.SetLabel("env1 rim, " + std::to_string(state.range(0)) + " technicians, " + std::to_string(state.range(1)) +
                  " threads");
 }
-BENCHMARK(BM_Population)
-    ->ArgsProduct({{20, 1000}, {1, 2}})
-    ->Iterations(1)
-    ->Unit(benchmark::kSecond)
-    ->UseRealTime();
+BENCHMARK(BM_Population)->ArgsProduct({{20, 1000}, {1, 2}})->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
 }  // namespace
 

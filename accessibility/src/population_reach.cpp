@@ -63,7 +63,8 @@ const char* reachSourceName(ReachSource source) noexcept {
 }
 
 NominalReach planNominalReach(const PopulationTask& task) {
-  if (task.model == nullptr || task.scene == nullptr) throw std::invalid_argument("planNominalReach: no model or scene");
+  if (task.model == nullptr || task.scene == nullptr)
+    throw std::invalid_argument("planNominalReach: no model or scene");
   const haptics::Scene& scene = *task.scene;
   if (scene.posture("rest") == nullptr) {
     throw core::ConfigError(scene.source, "arm.postures", "the scene has no posture 'rest' (the start of the reach)");
@@ -152,8 +153,8 @@ TechnicianOutcome evaluateTechnician(const PopulationTask& task, const NominalRe
       r.mode = mode;
       const ReachResult& nominal_result = nominal.result(mode);
       if (nominal_result.verdict != Verdict::kReachable) continue;
-      r.path = repairPath(checker, mode, problem.target, *task.model, nominal_result.path, options,
-                          task.repair_iterations);
+      r.path =
+          repairPath(checker, mode, problem.target, *task.model, nominal_result.path, options, task.repair_iterations);
       if (r.path.empty()) continue;
       r.verdict = Verdict::kReachable;
       r.source = ReachSource::kRepaired;
@@ -184,8 +185,8 @@ TechnicianOutcome evaluateTechnician(const PopulationTask& task, const NominalRe
     const std::unique_ptr<haptics::GlobalSearch> search = haptics::makeGlobalSearch(haptics::SearchKind::kSnch, world);
     BraceSearchOptions bo = task.brace;
     bo.seed = seed;
-    const BraceSearchResult brace = searchBracePosture(model, human, world, *search, task.params, contact.path.back(),
-                                                       problem.target.push_W, bo);
+    const BraceSearchResult brace =
+        searchBracePosture(model, human, world, *search, task.params, contact.path.back(), problem.target.push_W, bo);
     out.push_analysed = true;
     out.push_braced_n = pushValue(brace.best.braced);
     out.push_unbraced_n = betterPush(pushValue(brace.start.unbraced), pushValue(brace.best.unbraced));

@@ -33,7 +33,7 @@ namespace fullarm::accessibility {
 inline constexpr int kReachModes = 3;
 /// The reach modes in the order outcomes list them: free, contact allowed, hand only.
 inline constexpr std::array<ReachMode, kReachModes> kReachModeOrder = {ReachMode::kFree, ReachMode::kContactAllowed,
-                                                                      ReachMode::kHandOnly};
+                                                                       ReachMode::kHandOnly};
 
 /// What every technician of a population attempts: one target of one scene.
 struct PopulationTask {
