@@ -1,8 +1,10 @@
 #include "fullarm/accessibility/population_reach.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numbers>
 #include <stdexcept>
 
 #include "fullarm/accessibility/ik.hpp"
@@ -38,6 +40,31 @@ double betterPush(double a, double b) {
   if (std::isnan(a)) return b;
   if (std::isnan(b)) return a;
   return std::max(a, b);
+}
+
+// The goal candidates of a repair, nearest first: the nominal swivel and roll, then swivels
+// 5, 10 and 20 degrees to either side, each with the hand rolled 0, +-30 and +-60 degrees about its
+// pointing axis.
+struct RepairGoalOffset {
+  double swivel_rad = 0.0;
+  double roll_rad = 0.0;
+};
+
+const std::vector<RepairGoalOffset>& repairGoalOffsets() {
+  static const std::vector<RepairGoalOffset> offsets = [] {
+    constexpr double kDeg = std::numbers::pi / 180.0;
+    std::vector<RepairGoalOffset> out;
+    for (const double roll : {0.0, 30.0, -30.0, 60.0, -60.0}) {
+      for (const double swivel : {0.0, 5.0, -5.0, 10.0, -10.0, 20.0, -20.0}) {
+        out.push_back({swivel * kDeg, roll * kDeg});
+      }
+    }
+    std::stable_sort(out.begin(), out.end(), [](const RepairGoalOffset& a, const RepairGoalOffset& b) {
+      return std::abs(a.swivel_rad) + std::abs(a.roll_rad) < std::abs(b.swivel_rad) + std::abs(b.roll_rad);
+    });
+    return out;
+  }();
+  return offsets;
 }
 
 }  // namespace
@@ -89,13 +116,24 @@ std::vector<Eigen::VectorXd> repairPath(ReachChecker& checker, ReachMode mode, c
                                         long repair_iterations) {
   const arm::ArmModel& model = checker.model();
   if (nominal_path.size() < 2) return {};
-  // The goal: the nominal goal's hand orientation and swivel angle, on the technician's arm.
+  // The goal: the nominal goal's hand orientation and swivel angle on the technician's arm,
+  // else the nearest of the neighbouring swivels and rolls that gives a valid goal.
   arm::ArmData fk_nominal(nominal_model);
   arm::computeForwardKinematics(nominal_model, fk_nominal, nominal_path.back());
   const Eigen::Matrix3d R_W = fk_nominal.X_WL[static_cast<std::size_t>(nominal_model.tool_link)].linear();
+  const Eigen::Vector3d pointing_W = R_W.col(0);
   const double swivel = swivelAngle(fk_nominal);
   arm::ArmData fk(model);
-  const IkSolution goal = solveIk(model, fk, target.position_W_m, R_W, swivel, nominal_path.back(), options.ik);
+  IkSolution goal;
+  for (const RepairGoalOffset& offset : repairGoalOffsets()) {
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(offset.roll_rad, pointing_W).toRotationMatrix() * R_W;
+    IkSolution candidate =
+        solveIk(model, fk, target.position_W_m, R, swivel + offset.swivel_rad, nominal_path.back(), options.ik);
+    if (candidate.converged && checker.check(candidate.q_rad).valid(mode)) {
+      goal = std::move(candidate);
+      break;
+    }
+  }
   if (!goal.converged) return {};
 
   std::vector<Eigen::VectorXd> waypoints = nominal_path;

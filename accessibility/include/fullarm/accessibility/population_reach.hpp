@@ -113,12 +113,14 @@ enum class ReachStrategy {
                                                    ReachStrategy strategy = ReachStrategy::kRepair);
 
 /// Repairs `nominal_path` (a path of the nominal arm `nominal_model`, start to a grasp of
-/// `target`) on `checker`'s arm in `mode`: the goal re-solved by solveIk from the nominal goal
-/// (the same tool-link orientation and swivel angle), the start kept, then every waypoint and
-/// every edge re-checked at the motion step of `options`, and each invalid stretch re-planned by
-/// planBetween (budget `repair_iterations`, seed options.seed) between the valid waypoints
-/// around it. The repaired path, or empty when the goal does not converge or is not valid, the
-/// start is not valid, or a stretch cannot be re-planned.
+/// `target`) on `checker`'s arm in `mode`. The goal is re-solved by solveIk from the nominal goal
+/// at the nominal goal's tool-link orientation and swivel angle; when that does not converge to a
+/// valid goal, at the nearest valid of 34 neighbours (swivel 0, +-5, +-10, +-20 degrees, the hand
+/// rolled 0, +-30, +-60 degrees about its pointing axis). The start is kept; every waypoint and
+/// every edge is re-checked at the motion step of `options`, and each invalid stretch re-planned
+/// by planBetween (budget `repair_iterations`, seed options.seed) between the valid waypoints
+/// around it. The repaired path, or empty when no goal candidate is valid, the start is not
+/// valid, or a stretch cannot be re-planned.
 [[nodiscard]] std::vector<Eigen::VectorXd> repairPath(ReachChecker& checker, ReachMode mode, const GraspTarget& target,
                                                       const arm::ArmModel& nominal_model,
                                                       const std::vector<Eigen::VectorXd>& nominal_path,
