@@ -201,11 +201,12 @@ int exitCode(Verdict v) {
 
 }  // namespace
 
-CLI::App* addAccessCommand(CLI::App& app, AccessOptions& o, OptionTable& table) {
+CLI::App* addAccessCommand(CLI::App& app, AccessOptions& o, AccessMergeOptions& m, CLI::App*& merge,
+                           OptionTable& table) {
   CLI::App* cmd = app.add_subcommand(
       "access", "Can the arm reach the scene's target: free, with contact allowed, hand only (OMPL, seeded)");
   OptionDeclarer declare(*cmd, table);
-  declare.file("--scene", o.scene, "Scene YAML with targets (scenes/accessibility/env1.yaml)")->required();
+  declare.file("--scene", o.scene, "Scene YAML with targets (scenes/accessibility/env1.yaml); required");
   declare.name("--target", o.target, "Target name (default: the scene's first)");
   declare.file("--arm", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
   declare.folder("--out", o.out_dir, "Write summary.json and report.html to this folder");
@@ -226,10 +227,49 @@ CLI::App* addAccessCommand(CLI::App& app, AccessOptions& o, OptionTable& table) 
                "The person's arm: strength and weight YAML (default: config/human_arm.yaml)");
   declare.integer("--brace-evaluations", o.brace_evaluations, "Budget of the brace-posture search (postures evaluated)",
                   1, 100000);
+  declare.integer("--population", o.population,
+                  "Run a population of this many technicians (with --force) instead of the nominal arm", 1,
+                  100000000LL);
+  declare.number("--mix", o.mix, "Population: the share of women", {0.0, 1.0, ""});
+  declare.integer("--threads", o.threads, "Population: worker threads (0: one per core; under mpirun 0 means 1)", 0,
+                  1024);
+  declare.name("--shard", o.shard, "Population: run shard i of N (i/N, 1 <= i <= N); merge with `access merge`");
+  declare.integer("--repair-iterations", o.repair_iterations,
+                  "Population: planner iterations for each re-planned stretch of a repaired path", 1, 100000000LL);
+
+  merge = cmd->add_subcommand("merge", "Merge the shards of a population (`access --population N --shard i/N`)");
+  OptionDeclarer merge_declare(*merge, table);
+  merge_declare.folder("--out", m.out_dir, "Write the merged summary.json, technicians.csv and report.html here")
+      ->required();
+  merge_declare.files("shards", m.shards, "The shards' technicians.sweep files (population.json beside each)")
+      ->required();
   return cmd;
 }
 
+accessibility::ReachOptions accessReachOptions(const AccessOptions& o) {
+  accessibility::ReachOptions ro;
+  ro.seed = static_cast<std::uint32_t>(o.seed);
+  ro.max_iterations = static_cast<long>(o.iterations);
+  ro.planner = o.planner == "sbl" ? accessibility::ReachPlanner::kSbl : accessibility::ReachPlanner::kRrtConnect;
+  ro.limits.max_link_force_n = o.max_link_force_n;
+  ro.limits.max_skin_depth_m = o.max_skin_depth_m;
+  ro.limits.clearance_margin_m = o.clearance_m;
+  return ro;
+}
+
+accessibility::BraceSearchOptions accessBraceOptions(const AccessOptions& o) {
+  accessibility::BraceSearchOptions bo;
+  bo.max_evaluations = static_cast<int>(o.brace_evaluations);
+  bo.seed = static_cast<std::uint64_t>(o.seed);
+  bo.contact_force_max_n = o.max_link_force_n;
+  bo.penetration_max_m = o.max_skin_depth_m;
+  return bo;
+}
+
 int runAccess(const AccessOptions& o) {
+  if (o.scene.empty()) throw core::ConfigError("", "--scene", "access needs a scene (--scene FILE)");
+  if (o.population) throw core::ConfigError("", "--population", "a population runs with runAccessPopulation");
+  if (!o.shard.empty()) throw core::ConfigError("", "--shard", "--shard needs --population");
   const arm::ArmModel model = arm::loadArmModel(configPathOr(o.arm_config, arm::defaultArmModelPath));
   std::cerr << "access: loading scene " << o.scene << "\n";
   const haptics::Scene scene = haptics::loadScene(o.scene);
@@ -245,13 +285,7 @@ int runAccess(const AccessOptions& o) {
   p.q_start = haptics::scenePosture(scene, "rest", model);
   const accessibility::HumanArm human =
       accessibility::loadHumanArm(configPathOr(o.human_config, accessibility::defaultHumanArmPath), model);
-  accessibility::ReachOptions ro;
-  ro.seed = static_cast<std::uint32_t>(o.seed);
-  ro.max_iterations = static_cast<long>(o.iterations);
-  ro.planner = o.planner == "sbl" ? accessibility::ReachPlanner::kSbl : accessibility::ReachPlanner::kRrtConnect;
-  ro.limits.max_link_force_n = o.max_link_force_n;
-  ro.limits.max_skin_depth_m = o.max_skin_depth_m;
-  ro.limits.clearance_margin_m = o.clearance_m;
+  const accessibility::ReachOptions ro = accessReachOptions(o);
   std::cerr << "access: target '" << p.target.name << "' on '" << p.target.object << "'; goal sweep and " << o.planner
             << " in three modes (" << o.iterations << " iterations each, seed " << o.seed << ")\n";
   const accessibility::ReachStudy study = accessibility::studyReach(p, ro);
@@ -262,11 +296,7 @@ int runAccess(const AccessOptions& o) {
     std::cerr << "access: push along the target's push direction, brace-posture search (" << o.brace_evaluations
               << " postures, seed " << o.seed << ")\n";
     const std::unique_ptr<haptics::GlobalSearch> search = haptics::makeGlobalSearch(haptics::SearchKind::kSnch, world);
-    accessibility::BraceSearchOptions bo;
-    bo.max_evaluations = static_cast<int>(o.brace_evaluations);
-    bo.seed = static_cast<std::uint64_t>(o.seed);
-    bo.contact_force_max_n = ro.limits.max_link_force_n;
-    bo.penetration_max_m = ro.limits.max_skin_depth_m;
+    const accessibility::BraceSearchOptions bo = accessBraceOptions(o);
     brace = accessibility::searchBracePosture(model, human, world, *search, p.params, study.contact.path.back(),
                                               p.target.push_W, bo);
   }

@@ -8,9 +8,13 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "cli_options.hpp"
+#include "fullarm/accessibility/brace_search.hpp"
+#include "fullarm/accessibility/reach.hpp"
 #include "fullarm/arm/arm_model.hpp"
+#include "fullarm/core/progress.hpp"
 #include "fullarm/reports/report.hpp"
 
 namespace fullarm::app {
@@ -30,15 +34,37 @@ struct AccessOptions {
   std::optional<double> force_n;         ///< the push the task needs [N]; unset: no requirement
   std::string human_config;              ///< the person's arm YAML (default: config/human_arm.yaml)
   std::int64_t brace_evaluations = 120;  ///< the brace-posture search's budget
+  /// Population: the number of technicians (unset: the nominal arm alone)
+  std::optional<std::int64_t> population;
+  double mix = 0.5;                       ///< population: the share of women in [0, 1]
+  int threads = 0;                        ///< population: worker threads (0: one per core; 1 per MPI rank)
+  std::string shard;                      ///< population: `i/N`, this run's shard
+  std::int64_t repair_iterations = 2000;  ///< population: planner budget of each re-planned stretch
+  core::Progress* progress = nullptr;     ///< population: progress lines (null: none)
 };
 
-/// Adds `access` to `app`.
-CLI::App* addAccessCommand(CLI::App& app, AccessOptions& options, OptionTable& table);
+/// Options of `fullarm access merge`.
+struct AccessMergeOptions {
+  std::string out_dir;              ///< the merged population's folder (required)
+  std::vector<std::string> shards;  ///< the shards' technicians.sweep files
+};
+
+/// The reach options the access options give (limits, planner, budget, seed).
+[[nodiscard]] accessibility::ReachOptions accessReachOptions(const AccessOptions& options);
+
+/// The brace-search options the access options give (budget, seed, contact limits).
+[[nodiscard]] accessibility::BraceSearchOptions accessBraceOptions(const AccessOptions& options);
+
+/// Adds `access` to `app`, and its `merge` subcommand (the population's shards) with
+/// `merge_options`; `merge` receives the merge subcommand.
+CLI::App* addAccessCommand(CLI::App& app, AccessOptions& options, AccessMergeOptions& merge_options, CLI::App*& merge,
+                           OptionTable& table);
 
 /// Runs `fullarm access`: prints progress on stderr, the three verdicts and, when contact-allowed
 /// reach finds a path, the push along the target's push direction at the reached grasp and at the
 /// brace posture (with and without bracing) on stdout; with --out also summary.json and
 /// report.html.
+/// A population (--population) is runAccessPopulation's (access_population.hpp).
 /// @return 0 when contact-allowed reach (the arm feeling its way in with full-arm haptics) says
 ///   reachable and, with --force, the best push reaches the force; 1 when the target is proven
 ///   unreachable or the person is too weak; 4 when the reach budget ran out.

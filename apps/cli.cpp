@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "access_command.hpp"
+#include "access_population.hpp"
 #include "arm_summary.hpp"
 #include "fullarm/accessibility/reach.hpp"
 #include "cli_values.hpp"
@@ -211,6 +212,8 @@ struct CommandLine {
   HapticsQueryOptions haptics_options;
   CLI::App* access = nullptr;
   AccessOptions access_options;
+  CLI::App* access_merge = nullptr;
+  AccessMergeOptions access_merge_options;
   CLI::App* run = nullptr;
   RunCommandOptions run_options;
   CLI::App* local = nullptr;
@@ -249,7 +252,7 @@ struct CommandLine {
     global_node = addGlobalCommand(app, global_options, table);
     validate = addValidateCommand(app, validate_options, table);
     haptics_query = addHapticsCommand(app, haptics_options, table);
-    access = addAccessCommand(app, access_options, table);
+    access = addAccessCommand(app, access_options, access_merge_options, access_merge, table);
     run = addRunCommand(app, run_options, table);
     local = addLocalCommand(app, local_options, table);
     replay = addReplayCommand(app, replay_options, table);
@@ -277,7 +280,11 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
     return runTune(cli.tune_options);
   }
   if (cli.haptics_query->parsed()) return runHapticsQuery(cli.haptics_options);
-  if (cli.access->parsed()) return runAccess(cli.access_options);
+  if (cli.access_merge->parsed()) return runAccessMerge(cli.access_merge_options);
+  if (cli.access->parsed()) {
+    cli.access_options.progress = &progress;
+    return cli.access_options.population ? runAccessPopulation(cli.access_options) : runAccess(cli.access_options);
+  }
   if (cli.run->parsed() || cli.local->parsed()) {
     std::string command_line = "fullarm";
     for (const std::string& arg : args) command_line.append(" ").append(arg);

@@ -133,6 +133,41 @@ double violation(const PostureCheck& c, const std::vector<int>& links, const arm
   return worst;
 }
 
+// The space of the seven arm joints in their limits, the seeded sampler and `checker`'s
+// validity in `mode` (the other joints at `q_base`'s values).
+ob::SpaceInformationPtr makeSpaceInformation(ReachChecker& checker, ReachMode mode, const Eigen::VectorXd& q_base,
+                                             const ReachOptions& options) {
+  const arm::ArmModel& model = checker.model();
+  auto space = std::make_shared<ob::RealVectorStateSpace>(kArm);
+  ob::RealVectorBounds bounds(kArm);
+  const Eigen::VectorXd lo = model.lowerLimits();
+  const Eigen::VectorXd hi = model.upperLimits();
+  for (int j = 0; j < kArm; ++j) {
+    bounds.setLow(static_cast<unsigned>(j), lo[j]);
+    bounds.setHigh(static_cast<unsigned>(j), hi[j]);
+  }
+  space->setBounds(bounds);
+  const std::uint32_t seed = options.seed;
+  space->setStateSamplerAllocator([seed](const ob::StateSpace* s) { return std::make_shared<SeededSampler>(s, seed); });
+  auto si = std::make_shared<ob::SpaceInformation>(space);
+  si->setStateValidityChecker(
+      [&checker, q_base, mode](const ob::State* s) { return checker.check(fullConfiguration(q_base, s)).valid(mode); });
+  si->setStateValidityCheckingResolution(options.motion_resolution);
+  si->setup();
+  return si;
+}
+
+// The planner of `options`, seeded with its seed.
+ob::PlannerPtr makePlanner(const ob::SpaceInformationPtr& si, const arm::ArmModel& model, const Eigen::VectorXd& q_base,
+                           const ReachOptions& options) {
+  if (options.planner == ReachPlanner::kSbl) {
+    auto sbl = std::make_shared<SeededSbl>(si, options.seed);
+    sbl->setProjectionEvaluator(std::make_shared<WristProjection>(si->getStateSpace(), model, q_base));
+    return sbl;
+  }
+  return std::make_shared<SeededRrtConnect>(si, options.seed);
+}
+
 ReachResult planWithGoals(const ReachProblem& p, ReachMode mode, const ReachOptions& options, const Goals& goals,
                           ReachChecker& checker) {
   const arm::ArmModel& model = *p.model;
@@ -188,23 +223,10 @@ ReachResult planWithGoals(const ReachProblem& p, ReachMode mode, const ReachOpti
   }
 
   // The planner over the seven arm joints.
-  auto space = std::make_shared<ob::RealVectorStateSpace>(kArm);
-  ob::RealVectorBounds bounds(kArm);
-  const Eigen::VectorXd lo = model.lowerLimits();
-  const Eigen::VectorXd hi = model.upperLimits();
-  for (int j = 0; j < kArm; ++j) {
-    bounds.setLow(static_cast<unsigned>(j), lo[j]);
-    bounds.setHigh(static_cast<unsigned>(j), hi[j]);
-  }
-  space->setBounds(bounds);
-  const std::uint32_t seed = options.seed;
-  space->setStateSamplerAllocator([seed](const ob::StateSpace* s) { return std::make_shared<SeededSampler>(s, seed); });
-  auto si = std::make_shared<ob::SpaceInformation>(space);
   const Eigen::VectorXd q_base = p.q_start;
-  si->setStateValidityChecker(
-      [&checker, q_base, mode](const ob::State* s) { return checker.check(fullConfiguration(q_base, s)).valid(mode); });
-  si->setStateValidityCheckingResolution(options.motion_resolution);
-  si->setup();
+  const std::uint32_t seed = options.seed;
+  const ob::SpaceInformationPtr si = makeSpaceInformation(checker, mode, q_base, options);
+  const ob::StateSpacePtr space = si->getStateSpace();
 
   auto pdef = std::make_shared<ob::ProblemDefinition>(si);
   ob::ScopedState<> start(space);
@@ -218,14 +240,7 @@ ReachResult planWithGoals(const ReachProblem& p, ReachMode mode, const ReachOpti
   }
   pdef->setGoal(goal);
 
-  ob::PlannerPtr planner;
-  if (options.planner == ReachPlanner::kSbl) {
-    auto sbl = std::make_shared<SeededSbl>(si, seed);
-    sbl->setProjectionEvaluator(std::make_shared<WristProjection>(space, model, q_base));
-    planner = sbl;
-  } else {
-    planner = std::make_shared<SeededRrtConnect>(si, seed);
-  }
+  const ob::PlannerPtr planner = makePlanner(si, model, q_base, options);
   r.planner = reachPlannerName(options.planner);
   planner->setProblemDefinition(pdef);
   planner->setup();
@@ -444,6 +459,58 @@ ReachStudy studyReach(const ReachProblem& problem, const ReachOptions& options) 
   s.contact = planWithGoals(problem, ReachMode::kContactAllowed, options, goals, checker);
   s.hand_only = planWithGoals(problem, ReachMode::kHandOnly, options, goals, checker);
   return s;
+}
+
+double motionStep(const arm::ArmModel& model, double motion_resolution) {
+  const Eigen::VectorXd span = (model.upperLimits() - model.lowerLimits()).head(kArm);
+  return motion_resolution * span.norm();
+}
+
+bool motionValid(ReachChecker& checker, ReachMode mode, const Eigen::VectorXd& a, const Eigen::VectorXd& b,
+                 double step_rad) {
+  const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step_rad)));
+  for (int k = 0; k <= n; ++k) {
+    const Eigen::VectorXd q = a + (b - a) * (static_cast<double>(k) / n);
+    if (!checker.check(q).valid(mode)) return false;
+  }
+  return true;
+}
+
+std::vector<Eigen::VectorXd> planBetween(ReachChecker& checker, ReachMode mode, const Eigen::VectorXd& from,
+                                         const Eigen::VectorXd& to, const ReachOptions& options) {
+  const arm::ArmModel& model = checker.model();
+  if (from.size() != model.numJoints() || to.size() != model.numJoints()) {
+    throw std::invalid_argument("planBetween: configurations of the wrong size");
+  }
+  if (options.max_iterations < 1) throw ReachInputError("reach: max_iterations must be at least 1");
+  if (!(options.motion_resolution > 0.0 && options.motion_resolution < 0.1)) {
+    throw ReachInputError("reach: motion_resolution must lie in (0, 0.1)");
+  }
+  ompl::msg::noOutputHandler();
+  const ob::SpaceInformationPtr si = makeSpaceInformation(checker, mode, from, options);
+  auto pdef = std::make_shared<ob::ProblemDefinition>(si);
+  ob::ScopedState<> start(si->getStateSpace());
+  setState(start.get(), from);
+  pdef->addStartState(start);
+  auto goal = std::make_shared<ob::GoalStates>(si);
+  ob::ScopedState<> g(si->getStateSpace());
+  setState(g.get(), to);
+  goal->addState(g);
+  pdef->setGoal(goal);
+  const ob::PlannerPtr planner = makePlanner(si, model, from, options);
+  planner->setProblemDefinition(pdef);
+  planner->setup();
+  long evaluations = 0;
+  const long budget = options.max_iterations;
+  const ob::PlannerTerminationCondition ptc([&evaluations, budget] { return ++evaluations > budget; });
+  std::vector<Eigen::VectorXd> path;
+  if (planner->solve(ptc) != ob::PlannerStatus::EXACT_SOLUTION) return path;
+  const auto solution = pdef->getSolutionPath()->as<og::PathGeometric>();
+  for (std::size_t i = 0; i < solution->getStateCount(); ++i) {
+    path.push_back(fullConfiguration(from, solution->getState(static_cast<unsigned>(i))));
+  }
+  path.back() = to;  // the goal state exactly, hand joints included
+  return path;
 }
 
 }  // namespace fullarm::accessibility

@@ -189,6 +189,24 @@ struct ReachProblem {
 ///   size or a problem without model or world
 [[nodiscard]] ReachResult planReach(const ReachProblem& problem, ReachMode mode, const ReachOptions& options);
 
+/// The joint-space step at which motions are checked: `motion_resolution` times the diagonal of
+/// the arm joints' box (OMPL's state validity checking resolution over the seven arm joints) [rad].
+[[nodiscard]] double motionStep(const arm::ArmModel& model, double motion_resolution);
+
+/// Whether the straight joint-space motion from `a` to `b` (full configurations) is valid in
+/// `mode`: both ends and the states between them at most `step_rad` apart are checked.
+[[nodiscard]] bool motionValid(ReachChecker& checker, ReachMode mode, const Eigen::VectorXd& a,
+                               const Eigen::VectorXd& b, double step_rad);
+
+/// The planner of `options` (its seed, budget and motion resolution) from `from` to `to`, two
+/// full configurations valid in `mode`, on `checker`'s arm and world: the path, `from` to `to`,
+/// or empty when the budget ran out.
+/// @throws ReachInputError for bad options; std::invalid_argument for configurations of the
+///   wrong size
+[[nodiscard]] std::vector<Eigen::VectorXd> planBetween(ReachChecker& checker, ReachMode mode,
+                                                       const Eigen::VectorXd& from, const Eigen::VectorXd& to,
+                                                       const ReachOptions& options);
+
 /// The three modes on one problem, sharing the goal sweep.
 struct ReachStudy {
   ReachResult free;
