@@ -254,7 +254,11 @@ void writePopulation(const nlohmann::json& task, const core::SweepResults& all, 
                                              "reach (contact allowed) and push " + f.str() + " N without bracing",
                                              "reach (contact allowed) and push " + f.str() + " N with bracing"};
   std::array<acc::CriterionSummary, 5> criteria;
-  for (std::size_t c = 0; c < 5; ++c) criteria[c] = acc::summariseCriterion(technicians, success[c]);
+  // Reach depends on the arm's size only; the push on size and strength.
+  for (std::size_t c = 0; c < 5; ++c) {
+    criteria[c] = acc::summariseCriterion(technicians, success[c], 0.95,
+                                          c < acc::kReachModes ? acc::kSizeFactors : acc::kAllFactors);
+  }
 
   reports::Report report("access", "Accessibility of a population: " + task.at("scene").get<std::string>() +
                                        ", target " + task.at("target").get<std::string>());

@@ -111,7 +111,7 @@ const char* factorName(PopulationFactor factor) noexcept {
 }
 
 CriterionSummary summariseCriterion(const std::vector<Technician>& technicians, const std::vector<bool>& success,
-                                    double confidence) {
+                                    double confidence, const FactorMask& factors) {
   if (technicians.empty()) throw std::invalid_argument("summariseCriterion: no technicians");
   if (technicians.size() != success.size()) {
     throw std::invalid_argument("summariseCriterion: " + std::to_string(technicians.size()) + " technicians but " +
@@ -141,6 +141,8 @@ CriterionSummary summariseCriterion(const std::vector<Technician>& technicians, 
     x.col(k).array() -= mean;
     const double sd = std::sqrt(x.col(k).squaredNorm() / static_cast<double>(std::max<Eigen::Index>(n - 1, 1)));
     if (sd > 0.0) x.col(k) /= sd;
+    // A factor left out is a zero column: its coefficient has only the penalty's pull and stays 0.
+    if (!factors[static_cast<std::size_t>(k)]) x.col(k).setZero();
   }
   Eigen::MatrixXd a(n, kPopulationFactors + 1);
   a.col(0).setOnes();

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -157,6 +159,29 @@ TEST(PopulationShares, AStrengthThresholdPutsTheFailuresOnStrength) {
   EXPECT_EQ(s.failures_by_factor[2], failures);
   EXPECT_GT(s.log_odds_per_sd[2], 5.0);
   EXPECT_STREQ(factorName(PopulationFactor::kStrength), "strength");
+}
+
+TEST(PopulationShares, AFactorLeftOutIsNeverTheLimitingOne) {
+  // Success set by arm length alone; strength correlates with size (0.3 on the log scale) and
+  // by chance in a finite sample, so with all three factors its coefficient is not zero.
+  const std::vector<Technician> t = population(400);
+  std::vector<double> reach;
+  for (const Technician& x : t) reach.push_back(x.upper_arm_m + x.forearm_m);
+  std::vector<double> sorted = reach;
+  std::sort(sorted.begin(), sorted.end());
+  const double cut = sorted[sorted.size() / 3];
+  std::vector<bool> ok;
+  for (const double r : reach) ok.push_back(r > cut);
+  const CriterionSummary all = summariseCriterion(t, ok);
+  const CriterionSummary size = summariseCriterion(t, ok, 0.95, kSizeFactors);
+  EXPECT_EQ(size.log_odds_per_sd[2], 0.0);
+  EXPECT_EQ(size.failures_by_factor[2], 0);
+  const std::int64_t failures = size.wilson.trials - size.wilson.successes;
+  EXPECT_EQ(size.failures_by_factor[0] + size.failures_by_factor[1] + size.failures_unexplained, failures);
+  EXPECT_NE(all.log_odds_per_sd[2], 0.0);
+  // The shares and intervals do not depend on the factors.
+  EXPECT_EQ(size.wilson.share, all.wilson.share);
+  EXPECT_EQ(size.clopper_pearson.lower, all.clopper_pearson.lower);
 }
 
 TEST(PopulationShares, EveryoneSucceedingGivesAShareOfOneAndNoFit) {

@@ -64,11 +64,22 @@ struct CriterionSummary {
   std::int64_t failures_unexplained = 0;
 };
 
-/// Summarises `success` (one flag per technician, same order) over `technicians`.
+/// Which factors may explain a criterion: reach depends on the arm's size, never on its strength,
+/// so a reach criterion leaves strength out of the fit (its coefficient stays 0 and no failure is
+/// put on it, however strength happens to correlate with the failures in a finite sample).
+using FactorMask = std::array<bool, kPopulationFactors>;
+/// Every factor.
+inline constexpr FactorMask kAllFactors{true, true, true};
+/// The arm's segment lengths only (the reach criteria).
+inline constexpr FactorMask kSizeFactors{true, true, false};
+
+/// Summarises `success` (one flag per technician, same order) over `technicians`, explaining the
+/// failures by the factors in `factors` only.
 /// The logistic fit is Newton's method on the log-likelihood with a small ridge penalty
 /// (1e-3 sum b_k^2, not on b0) so that it ends when the data separate.
 /// @throws std::invalid_argument when the sizes differ or there are no technicians.
 [[nodiscard]] CriterionSummary summariseCriterion(const std::vector<Technician>& technicians,
-                                                  const std::vector<bool>& success, double confidence = 0.95);
+                                                  const std::vector<bool>& success, double confidence = 0.95,
+                                                  const FactorMask& factors = kAllFactors);
 
 }  // namespace fullarm::accessibility
