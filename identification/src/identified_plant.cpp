@@ -12,6 +12,8 @@
 namespace fullarm::identification {
 namespace {
 
+constexpr double kStructureTolerance = 1.0e-3;
+
 std::string text(double v) {
   std::ostringstream s;
   s.precision(6);
@@ -24,9 +26,11 @@ std::string text(double v) {
 }
 
 // The fixed structure must be the start joint's: otherwise the groups were identified on
-// another valve or actuator and cannot be carried by this joint's parameters.
+// another valve or actuator and cannot be carried by this joint's parameters. It is compared to
+// 0.1 %: a fit started from the joint at a slightly different angle (a cylinder's moment arm
+// changes with it) has the same valve.
 void checkStructure(const plant::JointParams& start, const GreyModel& groups, const GreyModel& own) {
-  const auto same = [](double a, double b) { return std::abs(a - b) <= 1e-6 * std::max({std::abs(a), std::abs(b), 1e-12}); };
+  const auto same = [](double a, double b) { return std::abs(a - b) <= kStructureTolerance * std::max({std::abs(a), std::abs(b), 1e-12}); };
   const struct {
     const char* name;
     double identified, plant;
