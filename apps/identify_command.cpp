@@ -390,7 +390,7 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   reports::Table vt;
   vt.caption = "Validation on the held-out experiment (thresholds from " + cfg.source.filename().string() +
                "): the simulation sees only the excitation and is judged; the one-step prediction (a Kalman filter "
-               "on the readings up to the previous sample) is reported beside it and is always the higher";
+               "on the readings up to the previous sample, correcting the model at every sample) is reported beside it";
   vt.columns = {"Channel", "Simulation fit [%]", "Required simulation fit [%]", "One-step prediction fit [%]",
                 "Autocorrelation lags outside", "Cross-correlation lags outside"};
   const auto outside = [](const id::CorrelationTest& test) {
