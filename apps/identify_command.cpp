@@ -67,8 +67,8 @@ struct Outcome {
   id::FitResult fit;
   id::ModelValidation validation_result;
   double wall_s = 0.0;
-  bool plant_written = false;  // identified_plant.yaml
-  std::string plant_note;      // why it was not written
+  bool plant_written = false;            // identified_plant.yaml
+  std::string plant_note;                // why it was not written
   std::vector<std::string> plant_notes;  // groups it carries only approximately
 };
 
@@ -208,32 +208,32 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   for (const Experiment& e : o.fit_experiments) addExperiment(e, "fit");
   addExperiment(o.validation, "validation");
   const id::ModelValidation& v = o.validation_result;
-  report.results()["identify"] = {{"joint", o.joint},
-                                  {"source", o.source},
-                                  {"start", o.start_source},
-                                  {"settings", cfg.source.string()},
-                                  {"experiments", experiments},
-                                  {"delay_samples", o.fit.model.delay_samples},
-                                  {"parameters", params},
-                                  {"cost", o.fit.cost},
-                                  {"evaluations", o.fit.evaluations},
-                                  {"fit_wall_s", o.fit.global_seconds + o.fit.polish_seconds},
-                                  {"unidentifiable", o.fit.unidentifiable},
-                                  {"identified_plant", o.plant_written ? nlohmann::json(kIdentifiedPlantFile)
-                                                                       : nlohmann::json(nullptr)},
-                                  {"identified_plant_refused", o.plant_note},
-                                  {"identified_plant_notes", o.plant_notes},
-                                  {"validation",
-                                   {{"fit_angle_percent", v.angle.fit_percent},
-                                    {"fit_torque_percent", v.torque.fit_percent},
-                                    {"prediction_fit_angle_percent", v.angle.prediction_fit_percent},
-                                    {"prediction_fit_torque_percent", v.torque.prediction_fit_percent},
-                                    {"angle_autocorrelation", correlationJson(v.angle.autocorrelation)},
-                                    {"angle_cross_correlation", correlationJson(v.angle.cross_correlation)},
-                                    {"torque_autocorrelation", correlationJson(v.torque.autocorrelation)},
-                                    {"torque_cross_correlation", correlationJson(v.torque.cross_correlation)},
-                                    {"pass", v.pass},
-                                    {"failures", v.failures}}}};
+  report.results()["identify"] = {
+      {"joint", o.joint},
+      {"source", o.source},
+      {"start", o.start_source},
+      {"settings", cfg.source.string()},
+      {"experiments", experiments},
+      {"delay_samples", o.fit.model.delay_samples},
+      {"parameters", params},
+      {"cost", o.fit.cost},
+      {"evaluations", o.fit.evaluations},
+      {"fit_wall_s", o.fit.global_seconds + o.fit.polish_seconds},
+      {"unidentifiable", o.fit.unidentifiable},
+      {"identified_plant", o.plant_written ? nlohmann::json(kIdentifiedPlantFile) : nlohmann::json(nullptr)},
+      {"identified_plant_refused", o.plant_note},
+      {"identified_plant_notes", o.plant_notes},
+      {"validation",
+       {{"fit_angle_percent", v.angle.fit_percent},
+        {"fit_torque_percent", v.torque.fit_percent},
+        {"prediction_fit_angle_percent", v.angle.prediction_fit_percent},
+        {"prediction_fit_torque_percent", v.torque.prediction_fit_percent},
+        {"angle_autocorrelation", correlationJson(v.angle.autocorrelation)},
+        {"angle_cross_correlation", correlationJson(v.angle.cross_correlation)},
+        {"torque_autocorrelation", correlationJson(v.torque.autocorrelation)},
+        {"torque_cross_correlation", correlationJson(v.torque.cross_correlation)},
+        {"pass", v.pass},
+        {"failures", v.failures}}}};
 
   reports::Section& section = report.addSection(heading);
   std::ostringstream intro;
@@ -391,14 +391,17 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   vt.caption = "Validation on the held-out experiment (thresholds from " + cfg.source.filename().string() +
                "): the simulation sees only the excitation and is judged; the one-step prediction (a Kalman filter "
                "on the readings up to the previous sample, correcting the model at every sample) is reported beside it";
-  vt.columns = {"Channel", "Simulation fit [%]", "Required simulation fit [%]", "One-step prediction fit [%]",
-                "Autocorrelation lags outside", "Cross-correlation lags outside"};
+  vt.columns = {"Channel",
+                "Simulation fit [%]",
+                "Required simulation fit [%]",
+                "One-step prediction fit [%]",
+                "Autocorrelation lags outside",
+                "Cross-correlation lags outside"};
   const auto outside = [](const id::CorrelationTest& test) {
     return std::to_string(test.outside) + " / " + std::to_string(test.lags.size());
   };
-  vt.rows.push_back({"angle", v.angle.fit_percent, cfg.validation.min_fit_angle_percent,
-                     v.angle.prediction_fit_percent, outside(v.angle.autocorrelation),
-                     outside(v.angle.cross_correlation)});
+  vt.rows.push_back({"angle", v.angle.fit_percent, cfg.validation.min_fit_angle_percent, v.angle.prediction_fit_percent,
+                     outside(v.angle.autocorrelation), outside(v.angle.cross_correlation)});
   vt.rows.push_back({"torque", v.torque.fit_percent, cfg.validation.min_fit_torque_percent,
                      v.torque.prediction_fit_percent, outside(v.torque.autocorrelation),
                      outside(v.torque.cross_correlation)});
@@ -592,8 +595,10 @@ int runIdentify(const IdentifyOptions& o) {
   const Outcome r = identify(o, out, progress, std::cout);
   reports::Report report("identify", "Identification of " + r.joint);
   report.setVerdict(r.validation_result.pass, verdictText(r));
-  report.addHeadlineNumber("fit_angle_percent", "Held-out angle fit, simulation", r.validation_result.angle.fit_percent, "%");
-  report.addHeadlineNumber("fit_torque_percent", "Held-out torque fit, simulation", r.validation_result.torque.fit_percent, "%");
+  report.addHeadlineNumber("fit_angle_percent", "Held-out angle fit, simulation", r.validation_result.angle.fit_percent,
+                           "%");
+  report.addHeadlineNumber("fit_torque_percent", "Held-out torque fit, simulation",
+                           r.validation_result.torque.fit_percent, "%");
   report.addHeadlineNumber("prediction_fit_angle_percent", "Held-out angle fit, one step ahead",
                            r.validation_result.angle.prediction_fit_percent, "%");
   report.addHeadlineNumber("wall_time_s", "Wall time", r.wall_s, "s");
@@ -610,8 +615,7 @@ int runIdentify(const IdentifyOptions& o) {
   if (r.plant_written) {
     std::cout << "Identified plant: " << (std::filesystem::absolute(out) / kIdentifiedPlantFile).string() << "\n";
   }
-  std::cout
-            << "Report: " << (std::filesystem::absolute(out) / "report.html").string() << "\n";
+  std::cout << "Report: " << (std::filesystem::absolute(out) / "report.html").string() << "\n";
   return r.validation_result.pass ? kExitPass : kExitFail;
 }
 

@@ -389,7 +389,9 @@ StateVector toVector(const State& x) {
   return v;
 }
 
-State fromVector(const StateVector& v) { return {v[0], v[1], v[2], v[3], v[4], v[5]}; }
+State fromVector(const StateVector& v) {
+  return {v[0], v[1], v[2], v[3], v[4], v[5]};
+}
 
 // One sample of the reduced model under a held command (the simulation's RK4 sub-steps).
 StateVector stepSample(const GreyModel& m, const StateVector& v, double u, double q_ref, double dt) {
@@ -479,7 +481,8 @@ Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, co
     for (int i = 0; i < kStates; ++i) {
       StateVector xp = x;
       xp[i] += kStateStep[static_cast<std::size_t>(i)];
-      f.col(i) = (stepSample(model, xp, u, q_ref, data.sample_period_s) - next) / kStateStep[static_cast<std::size_t>(i)];
+      f.col(i) =
+          (stepSample(model, xp, u, q_ref, data.sample_period_s) - next) / kStateStep[static_cast<std::size_t>(i)];
     }
     x = next;
     cov = f * cov * f.transpose() + process;

@@ -88,10 +88,10 @@ IdentificationConfig parseIdentificationConfig(std::string_view yaml_text, const
     noise.torque_nm = pred.number("torque_noise_nm", "N m");
     noise.process_torque_nm = pred.number("process_torque_nm", "N m per sample");
     noise.process_speed_radps = pred.number("process_speed_radps", "rad/s per sample");
-    for (const auto& [key, value] : {std::pair{"angle_noise_rad", noise.angle_rad},
-                                     std::pair{"torque_noise_nm", noise.torque_nm},
-                                     std::pair{"process_torque_nm", noise.process_torque_nm},
-                                     std::pair{"process_speed_radps", noise.process_speed_radps}}) {
+    for (const auto& [key, value] :
+         {std::pair{"angle_noise_rad", noise.angle_rad}, std::pair{"torque_noise_nm", noise.torque_nm},
+          std::pair{"process_torque_nm", noise.process_torque_nm},
+          std::pair{"process_speed_radps", noise.process_speed_radps}}) {
       if (!(value > 0.0)) pred.fail(key, "expected a positive standard deviation");
     }
     pred.finish();

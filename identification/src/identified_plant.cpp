@@ -30,7 +30,9 @@ std::string text(double v) {
 // 0.1 %: a fit started from the joint at a slightly different angle (a cylinder's moment arm
 // changes with it) has the same valve.
 void checkStructure(const plant::JointParams& start, const GreyModel& groups, const GreyModel& own) {
-  const auto same = [](double a, double b) { return std::abs(a - b) <= kStructureTolerance * std::max({std::abs(a), std::abs(b), 1e-12}); };
+  const auto same = [](double a, double b) {
+    return std::abs(a - b) <= kStructureTolerance * std::max({std::abs(a), std::abs(b), 1e-12});
+  };
   const struct {
     const char* name;
     double identified, plant;
@@ -56,11 +58,13 @@ IdentifiedPlantJoint plantJointWithGroups(const plant::JointParams& start, const
   const auto& v = groups.value;
   for (const int i : {kFlowGain, kStiffness, kInertia}) {
     const double x = v[static_cast<std::size_t>(i)];
-    if (!(std::isfinite(x) && x > 0.0)) refuse(start, std::string(greyParamName(i)) + " is " + text(x) + ": expected > 0");
+    if (!(std::isfinite(x) && x > 0.0))
+      refuse(start, std::string(greyParamName(i)) + " is " + text(x) + ": expected > 0");
   }
   for (const int i : {kLeakage, kViscous, kCoulomb, kStribeck}) {
     const double x = v[static_cast<std::size_t>(i)];
-    if (!(std::isfinite(x) && x >= 0.0)) refuse(start, std::string(greyParamName(i)) + " is " + text(x) + ": expected >= 0");
+    if (!(std::isfinite(x) && x >= 0.0))
+      refuse(start, std::string(greyParamName(i)) + " is " + text(x) + ": expected >= 0");
   }
   const GreyModel own = greyModelFromJoint(start, q_rad, link_inertia_kgm2, 0.0, groups.delay_samples);
   checkStructure(start, groups, own);
@@ -82,12 +86,14 @@ IdentifiedPlantJoint plantJointWithGroups(const plant::JointParams& start, const
   constexpr double kMinScale = 1.0e-6, kMaxScale = 1.0e6;
   if (target >= stiffness(kMinScale)) {
     refuse(start, "hydraulic_stiffness_nm_per_rad is " + text(target) + " N m/rad, above the " +
-                      text(stiffness(kMinScale)) + " N m/rad the actuator's swept volume alone gives at " + text(q_rad) +
+                      text(stiffness(kMinScale)) + " N m/rad the actuator's swept volume alone gives at " +
+                      text(q_rad) +
                       " rad: expected the bulk modulus or the actuator to change, which this mapping keeps");
   }
   if (target <= stiffness(kMaxScale)) {
     refuse(start, "hydraulic_stiffness_nm_per_rad is " + text(target) + " N m/rad, below the " +
-                      text(stiffness(kMaxScale)) + " N m/rad of dead volumes 1e6 times the plant's: expected a stiffness "
+                      text(stiffness(kMaxScale)) +
+                      " N m/rad of dead volumes 1e6 times the plant's: expected a stiffness "
                       "within the dead volumes' reach");
   }
   double lo = std::log(kMinScale), hi = std::log(kMaxScale);

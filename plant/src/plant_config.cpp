@@ -335,8 +335,7 @@ std::string formatPlantConfigYaml(const PlantConfig& config, const arm::ArmModel
       << ", spool_stroke_m: " << num(v.spool_stroke_m) << ", rated_flow_m3ps: " << num(v.rated_flow_m3ps)
       << ", rated_pressure_drop_pa: " << num(v.rated_pressure_drop_pa) << ", lap_pa_m: " << num(v.lap_pa_m)
       << ", lap_pb_m: " << num(v.lap_pb_m) << ", lap_at_m: " << num(v.lap_at_m) << ", lap_bt_m: " << num(v.lap_bt_m)
-      << ", edge_rounding_m: " << num(v.edge_rounding_m) << ", linear_region_pa: " << num(v.linear_region_pa)
-      << "}\n";
+      << ", edge_rounding_m: " << num(v.edge_rounding_m) << ", linear_region_pa: " << num(v.linear_region_pa) << "}\n";
     if (a.kind == ActuatorKind::kCylinder) {
       o << "    actuator: {type: cylinder, piston_area_a_m2: " << num(a.piston_area_a_m2)
         << ", piston_area_b_m2: " << num(a.piston_area_b_m2) << ", inertia_kgm2: " << num(a.inertia_kgm2) << "}\n";
@@ -347,8 +346,9 @@ std::string formatPlantConfigYaml(const PlantConfig& config, const arm::ArmModel
       throw std::invalid_argument("formatPlantConfigYaml: joint " + p.name +
                                   " has an ideal torque actuator, which the plant file cannot hold");
     }
-    o << "    chambers: {dead_volume_a_m3: " << num(c.dead_volume_a_m3) << ", dead_volume_b_m3: "
-      << num(c.dead_volume_b_m3) << ", internal_leakage_m3ps_per_pa: " << num(c.internal_leakage_m3ps_per_pa)
+    o << "    chambers: {dead_volume_a_m3: " << num(c.dead_volume_a_m3)
+      << ", dead_volume_b_m3: " << num(c.dead_volume_b_m3)
+      << ", internal_leakage_m3ps_per_pa: " << num(c.internal_leakage_m3ps_per_pa)
       << ", external_leakage_m3ps_per_pa: " << num(c.external_leakage_m3ps_per_pa)
       << ", check_valve_conductance_m3ps_per_pa: " << num(c.check_valve_conductance_m3ps_per_pa) << "}\n"
       << "    friction: {coulomb_nm: " << num(f.coulomb_nm) << ", static_nm: " << num(f.static_nm)

@@ -92,8 +92,7 @@ TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
   const fullarm::plant::PlantConfig written = fullarm::plant::loadPlantConfig(dir / "identified_plant.yaml", model);
   const int eb = fullarm::plant::findPlantJoint(written, "EB");
   const double q_hold = result["experiments"][0]["hold_rad"].get<double>();
-  const id::GreyModel own =
-      id::greyModelFromJoint(written.joints[static_cast<std::size_t>(eb)], q_hold, 0.0, 0.0, 1);
+  const id::GreyModel own = id::greyModelFromJoint(written.joints[static_cast<std::size_t>(eb)], q_hold, 0.0, 0.0, 1);
   for (const int i : {id::kFlowGain, id::kStiffness, id::kLeakage, id::kViscous, id::kCoulomb}) {
     const double want = identified.model.value[static_cast<std::size_t>(i)];
     EXPECT_NEAR(own.value[static_cast<std::size_t>(i)], want, 1e-9 * want) << id::greyParamName(i);

@@ -80,9 +80,8 @@ TEST(IdentifyTuneLoop, IdentifiedPlantGivesGainsThatPassWhereTheShippedOnesFail)
 
   // 2. Identify on it (excitation scaled down with the faster valve, so the load cell stays in range).
   const auto identified_dir = dir / "identify";
-  const auto r2 = runFullarm("identify --quiet --joint EB --duration 4 --amplitude 0.1 --plant " +
-                             truth_file.string() + " --start " + start_file.string() + " --out " +
-                             identified_dir.string());
+  const auto r2 = runFullarm("identify --quiet --joint EB --duration 4 --amplitude 0.1 --plant " + truth_file.string() +
+                             " --start " + start_file.string() + " --out " + identified_dir.string());
   ASSERT_TRUE(r2.exit_code == 0 || r2.exit_code == 1) << r2.output;
   const auto plant_file = identified_dir / "identified_plant.yaml";
   ASSERT_TRUE(std::filesystem::exists(plant_file)) << r2.output;

@@ -121,7 +121,8 @@ TEST(ValidationTest, OneStepPredictionIsExactForTheTrueModelAndBeatsSimulationFo
   EXPECT_LT(bad.angle.fit_percent, 70.0);
   EXPECT_GT(bad.angle.prediction_fit_percent, 80.0) << bad.angle.fit_percent;
   EXPECT_GT(bad.angle.prediction_fit_percent, bad.angle.fit_percent);
-  EXPECT_GT(bad.torque.prediction_fit_percent, bad.torque.fit_percent) << bad.torque.fit_percent << " " << bad.torque.prediction_fit_percent;
+  EXPECT_GT(bad.torque.prediction_fit_percent, bad.torque.fit_percent)
+      << bad.torque.fit_percent << " " << bad.torque.prediction_fit_percent;
 
   thresholds.prediction.torque_nm = 0.0;
   EXPECT_THROW((void)predictOneStep(truth, d, thresholds.prediction), std::invalid_argument);

@@ -4,14 +4,15 @@
 /// model (grey_box.hpp) is carried by one designated plant parameter, the others kept from a
 /// starting joint, so that `plant`, `tune`, `validate` and `run` can use the identified joint.
 ///
-/// | group | plant parameter set | kept | why that one |
-/// |---|---|---|---|
-/// | flow gain a = k_a K_q / D | valve.rated_flow_m3ps (scaled) | amplifier gain, stroke, area | the amplifier gain and stroke also set the laps and rounding in volts; the area sets the other groups |
-/// | hydraulic stiffness K_h = beta (D_a^2/V_a + D_b^2/V_b) | both dead volumes (one factor) | bulk modulus, air, area | the fluid is shared by every joint; the area sets a, c and the stall torque |
-/// | leakage c = C_i / D^2 | chambers.internal_leakage_m3ps_per_pa | area | |
-/// | inertia J = link + actuator | actuator.inertia_kgm2 | the arm model's link | the link's inertia is the arm model's, used by every joint |
-/// | viscous b, Coulomb tau_c | friction.viscous_nms_per_rad, coulomb_nm | smoothing, Stribeck velocity | |
-/// | Stribeck tau_st = static - Coulomb | friction.static_nm = tau_c + tau_st | | |
+/// Each group and the plant parameter that carries it (docs/identification.md has the reasons):
+/// - flow gain a = k_a K_q / D: valve.rated_flow_m3ps, scaled (the amplifier gain and stroke also
+///   set the laps and rounding in volts, the area the other groups);
+/// - hydraulic stiffness K_h = beta (D_a^2/V_a + D_b^2/V_b): both dead volumes, by one factor (the
+///   fluid is shared by every joint);
+/// - leakage c = C_i / D^2: chambers.internal_leakage_m3ps_per_pa;
+/// - inertia J = link + actuator: actuator.inertia_kgm2 (the link's is the arm model's);
+/// - viscous b, Coulomb tau_c: friction.viscous_nms_per_rad, friction.coulomb_nm;
+/// - Stribeck tau_st: friction.static_nm = tau_c + tau_st.
 ///
 /// Not written: the static load tau_g (the arm model's gravity), the offsets u_0, q_off, tau_off
 /// (the valve's null and the sensors' calibration) and the delay (the I/O device's latency).
