@@ -25,6 +25,7 @@
 #include "fullarm/identification/grey_box.hpp"
 #include "fullarm/identification/identification_config.hpp"
 #include "fullarm/identification/identified_model.hpp"
+#include "fullarm/identification/identified_plant.hpp"
 #include "fullarm/identification/joint_groups.hpp"
 #include "fullarm/identification/signal_csv.hpp"
 #include "fullarm/identification/validation.hpp"
@@ -41,6 +42,7 @@ constexpr double kBandHz = 30.0;            // excitation band (PRBS flat band, 
 constexpr int kLatencySamples = 1;          // the simulated DTS's I/O latency
 constexpr std::size_t kMaxPlotPoints = 1000;
 constexpr const char* kIdentifiedFile = "identified.yaml";
+constexpr const char* kIdentifiedPlantFile = "identified_plant.yaml";
 constexpr const char* kFitLogFile = "experiment_fit.csv";
 constexpr const char* kValidationLogFile = "experiment_validation.csv";
 
@@ -65,6 +67,9 @@ struct Outcome {
   id::FitResult fit;
   id::ModelValidation validation_result;
   double wall_s = 0.0;
+  bool plant_written = false;            // identified_plant.yaml
+  std::string plant_note;                // why it was not written
+  std::vector<std::string> plant_notes;  // groups it carries only approximately
 };
 
 id::ExperimentData dataFromLog(const id::SignalTable& log, const std::string& file) {
@@ -203,26 +208,32 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   for (const Experiment& e : o.fit_experiments) addExperiment(e, "fit");
   addExperiment(o.validation, "validation");
   const id::ModelValidation& v = o.validation_result;
-  report.results()["identify"] = {{"joint", o.joint},
-                                  {"source", o.source},
-                                  {"start", o.start_source},
-                                  {"settings", cfg.source.string()},
-                                  {"experiments", experiments},
-                                  {"delay_samples", o.fit.model.delay_samples},
-                                  {"parameters", params},
-                                  {"cost", o.fit.cost},
-                                  {"evaluations", o.fit.evaluations},
-                                  {"fit_wall_s", o.fit.global_seconds + o.fit.polish_seconds},
-                                  {"unidentifiable", o.fit.unidentifiable},
-                                  {"validation",
-                                   {{"fit_angle_percent", v.angle.fit_percent},
-                                    {"fit_torque_percent", v.torque.fit_percent},
-                                    {"angle_autocorrelation", correlationJson(v.angle.autocorrelation)},
-                                    {"angle_cross_correlation", correlationJson(v.angle.cross_correlation)},
-                                    {"torque_autocorrelation", correlationJson(v.torque.autocorrelation)},
-                                    {"torque_cross_correlation", correlationJson(v.torque.cross_correlation)},
-                                    {"pass", v.pass},
-                                    {"failures", v.failures}}}};
+  report.results()["identify"] = {
+      {"joint", o.joint},
+      {"source", o.source},
+      {"start", o.start_source},
+      {"settings", cfg.source.string()},
+      {"experiments", experiments},
+      {"delay_samples", o.fit.model.delay_samples},
+      {"parameters", params},
+      {"cost", o.fit.cost},
+      {"evaluations", o.fit.evaluations},
+      {"fit_wall_s", o.fit.global_seconds + o.fit.polish_seconds},
+      {"unidentifiable", o.fit.unidentifiable},
+      {"identified_plant", o.plant_written ? nlohmann::json(kIdentifiedPlantFile) : nlohmann::json(nullptr)},
+      {"identified_plant_refused", o.plant_note},
+      {"identified_plant_notes", o.plant_notes},
+      {"validation",
+       {{"fit_angle_percent", v.angle.fit_percent},
+        {"fit_torque_percent", v.torque.fit_percent},
+        {"prediction_fit_angle_percent", v.angle.prediction_fit_percent},
+        {"prediction_fit_torque_percent", v.torque.prediction_fit_percent},
+        {"angle_autocorrelation", correlationJson(v.angle.autocorrelation)},
+        {"angle_cross_correlation", correlationJson(v.angle.cross_correlation)},
+        {"torque_autocorrelation", correlationJson(v.torque.autocorrelation)},
+        {"torque_cross_correlation", correlationJson(v.torque.cross_correlation)},
+        {"pass", v.pass},
+        {"failures", v.failures}}}};
 
   reports::Section& section = report.addSection(heading);
   std::ostringstream intro;
@@ -231,11 +242,19 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
         << (o.source == "sim" ? "on the simulated DTS (the joint alone, its neighbours locked; a PRBS to 30 Hz "
                                 "added to the valve command about a proportional position hold)"
                               : "read from recorded logs")
-        << ", validated by pure simulation on a held-out experiment"
+        << ", validated by pure simulation (judged) and one-step-ahead prediction (reported) on a held-out experiment"
         << (o.source == "sim" ? " (a Schroeder multisine to 30 Hz)" : " (the last log)")
         << ". Fit start: " << o.start_source << ". " << o.fit.evaluations << " closed-loop simulations, cost "
         << std::setprecision(4) << o.fit.cost << ".";
   section.addParagraph(intro.str());
+  section.addParagraph(
+      o.plant_written
+          ? std::string("Plant file: ") + kIdentifiedPlantFile +
+                " is the starting plant with this joint's rated flow, dead volumes, internal leakage, actuator "
+                "inertia and friction set so that its own groups at the hold angle are the identified ones "
+                "(docs/identification.md); plant, tune, validate and run read it with --plant."
+          : std::string("No plant file: ") + o.plant_note);
+  for (const std::string& n : o.plant_notes) section.addParagraph("Plant file, approximate: " + n + ".");
   for (const Experiment& e : o.fit_experiments) {
     if (!e.completed) section.addParagraph("Fit experiment " + e.name + " stopped early: " + e.stop_reason);
   }
@@ -369,16 +388,23 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   correlationChart("Excitation-residual cross-correlation (held-out experiment)", "Lag", true);
 
   reports::Table vt;
-  vt.caption = "Validation on the held-out experiment (thresholds from " + cfg.source.filename().string() + ")";
-  vt.columns = {"Channel", "Fit [%]", "Required fit [%]", "Autocorrelation lags outside",
+  vt.caption = "Validation on the held-out experiment (thresholds from " + cfg.source.filename().string() +
+               "): the simulation sees only the excitation and is judged; the one-step prediction (a Kalman filter "
+               "on the readings up to the previous sample, correcting the model at every sample) is reported beside it";
+  vt.columns = {"Channel",
+                "Simulation fit [%]",
+                "Required simulation fit [%]",
+                "One-step prediction fit [%]",
+                "Autocorrelation lags outside",
                 "Cross-correlation lags outside"};
   const auto outside = [](const id::CorrelationTest& test) {
     return std::to_string(test.outside) + " / " + std::to_string(test.lags.size());
   };
-  vt.rows.push_back({"angle", v.angle.fit_percent, cfg.validation.min_fit_angle_percent,
+  vt.rows.push_back({"angle", v.angle.fit_percent, cfg.validation.min_fit_angle_percent, v.angle.prediction_fit_percent,
                      outside(v.angle.autocorrelation), outside(v.angle.cross_correlation)});
   vt.rows.push_back({"torque", v.torque.fit_percent, cfg.validation.min_fit_torque_percent,
-                     outside(v.torque.autocorrelation), outside(v.torque.cross_correlation)});
+                     v.torque.prediction_fit_percent, outside(v.torque.autocorrelation),
+                     outside(v.torque.cross_correlation)});
   vt.significant_digits = 4;
   section.addTable(std::move(vt));
   if (v.pass) {
@@ -392,8 +418,10 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
 
 std::string verdictText(const Outcome& o) {
   std::ostringstream s;
-  s << std::fixed << std::setprecision(1) << o.joint << " identified: held-out fit angle "
-    << o.validation_result.angle.fit_percent << " %, torque " << o.validation_result.torque.fit_percent << " % ("
+  s << std::fixed << std::setprecision(1) << o.joint << " identified: held-out simulation fit angle "
+    << o.validation_result.angle.fit_percent << " %, torque " << o.validation_result.torque.fit_percent
+    << " %; one-step prediction fit angle " << o.validation_result.angle.prediction_fit_percent << " %, torque "
+    << o.validation_result.torque.prediction_fit_percent << " % ("
     << (o.validation_result.pass ? "passes its validation" : "fails its validation") << ")";
   return s.str();
 }
@@ -454,27 +482,27 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
   // The start: a given model, or the plant joint's groups at the hold angle with the link's
   // inertia and gravity load there (the other joints at the default posture).
   const double q_hold = r.fit_experiments.front().data.hold_rad;
+  Eigen::VectorXd q = model.defaultPosture();
+  q[model_joint] = q_hold;
+  arm::ArmData arm_data(model);
+  arm::computeMassMatrix(model, arm_data, q);
+  const double link_inertia = arm_data.mass_matrix(model_joint, model_joint);
   if (!o.start.empty()) {
     const id::IdentifiedModel given = id::loadIdentifiedModel(o.start);
     r.start = given.model;
     r.start_source = o.start;
   } else {
-    Eigen::VectorXd q = model.defaultPosture();
-    q[model_joint] = q_hold;
-    arm::ArmData data(model);
-    arm::computeMassMatrix(model, data, q);
-    arm::computeGravityTorques(model, data, q);
-    r.start = id::greyModelFromJoint(jp, q_hold, data.mass_matrix(model_joint, model_joint),
-                                     data.tau_gravity[model_joint], 1);
+    arm::computeGravityTorques(model, arm_data, q);
+    r.start = id::greyModelFromJoint(jp, q_hold, link_inertia, arm_data.tau_gravity[model_joint], 1);
     // The gravity load's gradient at the hold angle (central difference), the known load stiffness.
     constexpr double kStep_rad = 1.0e-4;
     Eigen::VectorXd q_step = q;
     q_step[model_joint] = q_hold + kStep_rad;
-    arm::computeGravityTorques(model, data, q_step);
-    const double tau_up = data.tau_gravity[model_joint];
+    arm::computeGravityTorques(model, arm_data, q_step);
+    const double tau_up = arm_data.tau_gravity[model_joint];
     q_step[model_joint] = q_hold - kStep_rad;
-    arm::computeGravityTorques(model, data, q_step);
-    r.start.load_gradient_nm_per_rad = (tau_up - data.tau_gravity[model_joint]) / (2.0 * kStep_rad);
+    arm::computeGravityTorques(model, arm_data, q_step);
+    r.start.load_gradient_nm_per_rad = (tau_up - arm_data.tau_gravity[model_joint]) / (2.0 * kStep_rad);
     r.start_source = "the plant's groups of " + r.joint + " (" + plant_config.source.filename().string() + ")";
   }
   r.start.coulomb_smoothing_radps = r.config.coulomb_smoothing_radps;
@@ -497,6 +525,30 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
   identified.model = r.fit.model;
   identified.standard_error = r.fit.standard_error;
   writeTextFile(out / kIdentifiedFile, id::formatIdentifiedModelYaml(identified));
+  // The plant with the identified joint's groups carried by its designated parameters.
+  std::filesystem::remove(out / kIdentifiedPlantFile);
+  try {
+    plant::PlantConfig identified_plant = plant_config;
+    const id::IdentifiedPlantJoint carried = id::plantJointWithGroups(jp, r.fit.model, q_hold, link_inertia);
+    identified_plant.joints[static_cast<std::size_t>(joint)] = carried.joint;
+    r.plant_notes = carried.notes;
+    std::ostringstream hold;
+    hold << std::setprecision(6) << q_hold;
+    const std::vector<std::string> header = {
+        plant_config.source.filename().string() + " with " + r.joint +
+            "'s identified groups (identified.yaml, written by fullarm identify; docs/identification.md).",
+        "Set from the groups at the hold angle " + hold.str() +
+            " rad: valve.rated_flow_m3ps (flow gain), both chambers' dead volumes (hydraulic stiffness),",
+        "internal_leakage_m3ps_per_pa (leakage), actuator.inertia_kgm2 (inertia less the arm model's link),",
+        "friction coulomb_nm, static_nm and viscous_nms_per_rad. Everything else as in the starting plant."};
+    std::vector<std::string> lines = header;
+    for (const std::string& n : r.plant_notes) lines.push_back("Approximate: " + n + ".");
+    writeTextFile(out / kIdentifiedPlantFile, plant::formatPlantConfigYaml(identified_plant, model, lines));
+    r.plant_written = true;
+  } catch (const std::invalid_argument& e) {
+    r.plant_note = e.what();
+    text << "  no " << kIdentifiedPlantFile << ": " << e.what() << "\n";
+  }
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   text << verdictText(r) << "\n";
   for (const std::string& f : r.validation_result.failures) text << "  " << f << "\n";
@@ -543,19 +595,27 @@ int runIdentify(const IdentifyOptions& o) {
   const Outcome r = identify(o, out, progress, std::cout);
   reports::Report report("identify", "Identification of " + r.joint);
   report.setVerdict(r.validation_result.pass, verdictText(r));
-  report.addHeadlineNumber("fit_angle_percent", "Held-out angle fit", r.validation_result.angle.fit_percent, "%");
-  report.addHeadlineNumber("fit_torque_percent", "Held-out torque fit", r.validation_result.torque.fit_percent, "%");
+  report.addHeadlineNumber("fit_angle_percent", "Held-out angle fit, simulation", r.validation_result.angle.fit_percent,
+                           "%");
+  report.addHeadlineNumber("fit_torque_percent", "Held-out torque fit, simulation",
+                           r.validation_result.torque.fit_percent, "%");
+  report.addHeadlineNumber("prediction_fit_angle_percent", "Held-out angle fit, one step ahead",
+                           r.validation_result.angle.prediction_fit_percent, "%");
   report.addHeadlineNumber("wall_time_s", "Wall time", r.wall_s, "s");
   if (r.source == "sim") {
     report.addFile(kFitLogFile);
     report.addFile(kValidationLogFile);
   }
   report.addFile(kIdentifiedFile);
+  if (r.plant_written) report.addFile(kIdentifiedPlantFile);
   addToReport(r, report, "Identification");
   writeReport(report, out);
   std::cout << "Identified model: " << (std::filesystem::absolute(out) / kIdentifiedFile).string() << " (" << std::fixed
-            << std::setprecision(1) << r.wall_s << " s)\n"
-            << "Report: " << (std::filesystem::absolute(out) / "report.html").string() << "\n";
+            << std::setprecision(1) << r.wall_s << " s)\n";
+  if (r.plant_written) {
+    std::cout << "Identified plant: " << (std::filesystem::absolute(out) / kIdentifiedPlantFile).string() << "\n";
+  }
+  std::cout << "Report: " << (std::filesystem::absolute(out) / "report.html").string() << "\n";
   return r.validation_result.pass ? kExitPass : kExitFail;
 }
 
@@ -569,6 +629,7 @@ IdentifyDemoStep runIdentifyDemoStep(const std::filesystem::path& out_dir, repor
   for (const char* f : {kFitLogFile, kValidationLogFile, kIdentifiedFile}) {
     report.addFile(std::filesystem::path("identify") / f);
   }
+  if (r.plant_written) report.addFile(std::filesystem::path("identify") / kIdentifiedPlantFile);
   addToReport(r, report, "Identify a joint");
   IdentifyDemoStep step;
   step.pass = r.validation_result.pass;

@@ -4,6 +4,7 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -369,6 +370,123 @@ Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data
       x = axpy(axpy(axpy(axpy(x, h / 6.0, k1), h / 3.0, k2), h / 3.0, k3), h / 6.0, k4);
     }
     if (!std::isfinite(x.q) || !std::isfinite(x.w) || !std::isfinite(x.th) || std::abs(x.q) > 1e3) {
+      s.ok = false;
+      return s;
+    }
+  }
+  return s;
+}
+
+namespace {
+
+constexpr int kStates = 6;
+using StateVector = Eigen::Matrix<double, kStates, 1>;
+using StateMatrix = Eigen::Matrix<double, kStates, kStates>;
+
+StateVector toVector(const State& x) {
+  StateVector v;
+  v << x.q, x.w, x.th, x.x, x.xd, x.tf;
+  return v;
+}
+
+State fromVector(const StateVector& v) {
+  return {v[0], v[1], v[2], v[3], v[4], v[5]};
+}
+
+// One sample of the reduced model under a held command (the simulation's RK4 sub-steps).
+StateVector stepSample(const GreyModel& m, const StateVector& v, double u, double q_ref, double dt) {
+  const int substeps = m.spool_hz > 0.0 ? 2 * kSubsteps : kSubsteps;
+  const double h = dt / substeps;
+  State x = fromVector(v);
+  for (int i = 0; i < substeps; ++i) {
+    const State k1 = rhs(m, x, u, q_ref);
+    const State k2 = rhs(m, axpy(x, 0.5 * h, k1), u, q_ref);
+    const State k3 = rhs(m, axpy(x, 0.5 * h, k2), u, q_ref);
+    const State k4 = rhs(m, axpy(x, h, k3), u, q_ref);
+    x = axpy(axpy(axpy(axpy(x, h / 6.0, k1), h / 3.0, k2), h / 3.0, k3), h / 6.0, k4);
+  }
+  return toVector(x);
+}
+
+Eigen::Vector2d readings(const GreyModel& m, const StateVector& v) {
+  const State x = fromVector(v);
+  return {x.q + m.value[kAngleOffset], measuredTorque(m, x)};
+}
+
+// Finite-difference step of each state: angle, speed, hydraulic torque, spool (V), spool rate, filtered torque.
+constexpr std::array<double, kStates> kStateStep{1e-7, 1e-6, 1e-5, 1e-7, 1e-4, 1e-5};
+
+}  // namespace
+
+Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, const PredictorNoise& noise) {
+  if (!(noise.angle_rad > 0.0 && noise.torque_nm > 0.0 && noise.process_torque_nm > 0.0 &&
+        noise.process_speed_radps > 0.0)) {
+    throw std::invalid_argument("one-step prediction: every noise level must be positive");
+  }
+  const std::size_t n = data.q_rad.size();
+  Simulation s;
+  s.q_rad.resize(n);
+  s.tau_nm.resize(n);
+  s.command_v.resize(n);
+  if (n == 0) return s;
+  const auto& p = model.value;
+  // The simulation's initial state.
+  State x0;
+  x0.q = data.q_rad[0] - p[kAngleOffset];
+  x0.th = p[kLoadTorque];
+  x0.tf = p[kLoadTorque];
+  x0.x = restingValve(model);
+  const double q_ref = x0.q;
+  StateVector x = toVector(x0);
+  StateMatrix cov = StateMatrix::Zero();
+  cov(0, 0) = noise.angle_rad * noise.angle_rad;
+  cov(1, 1) = noise.process_speed_radps * noise.process_speed_radps;
+  cov(2, 2) = noise.process_torque_nm * noise.process_torque_nm;
+  if (model.torque_filter_hz > 0.0) cov(5, 5) = noise.torque_nm * noise.torque_nm;
+  StateMatrix process = StateMatrix::Zero();
+  process(1, 1) = noise.process_speed_radps * noise.process_speed_radps;
+  process(2, 2) = noise.process_torque_nm * noise.process_torque_nm;
+  const Eigen::Matrix2d r_meas =
+      Eigen::Vector2d(noise.angle_rad * noise.angle_rad, noise.torque_nm * noise.torque_nm).asDiagonal();
+  const std::size_t d = static_cast<std::size_t>(std::max(0, model.delay_samples));
+  const Eigen::Vector2d first = readings(model, x);
+  for (std::size_t j = 0; j < std::min(d, n); ++j) {
+    s.q_rad[j] = first[0];
+    s.tau_nm[j] = first[1];
+  }
+  // I9: the extended Kalman filter's predict-update cycle. State m is seen by reading m + d; the
+  // command of sample m acts over [m, m + 1].
+  for (std::size_t m = 0; m + d < n; ++m) {
+    const std::size_t j = m + d;
+    const Eigen::Vector2d predicted = readings(model, x);
+    s.q_rad[j] = predicted[0];
+    s.tau_nm[j] = predicted[1];
+    // Update with reading j.
+    Eigen::Matrix<double, 2, kStates> hm;
+    for (int i = 0; i < kStates; ++i) {
+      StateVector xp = x;
+      xp[i] += kStateStep[static_cast<std::size_t>(i)];
+      hm.col(i) = (readings(model, xp) - predicted) / kStateStep[static_cast<std::size_t>(i)];
+    }
+    const Eigen::Matrix2d innovation_cov = hm * cov * hm.transpose() + r_meas;
+    const Eigen::Matrix<double, kStates, 2> gain = cov * hm.transpose() * innovation_cov.inverse();
+    x += gain * (Eigen::Vector2d(data.q_rad[j], data.tau_nm[j]) - predicted);
+    const StateMatrix a = StateMatrix::Identity() - gain * hm;
+    cov = a * cov * a.transpose() + gain * r_meas * gain.transpose();  // Joseph form
+    // Propagate over sample m with the command the hold law gave from reading m.
+    const double u = data.hold_gain_v_per_rad * (data.hold_rad - data.q_rad[m]) + data.excitation_v[m];
+    s.command_v[m] = u;
+    const StateVector next = stepSample(model, x, u, q_ref, data.sample_period_s);
+    StateMatrix f;
+    for (int i = 0; i < kStates; ++i) {
+      StateVector xp = x;
+      xp[i] += kStateStep[static_cast<std::size_t>(i)];
+      f.col(i) =
+          (stepSample(model, xp, u, q_ref, data.sample_period_s) - next) / kStateStep[static_cast<std::size_t>(i)];
+    }
+    x = next;
+    cov = f * cov * f.transpose() + process;
+    if (!x.allFinite() || std::abs(x[0]) > 1e3) {
       s.ok = false;
       return s;
     }

@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/core/data_paths.hpp"
@@ -81,6 +82,19 @@ IdentificationConfig parseIdentificationConfig(std::string_view yaml_text, const
     if (!(c.validation.max_outside_fraction >= 0.0 && c.validation.max_outside_fraction <= 1.0)) {
       val.fail("max_outside_fraction", "expected 0..1");
     }
+    const core::YamlMap pred = val.map("prediction");
+    PredictorNoise& noise = c.validation.prediction;
+    noise.angle_rad = pred.number("angle_noise_rad", "rad");
+    noise.torque_nm = pred.number("torque_noise_nm", "N m");
+    noise.process_torque_nm = pred.number("process_torque_nm", "N m per sample");
+    noise.process_speed_radps = pred.number("process_speed_radps", "rad/s per sample");
+    for (const auto& [key, value] :
+         {std::pair{"angle_noise_rad", noise.angle_rad}, std::pair{"torque_noise_nm", noise.torque_nm},
+          std::pair{"process_torque_nm", noise.process_torque_nm},
+          std::pair{"process_speed_radps", noise.process_speed_radps}}) {
+      if (!(value > 0.0)) pred.fail(key, "expected a positive standard deviation");
+    }
+    pred.finish();
     val.finish();
     root.finish();
     return c;

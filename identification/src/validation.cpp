@@ -1,6 +1,7 @@
 #include "fullarm/identification/validation.hpp"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -98,6 +99,13 @@ ModelValidation validateModel(const GreyModel& model, const ExperimentData& data
   };
   v.angle = channel(data.q_rad, s.q_rad);
   v.torque = channel(data.tau_nm, s.tau_nm);
+  const Simulation predicted = predictOneStep(model, data, thresholds.prediction);
+  if (predicted.ok) {
+    v.angle.prediction_fit_percent = fitPercent(data.q_rad, predicted.q_rad);
+    v.torque.prediction_fit_percent = fitPercent(data.tau_nm, predicted.tau_nm);
+  } else {
+    v.angle.prediction_fit_percent = v.torque.prediction_fit_percent = std::numeric_limits<double>::quiet_NaN();
+  }
   auto check = [&](const char* name, const ChannelValidation& c, double min_fit) {
     std::ostringstream msg;
     if (c.fit_percent < min_fit) {

@@ -1,6 +1,9 @@
 #include "fullarm/plant/plant_config.hpp"
 
 #include <cstdlib>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
 #include <vector>
 
 #include "fullarm/arm/arm_yaml.hpp"
@@ -240,6 +243,125 @@ int findPlantJoint(const PlantConfig& config, std::string_view name) {
   names.reserve(config.joints.size());
   for (const JointParams& p : config.joints) names.emplace_back(p.name);
   return arm::findJointByName(names, name, config.source);
+}
+
+}  // namespace fullarm::plant
+
+namespace fullarm::plant {
+namespace {
+
+std::string num(double v) {
+  std::ostringstream s;
+  s << std::setprecision(17) << v;
+  return s.str();
+}
+
+const char* integratorName(IntegratorKind k) {
+  switch (k) {
+    case IntegratorKind::kCvodes:
+      return "cvodes";
+    case IntegratorKind::kRodas3:
+      return "rodas3";
+    case IntegratorKind::kRodas4:
+      return "rodas4";
+    case IntegratorKind::kRos34pw2:
+      return "ros34pw2";
+  }
+  return "cvodes";
+}
+
+}  // namespace
+
+std::string formatPlantConfigYaml(const PlantConfig& config, const arm::ArmModel& model,
+                                  const std::vector<std::string>& header) {
+  if (config.joints.empty()) throw std::invalid_argument("formatPlantConfigYaml: the plant has no joints");
+  const JointParams& first = config.joints.front();
+  for (const JointParams& p : config.joints) {
+    if (p.supply_pressure_pa != first.supply_pressure_pa || p.return_pressure_pa != first.return_pressure_pa ||
+        p.fluid.oil_bulk_modulus_pa != first.fluid.oil_bulk_modulus_pa ||
+        p.fluid.air_fraction != first.fluid.air_fraction || p.fluid.polytropic_index != first.fluid.polytropic_index ||
+        p.fluid.atmospheric_pressure_pa != first.fluid.atmospheric_pressure_pa) {
+      throw std::invalid_argument("formatPlantConfigYaml: joint " + p.name + " has another supply or fluid than " +
+                                  first.name + " (the file holds one of each)");
+    }
+  }
+  const UserArmParams& u = config.user_arm;
+  if (u.link < 0 || u.link >= static_cast<int>(model.joints.size())) {
+    throw std::invalid_argument("formatPlantConfigYaml: the user arm's link " + std::to_string(u.link) +
+                                " is not a joint of arm model " + model.name);
+  }
+  std::ostringstream o;
+  for (const std::string& line : header) o << "# " << line << "\n";
+  const SolverOptions& s = config.solver;
+  o << "schema_version: " << kSchemaVersion << "\n\n"
+    << "supply:\n"
+    << "  supply_pressure_pa: " << num(first.supply_pressure_pa) << "\n"
+    << "  return_pressure_pa: " << num(first.return_pressure_pa) << "\n\n"
+    << "fluid:\n"
+    << "  oil_bulk_modulus_pa: " << num(first.fluid.oil_bulk_modulus_pa) << "\n"
+    << "  air_fraction: " << num(first.fluid.air_fraction) << "\n"
+    << "  polytropic_index: " << num(first.fluid.polytropic_index) << "\n"
+    << "  atmospheric_pressure_pa: " << num(first.fluid.atmospheric_pressure_pa) << "\n\n"
+    << "solver:\n"
+    << "  rtol: " << num(s.rtol) << "\n"
+    << "  atol_spool: " << num(s.atol_spool) << "\n"
+    << "  atol_spool_rate_per_s: " << num(s.atol_spool_rate_per_s) << "\n"
+    << "  atol_pressure_pa: " << num(s.atol_pressure_pa) << "\n"
+    << "  atol_angle_rad: " << num(s.atol_angle_rad) << "\n"
+    << "  atol_velocity_radps: " << num(s.atol_velocity_radps) << "\n"
+    << "  max_steps_per_period: " << s.max_steps_per_period << "\n"
+    << "  reinit_command_jump: " << num(s.reinit_command_jump) << "\n"
+    << "  jacobian: " << (s.jacobian == JacobianKind::kAnalytic ? "analytic" : "finite_difference") << "\n"
+    << "  integrator: " << integratorName(s.integrator) << "\n\n"
+    << "user_arm:\n"
+    << "  enabled: " << (u.enabled ? "true" : "false") << "\n"
+    << "  link: " << model.joints[static_cast<std::size_t>(u.link)].name << "\n"
+    << "  point_m: [" << num(u.point_L.x()) << ", " << num(u.point_L.y()) << ", " << num(u.point_L.z()) << "]\n"
+    << "  mass_kg: " << num(u.mass_kg) << "\n"
+    << "  stiffness_n_per_m: " << num(u.stiffness_n_per_m) << "\n"
+    << "  damping_ns_per_m: " << num(u.damping_ns_per_m) << "\n\n"
+    << "noise_seed: " << config.seed << "\n\n"
+    << "joints:\n";
+  for (const JointParams& p : config.joints) {
+    const ValveParams& v = p.valve;
+    const ActuatorParams& a = p.actuator;
+    const ChamberParams& c = p.chambers;
+    const FrictionParams& f = p.friction;
+    const SensorNoiseParams& n = p.sensor_noise;
+    o << "  - name: " << p.name << "\n"
+      << "    input_mode: " << (p.input_mode == InputMode::kValveVoltage ? "valve_voltage" : "torque_loop") << "\n"
+      << "    valve: {natural_frequency_hz: " << num(v.natural_frequency_hz)
+      << ", damping_ratio: " << num(v.damping_ratio) << ", amplifier_gain_per_v: " << num(v.amplifier_gain_per_v)
+      << ", spool_stroke_m: " << num(v.spool_stroke_m) << ", rated_flow_m3ps: " << num(v.rated_flow_m3ps)
+      << ", rated_pressure_drop_pa: " << num(v.rated_pressure_drop_pa) << ", lap_pa_m: " << num(v.lap_pa_m)
+      << ", lap_pb_m: " << num(v.lap_pb_m) << ", lap_at_m: " << num(v.lap_at_m) << ", lap_bt_m: " << num(v.lap_bt_m)
+      << ", edge_rounding_m: " << num(v.edge_rounding_m) << ", linear_region_pa: " << num(v.linear_region_pa) << "}\n";
+    if (a.kind == ActuatorKind::kCylinder) {
+      o << "    actuator: {type: cylinder, piston_area_a_m2: " << num(a.piston_area_a_m2)
+        << ", piston_area_b_m2: " << num(a.piston_area_b_m2) << ", inertia_kgm2: " << num(a.inertia_kgm2) << "}\n";
+    } else if (a.kind == ActuatorKind::kRotaryVane) {
+      o << "    actuator: {type: rotary_vane, displacement_m3_per_rad: " << num(a.displacement_m3_per_rad)
+        << ", inertia_kgm2: " << num(a.inertia_kgm2) << "}\n";
+    } else {
+      throw std::invalid_argument("formatPlantConfigYaml: joint " + p.name +
+                                  " has an ideal torque actuator, which the plant file cannot hold");
+    }
+    o << "    chambers: {dead_volume_a_m3: " << num(c.dead_volume_a_m3)
+      << ", dead_volume_b_m3: " << num(c.dead_volume_b_m3)
+      << ", internal_leakage_m3ps_per_pa: " << num(c.internal_leakage_m3ps_per_pa)
+      << ", external_leakage_m3ps_per_pa: " << num(c.external_leakage_m3ps_per_pa)
+      << ", check_valve_conductance_m3ps_per_pa: " << num(c.check_valve_conductance_m3ps_per_pa) << "}\n"
+      << "    friction: {coulomb_nm: " << num(f.coulomb_nm) << ", static_nm: " << num(f.static_nm)
+      << ", stribeck_velocity_radps: " << num(f.stribeck_velocity_radps)
+      << ", viscous_nms_per_rad: " << num(f.viscous_nms_per_rad)
+      << ", smoothing_velocity_radps: " << num(f.smoothing_velocity_radps) << "}\n"
+      << "    hard_stop: {stiffness_nm_per_rad: " << num(p.hard_stop.stiffness_nm_per_rad)
+      << ", damping_s_per_rad: " << num(p.hard_stop.damping_s_per_rad) << "}\n"
+      << "    torque_loop: {gain_v_per_nm: " << num(p.torque_loop.gain_v_per_nm) << "}\n"
+      << "    sensors: {angle_noise_rad: " << num(n.angle_noise_rad) << ", torque_noise_nm: " << num(n.torque_noise_nm)
+      << ", torque_bias_nm: " << num(n.torque_bias_nm) << ", torque_filter_hz: " << num(n.torque_filter_hz) << "}\n";
+  }
+  return o.str();
 }
 
 }  // namespace fullarm::plant

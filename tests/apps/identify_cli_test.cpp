@@ -1,7 +1,8 @@
 // `fullarm identify` end to end: a short run on the simulated DTS writes its logs, identified.yaml
-// (which the library reads back), summary.json and report.html with finite parameters inside
-// their bounds; fitting the written logs again with --log gives the same parameters; bad input
-// exits 2 with a message naming the option, file or line.
+// (which the library reads back), identified_plant.yaml (a plant whose elbow has the identified
+// groups), summary.json and report.html with finite parameters inside their bounds and the
+// one-step prediction fit beside the simulation's; fitting the written logs again with --log
+// gives the same parameters; bad input exits 2 with a message naming the option, file or line.
 
 #include <gtest/gtest.h>
 
@@ -12,7 +13,10 @@
 #include <string>
 
 #include "cli_runner.hpp"
+#include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/identification/identified_model.hpp"
+#include "fullarm/identification/joint_groups.hpp"
+#include "fullarm/plant/plant_config.hpp"
 
 namespace {
 
@@ -71,6 +75,33 @@ TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
     EXPECT_NEAR(result["parameters"][name]["value"].get<double>(), plant, 0.10 * plant) << name;
   }
   EXPECT_EQ(result["validation"]["pass"].get<bool>(), r.exit_code == 0);
+  // The one-step-ahead prediction is reported beside the simulation; it corrects the model's
+  // states from the readings, so on the torque it fits at least as well.
+  const double prediction_torque = result["validation"]["prediction_fit_torque_percent"].get<double>();
+  EXPECT_TRUE(std::isfinite(result["validation"]["prediction_fit_angle_percent"].get<double>()));
+  EXPECT_GE(prediction_torque, result["validation"]["fit_torque_percent"].get<double>());
+  EXPECT_NE(r.output.find("one-step prediction fit"), std::string::npos) << r.output;
+
+  // The identified plant file: a plant YAML whose elbow has the identified groups at the hold
+  // angle (the inertia is the link's share plus the actuator's, checked in identified_plant_test),
+  // the other joints the shipped ones.
+  ASSERT_EQ(result["identified_plant"], "identified_plant.yaml") << result["identified_plant_refused"];
+  const fullarm::arm::ArmModel model = fullarm::arm::loadArmModel(fullarm::arm::defaultArmModelPath());
+  const fullarm::plant::PlantConfig shipped =
+      fullarm::plant::loadPlantConfig(fullarm::plant::defaultPlantConfigPath(), model);
+  const fullarm::plant::PlantConfig written = fullarm::plant::loadPlantConfig(dir / "identified_plant.yaml", model);
+  const int eb = fullarm::plant::findPlantJoint(written, "EB");
+  const double q_hold = result["experiments"][0]["hold_rad"].get<double>();
+  const id::GreyModel own = id::greyModelFromJoint(written.joints[static_cast<std::size_t>(eb)], q_hold, 0.0, 0.0, 1);
+  for (const int i : {id::kFlowGain, id::kStiffness, id::kLeakage, id::kViscous, id::kCoulomb}) {
+    const double want = identified.model.value[static_cast<std::size_t>(i)];
+    EXPECT_NEAR(own.value[static_cast<std::size_t>(i)], want, 1e-9 * want) << id::greyParamName(i);
+  }
+  for (std::size_t k = 0; k < written.joints.size(); ++k) {
+    if (static_cast<int>(k) == eb) continue;
+    EXPECT_EQ(written.joints[k].valve.rated_flow_m3ps, shipped.joints[k].valve.rated_flow_m3ps);
+    EXPECT_EQ(written.joints[k].chambers.dead_volume_a_m3, shipped.joints[k].chambers.dead_volume_a_m3);
+  }
 
   // The same data through --log: the same fit.
   const auto again = tempDir("log");

@@ -1,6 +1,8 @@
 // Residual tests against their statistics: a white sequence stays inside the 99 % bounds at
 // about 1 % of lags, an AR(1) sequence and a residual that is a filtered excitation do not; the
-// verdict passes the true model on noisy data and fails a model with a wrong flow gain.
+// verdict passes the true model on noisy data and fails a model with a wrong flow gain; the
+// one-step-ahead prediction of the true model on noise-free data is exact to rounding, and for a
+// wrong model the Kalman filter's prediction fits far better than its simulation.
 
 #include "fullarm/identification/validation.hpp"
 
@@ -86,6 +88,44 @@ TEST(ValidationTest, VerdictPassesTheTrueModelAndFailsAWrongOne) {
   const ModelValidation bad = validateModel(wrong, d, thresholds);
   EXPECT_FALSE(bad.pass);
   EXPECT_FALSE(bad.failures.empty());
+}
+
+TEST(ValidationTest, OneStepPredictionIsExactForTheTrueModelAndBeatsSimulationForAWrongOne) {
+  GreyModel truth;
+  truth.value = {0.4, 8.0e3, 5.0e-4, 0.06, 0.8, 0.6, 0.2, 4.0, 0.0, 0.0, 0.0};
+  truth.delay_samples = 2;
+  truth.spool_hz = 150.0;
+  truth.torque_filter_hz = 200.0;
+  truth.load_gradient_nm_per_rad = 2.0;
+  ExperimentData d;
+  d.excitation_v = prbs(1.5, 11, 3, 1, kT).value_v;
+  d.hold_gain_v_per_rad = 10.0;
+  d.q_rad.assign(d.excitation_v.size(), 0.0);
+  const Simulation s = simulateClosedLoop(truth, d);
+  ASSERT_TRUE(s.ok);
+  d.q_rad = s.q_rad;
+  d.tau_nm = s.tau_nm;
+  const PredictorNoise noise;
+  const Simulation p = predictOneStep(truth, d, noise);
+  ASSERT_TRUE(p.ok);
+  EXPECT_GT(fitPercent(d.q_rad, p.q_rad), 99.99);
+  EXPECT_GT(fitPercent(d.tau_nm, p.tau_nm), 99.99);
+  // The commands the predictor used are the hold law's on the readings, as the simulation's were.
+  for (std::size_t k = 0; k + 2 < d.q_rad.size(); k += 97) EXPECT_NEAR(p.command_v[k], s.command_v[k], 1e-9);
+
+  ValidationThresholds thresholds;
+  GreyModel wrong = truth;
+  wrong.value[kFlowGain] *= 1.5;
+  wrong.value[kLoadTorque] += 1.0;
+  const ModelValidation bad = validateModel(wrong, d, thresholds);
+  EXPECT_LT(bad.angle.fit_percent, 70.0);
+  EXPECT_GT(bad.angle.prediction_fit_percent, 80.0) << bad.angle.fit_percent;
+  EXPECT_GT(bad.angle.prediction_fit_percent, bad.angle.fit_percent);
+  EXPECT_GT(bad.torque.prediction_fit_percent, bad.torque.fit_percent)
+      << bad.torque.fit_percent << " " << bad.torque.prediction_fit_percent;
+
+  thresholds.prediction.torque_nm = 0.0;
+  EXPECT_THROW((void)predictOneStep(truth, d, thresholds.prediction), std::invalid_argument);
 }
 
 }  // namespace

@@ -115,6 +115,27 @@ struct Simulation {
 /// each sample, through the spool and the load-cell filter when the model has them.
 [[nodiscard]] Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data);
 
+/// Noise levels of the one-step-ahead predictor's Kalman filter (predictOneStep), as standard
+/// deviations.
+struct PredictorNoise {
+  double angle_rad = 3.0e-4;           ///< of the angle reading (noise and quantisation)
+  double torque_nm = 0.1;              ///< of the load-cell reading
+  double process_torque_nm = 0.2;      ///< per sample, on the hydraulic torque: what the model leaves out
+  double process_speed_radps = 0.001;  ///< per sample, on the speed
+};
+
+/// One-step-ahead prediction of `data`'s readings by `model` (MATLAB's `compare` with horizon 1):
+/// an extended Kalman filter on the reduced model, linearised at every sample by finite
+/// differences of its one-sample step, estimates the unmeasured speed, hydraulic torque, spool
+/// and filter states from the angle and load-cell readings up to the previous sample, and each
+/// reading is predicted from that estimate one step ahead. The command is the hold law on the
+/// measured angle plus the excitation, the same law the simulation closes on its own reading; with
+/// a delay of d samples reading k shows the state of sample k - d. The filter starts from the
+/// simulation's initial state.
+/// @throws std::invalid_argument for a non-positive noise level
+[[nodiscard]] Simulation predictOneStep(const GreyModel& model, const ExperimentData& data,
+                                        const PredictorNoise& noise);
+
 /// One parameter's treatment in the fit.
 struct ParamSpec {
   bool free = true;

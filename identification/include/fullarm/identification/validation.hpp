@@ -2,7 +2,8 @@
 /// @file
 /// Validation of an identified joint model on an experiment it was not fitted to: fit
 /// percentage of angle and torque as pure simulation of the closed loop (the model sees only the
-/// excitation; MATLAB's `compare` with an infinite horizon), residual autocorrelation and
+/// excitation; MATLAB's `compare` with an infinite horizon) and, reported beside it, as one-step-ahead
+/// prediction (a Kalman filter on the readings up to the previous sample; horizon 1), residual autocorrelation and
 /// excitation-residual cross-correlation against their 99 % bounds, and a verdict against
 /// thresholds (config/identification.yaml).
 
@@ -37,11 +38,14 @@ struct ValidationThresholds {
   int max_lag = 25;
   /// Largest fraction of lags outside the 99 % bounds (about 1 % for a white residual).
   double max_outside_fraction = 0.1;
+  /// Noise levels of the one-step-ahead prediction's Kalman filter (reported, not judged).
+  PredictorNoise prediction;
 };
 
 /// Validation of one channel.
 struct ChannelValidation {
-  double fit_percent = 0.0;  ///< simulation fit
+  double fit_percent = 0.0;             ///< simulation fit (the verdict's)
+  double prediction_fit_percent = 0.0;  ///< one-step-ahead prediction fit (predictOneStep), reported beside it
   CorrelationTest autocorrelation;
   CorrelationTest cross_correlation;
 };
@@ -53,7 +57,8 @@ struct ModelValidation {
   std::vector<std::string> failures;  ///< one sentence per threshold missed
 };
 
-/// Simulates `model` on `data` and judges it against `thresholds`.
+/// Simulates `model` on `data` and judges it against `thresholds` (the residual tests and the
+/// verdict are the simulation's); also predicts it one step ahead (predictOneStep) and reports that fit.
 [[nodiscard]] ModelValidation validateModel(const GreyModel& model, const ExperimentData& data,
                                             const ValidationThresholds& thresholds);
 

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -33,6 +34,17 @@ struct PlantConfig {
 /// @throws core::ConfigError
 [[nodiscard]] PlantConfig parsePlantConfig(std::string_view yaml_text, const std::filesystem::path& source,
                                            const arm::ArmModel& model);
+
+/// Writes `config` as plant YAML (the schema loadPlantConfig reads, docs/plant.md) with 17
+/// significant digits, so that parsePlantConfig of the text with the same `model` gives the same
+/// doubles. The supply, return and fluid sections are written from the first joint (the loader
+/// gives every joint the same ones); `header` lines are written first as comments. Settings the
+/// schema does not hold (SolverOptions::rigid_derivatives_once_per_period, and what comes from
+/// the arm model: limits, levers, calibrations) are not written.
+/// @throws std::invalid_argument when `config` has no joints, its joints differ in supply or
+///   fluid, or its user arm's link is not a joint of `model`.
+[[nodiscard]] std::string formatPlantConfigYaml(const PlantConfig& config, const arm::ArmModel& model,
+                                                const std::vector<std::string>& header = {});
 
 /// $FULLARM_CONFIG_DIR/dts_plant.yaml if set, else the source-tree or installed config folder.
 [[nodiscard]] std::filesystem::path defaultPlantConfigPath();
