@@ -196,7 +196,7 @@ namespace {
 /// tie weight, is no obstacle to Newton). Per massive link k (block x[4k..4k+3] = (m, h)):
 /// m > m_min, and the centre of mass in its shape as a second-order cone: a ball is
 /// |h - m a| < m r; a capsule adds s_k with 0 < s_k < m and |h - m a - s_k (b - a)| < m r
-/// (s_k / m is the point along the segment). Starts from the nominal x_nom, strictly inside.
+/// (s_k / m is the point along the segment). Starts strictly inside, near the nominal x_nom.
 Eigen::VectorXd solveConsistent(const Eigen::MatrixXd& a_mat, const Eigen::VectorXd& x_star,
                                 const Eigen::VectorXd& x_nom, const std::vector<int>& links,
                                 const std::vector<ComBound>& shapes, double m_min) {
@@ -206,17 +206,24 @@ Eigen::VectorXd solveConsistent(const Eigen::MatrixXd& a_mat, const Eigen::Vecto
   for (std::size_t k = 0; k < links.size(); ++k) {
     if ((shapes[k].b - shapes[k].a).squaredNorm() > 0.0) s_index[k] = dim++;
   }
-  // The start: x_nom, each capsule's s at the nominal centre's point along the segment, kept
-  // strictly inside (0, m).
+  // The start, strictly inside whatever the nominal is (the optimum does not depend on it): each
+  // link's mass max(m_nom, 2 m_min), its centre of mass the nominal one moved to within half the
+  // radius of the shape's segment (at a point 1 %..99 % along a capsule's), a capsule's s there.
   Eigen::VectorXd v = Eigen::VectorXd::Zero(dim);
-  v.head(nx) = x_nom;
   for (std::size_t k = 0; k < links.size(); ++k) {
-    if (s_index[k] < 0) continue;
     const auto o = static_cast<Eigen::Index>(4 * k);
-    const Eigen::Vector3d e = shapes[k].b - shapes[k].a;
-    const Eigen::Vector3d c = x_nom.segment<3>(o + 1) / x_nom[o];
-    const double t = std::clamp((c - shapes[k].a).dot(e) / e.squaredNorm(), 0.01, 0.99);
-    v[s_index[k]] = t * x_nom[o];
+    const ComBound& shape = shapes[k];
+    const double m = std::max(x_nom[o], 2.0 * m_min);
+    const Eigen::Vector3d c_nom = x_nom[o] > 0.0 ? Eigen::Vector3d(x_nom.segment<3>(o + 1) / x_nom[o]) : shape.a;
+    const Eigen::Vector3d e = shape.b - shape.a;
+    const double t = s_index[k] >= 0 ? std::clamp((c_nom - shape.a).dot(e) / e.squaredNorm(), 0.01, 0.99) : 0.0;
+    const Eigen::Vector3d p = shape.a + t * e;
+    const Eigen::Vector3d d = c_nom - p;
+    const double dist = d.norm();
+    const Eigen::Vector3d c = dist > 0.5 * shape.radius ? Eigen::Vector3d(p + d * (0.5 * shape.radius / dist)) : c_nom;
+    v[o] = m;
+    v.segment<3>(o + 1) = m * c;
+    if (s_index[k] >= 0) v[s_index[k]] = t * m;
   }
   struct Cone {  // t = alpha^T v, u = B v
     Eigen::VectorXd alpha;
@@ -271,9 +278,7 @@ Eigen::VectorXd solveConsistent(const Eigen::MatrixXd& a_mat, const Eigen::Vecto
     return phi;
   };
   if (!std::isfinite(barrier(v))) {
-    throw std::invalid_argument(
-        "gravity fit: the nominal model is on the boundary of its consistent set (a mass at the minimum or a "
-        "centre of mass on its geometry's surface); the constrained fit starts strictly inside");
+    throw std::invalid_argument("gravity fit: a link's bounding geometry has no interior (radius 0)");
   }
   const double f_scale = std::max(objective(v), 1e-300);
   double t_weight = barrier_count / f_scale;  // the barrier and objective start comparable
@@ -328,12 +333,6 @@ GravityFit fitConsistentGravityParameters(const arm::ArmModel& nominal, const st
   for (int i = 0; i < n; ++i) {
     const auto& link = nominal.joints[static_cast<std::size_t>(i)];
     if (!(link.inertial.mass_kg > 0.0)) continue;
-    if (link.inertial.mass_kg < bounds.min_mass_kg || !centreOfMassInside(nominal, i, link.inertial.com_m, bounds)) {
-      throw std::invalid_argument("gravity fit: the nominal link " + link.name + " (mass " +
-                                  std::to_string(link.inertial.mass_kg) +
-                                  " kg) is not consistent itself: its mass is below the minimum or its centre of "
-                                  "mass outside its geometry");
-    }
     links.push_back(i);
     shapes.push_back(comBound(nominal, i, bounds));
   }

@@ -57,6 +57,22 @@ TEST(ReferenceGravityTest, ConsistentFitMatchesTheReferenceBetterThanTheDefault)
   EXPECT_GT(result.nominal_vs_reference.gain[1], 1.2);
   EXPECT_GT(result.nominal_vs_reference.gain[3], 1.2);
   EXPECT_LT(result.fitted_vs_reference.heldout_rms_nm.norm(), 0.5 * result.nominal_vs_reference.heldout_rms_nm.norm());
+  EXPECT_LT(result.fitted_vs_reference.heldout_rms_nm.maxCoeff(), 1e-5);  // the reference's six printed decimals
+  EXPECT_LT(result.fitted_vs_reference.published_max_nm.maxCoeff(), 1e-5);
+}
+
+TEST(ReferenceGravityTest, RefittingFromTheFittedSetOnItsBoundsReturnsTheSameGravity) {
+  // The fitted set has active bounds (centres of mass on their capsules, masses at the minimum):
+  // as a nominal it lies on the boundary, and the fit still starts strictly inside.
+  ReferenceFitOptions options;
+  options.train_postures = 60;
+  options.heldout_postures = 20;
+  const ReferenceGravityFit first = fitToReferenceGravity(arm::test::defaultModel(), options);
+  const ReferenceGravityFit again = fitToReferenceGravity(first.fitted, options);
+  EXPECT_TRUE(again.fit.centres_inside);
+  // The published torques have six decimals: the fit reproduces them to that precision.
+  EXPECT_LT(again.fitted_vs_reference.heldout_rms_nm.maxCoeff(), 1e-5);
+  EXPECT_LT(again.fitted_vs_reference.published_max_nm.maxCoeff(), 1e-5);
 }
 
 TEST(ReferenceGravityTest, FittedSetWrittenAsArmYamlReadsBackToTheSameGravity) {

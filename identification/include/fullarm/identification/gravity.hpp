@@ -68,10 +68,10 @@ struct GravityFit {
 /// The constraint set is convex ({(m, m c): c in a convex body} is a cone), so the optimum is
 /// unique. When the unconstrained least-squares fit (fitGravityParameters) is consistent it is
 /// returned as is; otherwise a log-barrier method with Newton steps solves the constrained
-/// problem from the nominal model. `rank` and `base_directions` are those of fitGravityParameters.
-/// @throws std::invalid_argument as fitGravityParameters, or for a nominal model that is not
-///   strictly consistent itself under `bounds`; std::runtime_error when the result is not
-///   consistent within 1e-6 m
+/// problem (from a strictly consistent point near the nominal, which itself may lie on or outside
+/// the bounds). `rank` and `base_directions` are those of fitGravityParameters.
+/// @throws std::invalid_argument as fitGravityParameters, or for a bound of radius 0;
+///   std::runtime_error when the result is not consistent within 1e-6 m
 [[nodiscard]] GravityFit fitConsistentGravityParameters(const arm::ArmModel& nominal,
                                                         const std::vector<Eigen::VectorXd>& postures,
                                                         const std::vector<Eigen::VectorXd>& torques_nm,
