@@ -1,7 +1,8 @@
 #include "fullarm/identification/gravity_yaml.hpp"
 
+#include <cctype>
+#include <charconv>
 #include <cstdio>
-#include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -27,6 +28,48 @@ std::string indentOf(const std::string& line, const std::string& key) {
   return line.substr(0, at);
 }
 
+/// The joint name of a `- name: X` line ("" for any other line).
+std::string nameOf(const std::string& line) {
+  std::size_t i = line.find_first_not_of(' ');
+  if (i == std::string::npos || line.compare(i, 7, "- name:") != 0) return {};
+  i = line.find_first_not_of(' ', i + 7);
+  if (i == std::string::npos) return {};
+  std::size_t end = i;
+  while (end < line.size() && (std::isalnum(static_cast<unsigned char>(line[end])) != 0 || line[end] == '_')) ++end;
+  return line.substr(i, end - i);
+}
+
+/// `line` (an `inertia_kgm2: {xx: v, ...}` line) with every entry's number times `ratio`.
+std::string scaleInertiaLine(const std::string& line, double ratio) {
+  const std::size_t open = line.find('{');
+  const std::size_t close = line.find('}', open == std::string::npos ? 0 : open);
+  if (open == std::string::npos || close == std::string::npos) return {};
+  std::string out = line.substr(0, open + 1);
+  std::size_t i = open + 1;
+  while (i < close) {
+    const std::size_t colon = line.find(':', i);
+    if (colon == std::string::npos || colon > close) return {};
+    out += line.substr(i, colon + 1 - i);
+    const std::size_t v = line.find_first_not_of(' ', colon + 1);
+    if (v == std::string::npos || v >= close) return {};
+    double value = 0.0;
+    const auto [ptr, ec] = std::from_chars(line.data() + v, line.data() + close, value);
+    if (ec != std::errc()) return {};
+    out += ' ';
+    out += number(value * ratio);
+    i = static_cast<std::size_t>(ptr - line.data());
+    const std::size_t comma = line.find(',', i);
+    if (comma == std::string::npos || comma > close) {
+      out += line.substr(i, close - i);
+      break;
+    }
+    out += line.substr(i, comma + 1 - i);
+    i = comma + 1;
+  }
+  out += line.substr(close);
+  return out;
+}
+
 }  // namespace
 
 std::string armYamlWithGravity(std::string_view yaml_text, const std::string& source_name, const arm::ArmModel& source,
@@ -40,8 +83,6 @@ std::string armYamlWithGravity(std::string_view yaml_text, const std::string& so
     std::istringstream in{std::string(yaml_text)};
     for (std::string line; std::getline(in, line);) lines.push_back(line);
   }
-  const std::regex name_line(R"(^\s*- name:\s*([A-Za-z0-9_]+))");
-  const std::regex inertia_entry(R"((xx|yy|zz|xy|xz|yz):\s*([-+0-9.eE]+))");
   for (std::size_t j = 0; j < source.joints.size(); ++j) {
     const auto& before = source.joints[j];
     const auto& after = fitted.joints[j];
@@ -50,15 +91,14 @@ std::string armYamlWithGravity(std::string_view yaml_text, const std::string& so
     // The joint's block: from its `- name:` line to the next one.
     std::size_t begin = lines.size();
     for (std::size_t i = 0; i < lines.size(); ++i) {
-      std::smatch m;
-      if (std::regex_search(lines[i], m, name_line) && m[1] == before.name) {
+      if (nameOf(lines[i]) == before.name) {
         begin = i;
         break;
       }
     }
     if (begin == lines.size()) throw std::invalid_argument(source_name + ": no '- name: " + before.name + "' line");
     std::size_t end = begin + 1;
-    while (end < lines.size() && !std::regex_search(lines[end], name_line)) ++end;
+    while (end < lines.size() && nameOf(lines[end]).empty()) ++end;
     bool mass_done = false;
     bool com_done = false;
     bool inertia_done = false;
@@ -73,15 +113,9 @@ std::string armYamlWithGravity(std::string_view yaml_text, const std::string& so
         line = indentOf(line, "com_m") + "com_m: [" + number(c.x()) + ", " + number(c.y()) + ", " + number(c.z()) + "]";
         com_done = true;
       } else if (!inertia_done && !indentOf(line, "inertia_kgm2").empty()) {
-        std::string out;
-        auto it = std::sregex_iterator(line.begin(), line.end(), inertia_entry);
-        std::size_t last = 0;
-        for (; it != std::sregex_iterator(); ++it) {
-          out += line.substr(last, static_cast<std::size_t>(it->position()) - last);
-          out += (*it)[1].str() + ": " + number(std::stod((*it)[2].str()) * ratio);
-          last = static_cast<std::size_t>(it->position() + it->length());
-        }
-        out += line.substr(last);
+        std::string out = scaleInertiaLine(line, ratio);
+        if (out.empty())
+          throw std::invalid_argument(source_name + ": joint " + before.name + ": unreadable inertia line");
         const std::size_t hash = out.find('#');
         if (hash != std::string::npos) out.insert(hash + 1, " scaled to the fitted mass from:");
         line = out;

@@ -73,6 +73,11 @@ TEST(StaticHoldsSimTest, FittedBaseParametersPredictThePlantsGravityAtHeldOutPos
     options.max_rad.push_back(limits.max_rad);
   }
   const auto postures = devicePostures(joints, 16, 0.15, 1);
+  // A posture whose approach leaves the limits is refused before the arm moves.
+  Eigen::VectorXd too_close = postures.front();
+  too_close[3] = options.max_rad[3] - 0.03;  // elbow: 0.03 + 0.05 approach > 0.02 margin
+  EXPECT_THROW((void)runStaticHolds(device, {too_close}, options), std::invalid_argument);
+  EXPECT_EQ(device.state(), hil::IoState::kInactive);
   const StaticHoldRun run = runStaticHolds(device, postures, options);
   ASSERT_TRUE(run.completed) << run.stop_reason;
   ASSERT_EQ(run.holds.size(), 2 * postures.size());

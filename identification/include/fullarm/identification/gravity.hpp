@@ -27,11 +27,11 @@ namespace fullarm::identification {
 /// What makes a link's gravity parameters physically consistent.
 struct GravityBounds {
   double min_mass_kg = 0.01;  ///< every link that has mass in the nominal model keeps at least this
-  double free_radius_m =
-      0.05;  ///< a link without capsule geometry: its centre of mass stays within this of the nominal one
-  /// Weight of the pull towards the nominal, ||pi - pi_nom||^2, relative to the mean squared
-  /// torque residual scaled by the regressor's largest squared singular value over the rows:
-  /// small, so it only breaks ties (directions the holds do not see keep their nominal values).
+  /// A link without capsule geometry: its centre of mass stays within this of the nominal one.
+  double free_radius_m = 0.05;
+  /// Weight of the pull towards the nominal, ||pi - pi_nom||^2, against the mean squared torque
+  /// residual, times the largest diagonal entry of Y^T Y / rows (so it is scale-free): small, so
+  /// it only breaks ties (directions the holds do not see keep their nominal values).
   double tie_weight = 1e-10;
 };
 
@@ -50,7 +50,7 @@ struct GravityFit {
   Eigen::VectorXd residual_rms_nm;  ///< per joint, over the holds
   bool positive_masses = false;     ///< every link's fitted mass > 0
   /// every massive link's centre of mass inside its bounding geometry (centreOfMassInside with
-  /// the default GravityBounds, 1e-6 m of slack)
+  /// the fit's bounds, the default GravityBounds for fitGravityParameters; 1e-6 m of slack)
   bool centres_inside = false;
 };
 
