@@ -25,6 +25,7 @@
 #include "fullarm/reports/report.hpp"
 #include "global_command.hpp"
 #include "haptics_command.hpp"
+#include "gravity_command.hpp"
 #include "identify_command.hpp"
 #include "local_command.hpp"
 #include "output_files.hpp"
@@ -222,6 +223,8 @@ struct CommandLine {
   ReplayCommandOptions replay_options;
   CLI::App* identify = nullptr;
   IdentifyOptions identify_options;
+  CLI::App* gravity = nullptr;
+  GravityOptions gravity_options;
 
   CommandLine() {
     app.set_version_flag("--version", std::string(reports::fullarmVersion()));
@@ -257,6 +260,7 @@ struct CommandLine {
     local = addLocalCommand(app, local_options, table);
     replay = addReplayCommand(app, replay_options, table);
     identify = addIdentifyCommand(app, identify_options, table);
+    gravity = addGravityCommand(app, gravity_options, table);
   }
 };
 
@@ -295,6 +299,7 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
     cli.identify_options.progress = &progress;
     return runIdentify(cli.identify_options);
   }
+  if (cli.gravity->parsed()) return runGravity(cli.gravity_options, out);
   return kExitBadInput;
 }
 
