@@ -299,7 +299,15 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
     cli.identify_options.progress = &progress;
     return runIdentify(cli.identify_options);
   }
-  if (cli.gravity->parsed()) return runGravity(cli.gravity_options, out);
+  if (cli.gravity->parsed()) {
+    if (!cli.gravity_options.holds.empty()) {
+      // The random postures belong to the fit to the reference; a log brings its own postures.
+      for (const char* option : {"--postures", "--seed"}) {
+        if (cli.gravity->count(option) > 0) throw core::ConfigError("", option, "not used with --holds");
+      }
+    }
+    return runGravity(cli.gravity_options, out);
+  }
   return kExitBadInput;
 }
 

@@ -114,7 +114,8 @@ int runGravity(const GravityOptions& o, std::ostream& out) {
       joints.scatter(c.tau_nm, tau);
       torques.push_back(tau);
     }
-    const id::GravityFit fit = id::fitConsistentGravityParameters(nominal, postures, torques);
+    // The log carries the arm joints' torques only: the hand joints are left out, not read as 0 N m.
+    const id::GravityFit fit = id::fitConsistentGravityParameters(nominal, postures, torques, {}, arm_indices);
     fitted = id::withGravityParameters(nominal, fit.parameters);
     note = "fitted physically consistent to static holds (fullarm gravity --holds)";
     out << "Gravity fitted to " << combined.size() << " postures held from both sides (" << o.holds << "); " << fit.rank

@@ -48,7 +48,7 @@ struct StackedHolds {
 };
 
 StackedHolds stackHolds(const arm::ArmModel& nominal, const std::vector<Eigen::VectorXd>& postures,
-                        const std::vector<Eigen::VectorXd>& torques_nm) {
+                        const std::vector<Eigen::VectorXd>& torques_nm, const std::vector<int>& measured_joints) {
   const int n = nominal.numJoints();
   if (postures.empty() || postures.size() != torques_nm.size()) {
     throw std::invalid_argument("gravity fit: " + std::to_string(postures.size()) + " postures and " +
@@ -63,6 +63,24 @@ StackedHolds stackHolds(const arm::ArmModel& nominal, const std::vector<Eigen::V
     if (t.size() != n) throw std::invalid_argument("gravity fit: torque vector of the wrong size");
     st.y.middleRows(k * n, n) = gravityRegressor(nominal, postures[static_cast<std::size_t>(k)]);
     st.tau.segment(k * n, n) = t;
+  }
+  if (!measured_joints.empty()) {
+    // A joint whose torque was not measured is a zero row: it neither pulls the fit nor adds rank.
+    std::vector<bool> measured(static_cast<std::size_t>(n), false);
+    for (const int j : measured_joints) {
+      if (j < 0 || j >= n) {
+        throw std::invalid_argument("gravity fit: measured joint index " + std::to_string(j) + " outside 0.." +
+                                    std::to_string(n - 1));
+      }
+      measured[static_cast<std::size_t>(j)] = true;
+    }
+    for (Eigen::Index k = 0; k < st.holds; ++k) {
+      for (int j = 0; j < n; ++j) {
+        if (measured[static_cast<std::size_t>(j)]) continue;
+        st.y.row(k * n + j).setZero();
+        st.tau[k * n + j] = 0.0;
+      }
+    }
   }
   std::vector<Eigen::Index> cols;
   for (int i = 0; i < n; ++i) {
@@ -170,8 +188,9 @@ arm::ArmModel withGravityParameters(const arm::ArmModel& model, const Eigen::Vec
 }
 
 GravityFit fitGravityParameters(const arm::ArmModel& nominal, const std::vector<Eigen::VectorXd>& postures,
-                                const std::vector<Eigen::VectorXd>& torques_nm) {
-  const StackedHolds st = stackHolds(nominal, postures, torques_nm);
+                                const std::vector<Eigen::VectorXd>& torques_nm,
+                                const std::vector<int>& measured_joints) {
+  const StackedHolds st = stackHolds(nominal, postures, torques_nm, measured_joints);
   const Eigen::MatrixXd y_free = st.y * st.select;
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(y_free, Eigen::ComputeThinU | Eigen::ComputeThinV);
   const Eigen::VectorXd sv = svd.singularValues();
@@ -307,15 +326,17 @@ Eigen::VectorXd solveConsistent(const Eigen::MatrixXd& a_mat, const Eigen::Vecto
       const double decrement = -grad.dot(step);
       if (!(decrement > 1e-14)) break;
       const double value = t_weight * objective(v) + barrier(v);
+      // Backtracking to the Armijo condition; no step that meets it ends this centring.
       double alpha = 1.0;
-      for (int ls = 0; ls < 60; ++ls, alpha *= 0.5) {
+      bool descent = false;
+      for (int ls = 0; ls < 60 && !descent; ++ls) {
         const Eigen::VectorXd trial = v + alpha * step;
         const double b_trial = barrier(trial);
-        if (std::isfinite(b_trial) && t_weight * objective(trial) + b_trial <= value - 0.25 * alpha * decrement) break;
+        descent = std::isfinite(b_trial) && t_weight * objective(trial) + b_trial <= value - 0.25 * alpha * decrement;
+        if (!descent) alpha *= 0.5;
       }
-      const Eigen::VectorXd trial = v + alpha * step;
-      if (!std::isfinite(barrier(trial))) break;
-      v = trial;
+      if (!descent) break;
+      v += alpha * step;
     }
     if (barrier_count / t_weight < 1e-15 * f_scale) break;
     t_weight *= 8.0;
@@ -326,7 +347,8 @@ Eigen::VectorXd solveConsistent(const Eigen::MatrixXd& a_mat, const Eigen::Vecto
 }  // namespace
 
 GravityFit fitConsistentGravityParameters(const arm::ArmModel& nominal, const std::vector<Eigen::VectorXd>& postures,
-                                          const std::vector<Eigen::VectorXd>& torques_nm, const GravityBounds& bounds) {
+                                          const std::vector<Eigen::VectorXd>& torques_nm, const GravityBounds& bounds,
+                                          const std::vector<int>& measured_joints) {
   const int n = nominal.numJoints();
   std::vector<int> links;        // model index of each massive link (free block k = links[k])
   std::vector<ComBound> shapes;  // its centre-of-mass bound
@@ -347,13 +369,13 @@ GravityFit fitConsistentGravityParameters(const arm::ArmModel& nominal, const st
     }
     return {};
   };
-  GravityFit fit = fitGravityParameters(nominal, postures, torques_nm);
+  GravityFit fit = fitGravityParameters(nominal, postures, torques_nm, measured_joints);
   if (inconsistentLink(fit.parameters).empty()) {
     fit.centres_inside = true;
     return fit;
   }
 
-  const StackedHolds st = stackHolds(nominal, postures, torques_nm);
+  const StackedHolds st = stackHolds(nominal, postures, torques_nm, measured_joints);
   const Eigen::MatrixXd y_free = st.y * st.select;
   const auto rows = static_cast<double>(y_free.rows());
   Eigen::MatrixXd a = y_free.transpose() * y_free / rows;

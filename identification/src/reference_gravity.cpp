@@ -153,12 +153,12 @@ ReferenceGravityFit fitToReferenceGravity(const arm::ArmModel& nominal, const Re
   arm::ArmData data(reference);
   std::vector<Eigen::VectorXd> torques;
   for (const auto& q : train) {
-    // Only the arm joints' torques are the reference's (SL forces the hand joints' to zero).
-    Eigen::VectorXd tau = gravityAt(reference, data, q);
-    torques.push_back(tau);
+    torques.push_back(gravityAt(reference, data, q));
   }
   ReferenceGravityFit out;
-  out.fit = fitConsistentGravityParameters(nominal, train, torques, options.bounds);
+  // Only the arm joints' torques are the reference's: SL leaves the hand links out of its
+  // estimation and forces their torques to zero, which says nothing about our hand links' load.
+  out.fit = fitConsistentGravityParameters(nominal, train, torques, options.bounds, arm);
   out.fitted = withGravityParameters(nominal, out.fit.parameters);
   out.fitted_vs_reference = compare(out.fitted, reference, arm, train, heldout);
   out.nominal_vs_reference = compare(nominal, reference, arm, train, heldout);

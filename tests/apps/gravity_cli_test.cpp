@@ -1,9 +1,11 @@
 // `fullarm gravity` end to end: the fit to the reference writes an arm YAML that loads and
-// whose gravity is the reference's at a published posture; a holds log is fitted; a malformed
-// log exits 2 naming the line.
+// whose gravity is the reference's at a published posture; a holds log is fitted (the written
+// arm's gravity against the logged torques, and the residual the command reports); a malformed
+// log exits 2 naming the line; the random postures' options are refused beside a log.
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -67,13 +69,47 @@ TEST(GravityCli, HoldsLogIsFittedAndAMalformedOneNamesTheLine) {
   const Result ok =
       runFullarm("gravity --holds " + (dir / "holds.csv").string() + " --quiet --out " + (dir / "out").string());
   ASSERT_EQ(ok.exit_code, 0) << ok.output;
-  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "arm.yaml"));
+  // The written arm's gravity at the three postures, against the logged torques: the RMS per
+  // joint is the residual gravity.csv reports (to the YAML's and the CSV's digits), and small
+  // against the torques themselves (a fit to 3 postures x 7 joints of the reference's own load).
+  const fullarm::arm::ArmModel model = fullarm::arm::loadArmModel(dir / "out" / "arm.yaml");
+  fullarm::arm::ArmData data(model);
+  Eigen::VectorXd squared = Eigen::VectorXd::Zero(7);
+  Eigen::VectorXd torque_squared = Eigen::VectorXd::Zero(7);
+  for (const auto& hold : id::publishedGravity()) {
+    Eigen::VectorXd q = model.defaultPosture();
+    for (int k = 0; k < 7; ++k) q[k] = hold.q_rad[static_cast<std::size_t>(k)];
+    fullarm::arm::computeGravityTorques(model, data, q);
+    for (int k = 0; k < 7; ++k) {
+      const double logged = hold.tau_nm[static_cast<std::size_t>(k)];
+      squared[k] += (data.tau_gravity[k] - logged) * (data.tau_gravity[k] - logged);
+      torque_squared[k] += logged * logged;
+    }
+  }
+  std::ifstream csv(dir / "out" / "gravity.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line, "joint,residual_rms_nm");
+  for (int k = 0; k < 7; ++k) {
+    ASSERT_TRUE(std::getline(csv, line)) << "joint " << k;
+    const double reported = std::stod(line.substr(line.find(',') + 1));
+    const double rms = std::sqrt(squared[k] / 3.0);
+    EXPECT_NEAR(rms, reported, 1e-5 + 1e-4 * reported) << line;
+    EXPECT_LT(rms, 0.01 * std::sqrt(torque_squared[k] / 3.0)) << line;
+  }
   { std::ofstream(dir / "bad.csv") << header << rows.str() << "99.0,3,2,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n"; }
   const Result bad =
       runFullarm("gravity --holds " + (dir / "bad.csv").string() + " --quiet --out " + (dir / "out2").string());
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("bad.csv:8"), std::string::npos) << bad.output;
   EXPECT_NE(bad.output.find("side_sign"), std::string::npos) << bad.output;
+  for (const char* option : {"--postures 40", "--seed 3"}) {
+    const Result both = runFullarm("gravity --holds " + (dir / "holds.csv").string() + " " + option +
+                                   " --quiet --out " + (dir / "out3").string());
+    EXPECT_EQ(both.exit_code, 2) << option << "\n" << both.output;
+    EXPECT_NE(both.output.find(std::string(option).substr(0, std::string(option).find(' '))), std::string::npos)
+        << both.output;
+  }
 }
 
 }  // namespace

@@ -108,7 +108,9 @@ TEST(StaticHoldsSimTest, FittedBaseParametersPredictThePlantsGravityAtHeldOutPos
         std::max(worst_q_error, (c.q_rad - postures[static_cast<std::size_t>(c.posture_index)]).cwiseAbs().maxCoeff());
   }
   std::printf("largest hold error from the commanded posture %.4f rad\n", worst_q_error);
-  const GravityFit fit = fitGravityParameters(nominal, q_fit, tau_fit);
+  std::vector<int> measured;
+  for (int k = 0; k < joints.size(); ++k) measured.push_back(joints.modelIndex(k));
+  const GravityFit fit = fitGravityParameters(nominal, q_fit, tau_fit, measured);
   ASSERT_TRUE(fit.positive_masses);
   const arm::ArmModel fitted = withGravityParameters(nominal, fit.parameters);
   std::printf("residual per joint [N m]:");

@@ -56,11 +56,14 @@ struct GravityFit {
 
 /// Fits pi to measured holding torques: `torques_nm[k]` holds the arm still at `postures[k]`
 /// (both configuration vectors). pi = pi_nom + Y^+ (tau - Y pi_nom) over the links that have
-/// mass in `nominal` (massless links stay massless).
-/// @throws std::invalid_argument for no holds or vectors of the wrong size
+/// mass in `nominal` (massless links stay massless). `measured_joints` (model indices; empty: all)
+/// are the joints whose torques were measured: the others' rows are left out of the fit (a hand
+/// joint a log does not carry is not a measured 0 N m), and their residual is 0.
+/// @throws std::invalid_argument for no holds, vectors of the wrong size or a joint index out of range
 [[nodiscard]] GravityFit fitGravityParameters(const arm::ArmModel& nominal,
                                               const std::vector<Eigen::VectorXd>& postures,
-                                              const std::vector<Eigen::VectorXd>& torques_nm);
+                                              const std::vector<Eigen::VectorXd>& torques_nm,
+                                              const std::vector<int>& measured_joints = {});
 
 /// The physically consistent fit: minimises the mean squared torque residual plus
 /// `bounds.tie_weight` times the pull towards the nominal, subject to every massive link's mass
@@ -69,12 +72,14 @@ struct GravityFit {
 /// unique. When the unconstrained least-squares fit (fitGravityParameters) is consistent it is
 /// returned as is; otherwise a log-barrier method with Newton steps solves the constrained
 /// problem (from a strictly consistent point near the nominal, which itself may lie on or outside
-/// the bounds). `rank` and `base_directions` are those of fitGravityParameters.
+/// the bounds). `rank` and `base_directions` are those of fitGravityParameters, and so is
+/// `measured_joints`.
 /// @throws std::invalid_argument as fitGravityParameters, or for a bound of radius 0;
 ///   std::runtime_error when the result is not consistent within 1e-6 m
 [[nodiscard]] GravityFit fitConsistentGravityParameters(const arm::ArmModel& nominal,
                                                         const std::vector<Eigen::VectorXd>& postures,
                                                         const std::vector<Eigen::VectorXd>& torques_nm,
-                                                        const GravityBounds& bounds = {});
+                                                        const GravityBounds& bounds = {},
+                                                        const std::vector<int>& measured_joints = {});
 
 }  // namespace fullarm::identification

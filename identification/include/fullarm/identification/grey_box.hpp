@@ -131,7 +131,8 @@ struct PredictorNoise {
 /// reading is predicted from that estimate one step ahead. The command is the hold law on the
 /// measured angle plus the excitation, the same law the simulation closes on its own reading; with
 /// a delay of d samples reading k shows the state of sample k - d. The filter starts from the
-/// simulation's initial state.
+/// simulation's initial state, so the first d readings (before any reading reaches the filter)
+/// are that state's readings, as in the simulation.
 /// @throws std::invalid_argument for a non-positive noise level
 [[nodiscard]] Simulation predictOneStep(const GreyModel& model, const ExperimentData& data,
                                         const PredictorNoise& noise);
