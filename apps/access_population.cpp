@@ -155,8 +155,9 @@ Setup makeSetup(const AccessOptions& o) {
   s.spec.samples = s.population.technicians;
   s.spec.seed = s.population.seed;
   s.spec.values_per_sample = static_cast<int>(kColumns);
-  s.spec.input_hash = core::sweepInputHash(withoutPaths(d).dump() + "\n" + readText(s.scene.source) + "\n" +
-                                           readText(arm_file) + "\n" + readText(human_file));
+  s.spec.input_hash =
+      core::sweepInputHash(withoutPaths(d).dump() + "\n" + readText(s.scene.source) + "\n" + readText(arm_file) + "\n" +
+                           readText(human_file) + "\n" + readText(haptics::defaultHapticsParamsPath()));
   return s;
 }
 
@@ -282,7 +283,8 @@ void writePopulation(const nlohmann::json& task, const core::SweepResults& all, 
   reports::Table shares;
   shares.caption =
       "Shares of the population with 95 % intervals, and the failures split by the factor that limits "
-      "each (a logistic fit on the standardised log segment lengths and log strength)";
+      "each (a logistic fit on the standardised log segment lengths for the reach rows, and on those "
+      "and log strength for the push rows)";
   shares.columns = {"Criterion",
                     "Successes",
                     "Share",

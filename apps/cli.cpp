@@ -286,6 +286,12 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
   if (cli.haptics_query->parsed()) return runHapticsQuery(cli.haptics_options);
   if (cli.access_merge->parsed()) return runAccessMerge(cli.access_merge_options);
   if (cli.access->parsed()) {
+    if (!cli.access_options.population) {
+      // The population's own options mean nothing to one arm: refuse them rather than ignore them.
+      for (const char* option : {"--mix", "--threads", "--repair-iterations"}) {
+        if (cli.access->count(option) > 0) throw core::ConfigError("", option, "needs --population");
+      }
+    }
     cli.access_options.progress = &progress;
     return cli.access_options.population ? runAccessPopulation(cli.access_options) : runAccess(cli.access_options);
   }

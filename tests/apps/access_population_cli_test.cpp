@@ -150,7 +150,8 @@ TEST(AccessPopulationOptionsTest, BadOptionsExitTwoNamingTheOption) {
         Case{"--population 5 --mix -0.1", "--mix"}, Case{"--population 5 --shard 0/2 --out " + x, "--shard"},
         Case{"--population 5 --shard 3/2 --out " + x, "--shard"},
         Case{"--population 5 --shard a/b --out " + x, "--shard"}, Case{"--population 5 --shard 1/2", "--shard"},
-        Case{"--shard 1/2 --out " + x, "--shard"}}) {
+        Case{"--shard 1/2 --out " + x, "--shard"}, Case{"--mix 0.3", "--mix"}, Case{"--threads 2", "--threads"},
+        Case{"--repair-iterations 50", "--repair-iterations"}}) {
     const auto r = runFullarm(base + c.args);
     EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
     EXPECT_NE(r.output.find(c.names), std::string::npos) << c.args << "\n" << r.output;
