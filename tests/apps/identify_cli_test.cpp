@@ -75,11 +75,10 @@ TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
     EXPECT_NEAR(result["parameters"][name]["value"].get<double>(), plant, 0.10 * plant) << name;
   }
   EXPECT_EQ(result["validation"]["pass"].get<bool>(), r.exit_code == 0);
-  // The one-step-ahead prediction is reported beside the simulation; it corrects the model's
-  // states from the readings, so on the torque it fits at least as well.
-  const double prediction_torque = result["validation"]["prediction_fit_torque_percent"].get<double>();
-  EXPECT_TRUE(std::isfinite(result["validation"]["prediction_fit_angle_percent"].get<double>()));
-  EXPECT_GE(prediction_torque, result["validation"]["fit_torque_percent"].get<double>());
+  // The one-step-ahead prediction is reported beside the simulation (its fit, not the
+  // simulation's, depends on the filter's noise levels: no ordering between the two is asserted).
+  EXPECT_GE(result["validation"]["prediction_fit_angle_percent"].get<double>(), 90.0);
+  EXPECT_GE(result["validation"]["prediction_fit_torque_percent"].get<double>(), 90.0);
   EXPECT_NE(r.output.find("one-step prediction fit"), std::string::npos) << r.output;
 
   // The identified plant file: a plant YAML whose elbow has the identified groups at the hold

@@ -1,5 +1,5 @@
 // The loop closes: on a simulated elbow whose valve flow gain is four times and whose chambers'
-// dead volumes are 0.4 times the shipped plant's, the shipped gains fail `validate`; `identify`
+// dead volumes are 0.7 times the shipped plant's, the shipped gains fail `validate`; `identify`
 // on that plant (started from the shipped plant's groups) writes a plant file whose groups lie
 // within 10 % of the perturbed plant's own (greyModelFromJoint), and `tune` on that file gives
 // gains that pass `validate` on the perturbed plant. Only the elbow is tuned (the tuner's
