@@ -276,6 +276,10 @@ void LcmPublisher::run() {
       // has to wake this thread (no system call on the real-time side); flush() and stop() end
       // the wait early.
       (void)wake_.try_acquire_until(std::min(until, now + poll));
+      // Spend wake-ups left over from flush()'s repeated releases, so the next poll waits its
+      // full period instead of returning at once.
+      while (wake_.try_acquire()) {
+      }
       continue;
     }
     // Idle: block until a push wakes the thread (the first push after the pause pays one
