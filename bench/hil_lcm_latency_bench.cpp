@@ -103,7 +103,9 @@ MinimaSetRecord set64() {
 }
 
 /// Fragments of a 64-minimum set, and the encoded size of its first (full) fragment.
-int setFragments() { return fragmentCount(64); }
+int setFragments() {
+  return fragmentCount(64);
+}
 std::size_t fullFragmentBytes() {
   std::vector<std::uint8_t> b;
   encodeMessage(toFragment(set64(), 0, 0), b);
@@ -299,7 +301,8 @@ void jointState(int n, std::vector<double>& us) {
     while (!done.load()) {
       receiver.drainWait(0.01);
       const std::int64_t t = nowNs();
-      if (const JointStateRecord* j = receiver.takeJointState()) us.push_back(static_cast<double>(t - j->utime_us) * 1e-3);
+      if (const JointStateRecord* j = receiver.takeJointState())
+        us.push_back(static_cast<double>(t - j->utime_us) * 1e-3);
     }
   });
   {
@@ -389,8 +392,8 @@ int main(int argc, char** argv) {
   const int k = setFragments();
   const std::size_t bytes = fullFragmentBytes();
   const int per_round = n / kRounds;
-  std::vector<double> floor1, floor1_send, floor_k, floor_k_send, direct, direct_send, inl, inl_first, inl_span,
-      poll, poll_first, poll_span, js, exchange, encode, decode;
+  std::vector<double> floor1, floor1_send, floor_k, floor_k_send, direct, direct_send, inl, inl_first, inl_span, poll,
+      poll_first, poll_span, js, exchange, encode, decode;
   for (int r = 0; r < kRounds; ++r) {
     floorPath(per_round, 1, bytes, floor1, floor1_send);
     floorPath(per_round, k, bytes, floor_k, floor_k_send);

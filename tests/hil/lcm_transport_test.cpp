@@ -404,7 +404,7 @@ TEST(LcmTransport, InlineMinimaSetsAreSentBeforeThePushReturns) {
     options.poll_window_s = 10.0;
     LcmPublisher pub(lcm, options);
     ASSERT_TRUE(pub.pushJointState(makeJointState(1)));
-    pub.flush();  // a record went out: the thread now polls
+    pub.flush();                                                 // a record went out: the thread now polls
     std::this_thread::sleep_for(std::chrono::milliseconds(50));  // flush's extra wakes are spent
     const std::uint64_t wakeups_before = pub.counters().push_wakeups;
     ASSERT_TRUE(pub.pushMinimaSet(*set));
