@@ -83,6 +83,15 @@ State axpy(const State& x, double h, const State& d) noexcept {
   return {x.q + h * d.q, x.w + h * d.w, x.th + h * d.th, x.x + h * d.x, x.xd + h * d.xd, x.tf + h * d.tf};
 }
 
+// One classical RK4 step of length h under the held command u.
+State rk4Step(const GreyModel& m, const State& x, double u, double q_ref, double h) noexcept {
+  const State k1 = rhs(m, x, u, q_ref);
+  const State k2 = rhs(m, axpy(x, 0.5 * h, k1), u, q_ref);
+  const State k3 = rhs(m, axpy(x, 0.5 * h, k2), u, q_ref);
+  const State k4 = rhs(m, axpy(x, h, k3), u, q_ref);
+  return axpy(axpy(axpy(axpy(x, h / 6.0, k1), h / 3.0, k2), h / 3.0, k3), h / 6.0, k4);
+}
+
 double measuredTorque(const GreyModel& m, const State& x) noexcept {
   return (m.torque_filter_hz > 0.0 ? x.tf : cellTorque(m, x)) + m.value[kTorqueOffset];
 }
@@ -362,13 +371,7 @@ Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data
     s.tau_nm[k] = out_tau[seen];
     const double u = data.hold_gain_v_per_rad * (data.hold_rad - s.q_rad[k]) + data.excitation_v[k];
     s.command_v[k] = u;
-    for (int i = 0; i < substeps; ++i) {
-      const State k1 = rhs(model, x, u, q_ref);
-      const State k2 = rhs(model, axpy(x, 0.5 * h, k1), u, q_ref);
-      const State k3 = rhs(model, axpy(x, 0.5 * h, k2), u, q_ref);
-      const State k4 = rhs(model, axpy(x, h, k3), u, q_ref);
-      x = axpy(axpy(axpy(axpy(x, h / 6.0, k1), h / 3.0, k2), h / 3.0, k3), h / 6.0, k4);
-    }
+    for (int i = 0; i < substeps; ++i) x = rk4Step(model, x, u, q_ref, h);
     if (!std::isfinite(x.q) || !std::isfinite(x.w) || !std::isfinite(x.th) || std::abs(x.q) > 1e3) {
       s.ok = false;
       return s;
@@ -398,13 +401,7 @@ StateVector stepSample(const GreyModel& m, const StateVector& v, double u, doubl
   const int substeps = m.spool_hz > 0.0 ? 2 * kSubsteps : kSubsteps;
   const double h = dt / substeps;
   State x = fromVector(v);
-  for (int i = 0; i < substeps; ++i) {
-    const State k1 = rhs(m, x, u, q_ref);
-    const State k2 = rhs(m, axpy(x, 0.5 * h, k1), u, q_ref);
-    const State k3 = rhs(m, axpy(x, 0.5 * h, k2), u, q_ref);
-    const State k4 = rhs(m, axpy(x, h, k3), u, q_ref);
-    x = axpy(axpy(axpy(axpy(x, h / 6.0, k1), h / 3.0, k2), h / 3.0, k3), h / 6.0, k4);
-  }
+  for (int i = 0; i < substeps; ++i) x = rk4Step(m, x, u, q_ref, h);
   return toVector(x);
 }
 
