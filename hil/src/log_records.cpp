@@ -338,7 +338,7 @@ fullarm_lcm::minima_set_t toFragment(const MinimaSetRecord& set, int index, std:
   return m;
 }
 
-void checkFragment(const fullarm_lcm::minima_set_t& f) {
+int checkFragment(const fullarm_lcm::minima_set_t& f) {
   const std::string where = "minima_set_t (set " + std::to_string(f.set_id) + ", fragment " +
                             std::to_string(f.fragment_index) + ")";
   checkCount(where.c_str(), "num_minima_total", f.num_minima_total, kMaxMinimaPerSet);
@@ -346,28 +346,42 @@ void checkFragment(const fullarm_lcm::minima_set_t& f) {
   checkCount(where.c_str(), "num_minima", f.num_minima, kMaxMinimaPerFragment);
   checkSize(where.c_str(), "q_rad", f.q_rad, f.num_joints);
   checkSize(where.c_str(), "minima", f.minima, f.num_minima);
-  const int count = fragmentCount(f.num_minima_total);
-  if (f.fragment_count != count) {
-    throw RecordError(where + ": fragment_count = " + std::to_string(f.fragment_count) + ", expected " +
-                      std::to_string(count) + " for " + std::to_string(f.num_minima_total) + " minima");
-  }
-  checkCount(where.c_str(), "fragment_index", f.fragment_index, count - 1);
-  const int first = f.fragment_index * kMaxMinimaPerFragment;
-  const int expected_n = std::min(kMaxMinimaPerFragment, f.num_minima_total - first);
-  if (f.first_minimum_index != first || f.num_minima != expected_n) {
-    throw RecordError(where + ": carries minima " + std::to_string(f.first_minimum_index) + " .. +" +
-                      std::to_string(f.num_minima) + ", expected " + std::to_string(first) + " .. +" +
-                      std::to_string(expected_n));
+  // The fragment's place in its set under a layout of `per` minima per fragment, or "" when it
+  // fits that layout.
+  auto mismatch = [&f](int per) -> std::string {
+    const int total = f.num_minima_total;
+    const int count = total == 0 ? 1 : (total + per - 1) / per;
+    if (f.fragment_count != count) {
+      return "fragment_count = " + std::to_string(f.fragment_count) + ", expected " + std::to_string(count) + " for " +
+             std::to_string(total) + " minima";
+    }
+    if (f.fragment_index < 0 || f.fragment_index >= count) {
+      return "fragment_index = " + std::to_string(f.fragment_index) + " outside 0 .. " + std::to_string(count - 1);
+    }
+    const int first = f.fragment_index * per;
+    const int expected_n = std::min(per, total - first);
+    if (f.first_minimum_index != first || f.num_minima != expected_n) {
+      return "carries minima " + std::to_string(f.first_minimum_index) + " .. +" + std::to_string(f.num_minima) +
+             ", expected " + std::to_string(first) + " .. +" + std::to_string(expected_n);
+    }
+    return {};
+  };
+  int per = kMaxMinimaPerFragment;
+  const std::string current = mismatch(kMaxMinimaPerFragment);
+  if (!current.empty()) {
+    if (!mismatch(kLegacyMinimaPerFragment).empty()) throw RecordError(where + ": " + current);
+    per = kLegacyMinimaPerFragment;
   }
   for (const fullarm_lcm::minimum_t& m : f.minima) (void)fromMessage(m);
+  return per;
 }
 
 bool MinimaSetAssembler::add(const fullarm_lcm::minima_set_t& f) {
-  checkFragment(f);
+  const int per = checkFragment(f);
   const std::string where = "minima_set_t (set " + std::to_string(f.set_id) + ", fragment " +
                             std::to_string(f.fragment_index) + ")";
-  const int count = fragmentCount(f.num_minima_total);
-  const int first = f.fragment_index * kMaxMinimaPerFragment;
+  const int count = f.fragment_count;  // checked against the total in the fragment's layout
+  const int first = f.first_minimum_index;
   if (building_ && f.set_id < building_id_) {
     // An older set, unless its producer restarted its numbering (SequenceTracker's rules, by
     // set: a jump back beyond kRestartJump, or kRestartRun older sets in a row, increasing).
@@ -393,6 +407,7 @@ bool MinimaSetAssembler::add(const fullarm_lcm::minima_set_t& f) {
     building_ = true;
     building_id_ = f.set_id;
     expected_fragments_ = count;
+    fragment_size_ = per;
     have_.fill(false);
     have_count_ = 0;
     set_.utime_us = f.utime;
@@ -411,8 +426,9 @@ bool MinimaSetAssembler::add(const fullarm_lcm::minima_set_t& f) {
       ++ignored_;  // the set is complete already, or this fragment came twice
       return false;
     }
-    const bool same = set_.computed_tick == f.computed_tick && set_.adopted_tick == f.adopted_tick &&
-                      set_.num_minima == f.num_minima_total && set_.num_joints == f.num_joints &&
+    const bool same = per == fragment_size_ && set_.computed_tick == f.computed_tick &&
+                      set_.adopted_tick == f.adopted_tick && set_.num_minima == f.num_minima_total &&
+                      set_.num_joints == f.num_joints &&
                       std::equal(f.q_rad.begin(), f.q_rad.end(), set_.q_rad.begin(),
                                  [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; });
     if (!same) throw RecordError(where + ": its header disagrees with the set's other fragments");

@@ -250,6 +250,69 @@ TEST(LogRecords, FragmentsReassembleInAnyOrder) {
   }
 }
 
+// A set split in the earlier layout, sliced here from the current fragments' minima.
+std::vector<fullarm_lcm::minima_set_t> legacyFragments(const MinimaSetRecord& set) {
+  const int total = set.num_minima;
+  std::vector<fullarm_lcm::minimum_t> minima;
+  for (int i = 0; i < fragmentCount(total); ++i) {
+    const fullarm_lcm::minima_set_t f = toFragment(set, i, 0);
+    minima.insert(minima.end(), f.minima.begin(), f.minima.end());
+  }
+  const int count = total == 0 ? 1 : (total + kLegacyMinimaPerFragment - 1) / kLegacyMinimaPerFragment;
+  std::vector<fullarm_lcm::minima_set_t> out;
+  for (int i = 0; i < count; ++i) {
+    fullarm_lcm::minima_set_t f = toFragment(set, 0, 50 + i);  // the header
+    f.fragment_index = static_cast<std::int16_t>(i);
+    f.fragment_count = static_cast<std::int16_t>(count);
+    const int first = i * kLegacyMinimaPerFragment;
+    const int n = std::min(kLegacyMinimaPerFragment, total - first);
+    f.first_minimum_index = static_cast<std::int16_t>(first);
+    f.num_minima = static_cast<std::int16_t>(n);
+    f.minima.clear();
+    for (int k = 0; k < n; ++k) f.minima.push_back(minima[static_cast<std::size_t>(first + k)]);
+    out.push_back(f);
+  }
+  return out;
+}
+
+TEST(LogRecords, SetsInTheEarlierTenMinimumLayoutStillReassemble) {
+  for (const int n : {0, 7, 10, 11, 20, 21, 64, kMaxMinimaPerSet}) {
+    const MinimaSetRecord set = makeSet(9, n);
+    std::vector<fullarm_lcm::minima_set_t> fragments = legacyFragments(set);
+    for (const auto& f : fragments) {
+      // Sets of up to ten minima are one fragment, the same in both layouts.
+      EXPECT_EQ(checkFragment(f), n > kLegacyMinimaPerFragment ? kLegacyMinimaPerFragment : kMaxMinimaPerFragment) << n;
+    }
+    std::mt19937 rng(static_cast<unsigned>(n) + 7U);
+    std::shuffle(fragments.begin(), fragments.end(), rng);
+    MinimaSetAssembler assembler;
+    for (std::size_t i = 0; i < fragments.size(); ++i) {
+      EXPECT_EQ(assembler.add(fragments[i]), i + 1 == fragments.size()) << n << " " << i;
+    }
+    expectSameSet(assembler.set(), set);
+  }
+}
+
+TEST(LogRecords, ASetMixingTheTwoLayoutsIsRejected) {
+  // 20 minima: two fragments in either layout (11 + 9, or 10 + 10), so only the layout differs.
+  const MinimaSetRecord set = makeSet(4, 20);
+  const std::vector<fullarm_lcm::minima_set_t> legacy = legacyFragments(set);
+  ASSERT_EQ(legacy.size(), 2u);
+  ASSERT_EQ(fragmentCount(20), 2);
+  MinimaSetAssembler assembler;
+  EXPECT_FALSE(assembler.add(toFragment(set, 0, 0)));
+  EXPECT_THROW(assembler.add(legacy[1]), RecordError);
+  // A fragment that fits neither layout names what the current one expects.
+  fullarm_lcm::minima_set_t f = legacy[1];
+  f.first_minimum_index = 12;
+  try {
+    (void)checkFragment(f);
+    FAIL() << "no error";
+  } catch (const RecordError& e) {
+    EXPECT_NE(std::string(e.what()).find("expected 11 .. +9"), std::string::npos) << e.what();
+  }
+}
+
 TEST(LogRecords, AssemblerAbandonsAnIncompleteSetAndIgnoresStaleFragments) {
   const MinimaSetRecord a = makeSet(1, 35);  // 4 fragments
   const MinimaSetRecord b = makeSet(2, 15);  // 2 fragments
@@ -270,17 +333,17 @@ TEST(LogRecords, CheckFragmentNamesWhatIsInconsistent) {
   fullarm_lcm::minima_set_t f = toFragment(set, 2, 0);
   f.fragment_count = 7;
   try {
-    checkFragment(f);
+    (void)checkFragment(f);
     FAIL() << "no error";
   } catch (const RecordError& e) {
     EXPECT_NE(std::string(e.what()).find("fragment_count = 7, expected 3"), std::string::npos) << e.what();
   }
   f = toFragment(set, 2, 0);
   f.first_minimum_index = 10;
-  EXPECT_THROW(checkFragment(f), RecordError);
+  EXPECT_THROW((void)checkFragment(f), RecordError);
   f = toFragment(set, 2, 0);
   f.minima[0].feature_link_kind = 5;
-  EXPECT_THROW(checkFragment(f), RecordError);
+  EXPECT_THROW((void)checkFragment(f), RecordError);
   MinimaSetAssembler assembler;
   EXPECT_FALSE(assembler.add(toFragment(set, 0, 0)));
   f = toFragment(set, 1, 0);

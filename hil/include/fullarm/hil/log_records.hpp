@@ -42,6 +42,9 @@ inline constexpr int kMaxMinimaPerSet = 128;
 /// short-message bound, beyond which LCM would split the message itself). One more minimum
 /// (110 bytes) would cross it; a 64-minimum set travels in 6 fragments.
 inline constexpr int kMaxMinimaPerFragment = 11;
+/// Minima per fragment of the earlier layout (run logs and nodes that split sets in tens): read
+/// and reassembled, never written.
+inline constexpr int kLegacyMinimaPerFragment = 10;
 /// Characters of a supervisor event's message kept in its record (longer text is cut).
 inline constexpr int kMaxEventMessageChars = 119;
 
@@ -211,15 +214,18 @@ void fillMinima(std::span<const haptics::LocalMinimum> minima, MinimaSetRecord& 
 
 /// Checks one fragment on its own: counts within their bounds, fragment_count matching
 /// num_minima_total, fragment_index within it, and the fragment carrying exactly its share of
-/// the minima.
-/// @throws RecordError naming the set, the fragment and the field
-void checkFragment(const fullarm_lcm::minima_set_t& fragment);
+/// the minima, in the current layout (kMaxMinimaPerFragment per fragment) or the earlier one
+/// (kLegacyMinimaPerFragment). Returns the layout's minima per fragment.
+/// @throws RecordError naming the set, the fragment and the field (and what the current layout
+///         expects)
+int checkFragment(const fullarm_lcm::minima_set_t& fragment);
 
 /// Reassembles minima sets from their fragments, in the order they arrive. Fragments of one
-/// set may come in any order; a fragment of a newer set abandons an incomplete older one
-/// (counted), and a fragment of an older set than the one in progress is ignored (counted),
-/// unless the producer restarted its numbering: a set id more than kSetRestartJump back, or
-/// kSetRestartRun older sets in a row with increasing ids, begin anew (counted in restarts()).
+/// set may come in any order, in either layout (checkFragment) but one layout per set; a
+/// fragment of a newer set abandons an incomplete older one (counted), and a fragment of an
+/// older set than the one in progress is ignored (counted), unless the producer restarted its
+/// numbering: a set id more than kSetRestartJump back, or kSetRestartRun older sets in a row
+/// with increasing ids, begin anew (counted in restarts()).
 class MinimaSetAssembler {
  public:
   /// A set id this far back is a restarted producer's.
@@ -230,8 +236,8 @@ class MinimaSetAssembler {
   /// Adds one fragment. Returns true when it completes its set, which is then in `set()`
   /// (valid until the next call).
   /// @throws RecordError for an inconsistent fragment (counts beyond bounds, an index outside
-  ///         its count, minima outside the set, a header that disagrees with the set's other
-  ///         fragments)
+  ///         its count, minima outside the set, a header or a layout that disagrees with the
+  ///         set's other fragments)
   bool add(const fullarm_lcm::minima_set_t& fragment);
   /// The set the last successful add() completed.
   [[nodiscard]] const MinimaSetRecord& set() const noexcept { return set_; }
@@ -247,7 +253,8 @@ class MinimaSetAssembler {
   std::int64_t building_id_ = -1;
   bool building_ = false;
   int expected_fragments_ = 0;
-  std::array<bool, (kMaxMinimaPerSet + kMaxMinimaPerFragment - 1) / kMaxMinimaPerFragment> have_{};
+  int fragment_size_ = 0;  ///< the set's layout: minima per fragment
+  std::array<bool, (kMaxMinimaPerSet + kLegacyMinimaPerFragment - 1) / kLegacyMinimaPerFragment> have_{};
   int have_count_ = 0;
   std::uint64_t abandoned_ = 0;
   std::uint64_t ignored_ = 0;
