@@ -132,7 +132,9 @@ Dual<N> sqrt(const Dual<N>& a) {
 
 using Sens = Dual<kDirections>;
 
-inline double valueOf(double x) noexcept { return x; }
+inline double valueOf(double x) noexcept {
+  return x;
+}
 template <int N>
 double valueOf(const Dual<N>& x) noexcept {
   return x.v;
@@ -316,9 +318,9 @@ Trajectory<T> simulate(const GreyModel& model, const Values<T>& p, const Experim
     } else {
       // The first d readings show states from before the first one, which the simulation does
       // not model: they are taken as logged (at rest, the first state's readings), and so is
-      // the command the hold law computed from them.
+      // the command the hold law computed from them (a log without torques: the first state's).
       s.q_rad[k] = T(data.q_rad[k]);
-      s.tau_nm[k] = T(data.tau_nm[k]);
+      s.tau_nm[k] = data.tau_nm.size() == n ? T(data.tau_nm[k]) : out_tau[0];
     }
     const T u = data.hold_gain_v_per_rad * (data.hold_rad - s.q_rad[k]) + data.excitation_v[k];
     s.command_v[k] = valueOf(u);
@@ -599,8 +601,8 @@ void jacobian(JacobianMethod method, Problem& problem, const Coordinates& c, con
 // Projected Levenberg-Marquardt (Marquardt's diagonal scaling) inside the box. A coordinate on a
 // bound whose gradient points out of the box is held there for the step (the active set), so the
 // others move as the constrained problem asks rather than along a clipped unconstrained step.
-Polished polish(Problem& problem, const Coordinates& c, const Point& start, int max_iterations,
-                JacobianMethod method, core::JobPool& pool) {
+Polished polish(Problem& problem, const Coordinates& c, const Point& start, int max_iterations, JacobianMethod method,
+                core::JobPool& pool) {
   Eigen::VectorXd z = c.clamp(c.toZ(start));
   Eigen::VectorXd r;
   problem.residuals(c.fromZ(start, z), r);
@@ -876,9 +878,8 @@ Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, co
   if (n == 0) return s;
   const auto& p = model.value;
   // The simulation's initial state.
-  const State x0 =
-      initialState(model, p, data.q_rad[std::min(static_cast<std::size_t>(std::max(0, model.delay_samples)), n - 1)],
-                   0.0, 0.0);
+  const State x0 = initialState(
+      model, p, data.q_rad[std::min(static_cast<std::size_t>(std::max(0, model.delay_samples)), n - 1)], 0.0, 0.0);
   const double q_ref = x0.q;
   StateVector x = toVector(x0);
   StateMatrix cov = StateMatrix::Zero();
@@ -972,7 +973,7 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
     }
   }
   for (const auto& [name, spec] : {std::pair{"initial_speed_radps", &options.initial_speed},
-                                    std::pair{"initial_torque_offset_nm", &options.initial_torque_offset}}) {
+                                   std::pair{"initial_torque_offset_nm", &options.initial_torque_offset}}) {
     if (spec->free && !(spec->min <= 0.0 && 0.0 <= spec->max)) {
       throw std::invalid_argument(std::string("grey-box fit: the bounds of ") + name + " (" +
                                   std::to_string(spec->min) + ".." + std::to_string(spec->max) +

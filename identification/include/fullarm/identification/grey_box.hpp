@@ -126,8 +126,11 @@ struct Simulation {
 /// torque, underlap and edge rounding (x itself for a linearised valve).
 [[nodiscard]] double valveLoadFlow(const GreyModel& model, double x_v, double tau_h_nm) noexcept;
 
-/// Simulates the closed loop of `data` (its hold law and excitation) with `model`, from the first
-/// logged angle with `initial`'s speed and hydraulic torque tau_g + offset (by default at rest),
+/// Simulates the closed loop of `data` (its hold law and excitation) with `model`, from the state
+/// reading d shows (d the delay; the first d readings, of earlier states, and the commands the
+/// hold law computed from them are taken as logged; without logged torques, the first state's
+/// torque reading), at its angle with `initial`'s speed and
+/// hydraulic torque tau_g + offset (by default at rest),
 /// the load-cell filter settled and the spool where the valve's flow feeds that speed and the
 /// leakage (at rest: balances the leakage under the static load); 4 RK4 sub-steps per sample (8
 /// with a spool), the command held over each sample, through the spool and the load-cell filter
@@ -171,8 +174,8 @@ struct PredictorNoise {
 /// reading is predicted from that estimate one step ahead. The command is the hold law on the
 /// measured angle plus the excitation, the same law the simulation closes on its own reading; with
 /// a delay of d samples reading k shows the state of sample k - d. The filter starts from the
-/// simulation's initial state, so the first d readings (before any reading reaches the filter)
-/// are that state's readings, as in the simulation.
+/// simulation's initial state at rest (at the angle reading d shows), so the first d readings
+/// (before any reading reaches the filter) are that state's readings.
 /// @throws std::invalid_argument for a non-positive noise level
 [[nodiscard]] Simulation predictOneStep(const GreyModel& model, const ExperimentData& data,
                                         const PredictorNoise& noise);
@@ -229,14 +232,14 @@ struct FitResult {
   std::vector<InitialState> initial_state_standard_error;
   int evaluations = 0;              ///< closed-loop simulations run (values only)
   int sensitivity_evaluations = 0;  ///< simulations run with sensitivities (up to 4 directions each)
-  double global_seconds = 0.0;                       ///< wall time of the global stage
-  double polish_seconds = 0.0;                       ///< wall time of the polish
+  double global_seconds = 0.0;      ///< wall time of the global stage
+  double polish_seconds = 0.0;      ///< wall time of the polish
 };
 
 /// Fits the model to the experiments jointly, starting from `start` (the global stage includes it).
 /// Free initial states start, at every point of the global stage, from the data: the speed
-/// from the slope of the first ten logged angles and the torque offset from the first load-cell
-/// reading, each clamped into its bounds.
+/// from the slope of ten angles from reading d on (the reading that shows the first state) and
+/// the torque offset from load-cell reading d, each clamped into its bounds.
 /// @throws std::invalid_argument for no experiments, bounds that do not hold the start, or
 ///   non-positive bounds of a log-scaled parameter, or initial-state bounds that do not hold 0
 [[nodiscard]] FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const GreyModel& start,
