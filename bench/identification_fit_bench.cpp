@@ -76,8 +76,8 @@ int main(int argc, char** argv) {
     fits[method] = id::fitGreyModel(data, start, options);
     walls[method] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
-  std::printf("%-22s %10s %10s %10s %12s %12s\n", "polish Jacobian", "global s", "polish s", "total s",
-              "simulations", "sensitivity");
+  std::printf("%-22s %10s %10s %10s %12s %12s\n", "polish Jacobian", "global s", "polish s", "total s", "simulations",
+              "sensitivity");
   for (int method = 0; method < (peer ? 2 : 1); ++method) {
     const id::FitResult& f = fits[method];
     std::printf("%-22s %10.2f %10.2f %10.2f %12d %12d\n", labels[method], f.global_seconds, f.polish_seconds,

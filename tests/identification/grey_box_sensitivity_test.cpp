@@ -98,9 +98,10 @@ void expectMatchesCentralDifferences(const GreyModel& model, const ExperimentDat
       tau_err = std::max(tau_err, std::abs((a.tau_nm[k] - b.tau_nm[k]) / (2.0 * h) - s.tau_nm(row, col)));
     }
     // Rounding of the differences: 1e-16 of outputs of order 1 rad and 100 N m over 2 h.
-    EXPECT_LE(q_err, rel * q_scale + 1e-14 / h) << label << ": d angle / d " << name(dir) << " (scale " << q_scale << ")";
-    EXPECT_LE(tau_err, rel * tau_scale + 1e-12 / h) << label << ": d torque / d " << name(dir) << " (scale " << tau_scale
-                                               << ")";
+    EXPECT_LE(q_err, rel * q_scale + 1e-14 / h)
+        << label << ": d angle / d " << name(dir) << " (scale " << q_scale << ")";
+    EXPECT_LE(tau_err, rel * tau_scale + 1e-12 / h)
+        << label << ": d torque / d " << name(dir) << " (scale " << tau_scale << ")";
   }
 }
 

@@ -12,8 +12,8 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <numbers>
 
@@ -54,8 +54,7 @@ SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double 
   const double wn = 2.0 * std::numbers::pi * m.spool_hz;
   const double wf = 2.0 * std::numbers::pi * m.torque_filter_hz;
   auto cell = [&](const X& x) {
-    const double level =
-        p[kCoulomb] + p[kStribeck] * std::exp(-std::pow(x[1] / m.stribeck_velocity_radps, 2.0));
+    const double level = p[kCoulomb] + p[kStribeck] * std::exp(-std::pow(x[1] / m.stribeck_velocity_radps, 2.0));
     return x[2] - p[kViscous] * x[1] - level * std::tanh(x[1] / m.coulomb_smoothing_radps);
   };
   // Load flow of the four metering edges (P->A, A->T, P->B, B->T), each through its own pressure
@@ -390,10 +389,11 @@ TEST(GreyBoxTest, InitialStatesEstimatedPerExperimentRemoveTheBiasOfALogStartedM
     const InitialState& x = estimated.initial_states[e];
     const InitialState& se = estimated.initial_state_standard_error[e];
     const InitialState& w = true_initial[e];
-    std::printf("experiment %zu: initial speed %.4g +- %.2g rad/s (truth %.4g), torque offset %.4g +- %.2g N m "
-                "(truth %.4g)\n",
-                e + 1, x.speed_radps, se.speed_radps, w.speed_radps, x.torque_offset_nm, se.torque_offset_nm,
-                w.torque_offset_nm);
+    std::printf(
+        "experiment %zu: initial speed %.4g +- %.2g rad/s (truth %.4g), torque offset %.4g +- %.2g N m "
+        "(truth %.4g)\n",
+        e + 1, x.speed_radps, se.speed_radps, w.speed_radps, x.torque_offset_nm, se.torque_offset_nm,
+        w.torque_offset_nm);
     EXPECT_NEAR(x.speed_radps, w.speed_radps, 0.02 * std::abs(w.speed_radps)) << "experiment " << e + 1;
     EXPECT_NEAR(x.torque_offset_nm, w.torque_offset_nm, 0.02 * std::abs(w.torque_offset_nm) + 0.05)
         << "experiment " << e + 1;
