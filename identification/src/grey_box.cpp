@@ -697,6 +697,7 @@ Point pointFromData(const GreyModel& m, const std::vector<ExperimentData>& exper
 }  // namespace
 
 double valveLoadFlow(const GreyModel& m, double x_v, double tau_h_nm) noexcept {
+  // (I1) Q = r(x + l) sqrt(1 - tau_h / tau_s) - r(l - x) sqrt(1 + tau_h / tau_s), in doubles.
   return loadFlow(m, x_v, tau_h_nm);
 }
 
