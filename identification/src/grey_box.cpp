@@ -12,6 +12,9 @@
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
 
 #include "fullarm/core/job_pool.hpp"
 #include "fullarm/core/random.hpp"
@@ -23,36 +26,185 @@ constexpr int kSubsteps = 4;
 constexpr double kDivergedResidual = 1.0e3;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-struct State {
-  double q = 0.0, w = 0.0, th = 0.0;
-  double x = 0.0, xd = 0.0;  // spool position (in volts of command) and its rate
-  double tf = 0.0;           // filtered load-cell torque
+// Forward-mode dual number: a value and its derivatives along N directions (the fitted parameters
+// seeded one per direction). The simulation is templated on its scalar, so one run in Dual
+// carries the exact derivatives of the discretised simulation (every RK4 sub-step, the hold law
+// and the delay line) alongside its values (I10).
+constexpr int kDirections = 4;  // directions per sensitivity run (a SIMD-friendly width)
+
+template <int N>
+struct Dual {
+  double v = 0.0;
+  std::array<double, N> d{};
+  Dual() = default;
+  Dual(double value) : v(value) {}  // NOLINT(google-explicit-constructor): constants mix freely
 };
 
+template <int N>
+Dual<N> operator+(const Dual<N>& a, const Dual<N>& b) {
+  Dual<N> r(a.v + b.v);
+  for (int i = 0; i < N; ++i) r.d[i] = a.d[i] + b.d[i];
+  return r;
+}
+template <int N>
+Dual<N> operator-(const Dual<N>& a, const Dual<N>& b) {
+  Dual<N> r(a.v - b.v);
+  for (int i = 0; i < N; ++i) r.d[i] = a.d[i] - b.d[i];
+  return r;
+}
+template <int N>
+Dual<N> operator-(const Dual<N>& a) {
+  Dual<N> r(-a.v);
+  for (int i = 0; i < N; ++i) r.d[i] = -a.d[i];
+  return r;
+}
+template <int N>
+Dual<N> operator*(const Dual<N>& a, const Dual<N>& b) {
+  Dual<N> r(a.v * b.v);
+  for (int i = 0; i < N; ++i) r.d[i] = a.d[i] * b.v + a.v * b.d[i];
+  return r;
+}
+template <int N>
+Dual<N> operator/(const Dual<N>& a, const Dual<N>& b) {
+  const double inv = 1.0 / b.v;
+  Dual<N> r(a.v / b.v);
+  for (int i = 0; i < N; ++i) r.d[i] = (a.d[i] - r.v * b.d[i]) * inv;
+  return r;
+}
+template <int N>
+Dual<N> operator+(const Dual<N>& a, double b) {
+  Dual<N> r = a;
+  r.v += b;
+  return r;
+}
+template <int N>
+Dual<N> operator+(double a, const Dual<N>& b) {
+  return b + a;
+}
+template <int N>
+Dual<N> operator-(const Dual<N>& a, double b) {
+  Dual<N> r = a;
+  r.v -= b;
+  return r;
+}
+template <int N>
+Dual<N> operator-(double a, const Dual<N>& b) {
+  Dual<N> r = -b;
+  r.v += a;
+  return r;
+}
+template <int N>
+Dual<N> operator*(const Dual<N>& a, double b) {
+  Dual<N> r(a.v * b);
+  for (int i = 0; i < N; ++i) r.d[i] = a.d[i] * b;
+  return r;
+}
+template <int N>
+Dual<N> operator*(double a, const Dual<N>& b) {
+  return b * a;
+}
+template <int N>
+Dual<N> operator/(const Dual<N>& a, double b) {
+  return a * (1.0 / b);
+}
+// The chain rule through the elementary functions: f(a) with f'(a) along every direction.
+template <int N>
+Dual<N> chain(const Dual<N>& a, double f, double df) {
+  Dual<N> r(f);
+  for (int i = 0; i < N; ++i) r.d[i] = df * a.d[i];
+  return r;
+}
+template <int N>
+Dual<N> exp(const Dual<N>& a) {
+  const double e = std::exp(a.v);
+  return chain(a, e, e);
+}
+template <int N>
+Dual<N> tanh(const Dual<N>& a) {
+  const double t = std::tanh(a.v);
+  return chain(a, t, 1.0 - t * t);
+}
+template <int N>
+Dual<N> sqrt(const Dual<N>& a) {
+  const double s = std::sqrt(a.v);
+  return chain(a, s, 0.5 / s);
+}
+
+using Sens = Dual<kDirections>;
+
+inline double valueOf(double x) noexcept {
+  return x;
+}
+template <int N>
+double valueOf(const Dual<N>& x) noexcept {
+  return x.v;
+}
+
+template <class T>
+using Values = std::array<T, kGreyParams>;
+
+template <class T>
+struct StateT {
+  T q{}, w{}, th{};
+  T x{}, xd{};  // spool position (in volts of command) and its rate
+  T tf{};       // filtered load-cell torque
+};
+using State = StateT<double>;
+
 // Edge opening rounded over w (the plant's H2 in volts): 0 below -w, s above w, a quadratic blend
-// between.
-double roundedOpening(double s, double w) noexcept {
-  if (w <= 0.0) return std::max(s, 0.0);
-  if (s <= -w) return 0.0;
-  if (s >= w) return s;
+// between (continuously differentiable, so its sensitivity is exact everywhere).
+template <class T>
+T roundedOpening(const T& s, double w) noexcept {
+  if (w <= 0.0) return valueOf(s) > 0.0 ? s : T(0.0);
+  if (valueOf(s) <= -w) return T(0.0);
+  if (valueOf(s) >= w) return s;
   return (s + w) * (s + w) / (4.0 * w);
 }
 
+// sqrt(max(0, a)): a pressure drop that would reverse gives no flow; past that point the flow
+// no longer depends on the load, so its derivative there is zero (one-sided).
+template <class T>
+T clampedSqrt(const T& a) noexcept {
+  using std::sqrt;
+  if constexpr (std::is_same_v<T, double>) {
+    return std::sqrt(std::max(0.0, a));
+  } else {
+    return valueOf(a) > 0.0 ? sqrt(a) : T(0.0);
+  }
+}
+
+// (I1)'s Q(x, tau_h).
+template <class T>
+T loadFlow(const GreyModel& m, const T& x_v, const T& tau_h_nm) noexcept {
+  if (m.stall_torque_nm <= 0.0 && m.underlap_v <= 0.0 && m.edge_rounding_v <= 0.0) return x_v;
+  // (I1) Q = r(x + l) sqrt(1 - tau_h / tau_s) - r(l - x) sqrt(1 + tau_h / tau_s).
+  const T load = m.stall_torque_nm > 0.0 ? tau_h_nm / m.stall_torque_nm : T(0.0);
+  const T supply_side = clampedSqrt(1.0 - load);
+  const T return_side = clampedSqrt(1.0 + load);
+  return roundedOpening(x_v + m.underlap_v, m.edge_rounding_v) * supply_side -
+         roundedOpening(m.underlap_v - x_v, m.edge_rounding_v) * return_side;
+}
+
 // Friction f(w) of (I2): Coulomb and Stribeck level with a tanh-smoothed sign, plus viscous.
-double friction(const GreyModel& m, double w) noexcept {
-  const auto& p = m.value;
-  const double r = w / m.stribeck_velocity_radps;
-  const double level = p[kCoulomb] + p[kStribeck] * std::exp(-r * r);
-  return level * std::tanh(w / m.coulomb_smoothing_radps) + p[kViscous] * w;
+template <class T>
+T friction(const GreyModel& m, const Values<T>& p, const T& w) noexcept {
+  using std::exp;
+  using std::tanh;
+  const T r = w / m.stribeck_velocity_radps;
+  const T level = p[kCoulomb] + p[kStribeck] * exp(-r * r);
+  return level * tanh(w / m.coulomb_smoothing_radps) + p[kViscous] * w;
 }
 
 // The reduced joint's right-hand side, (I1)-(I2) of grey_box.hpp.
-double cellTorque(const GreyModel& m, const State& x) noexcept { return x.th - friction(m, x.w); }
+template <class T>
+T cellTorque(const GreyModel& m, const Values<T>& p, const StateT<T>& x) noexcept {
+  return x.th - friction(m, p, x.w);
+}
 
-State rhs(const GreyModel& m, const State& x, double u, double q_ref) noexcept {
-  const auto& p = m.value;
-  State d;
-  double drive = u;
+template <class T>
+StateT<T> rhs(const GreyModel& m, const Values<T>& p, const StateT<T>& x, const T& u, const T& q_ref) noexcept {
+  StateT<T> d;
+  T drive = u;
   if (m.spool_hz > 0.0) {
     const double wn = 2.0 * std::numbers::pi * m.spool_hz;
     d.x = x.xd;
@@ -60,40 +212,146 @@ State rhs(const GreyModel& m, const State& x, double u, double q_ref) noexcept {
     drive = x.x;
   }
   d.q = x.w;
-  d.w = (cellTorque(m, x) - p[kLoadTorque] - m.load_gradient_nm_per_rad * (x.q - q_ref)) / p[kInertia];
-  d.th = p[kStiffness] * (p[kFlowGain] * valveLoadFlow(m, drive + p[kValveOffset], x.th) - x.w - p[kLeakage] * x.th);
-  if (m.torque_filter_hz > 0.0) d.tf = 2.0 * std::numbers::pi * m.torque_filter_hz * (cellTorque(m, x) - x.tf);
+  d.w = (cellTorque(m, p, x) - p[kLoadTorque] - m.load_gradient_nm_per_rad * (x.q - q_ref)) / p[kInertia];
+  d.th = p[kStiffness] * (p[kFlowGain] * loadFlow(m, drive + p[kValveOffset], x.th) - x.w - p[kLeakage] * x.th);
+  if (m.torque_filter_hz > 0.0) d.tf = 2.0 * std::numbers::pi * m.torque_filter_hz * (cellTorque(m, p, x) - x.tf);
   return d;
 }
 
-// The valve position (before the offset) whose flow balances the leakage under the static load:
-// a Q(x + u_0, tau_g) = c tau_g, by bisection (Q rises with x).
-double restingValve(const GreyModel& m) noexcept {
-  const auto& p = m.value;
-  const double target = p[kLeakage] * p[kLoadTorque] / p[kFlowGain];
+// The spool position (before the offset) where the valve's flow feeds the initial motion and the
+// leakage: a Q(x + u_0, tau_h0) = w_0 + c tau_h0 (at rest, the flow balancing the leakage under the
+// static load), by bisection (Q rises with x). Its sensitivity is the implicit function's,
+// dx = -(dF at fixed x) / (dF/dx), from one Newton correction in dual arithmetic at the root.
+template <class T>
+T initialValve(const GreyModel& m, const Values<T>& p, const T& speed, const T& th0) noexcept {
+  const T target = (speed + p[kLeakage] * th0) / p[kFlowGain];
   double lo = -100.0, hi = 100.0;
   for (int i = 0; i < 80; ++i) {
     const double mid = 0.5 * (lo + hi);
-    (valveLoadFlow(m, mid, p[kLoadTorque]) < target ? lo : hi) = mid;
+    (loadFlow(m, mid, valueOf(th0)) < valueOf(target) ? lo : hi) = mid;
   }
-  return 0.5 * (lo + hi) - p[kValveOffset];
+  const double root = 0.5 * (lo + hi);
+  if constexpr (std::is_same_v<T, double>) {
+    return root - p[kValveOffset];
+  } else {
+    T probe(root);
+    probe.d[0] = 1.0;
+    const double slope = loadFlow(m, probe, T(valueOf(th0))).d[0];
+    const T residual = loadFlow(m, T(root), th0) - target;
+    T y(root);
+    if (slope > 0.0) {
+      for (std::size_t i = 0; i < y.d.size(); ++i) y.d[i] = -residual.d[i] / slope;
+    }
+    return y - p[kValveOffset];
+  }
 }
 
-State axpy(const State& x, double h, const State& d) noexcept {
+template <class T>
+StateT<T> axpy(const StateT<T>& x, double h, const StateT<T>& d) noexcept {
   return {x.q + h * d.q, x.w + h * d.w, x.th + h * d.th, x.x + h * d.x, x.xd + h * d.xd, x.tf + h * d.tf};
 }
 
 // One classical RK4 step of length h under the held command u.
-State rk4Step(const GreyModel& m, const State& x, double u, double q_ref, double h) noexcept {
-  const State k1 = rhs(m, x, u, q_ref);
-  const State k2 = rhs(m, axpy(x, 0.5 * h, k1), u, q_ref);
-  const State k3 = rhs(m, axpy(x, 0.5 * h, k2), u, q_ref);
-  const State k4 = rhs(m, axpy(x, h, k3), u, q_ref);
+template <class T>
+StateT<T> rk4Step(const GreyModel& m, const Values<T>& p, const StateT<T>& x, const T& u, const T& q_ref,
+                  double h) noexcept {
+  const StateT<T> k1 = rhs(m, p, x, u, q_ref);
+  const StateT<T> k2 = rhs(m, p, axpy(x, 0.5 * h, k1), u, q_ref);
+  const StateT<T> k3 = rhs(m, p, axpy(x, 0.5 * h, k2), u, q_ref);
+  const StateT<T> k4 = rhs(m, p, axpy(x, h, k3), u, q_ref);
   return axpy(axpy(axpy(axpy(x, h / 6.0, k1), h / 3.0, k2), h / 3.0, k3), h / 6.0, k4);
 }
 
-double measuredTorque(const GreyModel& m, const State& x) noexcept {
-  return (m.torque_filter_hz > 0.0 ? x.tf : cellTorque(m, x)) + m.value[kTorqueOffset];
+template <class T>
+T measuredTorque(const GreyModel& m, const Values<T>& p, const StateT<T>& x) noexcept {
+  return (m.torque_filter_hz > 0.0 ? x.tf : cellTorque(m, p, x)) + p[kTorqueOffset];
+}
+
+// The simulation's initial state: the first logged angle, the given speed and hydraulic torque
+// tau_g + the torque offset, the load-cell filter settled on the torque the cell then sees and
+// the spool at rest where its flow feeds that motion (initialValve).
+template <class T>
+StateT<T> initialState(const GreyModel& m, const Values<T>& p, double first_angle_rad, const T& speed,
+                       const T& torque_offset) noexcept {
+  StateT<T> x;
+  x.q = first_angle_rad - p[kAngleOffset];
+  x.w = speed;
+  x.th = p[kLoadTorque] + torque_offset;
+  x.tf = cellTorque(m, p, x);
+  x.x = initialValve(m, p, speed, x.th);
+  return x;
+}
+
+// The closed loop of simulateClosedLoop in scalar T.
+template <class T>
+struct Trajectory {
+  std::vector<T> q_rad, tau_nm;
+  std::vector<double> command_v;
+  bool ok = true;
+};
+
+template <class T>
+Trajectory<T> simulate(const GreyModel& model, const Values<T>& p, const ExperimentData& data, const T& speed,
+                       const T& torque_offset) {
+  const std::size_t n = data.q_rad.size();
+  Trajectory<T> s;
+  s.q_rad.resize(n);
+  s.tau_nm.resize(n);
+  s.command_v.resize(n);
+  const std::size_t d = static_cast<std::size_t>(std::max(0, model.delay_samples));
+  // The first state is the one reading d shows (the readings before it show earlier states,
+  // which the simulation takes as the first: at rest they are the same).
+  StateT<T> x =
+      initialState(model, p, n > 0 ? data.q_rad[std::min(d, n - 1)] : valueOf(p[kAngleOffset]), speed, torque_offset);
+  const T q_ref = x.q;
+  std::vector<T> out_q(n), out_tau(n);
+  const int substeps = model.spool_hz > 0.0 ? 2 * kSubsteps : kSubsteps;
+  const double h = data.sample_period_s / substeps;
+  // (I1)-(I2) in closed loop: the hold law on the delayed reading, the command held over the
+  // sample. The delay is an integer number of samples and is not differentiated.
+  for (std::size_t k = 0; k < n; ++k) {
+    out_q[k] = x.q + p[kAngleOffset];
+    out_tau[k] = measuredTorque(model, p, x);
+    if (k >= d) {
+      s.q_rad[k] = out_q[k - d];
+      s.tau_nm[k] = out_tau[k - d];
+    } else {
+      // The first d readings show states from before the first one, which the simulation does
+      // not model: they are taken as logged (at rest, the first state's readings), and so is
+      // the command the hold law computed from them (a log without torques: the first state's).
+      s.q_rad[k] = T(data.q_rad[k]);
+      s.tau_nm[k] = data.tau_nm.size() == n ? T(data.tau_nm[k]) : out_tau[0];
+    }
+    const T u = data.hold_gain_v_per_rad * (data.hold_rad - s.q_rad[k]) + data.excitation_v[k];
+    s.command_v[k] = valueOf(u);
+    for (int i = 0; i < substeps; ++i) x = rk4Step(model, p, x, u, q_ref, h);
+    if (!std::isfinite(valueOf(x.q)) || !std::isfinite(valueOf(x.w)) || !std::isfinite(valueOf(x.th)) ||
+        std::abs(valueOf(x.q)) > 1e3) {
+      s.ok = false;
+      return s;
+    }
+  }
+  return s;
+}
+
+// The sensitivities of one run along up to kDirections parameters (GreyParam indices or
+// kInitialSpeed / kInitialTorqueOffset; -1 pads an unused direction).
+Trajectory<Sens> simulateDirections(const GreyModel& model, const ExperimentData& data, const InitialState& initial,
+                                    const std::array<int, kDirections>& directions) {
+  Values<Sens> p;
+  for (int i = 0; i < kGreyParams; ++i) p[static_cast<std::size_t>(i)] = Sens(model.value[static_cast<std::size_t>(i)]);
+  Sens speed(initial.speed_radps), torque(initial.torque_offset_nm);
+  for (std::size_t j = 0; j < directions.size(); ++j) {
+    const int i = directions[j];
+    if (i >= 0 && i < kGreyParams) {
+      p[static_cast<std::size_t>(i)].d[j] = 1.0;
+    } else if (i == kInitialSpeed) {
+      speed.d[j] = 1.0;
+    } else if (i == kInitialTorqueOffset) {
+      torque.d[j] = 1.0;
+    }
+  }
+  return simulate(model, p, data, speed, torque);
 }
 
 double spread(const std::vector<double>& v) {
@@ -106,67 +364,129 @@ double spread(const std::vector<double>& v) {
   return s > 0.0 ? s : 1.0;
 }
 
-/// The free parameters in fit coordinates (log for log-scaled ones).
+/// A point of the fit: the model and each experiment's initial state.
+struct Point {
+  GreyModel model;
+  std::vector<InitialState> initial;
+};
+
+double& initialMember(InitialState& s, int direction) noexcept {
+  return direction == kInitialSpeed ? s.speed_radps : s.torque_offset_nm;
+}
+
+/// The free parameters in fit coordinates (log for log-scaled ones): the model's groups first,
+/// then each experiment's free initial states.
 struct Coordinates {
-  std::vector<int> index;
+  struct Slot {
+    int param = 0;        ///< GreyParam index, or kInitialSpeed / kInitialTorqueOffset
+    int experiment = -1;  ///< the initial state's experiment (-1 for the model's groups)
+  };
+  std::vector<Slot> slots;
+  std::vector<int> index;  ///< GreyParam indices of the model's free groups
   std::vector<bool> log_scaled;
   Eigen::VectorXd lo, hi;
+  Eigen::Index model_count = 0;
 
-  explicit Coordinates(const FitOptions& o) {
+  Coordinates(const FitOptions& o, std::size_t experiments) {
+    std::vector<const ParamSpec*> specs;
     for (int i = 0; i < kGreyParams; ++i) {
       const ParamSpec& s = o.params[static_cast<std::size_t>(i)];
       if (!s.free) continue;
       index.push_back(i);
-      log_scaled.push_back(s.log_scaled);
+      slots.push_back({i, -1});
+      specs.push_back(&s);
     }
-    const auto n = static_cast<Eigen::Index>(index.size());
+    model_count = static_cast<Eigen::Index>(slots.size());
+    for (std::size_t e = 0; e < experiments; ++e) {
+      if (o.initial_speed.free) {
+        slots.push_back({kInitialSpeed, static_cast<int>(e)});
+        specs.push_back(&o.initial_speed);
+      }
+      if (o.initial_torque_offset.free) {
+        slots.push_back({kInitialTorqueOffset, static_cast<int>(e)});
+        specs.push_back(&o.initial_torque_offset);
+      }
+    }
+    const auto n = static_cast<Eigen::Index>(slots.size());
     lo.resize(n);
     hi.resize(n);
     for (Eigen::Index k = 0; k < n; ++k) {
-      const ParamSpec& s = o.params[static_cast<std::size_t>(index[static_cast<std::size_t>(k)])];
-      lo[k] = log_scaled[static_cast<std::size_t>(k)] ? std::log(s.min) : s.min;
-      hi[k] = log_scaled[static_cast<std::size_t>(k)] ? std::log(s.max) : s.max;
+      const ParamSpec& s = *specs[static_cast<std::size_t>(k)];
+      log_scaled.push_back(k < model_count && s.log_scaled);
+      lo[k] = log_scaled.back() ? std::log(s.min) : s.min;
+      hi[k] = log_scaled.back() ? std::log(s.max) : s.max;
     }
   }
-  [[nodiscard]] Eigen::VectorXd toZ(const GreyModel& m) const {
-    Eigen::VectorXd z(static_cast<Eigen::Index>(index.size()));
-    for (std::size_t k = 0; k < index.size(); ++k) {
-      const double v = m.value[static_cast<std::size_t>(index[k])];
-      z[static_cast<Eigen::Index>(k)] = log_scaled[k] ? std::log(v) : v;
+  [[nodiscard]] Eigen::Index size() const noexcept { return static_cast<Eigen::Index>(slots.size()); }
+  [[nodiscard]] double value(const Point& p, Eigen::Index k) const {
+    const Slot& s = slots[static_cast<std::size_t>(k)];
+    if (s.experiment < 0) return p.model.value[static_cast<std::size_t>(s.param)];
+    InitialState copy = p.initial[static_cast<std::size_t>(s.experiment)];
+    return initialMember(copy, s.param);
+  }
+  [[nodiscard]] Eigen::VectorXd toZ(const Point& p) const {
+    Eigen::VectorXd z(size());
+    for (Eigen::Index k = 0; k < size(); ++k) {
+      const double v = value(p, k);
+      z[k] = log_scaled[static_cast<std::size_t>(k)] ? std::log(v) : v;
     }
     return z;
   }
-  [[nodiscard]] GreyModel fromZ(const GreyModel& base, const Eigen::VectorXd& z) const {
+  /// Only the model's groups (the first model_count entries of z) are read.
+  [[nodiscard]] GreyModel modelFromZ(const GreyModel& base, const Eigen::VectorXd& z) const {
     GreyModel m = base;
-    for (std::size_t k = 0; k < index.size(); ++k) {
-      const double v = z[static_cast<Eigen::Index>(k)];
-      m.value[static_cast<std::size_t>(index[k])] = log_scaled[k] ? std::exp(v) : v;
+    for (Eigen::Index k = 0; k < model_count; ++k) {
+      const double v = z[k];
+      m.value[static_cast<std::size_t>(slots[static_cast<std::size_t>(k)].param)] =
+          log_scaled[static_cast<std::size_t>(k)] ? std::exp(v) : v;
     }
     return m;
+  }
+  [[nodiscard]] Point fromZ(const Point& base, const Eigen::VectorXd& z) const {
+    Point p = base;
+    p.model = modelFromZ(base.model, z);
+    for (Eigen::Index k = model_count; k < size(); ++k) {
+      const Slot& s = slots[static_cast<std::size_t>(k)];
+      initialMember(p.initial[static_cast<std::size_t>(s.experiment)], s.param) = z[k];
+    }
+    return p;
+  }
+  /// d(parameter)/d(coordinate) at the point: the value for a log-scaled one, else 1.
+  [[nodiscard]] double chainFactor(const Point& p, Eigen::Index k) const {
+    return log_scaled[static_cast<std::size_t>(k)] ? value(p, k) : 1.0;
+  }
+  [[nodiscard]] std::string name(Eigen::Index k) const {
+    const Slot& s = slots[static_cast<std::size_t>(k)];
+    if (s.experiment < 0) return greyParamName(s.param);
+    return std::string(initialStateName(s.param)) + " of experiment " + std::to_string(s.experiment + 1);
   }
   [[nodiscard]] Eigen::VectorXd clamp(const Eigen::VectorXd& z) const { return z.cwiseMax(lo).cwiseMin(hi); }
 };
 
 class Problem {
  public:
-  Problem(const std::vector<ExperimentData>& experiments) : experiments_(experiments) {
+  explicit Problem(const std::vector<ExperimentData>& experiments) : experiments_(experiments) {
     for (const auto& e : experiments_) {
       q_scale_.push_back(spread(e.q_rad));
       tau_scale_.push_back(spread(e.tau_nm));
+      offset_.push_back(residual_count_);
       residual_count_ += 2 * static_cast<Eigen::Index>(e.q_rad.size());
     }
   }
   [[nodiscard]] Eigen::Index residualCount() const noexcept { return residual_count_; }
+  [[nodiscard]] std::size_t experimentCount() const noexcept { return experiments_.size(); }
+  [[nodiscard]] const ExperimentData& experiment(std::size_t e) const { return experiments_[e]; }
   std::atomic<int> evaluations{0};
+  std::atomic<int> sensitivity_evaluations{0};
 
   /// Thread-safe: each call simulates on its own.
-  void residuals(const GreyModel& m, Eigen::VectorXd& r) {
+  void residuals(const Point& pt, Eigen::VectorXd& r) {
     ++evaluations;
     r.resize(residual_count_);
     Eigen::Index at = 0;
     for (std::size_t e = 0; e < experiments_.size(); ++e) {
       const ExperimentData& x = experiments_[e];
-      const Simulation s = simulateClosedLoop(m, x);
+      const Simulation s = simulateClosedLoop(pt.model, x, pt.initial[e]);
       for (std::size_t k = 0; k < x.q_rad.size(); ++k) {
         const double rq = (s.q_rad[k] - x.q_rad[k]) / q_scale_[e];
         const double rt = (s.tau_nm[k] - x.tau_nm[k]) / tau_scale_[e];
@@ -175,27 +495,43 @@ class Problem {
       }
     }
   }
-  double cost(const GreyModel& m) {
+  double cost(const Point& pt) {
     Eigen::VectorXd r;
-    residuals(m, r);
+    residuals(pt, r);
     return 0.5 * r.squaredNorm();
+  }
+
+  /// The rows of experiment e's residuals in column `col` of jac, from one sensitivity run's
+  /// direction j scaled by `factor` (the coordinate's chain factor). Diverged or non-finite
+  /// residuals are constants (kDivergedResidual) and have zero derivative.
+  void fillColumn(std::size_t e, const Trajectory<Sens>& s, std::size_t j, double factor, Eigen::Index col,
+                  Eigen::MatrixXd& jac) const {
+    const ExperimentData& x = experiments_[e];
+    Eigen::Index at = offset_[e];
+    for (std::size_t k = 0; k < x.q_rad.size(); ++k) {
+      const double rq = (s.q_rad[k].v - x.q_rad[k]) / q_scale_[e];
+      const double rt = (s.tau_nm[k].v - x.tau_nm[k]) / tau_scale_[e];
+      jac(at++, col) = s.ok && std::isfinite(rq) ? s.q_rad[k].d[j] * factor / q_scale_[e] : 0.0;
+      jac(at++, col) = s.ok && std::isfinite(rt) ? s.tau_nm[k].d[j] * factor / tau_scale_[e] : 0.0;
+    }
   }
 
  private:
   const std::vector<ExperimentData>& experiments_;
   std::vector<double> q_scale_, tau_scale_;
+  std::vector<Eigen::Index> offset_;
   Eigen::Index residual_count_ = 0;
 };
 
 struct Polished {
-  GreyModel model;
+  Point point;
   double cost = 0.0;
   Eigen::MatrixXd jacobian;
 };
 
 // Central differences, the 2 p simulations spread over the pool.
-void jacobian(Problem& problem, const Coordinates& c, const GreyModel& base, const Eigen::VectorXd& z,
-              Eigen::MatrixXd& jac, core::JobPool& pool) {
+void centralDifferenceJacobian(Problem& problem, const Coordinates& c, const Point& base, const Eigen::VectorXd& z,
+                               Eigen::MatrixXd& jac, core::JobPool& pool) {
   const auto p = z.size();
   jac.resize(problem.residualCount(), p);
   std::vector<Eigen::VectorXd> r(static_cast<std::size_t>(2 * p));
@@ -213,8 +549,59 @@ void jacobian(Problem& problem, const Coordinates& c, const GreyModel& base, con
   }
 }
 
-// Projected Levenberg-Marquardt (Marquardt's diagonal scaling) inside the box.
-Polished polish(Problem& problem, const Coordinates& c, const GreyModel& start, int max_iterations,
+// Forward sensitivities: per experiment, its coordinates (the model's groups and its own initial
+// states) in runs of kDirections, the runs spread over the pool. The split depends only on the
+// problem, so the Jacobian does not depend on the thread count.
+void sensitivityJacobian(Problem& problem, const Coordinates& c, const Point& base, const Eigen::VectorXd& z,
+                         Eigen::MatrixXd& jac, core::JobPool& pool) {
+  const Point at = c.fromZ(base, z);
+  jac.setZero(problem.residualCount(), z.size());
+  struct Run {
+    std::size_t experiment;
+    std::vector<Eigen::Index> columns;
+  };
+  std::vector<Run> runs;
+  for (std::size_t e = 0; e < problem.experimentCount(); ++e) {
+    std::vector<Eigen::Index> columns;
+    for (Eigen::Index k = 0; k < c.size(); ++k) {
+      const int owner = c.slots[static_cast<std::size_t>(k)].experiment;
+      if (owner < 0 || owner == static_cast<int>(e)) columns.push_back(k);
+    }
+    for (std::size_t first = 0; first < columns.size(); first += kDirections) {
+      const std::size_t last = std::min(columns.size(), first + kDirections);
+      runs.push_back({e, std::vector<Eigen::Index>(columns.begin() + static_cast<std::ptrdiff_t>(first),
+                                                   columns.begin() + static_cast<std::ptrdiff_t>(last))});
+    }
+  }
+  pool.run(static_cast<int>(runs.size()), [&](int task) {
+    const Run& run = runs[static_cast<std::size_t>(task)];
+    std::array<int, kDirections> directions{};
+    directions.fill(-1);
+    for (std::size_t j = 0; j < run.columns.size(); ++j) {
+      directions[j] = c.slots[static_cast<std::size_t>(run.columns[j])].param;
+    }
+    ++problem.sensitivity_evaluations;
+    const Trajectory<Sens> s =
+        simulateDirections(at.model, problem.experiment(run.experiment), at.initial[run.experiment], directions);
+    for (std::size_t j = 0; j < run.columns.size(); ++j) {
+      problem.fillColumn(run.experiment, s, j, c.chainFactor(at, run.columns[j]), run.columns[j], jac);
+    }
+  });
+}
+
+void jacobian(JacobianMethod method, Problem& problem, const Coordinates& c, const Point& base,
+              const Eigen::VectorXd& z, Eigen::MatrixXd& jac, core::JobPool& pool) {
+  if (method == JacobianMethod::kCentralDifferences) {
+    centralDifferenceJacobian(problem, c, base, z, jac, pool);
+  } else {
+    sensitivityJacobian(problem, c, base, z, jac, pool);
+  }
+}
+
+// Projected Levenberg-Marquardt (Marquardt's diagonal scaling) inside the box. A coordinate on a
+// bound whose gradient points out of the box is held there for the step (the active set), so the
+// others move as the constrained problem asks rather than along a clipped unconstrained step.
+Polished polish(Problem& problem, const Coordinates& c, const Point& start, int max_iterations, JacobianMethod method,
                 core::JobPool& pool) {
   Eigen::VectorXd z = c.clamp(c.toZ(start));
   Eigen::VectorXd r;
@@ -223,14 +610,27 @@ Polished polish(Problem& problem, const Coordinates& c, const GreyModel& start, 
   double mu = 1e-3;
   Eigen::MatrixXd jac;
   for (int it = 0; it < max_iterations && z.size() > 0; ++it) {
-    jacobian(problem, c, start, z, jac, pool);
+    jacobian(method, problem, c, start, z, jac, pool);
     const Eigen::MatrixXd jtj = jac.transpose() * jac;
     const Eigen::VectorXd g = jac.transpose() * r;
+    std::vector<bool> held(static_cast<std::size_t>(z.size()), false);
+    for (Eigen::Index k = 0; k < z.size(); ++k) {
+      held[static_cast<std::size_t>(k)] = (z[k] <= c.lo[k] && g[k] > 0.0) || (z[k] >= c.hi[k] && g[k] < 0.0);
+    }
     bool improved = false;
     for (int tries = 0; tries < 12; ++tries) {
       Eigen::MatrixXd a = jtj;
-      for (Eigen::Index k = 0; k < a.rows(); ++k) a(k, k) += mu * std::max(jtj(k, k), 1e-12);
-      const Eigen::VectorXd step = a.ldlt().solve(-g);
+      Eigen::VectorXd rhs = -g;
+      for (Eigen::Index k = 0; k < a.rows(); ++k) {
+        a(k, k) += mu * std::max(jtj(k, k), 1e-12);
+        if (held[static_cast<std::size_t>(k)]) {
+          a.row(k).setZero();
+          a.col(k).setZero();
+          a(k, k) = 1.0;
+          rhs[k] = 0.0;
+        }
+      }
+      const Eigen::VectorXd step = a.ldlt().solve(rhs);
       const Eigen::VectorXd z_new = c.clamp(z + step);
       Eigen::VectorXd r_new;
       problem.residuals(c.fromZ(start, z_new), r_new);
@@ -251,23 +651,65 @@ Polished polish(Problem& problem, const Coordinates& c, const GreyModel& start, 
     if (!improved) break;
   }
   Polished out;
-  out.model = c.fromZ(start, z);
+  out.point = c.fromZ(start, z);
   out.cost = cost;
-  jacobian(problem, c, start, z, jac, pool);
+  jacobian(method, problem, c, start, z, jac, pool);
   out.jacobian = jac;
   return out;
+}
+
+// A free initial state's start from the data (fitGreyModel's documentation), clamped into its
+// bounds; a fixed one at rest.
+InitialState initialStateFromData(const GreyModel& m, const ExperimentData& d, const FitOptions& o) {
+  InitialState s;
+  // Reading `first` shows the simulation's first state.
+  const std::size_t first =
+      std::min(static_cast<std::size_t>(std::max(0, m.delay_samples)), d.q_rad.empty() ? 0 : d.q_rad.size() - 1);
+  const std::size_t n = std::min<std::size_t>(d.q_rad.size() - first, 10);
+  if (o.initial_speed.free && n >= 2) {
+    double st = 0.0, sq = 0.0, stt = 0.0, stq = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const double t = static_cast<double>(k) * d.sample_period_s;
+      st += t;
+      sq += d.q_rad[first + k];
+      stt += t * t;
+      stq += t * d.q_rad[first + k];
+    }
+    const double nn = static_cast<double>(n);
+    const double slope = (stq - st * sq / nn) / (stt - st * st / nn);
+    s.speed_radps = std::clamp(slope, o.initial_speed.min, o.initial_speed.max);
+  }
+  if (o.initial_torque_offset.free && !d.tau_nm.empty()) {
+    // tau_meas = tau_h - f(w) + tau_off at the first reading.
+    const double th0 = d.tau_nm[first] - m.value[kTorqueOffset] + friction(m, m.value, s.speed_radps);
+    s.torque_offset_nm =
+        std::clamp(th0 - m.value[kLoadTorque], o.initial_torque_offset.min, o.initial_torque_offset.max);
+  }
+  return s;
+}
+
+Point pointFromData(const GreyModel& m, const std::vector<ExperimentData>& experiments, const FitOptions& o) {
+  Point p{m, {}};
+  for (const auto& e : experiments) p.initial.push_back(initialStateFromData(m, e, o));
+  return p;
 }
 
 }  // namespace
 
 double valveLoadFlow(const GreyModel& m, double x_v, double tau_h_nm) noexcept {
-  if (m.stall_torque_nm <= 0.0 && m.underlap_v <= 0.0 && m.edge_rounding_v <= 0.0) return x_v;
-  // (I1) Q = r(x + l) sqrt(1 - tau_h / tau_s) - r(l - x) sqrt(1 + tau_h / tau_s).
-  const double load = m.stall_torque_nm > 0.0 ? tau_h_nm / m.stall_torque_nm : 0.0;
-  const double supply_side = std::sqrt(std::max(0.0, 1.0 - load));
-  const double return_side = std::sqrt(std::max(0.0, 1.0 + load));
-  return roundedOpening(x_v + m.underlap_v, m.edge_rounding_v) * supply_side -
-         roundedOpening(m.underlap_v - x_v, m.edge_rounding_v) * return_side;
+  // (I1) Q = r(x + l) sqrt(1 - tau_h / tau_s) - r(l - x) sqrt(1 + tau_h / tau_s), in doubles.
+  return loadFlow(m, x_v, tau_h_nm);
+}
+
+const char* initialStateName(int direction) noexcept {
+  switch (direction) {
+    case kInitialSpeed:
+      return "initial_speed_radps";
+    case kInitialTorqueOffset:
+      return "initial_torque_offset_nm";
+    default:
+      return "unknown";
+  }
 }
 
 const char* greyParamName(int index) noexcept {
@@ -344,40 +786,49 @@ ExperimentData experimentFromLog(const SignalTable& log) {
   return d;
 }
 
-Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data) {
-  const std::size_t n = data.q_rad.size();
+Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data, const InitialState& initial) {
+  // (I1)-(I2) in closed loop, in plain doubles.
+  Trajectory<double> t = simulate(model, model.value, data, initial.speed_radps, initial.torque_offset_nm);
   Simulation s;
-  s.q_rad.resize(n);
-  s.tau_nm.resize(n);
-  s.command_v.resize(n);
-  const auto& p = model.value;
-  State x;
-  x.q = n > 0 ? data.q_rad[0] - p[kAngleOffset] : 0.0;
-  x.th = p[kLoadTorque];
-  x.tf = p[kLoadTorque];
-  // At rest the spool sits where the valve's flow balances the leakage under the static load.
-  x.x = restingValve(model);
-  const double q_ref = x.q;
-  const std::size_t d = static_cast<std::size_t>(std::max(0, model.delay_samples));
-  std::vector<double> out_q(n), out_tau(n);
-  const int substeps = model.spool_hz > 0.0 ? 2 * kSubsteps : kSubsteps;
-  const double h = data.sample_period_s / substeps;
-  // (I1)-(I2) in closed loop: the hold law on the delayed reading, the command held over the sample.
-  for (std::size_t k = 0; k < n; ++k) {
-    out_q[k] = x.q + p[kAngleOffset];
-    out_tau[k] = measuredTorque(model, x);
-    const std::size_t seen = k >= d ? k - d : 0;
-    s.q_rad[k] = out_q[seen];
-    s.tau_nm[k] = out_tau[seen];
-    const double u = data.hold_gain_v_per_rad * (data.hold_rad - s.q_rad[k]) + data.excitation_v[k];
-    s.command_v[k] = u;
-    for (int i = 0; i < substeps; ++i) x = rk4Step(model, x, u, q_ref, h);
-    if (!std::isfinite(x.q) || !std::isfinite(x.w) || !std::isfinite(x.th) || std::abs(x.q) > 1e3) {
-      s.ok = false;
-      return s;
+  s.q_rad = std::move(t.q_rad);
+  s.tau_nm = std::move(t.tau_nm);
+  s.command_v = std::move(t.command_v);
+  s.ok = t.ok;
+  return s;
+}
+
+SimulationSensitivity simulateSensitivities(const GreyModel& model, const ExperimentData& data,
+                                            const InitialState& initial, const std::vector<int>& directions) {
+  for (int i : directions) {
+    if (i < 0 || i > kInitialTorqueOffset) {
+      throw std::invalid_argument("simulation sensitivities: direction " + std::to_string(i) +
+                                  " is neither a model parameter nor an initial state");
     }
   }
-  return s;
+  const auto n = static_cast<Eigen::Index>(data.q_rad.size());
+  const auto p = static_cast<Eigen::Index>(directions.size());
+  SimulationSensitivity out;
+  out.simulation = simulateClosedLoop(model, data, initial);
+  out.q_rad.setZero(n, p);
+  out.tau_nm.setZero(n, p);
+  for (std::size_t first = 0; first < directions.size(); first += kDirections) {
+    std::array<int, kDirections> run{};
+    run.fill(-1);
+    const std::size_t count = std::min<std::size_t>(kDirections, directions.size() - first);
+    for (std::size_t j = 0; j < count; ++j) run[j] = directions[first + j];
+    // I10: the discretised simulation differentiated forward, dx_{k+1}/dθ = Φ_x dx_k/dθ + Φ_θ,
+    // through every RK4 sub-step, in dual numbers.
+    const Trajectory<Sens> s = simulateDirections(model, data, initial, run);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      // A diverged run stops early: its remaining samples stay zero, as in the simulation.
+      for (std::size_t j = 0; j < count; ++j) {
+        const auto col = static_cast<Eigen::Index>(first + j);
+        out.q_rad(k, col) = s.q_rad[static_cast<std::size_t>(k)].d[j];
+        out.tau_nm(k, col) = s.tau_nm[static_cast<std::size_t>(k)].d[j];
+      }
+    }
+  }
+  return out;
 }
 
 namespace {
@@ -401,13 +852,13 @@ StateVector stepSample(const GreyModel& m, const StateVector& v, double u, doubl
   const int substeps = m.spool_hz > 0.0 ? 2 * kSubsteps : kSubsteps;
   const double h = dt / substeps;
   State x = fromVector(v);
-  for (int i = 0; i < substeps; ++i) x = rk4Step(m, x, u, q_ref, h);
+  for (int i = 0; i < substeps; ++i) x = rk4Step(m, m.value, x, u, q_ref, h);
   return toVector(x);
 }
 
 Eigen::Vector2d readings(const GreyModel& m, const StateVector& v) {
   const State x = fromVector(v);
-  return {x.q + m.value[kAngleOffset], measuredTorque(m, x)};
+  return {x.q + m.value[kAngleOffset], measuredTorque(m, m.value, x)};
 }
 
 // Finite-difference step of each state: angle, speed, hydraulic torque, spool (V), spool rate, filtered torque.
@@ -428,11 +879,8 @@ Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, co
   if (n == 0) return s;
   const auto& p = model.value;
   // The simulation's initial state.
-  State x0;
-  x0.q = data.q_rad[0] - p[kAngleOffset];
-  x0.th = p[kLoadTorque];
-  x0.tf = p[kLoadTorque];
-  x0.x = restingValve(model);
+  const State x0 = initialState(
+      model, p, data.q_rad[std::min(static_cast<std::size_t>(std::max(0, model.delay_samples)), n - 1)], 0.0, 0.0);
   const double q_ref = x0.q;
   StateVector x = toVector(x0);
   StateMatrix cov = StateMatrix::Zero();
@@ -525,37 +973,48 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
                                   " outside its bounds " + std::to_string(s.min) + ".." + std::to_string(s.max));
     }
   }
-  const Coordinates c(options);
+  for (const auto& [name, spec] : {std::pair{"initial_speed_radps", &options.initial_speed},
+                                   std::pair{"initial_torque_offset_nm", &options.initial_torque_offset}}) {
+    if (spec->free && !(spec->min <= 0.0 && 0.0 <= spec->max)) {
+      throw std::invalid_argument(std::string("grey-box fit: the bounds of ") + name + " (" +
+                                  std::to_string(spec->min) + ".." + std::to_string(spec->max) +
+                                  ") do not hold 0, the state at rest");
+    }
+  }
+  const Coordinates c(options, experiments.size());
   Problem problem(experiments);
   auto say = [&](const std::string& line) {
     if (options.progress) options.progress(line);
   };
   using Clock = std::chrono::steady_clock;
 
-  // Global stage: the start and a seeded sample of the box, at every delay.
+  // Global stage: the start and a seeded sample of the box, at every delay; free initial states
+  // from the data at each point.
   const auto t0 = Clock::now();
   struct Candidate {
     double cost = kInf;
-    GreyModel model;
+    Point point;
   };
   core::JobPool pool(std::max(1, options.threads));
   const int samples = std::max(1, options.global_samples);
   const int delays = options.max_delay_samples + 1;
   std::vector<Candidate> candidates(static_cast<std::size_t>(samples * delays));
+  const Eigen::VectorXd z_start = c.toZ(pointFromData(start, experiments, options));
   constexpr int kBlock = 25;  // points per progress line
   for (int first = 0; first < samples; first += kBlock) {
     const int count = std::min(kBlock, samples - first);
     pool.run(count * delays, [&](int task) {
       const int sample = first + task / delays;
-      Eigen::VectorXd z = c.toZ(start);
+      Eigen::VectorXd z = z_start;
       if (sample > 0) {
         core::RandomStream rng(options.seed, 0x6772657962ULL, static_cast<std::uint64_t>(sample));
-        for (Eigen::Index k = 0; k < z.size(); ++k) z[k] = rng.uniform(c.lo[k], c.hi[k]);
+        for (Eigen::Index k = 0; k < c.model_count; ++k) z[k] = rng.uniform(c.lo[k], c.hi[k]);
       }
-      GreyModel m = c.fromZ(start, z);
+      GreyModel m = c.modelFromZ(start, z);
       m.delay_samples = task % delays;
-      const double cost = problem.cost(m);
-      candidates[static_cast<std::size_t>(sample * delays + task % delays)] = {std::isfinite(cost) ? cost : kInf, m};
+      const Point pt = pointFromData(m, experiments, options);
+      const double cost = problem.cost(pt);
+      candidates[static_cast<std::size_t>(sample * delays + task % delays)] = {std::isfinite(cost) ? cost : kInf, pt};
     });
     say("global stage: " + std::to_string(first + count) + "/" + std::to_string(samples) + " points x " +
         std::to_string(delays) + " delays");
@@ -573,30 +1032,34 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
   const std::size_t count =
       std::min(candidates.size(), static_cast<std::size_t>(std::max(1, options.polished_candidates)));
   for (std::size_t i = 0; i < count; ++i) {
-    Polished p = polish(problem, c, candidates[i].model, options.max_iterations, pool);
+    Polished p = polish(problem, c, candidates[i].point, options.max_iterations, options.jacobian, pool);
     std::ostringstream line;
-    line << "polish " << i + 1 << "/" << count << ": delay " << p.model.delay_samples << " samples, cost "
+    line << "polish " << i + 1 << "/" << count << ": delay " << p.point.model.delay_samples << " samples, cost "
          << candidates[i].cost << " -> " << p.cost;
     say(line.str());
     if (p.cost < best.cost) best = std::move(p);
   }
   for (int step : {-1, 1}) {
-    GreyModel m = best.model;
-    m.delay_samples += step;
-    if (m.delay_samples < 0 || m.delay_samples > options.max_delay_samples) continue;
-    Polished p = polish(problem, c, m, options.max_iterations, pool);
-    say("delay " + std::to_string(m.delay_samples) + " samples: cost " + std::to_string(p.cost));
+    Point pt = best.point;
+    pt.model.delay_samples += step;
+    if (pt.model.delay_samples < 0 || pt.model.delay_samples > options.max_delay_samples) continue;
+    Polished p = polish(problem, c, pt, options.max_iterations, options.jacobian, pool);
+    say("delay " + std::to_string(pt.model.delay_samples) + " samples: cost " + std::to_string(p.cost));
     if (p.cost < best.cost) best = std::move(p);
   }
   result.polish_seconds = std::chrono::duration<double>(Clock::now() - t1).count();
 
-  result.model = best.model;
+  result.model = best.point.model;
+  result.initial_states = best.point.initial;
+  result.initial_state_standard_error.assign(experiments.size(), InitialState{0.0, 0.0});
   result.cost = best.cost;
   result.evaluations = problem.evaluations.load();
+  result.sensitivity_evaluations = problem.sensitivity_evaluations.load();
   result.free_params = c.index;
   // Covariance of the fit coordinates: s^2 (J^T J)^+, s^2 the residual variance.
   const Eigen::Index np = best.jacobian.cols();
-  result.correlation = Eigen::MatrixXd::Identity(np, np);
+  const Eigen::Index nm = c.model_count;
+  result.correlation = Eigen::MatrixXd::Identity(nm, nm);
   if (np > 0) {
     const double dof = std::max<double>(1.0, static_cast<double>(problem.residualCount() - np));
     const double s2 = 2.0 * best.cost / dof;
@@ -619,8 +1082,7 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
           std::ostringstream term;
           term.precision(2);
           term << (direction.empty() ? "" : (weight > 0 ? " + " : " - "))
-               << (direction.empty() && weight < 0 ? "-" : "") << std::abs(weight) << " "
-               << greyParamName(c.index[static_cast<std::size_t>(j)]);
+               << (direction.empty() && weight < 0 ? "-" : "") << std::abs(weight) << " " << c.name(j);
           direction += term.str();
         }
         result.unidentifiable.push_back(direction);
@@ -628,10 +1090,15 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
     }
     const Eigen::MatrixXd cov = s2 * norms.cwiseInverse().asDiagonal() * cov_scaled * norms.cwiseInverse().asDiagonal();
     for (Eigen::Index k = 0; k < np; ++k) {
-      const auto i = static_cast<std::size_t>(c.index[static_cast<std::size_t>(k)]);
       const double sd = std::sqrt(std::max(0.0, cov(k, k)));
+      const Coordinates::Slot& slot = c.slots[static_cast<std::size_t>(k)];
+      if (slot.experiment >= 0) {
+        initialMember(result.initial_state_standard_error[static_cast<std::size_t>(slot.experiment)], slot.param) = sd;
+        continue;
+      }
+      const auto i = static_cast<std::size_t>(slot.param);
       result.standard_error[i] = c.log_scaled[static_cast<std::size_t>(k)] ? sd * result.model.value[i] : sd;
-      for (Eigen::Index j = 0; j < np; ++j) {
+      for (Eigen::Index j = 0; j < nm; ++j) {
         const double denom = std::sqrt(cov(k, k) * cov(j, j));
         result.correlation(k, j) = denom > 0.0 ? cov(k, j) / denom : (k == j ? 1.0 : 0.0);
       }

@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <utility>
 
 #include "fullarm/core/config_error.hpp"
@@ -42,7 +43,36 @@ IdentificationConfig parseIdentificationConfig(std::string_view yaml_text, const
     const int seed = fit.integer("seed");
     if (seed < 0) fit.fail("seed", "expected >= 0");
     c.fit.seed = static_cast<std::uint64_t>(seed);
+    const std::string jacobian = fit.string("jacobian");
+    if (jacobian == "sensitivities") {
+      c.fit.jacobian = JacobianMethod::kSensitivities;
+    } else if (jacobian == "central_differences") {
+      c.fit.jacobian = JacobianMethod::kCentralDifferences;
+    } else {
+      fit.fail("jacobian", "expected 'sensitivities' or 'central_differences', got '" + jacobian + "'");
+    }
     fit.finish();
+
+    const core::YamlMap initial = root.map("initial_states");
+    for (const auto& [key, spec, unit] : {std::tuple{"speed_radps", &c.fit.initial_speed, "rad/s"},
+                                          std::tuple{"torque_offset_nm", &c.fit.initial_torque_offset, "N m"}}) {
+      const core::YamlMap p = initial.map(key);
+      const std::string mode = p.string("mode");
+      if (mode == "free") {
+        spec->free = true;
+      } else if (mode == "fixed") {
+        spec->free = false;
+      } else {
+        p.fail("mode", "expected 'free' or 'fixed', got '" + mode + "'");
+      }
+      spec->log_scaled = false;
+      spec->min = p.number("min", unit);
+      spec->max = p.number("max", unit);
+      if (!(spec->min <= 0.0)) p.fail("min", "expected <= 0 (the bounds hold the state at rest)");
+      if (!(spec->max >= 0.0)) p.fail("max", "expected >= 0 (the bounds hold the state at rest)");
+      p.finish();
+    }
+    initial.finish();
 
     const core::YamlMap params = root.map("parameters");
     for (int i = 0; i < kGreyParams; ++i) {

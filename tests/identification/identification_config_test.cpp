@@ -53,6 +53,19 @@ TEST(IdentificationConfigTest, ShippedFileLoads) {
   EXPECT_DOUBLE_EQ(c.coulomb_smoothing_radps, 0.01);
   EXPECT_DOUBLE_EQ(c.stribeck_velocity_radps, 0.05);
   EXPECT_FALSE(c.fit.params[kStribeck].free);
+  EXPECT_EQ(c.fit.jacobian, JacobianMethod::kSensitivities);
+  EXPECT_TRUE(c.fit.initial_speed.free);
+  EXPECT_FALSE(c.fit.initial_speed.log_scaled);
+  EXPECT_DOUBLE_EQ(c.fit.initial_speed.max, 5.0);
+  EXPECT_TRUE(c.fit.initial_torque_offset.free);
+  EXPECT_DOUBLE_EQ(c.fit.initial_torque_offset.min, -60.0);
+  const IdentificationConfig cd = parseIdentificationConfig(
+      replaced(shippedText(), "jacobian: sensitivities", "jacobian: central_differences"), "identification.yaml");
+  EXPECT_EQ(cd.fit.jacobian, JacobianMethod::kCentralDifferences);
+  const IdentificationConfig rest = parseIdentificationConfig(
+      replaced(shippedText(), "speed_radps:      {mode: free", "speed_radps:      {mode: fixed"),
+      "identification.yaml");
+  EXPECT_FALSE(rest.fit.initial_speed.free);
   EXPECT_TRUE(std::filesystem::exists(loadIdentificationConfig(defaultIdentificationConfigPath()).source));
 }
 
@@ -71,6 +84,21 @@ TEST(IdentificationConfigTest, MistakesNameTheKeyAndTheLine) {
   EXPECT_NE(std::string(missing.what()).find("max_lag"), std::string::npos) << missing.what();
   const auto fraction = errorOf(replaced(text, "max_outside_fraction: 0.1", "max_outside_fraction: 1.5"));
   EXPECT_EQ(fraction.keyPath(), "validation.max_outside_fraction");
+  const auto jacobian = errorOf(replaced(text, "jacobian: sensitivities", "jacobian: secant"));
+  EXPECT_EQ(jacobian.keyPath(), "fit.jacobian");
+  EXPECT_GT(jacobian.line(), 0);
+  const auto off_rest =
+      errorOf(replaced(text, "{mode: free, min: -5.0, max: 5.0}", "{mode: free, min: 0.5, max: 5.0}"));
+  EXPECT_EQ(off_rest.keyPath(), "initial_states.speed_radps.min");
+  EXPECT_GT(off_rest.line(), 0);
+  const auto below =
+      errorOf(replaced(text, "{mode: free, min: -60.0, max: 60.0}", "{mode: free, min: -60.0, max: -1.0}"));
+  EXPECT_EQ(below.keyPath(), "initial_states.torque_offset_nm.max");
+  const auto mode = errorOf(replaced(text, "torque_offset_nm: {mode: free", "torque_offset_nm: {mode: loose"));
+  EXPECT_EQ(mode.keyPath(), "initial_states.torque_offset_nm.mode");
+  const auto extra =
+      errorOf(replaced(text, "{mode: free, min: -5.0, max: 5.0}", "{mode: free, min: -2.0, max: 2.0, scaling: log}"));
+  EXPECT_NE(std::string(extra.what()).find("scaling"), std::string::npos) << extra.what();
   EXPECT_THROW((void)loadIdentificationConfig("/nonexistent/identification.yaml"), core::ConfigError);
 }
 

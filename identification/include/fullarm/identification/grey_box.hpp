@@ -28,9 +28,11 @@
 /// driven by the logged excitation r) and minimises the output error on angle and torque,
 /// each normalised by its spread, over several experiments at once. Parameters are log-scaled
 /// (signed offsets linear) inside bounds; a global stage samples the box at every delay, the best
-/// candidates are polished by Levenberg-Marquardt with a central-difference Jacobian, and the
-/// delay is settled by polishing its neighbours. Standard errors and correlations come from the
-/// Jacobian at the optimum; directions whose singular value is negligible are named.
+/// candidates are polished by Levenberg-Marquardt with the exact forward sensitivities of the
+/// discretised simulation (central differences selectable), and the delay is settled by
+/// polishing its neighbours. Each experiment may have its own initial speed and hydraulic torque
+/// estimated with the groups. Standard errors and correlations come from the Jacobian at the
+/// optimum; directions whose singular value is negligible are named.
 
 #include <array>
 #include <cstdint>
@@ -99,6 +101,21 @@ struct ExperimentData {
 ///   (the command does not depend on the angle)
 [[nodiscard]] ExperimentData experimentFromLog(const SignalTable& log);
 
+/// The state an experiment's simulation starts from beyond its first logged angle: the joint's
+/// speed and the hydraulic torque's excess over the static load tau_g (both zero: at rest).
+struct InitialState {
+  double speed_radps = 0.0;
+  double torque_offset_nm = 0.0;
+};
+
+/// Sensitivity directions beyond the GreyParam indices: an experiment's initial speed and
+/// hydraulic torque offset (InitialState).
+inline constexpr int kInitialSpeed = kGreyParams;
+inline constexpr int kInitialTorqueOffset = kGreyParams + 1;
+
+/// Name of an InitialState member with its unit ("initial_speed_radps", ...).
+[[nodiscard]] const char* initialStateName(int direction) noexcept;
+
 /// The model's outputs over an experiment.
 struct Simulation {
   std::vector<double> q_rad, tau_nm, command_v;
@@ -109,11 +126,37 @@ struct Simulation {
 /// torque, underlap and edge rounding (x itself for a linearised valve).
 [[nodiscard]] double valveLoadFlow(const GreyModel& model, double x_v, double tau_h_nm) noexcept;
 
-/// Simulates the closed loop of `data` (its hold law and excitation) with `model`, from rest at
-/// the first logged angle (the spool where the valve's flow balances the leakage under the static
-/// load); 4 RK4 sub-steps per sample (8 with a spool), the command held over
-/// each sample, through the spool and the load-cell filter when the model has them.
-[[nodiscard]] Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data);
+/// Simulates the closed loop of `data` (its hold law and excitation) with `model`, from the state
+/// reading d shows (d the delay; the first d readings, of earlier states, and the commands the
+/// hold law computed from them are taken as logged; without logged torques, the first state's
+/// torque reading), at its angle with `initial`'s speed and
+/// hydraulic torque tau_g + offset (by default at rest),
+/// the load-cell filter settled and the spool where the valve's flow feeds that speed and the
+/// leakage (at rest: balances the leakage under the static load); 4 RK4 sub-steps per sample (8
+/// with a spool), the command held over each sample, through the spool and the load-cell filter
+/// when the model has them.
+[[nodiscard]] Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data,
+                                            const InitialState& initial = {});
+
+/// A simulation with its forward sensitivities: column j holds the derivative of every logged
+/// sample's output with respect to `directions[j]` (in that parameter's own unit).
+struct SimulationSensitivity {
+  Simulation simulation;
+  Eigen::MatrixXd q_rad;   ///< samples x directions [rad per unit]
+  Eigen::MatrixXd tau_nm;  ///< samples x directions [N m per unit]
+};
+
+/// The exact derivatives of simulateClosedLoop's outputs (the discretised simulation: every RK4
+/// sub-step, the hold law through the delayed reading, the initial state's dependence on the
+/// parameters) with respect to `directions` (GreyParam indices, kInitialSpeed,
+/// kInitialTorqueOffset), propagated forward with the state in dual numbers (I10). The delay is
+/// an integer and is not a direction. Where the model is not differentiable the one-sided
+/// derivative of the branch taken is given (an orifice edge past its full pressure drop); a
+/// diverged run (`simulation.ok` false) has zero sensitivities from the divergence on.
+/// @throws std::invalid_argument for a direction that is not a parameter
+[[nodiscard]] SimulationSensitivity simulateSensitivities(const GreyModel& model, const ExperimentData& data,
+                                                          const InitialState& initial,
+                                                          const std::vector<int>& directions);
 
 /// Noise levels of the one-step-ahead predictor's Kalman filter (predictOneStep), as standard
 /// deviations.
@@ -131,8 +174,8 @@ struct PredictorNoise {
 /// reading is predicted from that estimate one step ahead. The command is the hold law on the
 /// measured angle plus the excitation, the same law the simulation closes on its own reading; with
 /// a delay of d samples reading k shows the state of sample k - d. The filter starts from the
-/// simulation's initial state, so the first d readings (before any reading reaches the filter)
-/// are that state's readings, as in the simulation.
+/// simulation's initial state at rest (at the angle reading d shows), so the first d readings
+/// (before any reading reaches the filter) are that state's readings.
 /// @throws std::invalid_argument for a non-positive noise level
 [[nodiscard]] Simulation predictOneStep(const GreyModel& model, const ExperimentData& data,
                                         const PredictorNoise& noise);
@@ -145,9 +188,20 @@ struct ParamSpec {
   bool log_scaled = true;
 };
 
+/// How the polish gets the residuals' Jacobian.
+enum class JacobianMethod {
+  kSensitivities,      ///< forward sensitivities of the simulation (simulateSensitivities): exact
+  kCentralDifferences  ///< central differences of the simulation, two runs per parameter
+};
+
 /// Settings of the fit.
 struct FitOptions {
   std::array<ParamSpec, kGreyParams> params{};
+  /// Each experiment's initial speed and hydraulic torque offset (InitialState; linear scaling,
+  /// bounds containing 0): free = estimated per experiment with the groups, fixed = at rest.
+  ParamSpec initial_speed{false, -1.0, 1.0, false};
+  ParamSpec initial_torque_offset{false, -20.0, 20.0, false};
+  JacobianMethod jacobian = JacobianMethod::kSensitivities;
   int max_delay_samples = 4;
   int global_samples = 200;     ///< points of the global stage (per delay)
   int polished_candidates = 3;  ///< best global points polished
@@ -173,14 +227,21 @@ struct FitResult {
   Eigen::MatrixXd correlation;                       ///< of the free parameters, in order
   std::vector<int> free_params;                      ///< indices of the free parameters
   std::vector<std::string> unidentifiable;           ///< directions the data cannot determine
-  int evaluations = 0;                               ///< closed-loop simulations run
-  double global_seconds = 0.0;                       ///< wall time of the global stage
-  double polish_seconds = 0.0;                       ///< wall time of the polish
+  /// Each experiment's initial state (at rest where fixed) and its standard errors.
+  std::vector<InitialState> initial_states;
+  std::vector<InitialState> initial_state_standard_error;
+  int evaluations = 0;              ///< closed-loop simulations run (values only)
+  int sensitivity_evaluations = 0;  ///< simulations run with sensitivities (up to 4 directions each)
+  double global_seconds = 0.0;      ///< wall time of the global stage
+  double polish_seconds = 0.0;      ///< wall time of the polish
 };
 
 /// Fits the model to the experiments jointly, starting from `start` (the global stage includes it).
+/// Free initial states start, at every point of the global stage, from the data: the speed
+/// from the slope of ten angles from reading d on (the reading that shows the first state) and
+/// the torque offset from load-cell reading d, each clamped into its bounds.
 /// @throws std::invalid_argument for no experiments, bounds that do not hold the start, or
-///   non-positive bounds of a log-scaled parameter
+///   non-positive bounds of a log-scaled parameter, or initial-state bounds that do not hold 0
 [[nodiscard]] FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const GreyModel& start,
                                      const FitOptions& options);
 
