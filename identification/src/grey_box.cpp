@@ -62,8 +62,16 @@ State rhs(const GreyModel& m, const State& x, double u, double q_ref) noexcept {
   d.q = x.w;
   d.w = (cellTorque(m, x) - p[kLoadTorque] - m.load_gradient_nm_per_rad * (x.q - q_ref)) / p[kInertia];
   d.th = p[kStiffness] * (p[kFlowGain] * valveLoadFlow(m, drive + p[kValveOffset], x.th) - x.w - p[kLeakage] * x.th);
-  if (m.torque_filter_hz > 0.0) d.tf = 2.0 * std::numbers::pi * m.torque_filter_hz * (cellTorque(m, x) - x.tf);
-  return d;
+  return d;  // d.tf = 0: the load-cell filter acts on the samples (sampleLoadCell)
+}
+
+// The load cell's first-order filter on the sampled torque, as the plant's sensor model has it
+// (exact ZOH discretisation, the new sample held over the period it closes):
+// tf_k = a tf_{k-1} + (1 - a) tau_cell(t_k), a = exp(-2 pi f_c T).
+void sampleLoadCell(const GreyModel& m, State& x, double dt) noexcept {
+  if (m.torque_filter_hz <= 0.0) return;
+  const double a = std::exp(-2.0 * std::numbers::pi * m.torque_filter_hz * dt);
+  x.tf = a * x.tf + (1.0 - a) * cellTorque(m, x);
 }
 
 // The valve position (before the offset) whose flow balances the leakage under the static load:
@@ -372,6 +380,7 @@ Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data
     const double u = data.hold_gain_v_per_rad * (data.hold_rad - s.q_rad[k]) + data.excitation_v[k];
     s.command_v[k] = u;
     for (int i = 0; i < substeps; ++i) x = rk4Step(model, x, u, q_ref, h);
+    sampleLoadCell(model, x, data.sample_period_s);
     if (!std::isfinite(x.q) || !std::isfinite(x.w) || !std::isfinite(x.th) || std::abs(x.q) > 1e3) {
       s.ok = false;
       return s;
@@ -402,6 +411,7 @@ StateVector stepSample(const GreyModel& m, const StateVector& v, double u, doubl
   const double h = dt / substeps;
   State x = fromVector(v);
   for (int i = 0; i < substeps; ++i) x = rk4Step(m, x, u, q_ref, h);
+  sampleLoadCell(m, x, dt);
   return toVector(x);
 }
 

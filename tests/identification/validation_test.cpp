@@ -3,8 +3,8 @@
 // verdict passes the true model on noisy data and fails a model with a wrong flow gain; the true
 // model's one-step prediction errors are white on data whose noise entered the loop (the angle's
 // through the hold, the load cell's ahead of its filter), while those of a model with twice the
-// inertia or a delay one sample off are not; the simulation residual of a model without the
-// slow spool the data have is correlated with the past excitation; the one-step-ahead
+// inertia are not; the simulation residual of a model whose delay is one sample late, or without
+// the slow spool the data have, is correlated with the past excitation; the one-step-ahead
 // prediction of the true model on noise-free data is exact to rounding, and for a wrong model
 // the Kalman filter's prediction fits far better than its simulation.
 
@@ -168,14 +168,14 @@ TEST(ValidationTest, TrueModelsPredictionErrorsAreWhiteAndWrongModelsAreNot) {
   EXPECT_TRUE(whitenessFails(heavy_v.angle, t)) << heavy_v.angle.autocorrelation.outside;
   EXPECT_TRUE(whitenessFails(heavy_v.torque, t)) << heavy_v.torque.autocorrelation.outside;
 
-  // A delay one sample late: the filter, with more process noise, absorbs much of it, and the
-  // torque's prediction errors stay correlated at a few lags; the simulation residual shows it at
-  // most lags.
+  // A delay one sample late: the filter, given more process noise, absorbs most of it in its
+  // prediction errors (a few lags outside, no more than the limit allows on one channel), so the
+  // simulation residual's dependence on the past excitation is what shows it, at most lags.
   GreyModel late = truth;
   late.delay_samples += 1;
   const ModelValidation late_v = validateModel(late, d, t);
   EXPECT_FALSE(late_v.pass);
-  EXPECT_TRUE(whitenessFails(late_v.torque, t)) << late_v.torque.autocorrelation.outside;
+  EXPECT_GT(late_v.angle.cross_correlation.outside, late_v.angle.cross_correlation.lags.size() / 2);
   EXPECT_GT(late_v.torque.cross_correlation.outside, late_v.torque.cross_correlation.lags.size() / 2);
 }
 

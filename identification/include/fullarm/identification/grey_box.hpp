@@ -79,7 +79,8 @@ struct GreyModel {
   double load_gradient_nm_per_rad = 0.0;
   /// Known channel dynamics (fixed, not fitted; 0 = none): the servovalve spool as a second-order
   /// lag of the command (natural frequency, damping ratio) and the load cell's first-order
-  /// analog low-pass.
+  /// low-pass, which, as in the plant's sensor model, filters the sampled torque:
+  /// y_k = a y_{k-1} + (1 - a) tau_cell(t_k), a = exp(-2 pi f_c T).
   double spool_hz = 0.0;
   double spool_damping = 0.7;
   double torque_filter_hz = 0.0;
