@@ -40,16 +40,18 @@ struct CorrelationTest {
                                                             const std::vector<double>& residual, int min_lag,
                                                             int max_lag);
 
-/// The one-step-ahead predictor's noise levels with its process noise estimated from the data:
-/// the measurement noise is `noise`'s (the sensors'); the process noise levels are `noise`'s
-/// scaled by the factor s that minimises the determinant of the innovations' sample covariance
-/// (the prediction-error criterion for unknown noise covariance), searched over the decades
-/// 1e-4 .. 1e2 and then the half decades either side of the best. Also returns that factor.
+/// The one-step-ahead predictor with its process noise estimated from the data (tunePredictorNoise).
 struct TunedPredictor {
-  PredictorNoise noise;
-  double process_scale = 1.0;
-  Simulation prediction;  ///< predictOneStep with `noise`; ok false when every scale diverged
+  PredictorNoise noise;        ///< the noise levels chosen
+  double process_scale = 1.0;  ///< their process noise over the reference levels
+  Simulation prediction;       ///< predictOneStep with `noise`; ok false when every scale diverged
 };
+
+/// The measurement noise is `noise`'s (the sensors'); the process noise levels are `noise`'s
+/// scaled by the factor that minimises the determinant of the innovations' sample covariance
+/// (I10, the prediction-error criterion for unknown noise covariance), searched over the decades
+/// 1e-4 .. 1e2 and then the half decades either side of the best.
+/// @throws std::invalid_argument for a noise level predictOneStep refuses
 [[nodiscard]] TunedPredictor tunePredictorNoise(const GreyModel& model, const ExperimentData& data,
                                                 const PredictorNoise& noise);
 
