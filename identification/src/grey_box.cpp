@@ -214,8 +214,17 @@ StateT<T> rhs(const GreyModel& m, const Values<T>& p, const StateT<T>& x, const 
   d.q = x.w;
   d.w = (cellTorque(m, p, x) - p[kLoadTorque] - m.load_gradient_nm_per_rad * (x.q - q_ref)) / p[kInertia];
   d.th = p[kStiffness] * (p[kFlowGain] * loadFlow(m, drive + p[kValveOffset], x.th) - x.w - p[kLeakage] * x.th);
-  if (m.torque_filter_hz > 0.0) d.tf = 2.0 * std::numbers::pi * m.torque_filter_hz * (cellTorque(m, p, x) - x.tf);
-  return d;
+  return d;  // d.tf = 0: the load-cell filter acts on the samples (sampleLoadCell)
+}
+
+// The load cell's first-order filter on the sampled torque, as the plant's sensor model has it
+// (exact ZOH discretisation, the new sample held over the period it closes):
+// tf_k = a tf_{k-1} + (1 - a) tau_cell(t_k), a = exp(-2 pi f_c T).
+template <class T>
+void sampleLoadCell(const GreyModel& m, const Values<T>& p, StateT<T>& x, double dt) noexcept {
+  if (m.torque_filter_hz <= 0.0) return;
+  const double a = std::exp(-2.0 * std::numbers::pi * m.torque_filter_hz * dt);
+  x.tf = a * x.tf + (1.0 - a) * cellTorque(m, p, x);
 }
 
 // The spool position (before the offset) where the valve's flow feeds the initial motion and the
@@ -325,6 +334,7 @@ Trajectory<T> simulate(const GreyModel& model, const Values<T>& p, const Experim
     const T u = data.hold_gain_v_per_rad * (data.hold_rad - s.q_rad[k]) + data.excitation_v[k];
     s.command_v[k] = valueOf(u);
     for (int i = 0; i < substeps; ++i) x = rk4Step(model, p, x, u, q_ref, h);
+    sampleLoadCell(model, p, x, data.sample_period_s);
     if (!std::isfinite(valueOf(x.q)) || !std::isfinite(valueOf(x.w)) || !std::isfinite(valueOf(x.th)) ||
         std::abs(valueOf(x.q)) > 1e3) {
       s.ok = false;
@@ -853,6 +863,7 @@ StateVector stepSample(const GreyModel& m, const StateVector& v, double u, doubl
   const double h = dt / substeps;
   State x = fromVector(v);
   for (int i = 0; i < substeps; ++i) x = rk4Step(m, m.value, x, u, q_ref, h);
+  sampleLoadCell(m, m.value, x, dt);
   return toVector(x);
 }
 
@@ -868,8 +879,9 @@ constexpr std::array<double, kStates> kStateStep{1e-7, 1e-6, 1e-5, 1e-7, 1e-4, 1
 
 Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, const PredictorNoise& noise) {
   if (!(noise.angle_rad > 0.0 && noise.torque_nm > 0.0 && noise.process_torque_nm > 0.0 &&
-        noise.process_speed_radps > 0.0)) {
-    throw std::invalid_argument("one-step prediction: every noise level must be positive");
+        noise.process_speed_radps > 0.0 && noise.torque_cell_nm >= 0.0)) {
+    throw std::invalid_argument("one-step prediction: every noise level must be positive (the load cell's analog "
+                                "noise non-negative)");
   }
   const std::size_t n = data.q_rad.size();
   Simulation s;
@@ -891,8 +903,16 @@ Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, co
   StateMatrix process = StateMatrix::Zero();
   process(1, 1) = noise.process_speed_radps * noise.process_speed_radps;
   process(2, 2) = noise.process_torque_nm * noise.process_torque_nm;
+  double torque_reading_var = noise.torque_nm * noise.torque_nm;
+  if (model.torque_filter_hz > 0.0) {
+    // The analog noise, held over the sample, through the first-order filter.
+    const double pass = 1.0 - std::exp(-2.0 * std::numbers::pi * model.torque_filter_hz * data.sample_period_s);
+    process(5, 5) = pass * pass * noise.torque_cell_nm * noise.torque_cell_nm;
+  } else {
+    torque_reading_var += noise.torque_cell_nm * noise.torque_cell_nm;
+  }
   const Eigen::Matrix2d r_meas =
-      Eigen::Vector2d(noise.angle_rad * noise.angle_rad, noise.torque_nm * noise.torque_nm).asDiagonal();
+      Eigen::Vector2d(noise.angle_rad * noise.angle_rad, torque_reading_var).asDiagonal();
   const std::size_t d = static_cast<std::size_t>(std::max(0, model.delay_samples));
   const Eigen::Vector2d first = readings(model, x);
   for (std::size_t j = 0; j < std::min(d, n); ++j) {

@@ -108,14 +108,18 @@ IdentificationConfig parseIdentificationConfig(std::string_view yaml_text, const
     c.validation.min_fit_torque_percent = val.number("min_fit_torque_percent", "%");
     c.validation.max_lag = val.integer("max_lag");
     if (c.validation.max_lag < 1) val.fail("max_lag", "expected >= 1");
-    c.validation.max_outside_fraction = val.number("max_outside_fraction");
-    if (!(c.validation.max_outside_fraction >= 0.0 && c.validation.max_outside_fraction <= 1.0)) {
-      val.fail("max_outside_fraction", "expected 0..1");
+    for (const auto& [key, value] :
+         {std::pair{"whiteness_max_outside_fraction", &c.validation.whiteness_max_outside_fraction},
+          std::pair{"independence_max_outside_fraction", &c.validation.independence_max_outside_fraction}}) {
+      *value = val.number(key);
+      if (!(*value >= 0.0 && *value <= 1.0)) val.fail(key, "expected 0..1");
     }
     const core::YamlMap pred = val.map("prediction");
     PredictorNoise& noise = c.validation.prediction;
     noise.angle_rad = pred.number("angle_noise_rad", "rad");
     noise.torque_nm = pred.number("torque_noise_nm", "N m");
+    noise.torque_cell_nm = pred.number("torque_cell_noise_nm", "N m");
+    if (!(noise.torque_cell_nm >= 0.0)) pred.fail("torque_cell_noise_nm", "expected a standard deviation >= 0");
     noise.process_torque_nm = pred.number("process_torque_nm", "N m per sample");
     noise.process_speed_radps = pred.number("process_speed_radps", "rad/s per sample");
     for (const auto& [key, value] :

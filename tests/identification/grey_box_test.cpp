@@ -80,8 +80,10 @@ SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double 
              p[kStiffness] * (p[kFlowGain] * load_flow(drive + p[kValveOffset], x[2]) - x[1] - p[kLeakage] * x[2]),
              x[4],
              wn * wn * (u - x[3]) - 2.0 * m.spool_damping * wn * x[4],
-             wf * (cell(x) - x[5])};
+             0.0};
   };
+  // The load cell filters the sampled torque (the plant's sensor model): y_k = a y_{k-1} + (1 - a) x_k.
+  const double a_filter = std::exp(-wf * kT);
   X x{start_rad - p[kAngleOffset], 0.0, p[kLoadTorque], 0.0, 0.0, p[kLoadTorque]};
   SignalTable t;
   t.names = kExperimentColumns;
@@ -122,6 +124,7 @@ SignalTable experiment(const GreyModel& m, const std::vector<double>& r, double 
       const auto k4 = f(add(x, h, k3), u);
       for (std::size_t j = 0; j < x.size(); ++j) x[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
     }
+    if (m.torque_filter_hz > 0.0) x[5] = a_filter * x[5] + (1.0 - a_filter) * cell(x);
   }
   return t;
 }

@@ -82,8 +82,14 @@ TEST(IdentificationConfigTest, MistakesNameTheKeyAndTheLine) {
   EXPECT_NE(std::string(unknown.what()).find("sede"), std::string::npos) << unknown.what();
   const auto missing = errorOf(replaced(text, "  max_lag: 25 ", "  #max_lag: 25 "));
   EXPECT_NE(std::string(missing.what()).find("max_lag"), std::string::npos) << missing.what();
-  const auto fraction = errorOf(replaced(text, "max_outside_fraction: 0.1", "max_outside_fraction: 1.5"));
-  EXPECT_EQ(fraction.keyPath(), "validation.max_outside_fraction");
+  const auto fraction =
+      errorOf(replaced(text, "whiteness_max_outside_fraction: 0.1", "whiteness_max_outside_fraction: 1.5"));
+  EXPECT_EQ(fraction.keyPath(), "validation.whiteness_max_outside_fraction");
+  const auto independence =
+      errorOf(replaced(text, "independence_max_outside_fraction: 0.1", "independence_max_outside_fraction: -0.1"));
+  EXPECT_EQ(independence.keyPath(), "validation.independence_max_outside_fraction");
+  const auto cell = errorOf(replaced(text, "torque_cell_noise_nm: 0.05", "torque_cell_noise_nm: -0.05"));
+  EXPECT_EQ(cell.keyPath(), "validation.prediction.torque_cell_noise_nm");
   const auto jacobian = errorOf(replaced(text, "jacobian: sensitivities", "jacobian: secant"));
   EXPECT_EQ(jacobian.keyPath(), "fit.jacobian");
   EXPECT_GT(jacobian.line(), 0);

@@ -81,7 +81,8 @@ struct GreyModel {
   double load_gradient_nm_per_rad = 0.0;
   /// Known channel dynamics (fixed, not fitted; 0 = none): the servovalve spool as a second-order
   /// lag of the command (natural frequency, damping ratio) and the load cell's first-order
-  /// analog low-pass.
+  /// low-pass, which, as in the plant's sensor model, filters the sampled torque:
+  /// y_k = a y_{k-1} + (1 - a) tau_cell(t_k), a = exp(-2 pi f_c T).
   double spool_hz = 0.0;
   double spool_damping = 0.7;
   double torque_filter_hz = 0.0;
@@ -162,7 +163,11 @@ struct SimulationSensitivity {
 /// deviations.
 struct PredictorNoise {
   double angle_rad = 3.0e-4;           ///< of the angle reading (noise and quantisation)
-  double torque_nm = 0.1;              ///< of the load-cell reading
+  double torque_nm = 0.1;              ///< of the load-cell reading, white at the reading (its quantisation)
+  /// Of the load cell's analog noise ahead of its filter (0: none). Through the filter it is
+  /// coloured, so the filter carries it as process noise on its state, (1 - a) sigma per sample
+  /// with a = exp(-2 pi f_c T); a model without the filter adds it to the reading's.
+  double torque_cell_nm = 0.0;
   double process_torque_nm = 0.2;      ///< per sample, on the hydraulic torque: what the model leaves out
   double process_speed_radps = 0.001;  ///< per sample, on the speed
 };
@@ -175,8 +180,8 @@ struct PredictorNoise {
 /// measured angle plus the excitation, the same law the simulation closes on its own reading; with
 /// a delay of d samples reading k shows the state of sample k - d. The filter starts from the
 /// simulation's initial state at rest (at the angle reading d shows), so the first d readings
-/// (before any reading reaches the filter) are that state's readings.
-/// @throws std::invalid_argument for a non-positive noise level
+/// (before any reading reaches the filter) are that state's readings, as in the simulation.
+/// @throws std::invalid_argument for a non-positive noise level (the cell's may be zero)
 [[nodiscard]] Simulation predictOneStep(const GreyModel& model, const ExperimentData& data,
                                         const PredictorNoise& noise);
 
