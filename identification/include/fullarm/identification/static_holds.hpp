@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -43,6 +44,9 @@ struct StaticHoldOptions {
   double max_error_rad = 0.2;         ///< stop when a joint is this far from its target
   std::vector<double> min_rad;        ///< lower limit of every device joint
   std::vector<double> max_rad;        ///< upper limit of every device joint
+  /// Called before every read of the run (empty: none): the pacing of a real board, as in
+  /// ExperimentOptions::before_read.
+  std::function<void()> before_read;
 };
 
 /// One averaged hold.
