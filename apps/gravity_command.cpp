@@ -1,7 +1,6 @@
 #include "gravity_command.hpp"
 
 #include <cstdio>
-#include <iomanip>
 #include <fstream>
 #include <sstream>
 
@@ -194,20 +193,14 @@ std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, con
   const auto postures = randomDevicePostures(nominal, io.joints(), count, kPostureInset_rad,
                                              static_cast<std::uint64_t>(o.seed));
   out << "Holding " << count << " postures from both sides on " << o.io << "\n" << std::flush;
-  // One posture at a time, so that every hold is printed as it is taken.
-  std::vector<id::StaticHold> holds;
-  std::string stop_reason;
-  for (std::size_t p = 0; p < postures.size() && stop_reason.empty(); ++p) {
-    const id::StaticHoldRun run = id::runStaticHolds(io, {postures[p]}, options);
-    for (id::StaticHold h : run.holds) {
-      h.posture_index = static_cast<int>(p);
-      out << "  posture " << p + 1 << " of " << count << (h.side > 0 ? ", from above" : ", from below")
-          << ": held at t = " << std::fixed << std::setprecision(1) << h.time_s << " s\n"
-          << std::defaultfloat << std::flush;
-      holds.push_back(std::move(h));
-    }
-    if (!run.completed) stop_reason = run.stop_reason;
-  }
+  options.on_hold = [&](const id::StaticHold& h) {
+    out << "  posture " << h.posture_index + 1 << " of " << count << (h.side > 0 ? ", from above" : ", from below")
+        << ": held\n"
+        << std::flush;
+  };
+  const id::StaticHoldRun run = id::runStaticHolds(io, postures, options);
+  const std::vector<id::StaticHold>& holds = run.holds;
+  const std::string stop_reason = run.stop_reason;
   writeOutput(file, [&] { id::writeStaticHoldsCsv(file, holds, names); });
   return stop_reason;
 }

@@ -168,6 +168,7 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
       hold.q_rad /= static_cast<double>(average_steps);
       hold.tau_nm /= static_cast<double>(average_steps);
       run.holds.push_back(std::move(hold));
+      if (options.on_hold) options.on_hold(run.holds.back());
     }
   }
   run.completed = true;

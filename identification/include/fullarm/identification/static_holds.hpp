@@ -31,6 +31,8 @@
 
 namespace fullarm::identification {
 
+struct StaticHold;
+
 /// Settings of a static-hold run; the limit vectors follow the device's joint order.
 struct StaticHoldOptions {
   double hold_gain_v_per_rad = 30.0;  ///< K of every joint's position hold
@@ -47,6 +49,8 @@ struct StaticHoldOptions {
   /// Called before every read of the run (empty: none): the pacing of a real board, as in
   /// ExperimentOptions::before_read.
   std::function<void()> before_read;
+  /// Called with each hold as it is taken (empty: none): a command's progress line.
+  std::function<void(const StaticHold&)> on_hold;
 };
 
 /// One averaged hold.
