@@ -37,7 +37,7 @@ CLI::App* addGravityCommand(CLI::App& app, GravityOptions& o, OptionTable& table
       {"sim", "fakedaq", "comedi"});
   io->excludes(cmd->get_option("--holds"));
   declare.file("--plant", o.plant_config, "--io sim, fakedaq: the simulated DTS's plant YAML (default: config/dts_plant.yaml)");
-  declare.file("--plant-arm", o.plant_arm,
+  declare.file("--sim-arm", o.sim_arm,
                "--io sim, fakedaq: the arm model the simulated DTS moves, the truth of a test (default: --config)");
   declare.file("--daq-config", o.daq_config, "--io fakedaq, comedi: channel map YAML (default: config/dts_daq.yaml)");
   declare.file("--hil-config", o.hil_config,
@@ -123,7 +123,7 @@ void checkOptionCombination(const GravityOptions& o) {
   const auto refuse = [](const char* option, const std::string& why) { throw core::ConfigError({}, option, why); };
   if (o.io.empty()) {
     for (const auto& [name, value] : {std::pair<const char*, const std::string*>{"--plant", &o.plant_config},
-                                      {"--plant-arm", &o.plant_arm},
+                                      {"--sim-arm", &o.sim_arm},
                                       {"--daq-config", &o.daq_config},
                                       {"--hil-config", &o.hil_config}}) {
       if (!value->empty()) refuse(name, "is read only when the holds are taken on a device (--io)");
@@ -139,7 +139,7 @@ void checkOptionCombination(const GravityOptions& o) {
   }
   if (kind == hil::IoKind::kComedi) {
     if (!o.plant_config.empty()) refuse("--plant", "the real arm (--io comedi) is no simulated plant");
-    if (!o.plant_arm.empty()) refuse("--plant-arm", "the real arm (--io comedi) is no simulated plant");
+    if (!o.sim_arm.empty()) refuse("--sim-arm", "the real arm (--io comedi) is no simulated plant");
   }
 }
 
@@ -164,12 +164,12 @@ std::vector<Eigen::VectorXd> randomDevicePostures(const arm::ArmModel& model, co
 std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, const std::vector<std::string>& names,
                const std::filesystem::path& file, std::ostream& out) {
   const hil::IoKind kind = commandIoKind(o.io);
-  const arm::ArmModel plant_arm =
-      o.plant_arm.empty() ? nominal : arm::loadArmModel(std::filesystem::path(o.plant_arm));
+  const arm::ArmModel simulated =
+      o.sim_arm.empty() ? nominal : arm::loadArmModel(std::filesystem::path(o.sim_arm));
   const plant::PlantConfig plant_config =
-      plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), plant_arm);
+      plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), simulated);
   const std::unique_ptr<CommandDevice> device =
-      openCommandDevice(kind, plant_arm, plant_config, plant_arm.defaultPosture(), static_cast<std::uint64_t>(o.seed),
+      openCommandDevice(kind, simulated, plant_config, simulated.defaultPosture(), static_cast<std::uint64_t>(o.seed),
                         o.daq_config, o.hil_config, kHoldPeriod_s);
   hil::IoDevice& io = device->backend->device();
   if (io.joints().modelIndices() != armIndices(nominal)) {

@@ -132,7 +132,7 @@ std::string readFile(const std::filesystem::path& file) {
 }
 
 // Static holds taken by the command on the simulated DTS (sim) and through the fake DAQ (the
-// comedi back-end's code on it), whose arm (--plant-arm) is not the model being fitted: the
+// comedi back-end's code on it), whose arm (--sim-arm) is not the model being fitted: the
 // fitted arm predicts the simulated arm's own gravity at postures it never held, and the holds
 // log the command wrote, read back with --holds, gives the same fit.
 TEST(GravityCli, HoldsOnADevicePredictTheSimulatedArmsGravityAndTheirLogRefitsTheSame) {
@@ -147,7 +147,7 @@ TEST(GravityCli, HoldsOnADevicePredictTheSimulatedArmsGravityAndTheirLogRefitsTh
   for (const std::string io : {"sim", "fakedaq"}) {
     SCOPED_TRACE(io);
     const auto held = dir / io;
-    const Result r = runFullarm("gravity --io " + io + " --postures 6 --seed 2 --plant-arm " + truth_file.string() +
+    const Result r = runFullarm("gravity --io " + io + " --postures 6 --seed 2 --sim-arm " + truth_file.string() +
                                 " --out " + held.string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("posture 6 of 6, from below"), std::string::npos) << r.output;
@@ -201,12 +201,12 @@ TEST(GravityCli, DeviceOptionsOutOfPlaceExitTwoNamingTheOption) {
     EXPECT_NE(r.output.find(named), std::string::npos) << args << ": expected '" << named << "' in\n" << r.output;
   };
   expectBad("--plant " + file, "--plant");
-  expectBad("--plant-arm " + file, "--plant-arm");
+  expectBad("--sim-arm " + file, "--sim-arm");
   expectBad("--daq-config " + file, "--daq-config");
   expectBad("--hil-config " + file, "--hil-config");
   expectBad("--io sim --daq-config " + file, "--daq-config");
   expectBad("--io comedi --plant " + file, "--plant");
-  expectBad("--io comedi --plant-arm " + file, "--plant-arm");
+  expectBad("--io comedi --sim-arm " + file, "--sim-arm");
   expectBad("--io lcm", "--io");
   expectBad("--io sim --holds " + file, "--holds");
   expectBad("--postures 5", "--postures");
