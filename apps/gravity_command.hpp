@@ -3,6 +3,7 @@
 // identified torques or to a static-holds log, written as an arm YAML.
 
 #include <CLI/CLI.hpp>
+#include <optional>
 #include <ostream>
 #include <string>
 
@@ -14,8 +15,15 @@ namespace fullarm::app {
 struct GravityOptions {
   std::string arm_config;  ///< --config (default: dts_master.yaml)
   std::string holds;       ///< --holds: a static-holds log to fit (default: the reference's torques)
-  int postures = 400;      ///< --postures: random postures of the fit to the reference
-  int seed = 1;            ///< --seed: which random postures
+  std::string io;          ///< --io: take the static holds on this device (sim | fakedaq | comedi) and fit them
+  std::string plant_config;  ///< --plant: the simulated DTS of sim and fakedaq (default: dts_plant.yaml)
+  std::string sim_arm;       ///< --sim-arm: the arm the simulated DTS moves (default: --config)
+  std::string daq_config;    ///< --daq-config: the channel map of fakedaq and comedi
+  std::string hil_config;    ///< --hil-config: the loop configuration of fakedaq and comedi
+  /// --postures: random postures of the fit to the reference (default 400) or held on the
+  /// device (default 16)
+  std::optional<int> postures;
+  int seed = 1;            ///< --seed: which random postures (and the simulated sensors' noise)
   std::string out_dir = "out/gravity";
 };
 
@@ -23,8 +31,11 @@ struct GravityOptions {
 CLI::App* addGravityCommand(CLI::App& app, GravityOptions& options, OptionTable& table);
 
 /// Fits, prints the residual per joint, writes `arm.yaml` (the arm file with the fitted masses
-/// and centres of mass) and `gravity.csv` (the per-joint table) into --out.
-/// @return 0 when written
+/// and centres of mass) and `gravity.csv` (the per-joint table) into --out. With --io it first
+/// holds the postures on the device and writes their log, `holds.csv` (what --holds reads),
+/// printing a line per hold.
+/// @return 0 when written; 1 when the holds on the device stopped early (a limit, a fault: the
+///   holds taken are in holds.csv, nothing is fitted)
 /// @throws core::ConfigError for bad input (a malformed holds log names the line); OutputError
 int runGravity(const GravityOptions& options, std::ostream& out);
 

@@ -17,7 +17,7 @@
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/core/config_error.hpp"
-#include "fullarm/hil/sim_io.hpp"
+#include "fullarm/hil/io_backend.hpp"
 #include "fullarm/hil/simulated_arm.hpp"
 #include "fullarm/identification/excitation.hpp"
 #include "fullarm/identification/experiment.hpp"
@@ -30,6 +30,7 @@
 #include "fullarm/identification/signal_csv.hpp"
 #include "fullarm/identification/validation.hpp"
 #include "fullarm/plant/plant_config.hpp"
+#include "command_device.hpp"
 #include "output_files.hpp"
 
 namespace fullarm::app {
@@ -58,7 +59,7 @@ struct Experiment {
 // Everything a run produced, for the report and the summary.
 struct Outcome {
   std::string joint;
-  std::string source;  // "sim" or "logs"
+  std::string source;  // the back-end ("sim", "fakedaq", "comedi") or "logs"
   std::vector<Experiment> fit_experiments;
   Experiment validation;
   id::GreyModel start;
@@ -100,23 +101,7 @@ id::SampledSignal validationExcitation(double amplitude_v, double duration_s) {
   return id::schroederMultisine(amplitude_v, low, kBandHz, duration_s, 1, kSamplePeriod_s).signal;
 }
 
-Experiment runSimExperiment(const arm::ArmModel& model, plant::PlantConfig plant_config, int joint,
-                            const Eigen::VectorXd& posture, const id::SampledSignal& excitation, std::uint64_t seed,
-                            const std::string& name) {
-  plant_config.seed = seed;
-  plant_config.solver.integrator = plant::IntegratorKind::kRodas3;  // the lockstep loop's integrator
-  // The simulated plant can lock joints (the real arm cannot): only the driven joint is active, the
-  // others stay rigidly at the posture, so the data show the joint alone rather than the joint
-  // coupled to its neighbours through their holds and oil columns.
-  const plant::JointParams driven = plant_config.joints[static_cast<std::size_t>(joint)];
-  plant_config.joints = {driven};
-  hil::SimulatedArm arm(model, plant_config, posture, kSamplePeriod_s, kLatencySamples);
-  hil::SimIoDevice device(arm, {}, hil::IoSafetyParams{});
-  id::ExperimentOptions options;
-  options.joint = 0;
-  options.min_rad = driven.min_rad;
-  options.max_rad = driven.max_rad;
-  const id::ExperimentResult r = id::runExperiment(device, excitation, options);
+Experiment experimentOf(const id::ExperimentResult& r, const std::string& name) {
   Experiment e;
   e.name = name;
   e.log = r.log;
@@ -129,6 +114,74 @@ Experiment runSimExperiment(const arm::ArmModel& model, plant::PlantConfig plant
   }
   e.data = dataFromLog(e.log, name);
   return e;
+}
+
+Experiment runSimExperiment(const arm::ArmModel& model, plant::PlantConfig plant_config, int joint,
+                            const Eigen::VectorXd& posture, const id::SampledSignal& excitation, std::uint64_t seed,
+                            const std::string& name) {
+  plant_config.seed = seed;
+  plant_config.solver.integrator = plant::IntegratorKind::kRodas3;  // the lockstep loop's integrator
+  // The simulated plant can lock joints (the real arm cannot): only the driven joint is active, the
+  // others stay rigidly at the posture, so the data show the joint alone rather than the joint
+  // coupled to its neighbours through their holds and oil columns.
+  const plant::JointParams driven = plant_config.joints[static_cast<std::size_t>(joint)];
+  plant_config.joints = {driven};
+  hil::IoBackendOptions io;
+  io.io = hil::IoKind::kSim;
+  io.period_s = kSamplePeriod_s;
+  io.latency_samples = kLatencySamples;
+  io.plant = &plant_config;
+  io.posture = posture;
+  hil::IoBackend backend(model, io);
+  id::ExperimentOptions options;
+  options.joint = 0;
+  options.min_rad = driven.min_rad;
+  options.max_rad = driven.max_rad;
+  return experimentOf(id::runExperiment(backend.device(), excitation, options), name);
+}
+
+// The driven joint's index among the device's joints.
+int deviceJointIndex(hil::IoDevice& device, int model_joint, const std::string& name, const std::string& io) {
+  for (int k = 0; k < device.joints().size(); ++k) {
+    if (device.joints().modelIndex(k) == model_joint) return k;
+  }
+  throw core::ConfigError({}, "--joint", "'" + name + "' is not a joint of the " + io + " device's channel map");
+}
+
+// One experiment on a device that stays built between experiments (the fake DAQ, the real arm):
+// every device joint held, the driven one excited; the limits are the plant file's.
+Experiment runDeviceExperiment(CommandDevice& device, int device_joint, const plant::JointParams& driven,
+                               const id::SampledSignal& excitation, const std::string& name) {
+  id::ExperimentOptions options;
+  options.joint = device_joint;
+  options.min_rad = driven.min_rad;
+  options.max_rad = driven.max_rad;
+  options.before_read = device.pace;
+  options.log_control_time = true;
+  return experimentOf(id::runExperiment(device.backend->device(), excitation, options), name);
+}
+
+// Options that mean nothing with the chosen source are refused, not ignored.
+void checkOptionCombination(const IdentifyOptions& o) {
+  const auto refuse = [](const char* option, const std::string& why) { throw core::ConfigError({}, option, why); };
+  if (!o.logs.empty()) {
+    if (!o.daq_config.empty()) refuse("--daq-config", "a channel map is read only when experiments run (not with --log)");
+    if (!o.hil_config.empty()) refuse("--hil-config", "the loop configuration is read only when experiments run (not with --log)");
+    if (o.seed) refuse("--seed", "seeds the simulated sensors' noise: no experiment runs with --log");
+    return;
+  }
+  const hil::IoKind kind = commandIoKind(o.io);
+  if (kind == hil::IoKind::kSim) {
+    if (!o.daq_config.empty()) refuse("--daq-config", "only --io fakedaq and --io comedi read a channel map");
+    if (!o.hil_config.empty()) {
+      refuse("--hil-config",
+             "--io sim simulates the joint alone at 1 kHz with its own settings; only --io fakedaq and --io comedi "
+             "read the loop configuration");
+    }
+  }
+  if (kind == hil::IoKind::kComedi && o.seed) {
+    refuse("--seed", "seeds the simulated sensors' noise: the real arm (--io comedi) has none");
+  }
 }
 
 // The start's values must lie inside the settings' bounds (the fit refuses otherwise).
@@ -239,11 +292,16 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   std::ostringstream intro;
   intro << "Joint " << o.joint << ": the reduced hydraulic joint model (docs/identification.md) fitted by output "
         << "error to " << o.fit_experiments.size() << " closed-loop experiment(s) "
-        << (o.source == "sim" ? "on the simulated DTS (the joint alone, its neighbours locked; a PRBS to 30 Hz "
-                                "added to the valve command about a proportional position hold)"
-                              : "read from recorded logs")
+        << (o.source == "sim"       ? "on the simulated DTS (the joint alone, its neighbours locked; a PRBS to 30 Hz "
+                                      "added to the valve command about a proportional position hold)"
+            : o.source == "fakedaq" ? "through the fake DAQ (the comedi back-end on the simulated DTS, every other joint "
+                                      "held; a PRBS to 30 Hz added to the valve command about a proportional position "
+                                      "hold)"
+            : o.source == "comedi"  ? "on the arm through the Comedi board (every other joint held; a PRBS to 30 Hz "
+                                      "added to the valve command about a proportional position hold)"
+                                    : "read from recorded logs")
         << ", validated by pure simulation (judged) and one-step-ahead prediction (reported) on a held-out experiment"
-        << (o.source == "sim" ? " (a Schroeder multisine to 30 Hz)" : " (the last log)")
+        << (o.source != "logs" ? " (a Schroeder multisine to 30 Hz)" : " (the last log)")
         << ". Fit start: " << o.start_source << ". " << o.fit.evaluations << " closed-loop simulations, cost "
         << std::setprecision(4) << o.fit.cost << ".";
   section.addParagraph(intro.str());
@@ -431,6 +489,7 @@ std::string verdictText(const Outcome& o) {
 Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, core::Progress& progress,
                  std::ostream& text) {
   const auto started = std::chrono::steady_clock::now();
+  checkOptionCombination(o);
   const arm::ArmModel model = arm::loadArmModel(configPathOr(o.arm_config, arm::defaultArmModelPath));
   const plant::PlantConfig plant_config =
       plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), model);
@@ -449,16 +508,34 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
 
   progress.begin("identify", 0);
   if (o.logs.empty()) {
-    r.source = "sim";
+    r.source = o.io;
+    const hil::IoKind kind = commandIoKind(o.io);
+    const auto seed = static_cast<std::uint64_t>(o.seed.value_or(1));
     const Eigen::VectorXd posture = model.defaultPosture();
-    progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint));
-    r.fit_experiments.push_back(runSimExperiment(model, plant_config, joint, posture,
-                                                 fitExcitation(o.amplitude_v, o.duration_s),
-                                                 static_cast<std::uint64_t>(o.seed), kFitLogFile));
-    progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint));
-    r.validation =
-        runSimExperiment(model, plant_config, joint, posture, validationExcitation(o.amplitude_v, o.duration_s),
-                         static_cast<std::uint64_t>(o.seed) + 1, kValidationLogFile);
+    const id::SampledSignal fit_excitation = fitExcitation(o.amplitude_v, o.duration_s);
+    const id::SampledSignal validation_excitation = validationExcitation(o.amplitude_v, o.duration_s);
+    if (kind == hil::IoKind::kSim) {
+      progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint));
+      r.fit_experiments.push_back(
+          runSimExperiment(model, plant_config, joint, posture, fit_excitation, seed, kFitLogFile));
+      progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint));
+      r.validation =
+          runSimExperiment(model, plant_config, joint, posture, validation_excitation, seed + 1, kValidationLogFile);
+    } else {
+      // One device for both experiments, as on the real arm: the second starts where the first
+      // left. On the fake DAQ the simulated DTS locks the other joints, as --io sim does, and the
+      // board serves the driven joint's channels: the data show the joint alone (with every
+      // joint held instead, the neighbours' holds and the arm's coupling enter the data, which the
+      // single-joint model does not describe; docs/identification.md). The real arm holds them all.
+      const std::unique_ptr<CommandDevice> device =
+          openCommandDevice(kind, model, plant_config, posture, seed, o.daq_config, o.hil_config, kSamplePeriod_s,
+                            kind == hil::IoKind::kFakeDaq ? jp.name : std::string());
+      const int device_joint = deviceJointIndex(device->backend->device(), model_joint, o.joint, o.io);
+      progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint) + " through " + o.io);
+      r.fit_experiments.push_back(runDeviceExperiment(*device, device_joint, jp, fit_excitation, kFitLogFile));
+      progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint) + " through " + o.io);
+      r.validation = runDeviceExperiment(*device, device_joint, jp, validation_excitation, kValidationLogFile);
+    }
     writeOutput(out / kFitLogFile, [&] { id::writeSignalCsv(out / kFitLogFile, r.fit_experiments[0].log); });
     writeOutput(out / kValidationLogFile, [&] { id::writeSignalCsv(out / kValidationLogFile, r.validation.log); });
   } else {
@@ -564,19 +641,29 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
       "Identify one joint's hydraulic parameter groups from closed-loop experiments (simulated DTS or recorded "
       "logs); write the logs, identified.yaml, summary.json and report.html");
   OptionDeclarer declare(*cmd, table);
-  CLI::Option* io = declare.choice("--io", o.io, "I/O back-end the experiments run on", {"sim"});
+  CLI::Option* io = declare.choice("--io", o.io,
+                                   "I/O back-end the experiments run on (sim: the joint alone on the simulated DTS; "
+                                   "fakedaq: the comedi back-end on the simulated DTS; comedi: the arm)",
+                                   {"sim", "fakedaq", "comedi"});
   io->capture_default_str();
   declare.name("--joint", o.joint, "Joint to identify (short or model name)")->capture_default_str();
   declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
-  declare.integer("--seed", o.seed, "Seed of the simulated sensors' noise (the held-out experiment uses seed + 1)", 0,
-                  2147483647);
+  declare.integer("--seed", o.seed,
+                  "Seed of the simulated sensors' noise, default 1 (sim: the held-out experiment uses seed + 1; not with "
+                  "comedi)",
+                  0, 2147483647);
+  declare.file("--daq-config", o.daq_config, "fakedaq, comedi: channel map YAML (default: config/dts_daq.yaml)");
+  declare.file("--hil-config", o.hil_config,
+               "fakedaq, comedi: loop configuration YAML: period, latency, safety policy (default: config/hil.yaml)");
   declare.number("--duration", o.duration_s, "Excitation time of each experiment", {0.5, 600.0, "s"})
       ->capture_default_str();
   declare.number("--amplitude", o.amplitude_v, "Peak of the excitation on the valve command", {0.01, 5.0, "V"})
       ->capture_default_str();
   declare.integer("--threads", o.threads, "Threads of the fit's simulations", 1, 64)->capture_default_str();
   declare.file("--start", o.start, "identified.yaml whose model starts the fit (default: the plant joint's groups)");
-  declare.file("--plant", o.plant_config, "Plant YAML (default: config/dts_plant.yaml)");
+  declare.file("--plant", o.plant_config,
+               "Plant YAML: the simulated DTS of sim and fakedaq, the fit's start and the identified plant's base "
+               "(default: config/dts_plant.yaml)");
   declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
   declare.file("--settings", o.settings, "Identification settings YAML (default: config/identification.yaml)");
   declare
@@ -602,7 +689,7 @@ int runIdentify(const IdentifyOptions& o) {
   report.addHeadlineNumber("prediction_fit_angle_percent", "Held-out angle fit, one step ahead",
                            r.validation_result.angle.prediction_fit_percent, "%");
   report.addHeadlineNumber("wall_time_s", "Wall time", r.wall_s, "s");
-  if (r.source == "sim") {
+  if (r.source != "logs") {
     report.addFile(kFitLogFile);
     report.addFile(kValidationLogFile);
   }

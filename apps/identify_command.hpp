@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,13 +16,17 @@ namespace fullarm::app {
 
 /// Options of `fullarm identify`.
 struct IdentifyOptions {
-  std::string io = "sim";    ///< the I/O back-end the experiments run on
+  std::string io = "sim";    ///< the I/O back-end the experiments run on: sim | fakedaq | comedi
   std::string arm_config;    ///< --config (default: dts_master.yaml)
   std::string plant_config;  ///< --plant (default: dts_plant.yaml)
   std::string settings;      ///< --settings (default: identification.yaml)
   std::string joint = "EB";  ///< the driven joint (short or model name)
   std::string out_dir = "out/identify";
-  int seed = 1;                   ///< seed of the simulated sensors' noise (experiment k uses seed + k)
+  std::string daq_config;    ///< --daq-config: the channel map of fakedaq and comedi (default: dts_daq.yaml)
+  std::string hil_config;    ///< --hil-config: the loop configuration of fakedaq and comedi (default: hil.yaml)
+  /// Seed of the simulated sensors' noise (sim: experiment k uses seed + k; fakedaq: one arm for
+  /// both); unset: 1. The real arm has no seed.
+  std::optional<int> seed;
   double duration_s = 5.0;        ///< excitation time of each experiment
   double amplitude_v = 0.5;       ///< peak of the excitation added to the valve command
   int threads = 2;                ///< threads of the fit's simulations

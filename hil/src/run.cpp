@@ -15,20 +15,6 @@
 
 namespace fullarm::hil {
 
-const char* ioKindName(IoKind io) noexcept {
-  switch (io) {
-    case IoKind::kSim:
-      return "sim";
-    case IoKind::kFakeDaq:
-      return "fakedaq";
-    case IoKind::kComedi:
-      return "comedi";
-    case IoKind::kLcm:
-      return "lcm";
-  }
-  return "unknown";
-}
-
 const char* clockKindName(ClockKind clock) noexcept {
   return clock == ClockKind::kLockstep ? "lockstep" : "realtime";
 }
@@ -114,39 +100,28 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
   tick_ = makeTickModel(*model_, *world_, haptics_, gains_, config_.supervisor, joints, posture_);
   if (!build_device) return;
 
-  // The simulated arm lives in this process for sim and fakedaq, in the plant node for lcm.
-  if (options.io == IoKind::kSim || options.io == IoKind::kFakeDaq) {
-    arm_ = std::make_unique<SimulatedArm>(*model_, plant_, posture_, config_.control_period_s, config_.latency_samples);
+  IoBackendOptions io;
+  io.io = options.io;
+  io.period_s = config_.control_period_s;
+  io.latency_samples = config_.latency_samples;
+  io.safety = config_.io_safety;
+  io.plant = &plant_;
+  io.posture = posture_;
+  if (options.io == IoKind::kSim && options.sim_uses_daq_converters) daq_ = loadDaqConfig(options_.daq_config, *model_);
+  io.daq = &daq_;
+  io.sim_uses_daq_converters = options.sim_uses_daq_converters;
+  io.fakedaq_state_file = options.fakedaq_state_file;
+  io.lcm_joints = joints;
+  io.lcm_url = options.lcm_url;
+  // Real time: a reading must come within 0.6 of a period to leave the tick its compute time;
+  // lockstep waits long, for determinism.
+  if (options.clock == ClockKind::kRealtime) io.lcm_reply_timeout_s = 0.6 * config_.control_period_s;
+  backend_ = std::make_unique<IoBackend>(*model_, io);
+  device_ = &backend_->device();
+  arm_ = backend_->simulatedArm();
+  if (arm_ != nullptr) {
     user_ = std::make_unique<ScriptedUser>(loadScriptedUser(options_.user), *model_, haptics::armBasePose(*scene_, *model_));
     arm_->setUser(user_.get());
-  }
-  switch (options.io) {
-    case IoKind::kSim: {
-      SimIoOptions sim;
-      if (options.sim_uses_daq_converters) {
-        daq_ = loadDaqConfig(options_.daq_config, *model_);
-        sim.converters = &daq_;
-      }
-      device_ = std::make_unique<SimIoDevice>(*arm_, sim, config_.io_safety);
-      break;
-    }
-    case IoKind::kFakeDaq:
-      board_ = std::make_unique<FakeDaqBoard>(daq_, options.fakedaq_state_file);
-      rig_ = std::make_unique<FakeDaqRig>(*board_, *arm_, daq_, daq_.fake_watchdog_timeout_s);
-      device_ = makeFakeDaqIoDevice(daq_, *model_, config_.control_period_s, config_.io_safety, rig_.get());
-      break;
-    case IoKind::kComedi:
-      device_ = makeComediIoDevice(daq_, *model_, config_.control_period_s, config_.io_safety);
-      break;
-    case IoKind::kLcm: {
-      LcmIoOptions lcm;
-      if (!options.lcm_url.empty()) lcm.url = options.lcm_url;
-      // Real time: a reading must come within 0.6 of a period to leave the tick its compute
-      // time; lockstep waits long, for determinism.
-      if (options.clock == ClockKind::kRealtime) lcm.reply_timeout_s = 0.6 * config_.control_period_s;
-      device_ = std::make_unique<LcmIoDevice>(joints, config_.control_period_s, config_.io_safety, lcm);
-      break;
-    }
   }
   if (device_->joints().modelIndices() != joints.modelIndices()) {
     throw DeviceError("the I/O device's joints differ from the tick's: check the channel map " +

@@ -41,7 +41,11 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   for (auto& c : result.log.columns) c.reserve(excitation.value_v.size());
 
   hil::JointSample sample;
-  if (!device.read(sample).ok())
+  const auto read = [&] {
+    if (options.before_read) options.before_read();
+    return device.read(sample).ok();
+  };
+  if (!read())
     throw std::runtime_error(std::string("experiment: the device could not be read: ") + device.status().message);
   result.hold_rad.assign(sample.q_rad.data(), sample.q_rad.data() + n);
   if (!(sample.q_rad[j] >= lo && sample.q_rad[j] <= hi)) {
@@ -56,7 +60,7 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   const std::size_t total = settle_steps + excitation.value_v.size();
   hil::IoVector command = hil::IoVector::Zero(n);
   for (std::size_t step = 0; step < total; ++step) {
-    if (step > 0 && !device.read(sample).ok()) {
+    if (step > 0 && !read()) {
       result.stop_reason = std::string("device read failed: ") + device.status().message;
       return result;
     }
@@ -90,7 +94,10 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
     }
     if (exciting) {
       auto& c = result.log.columns;
-      c[0].push_back(sample.t_s);
+      const double t0 = c[0].empty() ? sample.t_s : c[0].front();
+      c[0].push_back(options.log_control_time
+                         ? t0 + static_cast<double>(step - settle_steps) * device.period()
+                         : sample.t_s);
       c[1].push_back(r);
       c[2].push_back(device.appliedCommand()[j]);
       c[3].push_back(q);

@@ -76,7 +76,11 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
 
   StaticHoldRun run;
   hil::JointSample sample;
-  if (!device.read(sample).ok())
+  const auto read = [&] {
+    if (options.before_read) options.before_read();
+    return device.read(sample).ok();
+  };
+  if (!read())
     throw std::runtime_error(std::string("static holds: the device could not be read: ") + device.status().message);
   device.activate();
   DeactivateOnExit guard{device};
@@ -93,7 +97,7 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
 
   // One control period towards `target`: read (the first one is the read above), check, write.
   auto step = [&](std::string& failure) -> bool {
-    if (!first_read && !device.read(sample).ok()) {
+    if (!first_read && !read()) {
       failure = std::string("device read failed: ") + device.status().message;
       return false;
     }
@@ -164,6 +168,7 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
       hold.q_rad /= static_cast<double>(average_steps);
       hold.tau_nm /= static_cast<double>(average_steps);
       run.holds.push_back(std::move(hold));
+      if (options.on_hold) options.on_hold(run.holds.back());
     }
   }
   run.completed = true;

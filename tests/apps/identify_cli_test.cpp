@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -21,6 +22,9 @@
 namespace {
 
 using Result = fullarm::test::CliResult;
+// The fake DAQ's groups against the plant's: 10 %, as on --io sim (the same simulated joint,
+// here read and driven through the channel map's converters and calibrations).
+constexpr double kFakeDaqTolerance = 0.10;
 using fullarm::test::runFullarm;
 namespace id = fullarm::identification;
 
@@ -159,6 +163,70 @@ TEST(IdentifyCli, BadInputExitsTwoNamingTheOptionFileOrLine) {
   const Result one = runFullarm("identify --quiet --out " + dir.string() + " --log " + bad_log.string());
   EXPECT_EQ(one.exit_code, 2) << one.output;
   EXPECT_NE(one.output.find("--log"), std::string::npos) << one.output;
+}
+
+// The same identification through the fake DAQ: the comedi back-end's code on the simulated DTS
+// with the channel map's 12-bit inputs and 16-bit outputs (the simulated DTS locks the other
+// joints, as with --io sim). The groups the experiments show are the plant's own at the hold
+// angle (greyModelFromJoint, the fit's start), and the delay is the loop's one-sample latency.
+TEST(IdentifyCli, FakeDaqRunIdentifiesThePlantsOwnGroups) {
+  const auto dir = tempDir("fakedaq");
+  const Result r = runFullarm("identify --io fakedaq --joint EB --duration 1 --quiet --out " + dir.string());
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+  for (const char* f :
+       {"experiment_fit.csv", "experiment_validation.csv", "identified.yaml", "summary.json", "report.html"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+  }
+  const nlohmann::json result = readSummary(dir)["results"]["identify"];
+  EXPECT_EQ(result["source"], "fakedaq");
+  EXPECT_TRUE(result["experiments"][0]["completed"].get<bool>());
+  EXPECT_TRUE(result["experiments"][1]["completed"].get<bool>());
+  std::printf("fakedaq: delay %d samples, fit angle %.1f %%, torque %.1f %%\n", result["delay_samples"].get<int>(),
+              result["validation"]["fit_angle_percent"].get<double>(),
+              result["validation"]["fit_torque_percent"].get<double>());
+  // The start is the plant's own groups: recompute them independently from the plant file.
+  const fullarm::arm::ArmModel model = fullarm::arm::loadArmModel(fullarm::arm::defaultArmModelPath());
+  const fullarm::plant::PlantConfig plant =
+      fullarm::plant::loadPlantConfig(fullarm::plant::defaultPlantConfigPath(), model);
+  const int eb = fullarm::plant::findPlantJoint(plant, "EB");
+  const double q_hold = result["experiments"][0]["hold_rad"].get<double>();
+  const id::GreyModel own = id::greyModelFromJoint(plant.joints[static_cast<std::size_t>(eb)], q_hold, 0.0, 0.0, 1);
+  for (const int i : {id::kFlowGain, id::kStiffness}) {
+    const char* name = id::greyParamName(i);
+    EXPECT_NEAR(result["parameters"][name]["start"].get<double>(), own.value[static_cast<std::size_t>(i)],
+                1e-9 * own.value[static_cast<std::size_t>(i)])
+        << name;
+  }
+  for (const char* name : {"flow_gain_radps_per_v", "hydraulic_stiffness_nm_per_rad", "inertia_kgm2"}) {
+    const double plant_value = result["parameters"][name]["start"].get<double>();
+    const double value = result["parameters"][name]["value"].get<double>();
+    std::printf("%s: plant %.6g, identified %.6g (%+.1f %%)\n", name, plant_value, value,
+                100.0 * (value / plant_value - 1.0));
+    EXPECT_NEAR(value, plant_value, kFakeDaqTolerance * plant_value) << name;
+  }
+  EXPECT_EQ(result["delay_samples"].get<int>(), 1);
+  EXPECT_GE(result["validation"]["fit_angle_percent"].get<double>(), 90.0);
+}
+
+TEST(IdentifyCli, BackEndOptionsOutOfPlaceExitTwoNamingTheOption) {
+  const auto dir = tempDir("io_bad");
+  const std::string file = (dir / "any.yaml").string();
+  { std::ofstream(file) << "x: 1\n"; }
+  const std::string log = (dir / "log.csv").string();
+  { std::ofstream(log) << "time_s,excitation_v,command_v,q_rad,tau_measured_nm\n"; }
+  const auto expectBad = [&](const std::string& args, const std::string& named) {
+    const Result r = runFullarm("identify --quiet --duration 1 --out " + dir.string() + " " + args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(named), std::string::npos) << args << ": expected '" << named << "' in\n" << r.output;
+  };
+  expectBad("--io sim --daq-config " + file, "--daq-config");
+  expectBad("--io sim --hil-config " + file, "--hil-config");
+  expectBad("--io comedi --seed 3", "--seed");
+  expectBad("--io lcm", "--io");
+  expectBad("--log " + log + " " + log + " --daq-config " + file, "--daq-config");
+  expectBad("--log " + log + " " + log + " --seed 2", "--seed");
+  // No board on this machine: the error names the device file of the channel map.
+  expectBad("--io comedi", "/dev/comedi0");
 }
 
 }  // namespace

@@ -29,6 +29,7 @@
 #include "fullarm/hil/fake_daq.hpp"
 #include "fullarm/hil/global_search.hpp"
 #include "fullarm/hil/hil_config.hpp"
+#include "fullarm/hil/io_backend.hpp"
 #include "fullarm/hil/io_device.hpp"
 #include "fullarm/hil/scripted_user.hpp"
 #include "fullarm/hil/simulated_arm.hpp"
@@ -37,13 +38,9 @@
 
 namespace fullarm::hil {
 
-/// Which I/O back-end drives the run.
-/// kLcm: remote I/O, the device's back-end in a plant node in another process (lcm_io.hpp).
-enum class IoKind { kSim, kFakeDaq, kComedi, kLcm };
 /// Which clock drives the run.
 enum class ClockKind { kLockstep, kRealtime };
 
-[[nodiscard]] const char* ioKindName(IoKind io) noexcept;
 [[nodiscard]] const char* clockKindName(ClockKind clock) noexcept;
 
 /// What a run is made of. Empty paths take the shipped defaults.
@@ -201,7 +198,7 @@ class HilSession {
   [[nodiscard]] const haptics::HapticsParams& hapticsParams() const noexcept { return haptics_; }
   [[nodiscard]] IoDevice& device() noexcept { return *device_; }
   /// The simulated arm behind sim and fakedaq (nullptr for comedi).
-  [[nodiscard]] SimulatedArm* simulatedArm() noexcept { return arm_.get(); }
+  [[nodiscard]] SimulatedArm* simulatedArm() noexcept { return arm_; }
   [[nodiscard]] const ScriptedUser* user() const noexcept { return user_.get(); }
 
  private:
@@ -220,11 +217,10 @@ class HilSession {
   plant::PlantConfig plant_;
   DaqConfig daq_;
   Eigen::VectorXd posture_;
-  std::unique_ptr<SimulatedArm> arm_;
   std::unique_ptr<ScriptedUser> user_;
-  std::unique_ptr<FakeDaqBoard> board_;
-  std::unique_ptr<FakeDaqRig> rig_;
-  std::unique_ptr<IoDevice> device_;
+  std::unique_ptr<IoBackend> backend_;
+  SimulatedArm* arm_ = nullptr;  // the backend's (sim, fakedaq)
+  IoDevice* device_ = nullptr;   // the backend's
   TickModel tick_;
   bool ran_ = false;
 };

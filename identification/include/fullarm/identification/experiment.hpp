@@ -13,9 +13,10 @@
 /// fault.
 ///
 /// The log has one row per control period of the excitation: `time_s` (the reading's device
-/// time), `excitation_v`, `command_v` (what the device put out after its clamp, held over the
+/// time, or the control time: ExperimentOptions::log_control_time), `excitation_v`, `command_v` (what the device put out after its clamp, held over the
 /// next period), `q_rad` and `tau_measured_nm` (the driven joint's reading).
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,15 @@ struct ExperimentOptions {
   double max_rad = 1.0;               ///< the driven joint's upper limit
   double limit_margin_rad = 0.05;     ///< stop when the driven joint comes this close to a limit
   double held_drift_limit_rad = 0.1;  ///< stop when a held joint leaves its hold by more than this
+  /// Called before every read of the run (empty: none). A simulated device advances one period
+  /// per read; a real board answers at once, so the caller paces its reads here (a wait for the
+  /// next period on the real-time clock).
+  std::function<void()> before_read;
+  /// true: the log's `time_s` is the control time, the first logged reading's device time plus
+  /// the periods since; false: each reading's device time. A board's readings carry the wall
+  /// clock (with the wake-up jitter of a real board, and on the fake DAQ the wall clock of a
+  /// simulation that runs faster than real time), while the fit needs a uniform time step.
+  bool log_control_time = false;
 };
 
 /// Outcome of one experiment.

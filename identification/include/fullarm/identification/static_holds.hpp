@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -29,6 +30,8 @@
 #include "fullarm/hil/io_device.hpp"
 
 namespace fullarm::identification {
+
+struct StaticHold;
 
 /// Settings of a static-hold run; the limit vectors follow the device's joint order.
 struct StaticHoldOptions {
@@ -43,6 +46,11 @@ struct StaticHoldOptions {
   double max_error_rad = 0.2;         ///< stop when a joint is this far from its target
   std::vector<double> min_rad;        ///< lower limit of every device joint
   std::vector<double> max_rad;        ///< upper limit of every device joint
+  /// Called before every read of the run (empty: none): the pacing of a real board, as in
+  /// ExperimentOptions::before_read.
+  std::function<void()> before_read;
+  /// Called with each hold as it is taken (empty: none): a command's progress line.
+  std::function<void(const StaticHold&)> on_hold;
 };
 
 /// One averaged hold.

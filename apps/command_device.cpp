@@ -1,0 +1,93 @@
+#include "command_device.hpp"
+
+#include <time.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "cli_values.hpp"
+#include "fullarm/core/config_error.hpp"
+
+namespace fullarm::app {
+
+hil::IoKind commandIoKind(const std::string& name) {
+  if (name == "sim") return hil::IoKind::kSim;
+  if (name == "fakedaq") return hil::IoKind::kFakeDaq;
+  if (name == "comedi") return hil::IoKind::kComedi;
+  throw core::ConfigError({}, "--io", "'" + name + "': expected sim, fakedaq or comedi");
+}
+
+namespace {
+
+// Waits until the next multiple of the period after the first call (CLOCK_MONOTONIC, absolute).
+class PeriodClock {
+ public:
+  explicit PeriodClock(double period_s) : period_ns_(static_cast<long>(std::llround(period_s * 1e9))) {}
+  void operator()() {
+    if (!started_) {
+      clock_gettime(CLOCK_MONOTONIC, &next_);
+      started_ = true;
+      return;
+    }
+    next_.tv_nsec += period_ns_;
+    while (next_.tv_nsec >= 1'000'000'000L) {
+      next_.tv_nsec -= 1'000'000'000L;
+      ++next_.tv_sec;
+    }
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next_, nullptr) != 0) {
+    }
+  }
+
+ private:
+  long period_ns_;
+  timespec next_{};
+  bool started_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::ArmModel& model,
+                                                 const plant::PlantConfig& plant, const Eigen::VectorXd& posture,
+                                                 std::uint64_t seed, const std::string& daq_config,
+                                                 const std::string& hil_config, double period_s,
+                                                 const std::string& only_joint) {
+  auto d = std::make_unique<CommandDevice>();
+  d->loop = hil::loadHilConfig(configPathOr(hil_config, hil::defaultHilConfigPath));
+  if (std::abs(d->loop.control_period_s - period_s) > 1e-12) {
+    throw core::ConfigError(d->loop.source, "control_period_s",
+                            "is " + std::to_string(d->loop.control_period_s) + " s: expected " +
+                                std::to_string(period_s) + " s, the period the experiments are designed for");
+  }
+  d->plant = plant;
+  d->plant.solver.integrator = d->loop.sim_integrator;
+  d->plant.seed = seed;
+  if (kind == hil::IoKind::kFakeDaq || kind == hil::IoKind::kComedi) {
+    d->daq = hil::loadDaqConfig(configPathOr(daq_config, hil::defaultDaqConfigPath), model);
+  }
+  if (!only_joint.empty() && kind != hil::IoKind::kComedi) {
+    const auto k = static_cast<std::size_t>(plant::findPlantJoint(d->plant, only_joint));
+    d->plant.joints = {d->plant.joints[k]};
+    if (kind == hil::IoKind::kFakeDaq) {
+      const auto j = std::find_if(d->daq.joints.begin(), d->daq.joints.end(),
+                                  [&](const hil::DaqJoint& dj) { return dj.name == d->plant.joints[0].name; });
+      if (j == d->daq.joints.end()) {
+        throw core::ConfigError(d->daq.source, "joints", "has no channels for " + d->plant.joints[0].name);
+      }
+      d->daq.joints = {*j};
+    }
+  }
+  hil::IoBackendOptions io;
+  io.io = kind;
+  io.period_s = d->loop.control_period_s;
+  io.latency_samples = d->loop.latency_samples;
+  io.safety = d->loop.io_safety;
+  io.plant = &d->plant;
+  io.posture = posture;
+  io.daq = &d->daq;
+  d->backend = std::make_unique<hil::IoBackend>(model, io);
+  d->backend->device().configure();  // opens the board: a missing one is reported before anything runs
+  if (kind == hil::IoKind::kComedi) d->pace = PeriodClock(d->loop.control_period_s);
+  return d;
+}
+
+}  // namespace fullarm::app
