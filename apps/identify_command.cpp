@@ -230,7 +230,7 @@ bool allFinite(const id::FitResult& fit) {
 }
 
 nlohmann::json correlationJson(const id::CorrelationTest& t) {
-  return {{"bound", t.bound}, {"outside", t.outside}, {"lags", t.lags.size()}};
+  return {{"label", t.label}, {"bound", t.bound}, {"outside", t.outside}, {"lags", t.lags.size()}};
 }
 
 void addToReport(const Outcome& o, reports::Report& report, const std::string& heading) {
@@ -258,7 +258,19 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
                            {"hold_gain_v_per_rad", e.data.hold_gain_v_per_rad},
                            {"hold_rad", e.data.hold_rad}});
   };
-  for (const Experiment& e : o.fit_experiments) addExperiment(e, "fit");
+  for (std::size_t i = 0; i < o.fit_experiments.size(); ++i) {
+    addExperiment(o.fit_experiments[i], "fit");
+    // The fit's initial state of this experiment (at rest where the settings hold it fixed).
+    if (i < o.fit.initial_states.size()) {
+      const id::InitialState& x0 = o.fit.initial_states[i];
+      const id::InitialState se =
+          i < o.fit.initial_state_standard_error.size() ? o.fit.initial_state_standard_error[i] : id::InitialState{};
+      experiments.back()["initial_state"] = {{"speed_radps", x0.speed_radps},
+                                             {"speed_standard_error", se.speed_radps},
+                                             {"torque_offset_nm", x0.torque_offset_nm},
+                                             {"torque_offset_standard_error", se.torque_offset_nm}};
+    }
+  }
   addExperiment(o.validation, "validation");
   const id::ModelValidation& v = o.validation_result;
   report.results()["identify"] = {
@@ -285,6 +297,7 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
         {"angle_cross_correlation", correlationJson(v.angle.cross_correlation)},
         {"torque_autocorrelation", correlationJson(v.torque.autocorrelation)},
         {"torque_cross_correlation", correlationJson(v.torque.cross_correlation)},
+        {"prediction_process_scale", v.process_scale},
         {"pass", v.pass},
         {"failures", v.failures}}}};
 
@@ -418,7 +431,7 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   }
 
   // Residual tests with their 99 % bounds.
-  const auto correlationChart = [&](const char* title, const char* x_label, bool cross) {
+  const auto correlationChart = [&](const char* title, const char* x_label, const char* residual, bool cross) {
     reports::XyChart c;
     c.title = title;
     c.x_axis = {x_label, "samples"};
@@ -428,7 +441,7 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
     for (const auto& [name, ch] : {std::pair<const char*, const id::ChannelValidation*>{"angle", &v.angle},
                                    std::pair<const char*, const id::ChannelValidation*>{"torque", &v.torque}}) {
       const id::CorrelationTest& test = cross ? ch->cross_correlation : ch->autocorrelation;
-      reports::Series s{std::string(name) + " residual", {}, test.values};
+      reports::Series s{std::string(name) + " " + residual, {}, test.values};
       for (int lag : test.lags) s.x.push_back(lag);
       s.mode = reports::SeriesMode::kLinesMarkers;
       if (!test.lags.empty()) {
@@ -442,19 +455,26 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
     c.series.push_back({"-99 % bound", {lo, hi}, {-bound, -bound}});
     section.addLineChart(std::move(c));
   };
-  correlationChart("Residual autocorrelation (held-out experiment)", "Lag", false);
-  correlationChart("Excitation-residual cross-correlation (held-out experiment)", "Lag", true);
+  correlationChart("Whiteness: autocorrelation of the one-step prediction errors (held-out experiment)", "Lag",
+                   "prediction error", false);
+  correlationChart(
+      "Independence: cross-correlation of the simulation residual with the past excitation (held-out experiment)",
+      "Lag", "simulation residual", true);
 
   reports::Table vt;
   vt.caption = "Validation on the held-out experiment (thresholds from " + cfg.source.filename().string() +
                "): the simulation sees only the excitation and is judged; the one-step prediction (a Kalman filter "
-               "on the readings up to the previous sample, correcting the model at every sample) is reported beside it";
+               "on the readings up to the previous sample, correcting the model at every sample, its process noise "
+               "the reference levels times " +
+               numberText(v.process_scale) +
+               ", estimated from the held-out record) is reported beside it; the simulation residual is judged for "
+               "independence of the past excitation, the prediction errors for whiteness";
   vt.columns = {"Channel",
                 "Simulation fit [%]",
                 "Required simulation fit [%]",
                 "One-step prediction fit [%]",
-                "Autocorrelation lags outside",
-                "Cross-correlation lags outside"};
+                "Prediction errors: autocorrelation lags outside",
+                "Simulation residual: cross-correlation lags outside"};
   const auto outside = [](const id::CorrelationTest& test) {
     return std::to_string(test.outside) + " / " + std::to_string(test.lags.size());
   };
