@@ -3,7 +3,10 @@
 #include <time.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "cli_values.hpp"
 #include "fullarm/core/config_error.hpp"
@@ -17,34 +20,40 @@ hil::IoKind commandIoKind(const std::string& name) {
   throw core::ConfigError({}, "--io", "'" + name + "': expected sim, fakedaq or comedi");
 }
 
-namespace {
-
-// Waits until the next multiple of the period after the first call (CLOCK_MONOTONIC, absolute).
-class PeriodClock {
- public:
-  explicit PeriodClock(double period_s) : period_ns_(static_cast<long>(std::llround(period_s * 1e9))) {}
-  void operator()() {
-    if (!started_) {
-      clock_gettime(CLOCK_MONOTONIC, &next_);
-      started_ = true;
-      return;
-    }
-    next_.tv_nsec += period_ns_;
-    while (next_.tv_nsec >= 1'000'000'000L) {
-      next_.tv_nsec -= 1'000'000'000L;
-      ++next_.tv_sec;
-    }
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next_, nullptr) != 0) {
-    }
+PeriodClock::PeriodClock(double period_s) {
+  if (!(std::isfinite(period_s) && period_s > 0.0)) {
+    throw std::invalid_argument("period clock: the period must be finite and positive, got " +
+                                std::to_string(period_s) + " s");
   }
+  period_ns_ = static_cast<long>(std::llround(period_s * 1e9));
+}
 
- private:
-  long period_ns_;
-  timespec next_{};
-  bool started_ = false;
-};
-
-}  // namespace
+bool PeriodClock::operator()() {
+  constexpr long kSecond = 1'000'000'000L;
+  if (!started_) {
+    clock_gettime(CLOCK_MONOTONIC, &next_);
+    started_ = true;
+    return true;
+  }
+  next_.tv_nsec += period_ns_;
+  while (next_.tv_nsec >= kSecond) {
+    next_.tv_nsec -= kSecond;
+    ++next_.tv_sec;
+  }
+  int error = 0;
+  while ((error = clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next_, nullptr)) == EINTR) {
+  }
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  const long long late_ns =
+      (static_cast<long long>(now.tv_sec) - next_.tv_sec) * kSecond + (now.tv_nsec - next_.tv_nsec);
+  if (error != 0 || late_ns > period_ns_ / 2) {
+    ++overruns_;
+    next_ = now;  // the deadlines restart from now: no burst of back-to-back periods
+    return false;
+  }
+  return true;
+}
 
 std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::ArmModel& model,
                                                  const plant::PlantConfig& plant, const Eigen::VectorXd& posture,

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <ctime>
 #include <functional>
 #include <memory>
 #include <string>
@@ -31,8 +32,29 @@ struct CommandDevice {
   hil::DaqConfig daq;        ///< the channel map (fakedaq, comedi)
   std::unique_ptr<hil::IoBackend> backend;
   /// Called before every read: waits for the next control period on the real-time clock for
-  /// the real board (a simulated device advances one period per read and needs none).
-  std::function<void()> pace;
+  /// the real board (a simulated device advances one period per read and needs none); false when
+  /// the wait came too late to keep the period (PeriodClock).
+  std::function<bool()> pace;
+};
+
+/// Paces a loop at a fixed period on CLOCK_MONOTONIC (absolute deadlines). The first call starts
+/// the clock; each later call waits for the next deadline and returns false when it woke more
+/// than half a period after it (the loop or the wake-up stalled: the readings no longer come a
+/// period apart) or the clock could not be waited on. After a late call the deadlines restart
+/// from the current time rather than catching up in a burst.
+class PeriodClock {
+ public:
+  /// @throws std::invalid_argument for a period that is not finite and positive
+  explicit PeriodClock(double period_s);
+  [[nodiscard]] bool operator()();
+  /// Calls that found their deadline more than half a period past.
+  [[nodiscard]] long overruns() const { return overruns_; }
+
+ private:
+  long period_ns_;
+  timespec next_{};
+  bool started_ = false;
+  long overruns_ = 0;
 };
 
 /// Builds the device of `kind` (sim, fakedaq or comedi; the arm at `posture` for the simulated

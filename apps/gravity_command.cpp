@@ -23,8 +23,8 @@ namespace id = fullarm::identification;
 CLI::App* addGravityCommand(CLI::App& app, GravityOptions& o, OptionTable& table) {
   CLI::App* cmd = app.add_subcommand(
       "gravity",
-      "Fit the arm's gravity load physically consistent (to the DTS reference's identified torques, or to a "
-      "static-holds log) and write it as an arm YAML");
+      "Fit the arm's gravity load physically consistent (to the DTS reference's identified torques, to a "
+      "static-holds log, or to holds taken on a device with --io) and write it as an arm YAML");
   OptionDeclarer declare(*cmd, table);
   declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
   declare.file("--holds", o.holds,
@@ -48,6 +48,9 @@ CLI::App* addGravityCommand(CLI::App& app, GravityOptions& o, OptionTable& table
                   2, 100000);
   declare.integer("--seed", o.seed, "Seed of the random postures (and of the simulated sensors' noise)", 0, 2147483647)
       ->capture_default_str();
+  declare.flag("--confirm-arm-motion", o.confirm_arm_motion,
+               "--io comedi: the arm's workspace is clear; the holds move every joint at once to random postures "
+               "inside the limits less 0.1 rad, with no check for self-collision or the arm's surroundings");
   declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
   return cmd;
 }
@@ -128,6 +131,7 @@ void checkOptionCombination(const GravityOptions& o) {
                                       {"--hil-config", &o.hil_config}}) {
       if (!value->empty()) refuse(name, "is read only when the holds are taken on a device (--io)");
     }
+    if (o.confirm_arm_motion) refuse("--confirm-arm-motion", "only --io comedi moves the real arm");
     if (o.holds.empty() && o.postures && *o.postures < 10) {
       refuse("--postures", "the fit to the reference needs at least 10 postures, got " + std::to_string(*o.postures));
     }
@@ -137,7 +141,16 @@ void checkOptionCombination(const GravityOptions& o) {
   if (kind == hil::IoKind::kSim && !o.daq_config.empty()) {
     refuse("--daq-config", "only --io fakedaq and --io comedi read a channel map");
   }
+  if (kind != hil::IoKind::kComedi && o.confirm_arm_motion) {
+    refuse("--confirm-arm-motion", "only --io comedi moves the real arm");
+  }
   if (kind == hil::IoKind::kComedi) {
+    if (!o.confirm_arm_motion) {
+      refuse("--confirm-arm-motion",
+             "is required with --io comedi: the holds move the real arm, every joint at once, to random postures "
+             "inside its limits less 0.1 rad, with no check for self-collision or the arm's surroundings; clear the "
+             "workspace, then give --confirm-arm-motion");
+    }
     if (!o.plant_config.empty()) refuse("--plant", "the real arm (--io comedi) is no simulated plant");
     if (!o.sim_arm.empty()) refuse("--sim-arm", "the real arm (--io comedi) is no simulated plant");
   }
@@ -195,8 +208,7 @@ std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, con
   out << "Holding " << count << " postures from both sides on " << o.io << "\n" << std::flush;
   options.on_hold = [&](const id::StaticHold& h) {
     out << "  posture " << h.posture_index + 1 << " of " << count << (h.side > 0 ? ", from above" : ", from below")
-        << ": held\n"
-        << std::flush;
+        << ": held\n";  // no flush inside the control loop: the pacing would see the wait
   };
   const id::StaticHoldRun run = id::runStaticHolds(io, postures, options);
   const std::vector<id::StaticHold>& holds = run.holds;

@@ -24,6 +24,9 @@ struct GravityOptions {
   /// device (default 16)
   std::optional<int> postures;
   int seed = 1;            ///< --seed: which random postures (and the simulated sensors' noise)
+  /// --confirm-arm-motion: the operator has cleared the real arm's workspace (--io comedi moves
+  /// it to random postures with no check for self-collision or its surroundings)
+  bool confirm_arm_motion = false;
   std::string out_dir = "out/gravity";
 };
 

@@ -307,16 +307,18 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
         << "error to " << o.fit_experiments.size() << " closed-loop experiment(s) "
         << (o.source == "sim"       ? "on the simulated DTS (the joint alone, its neighbours locked; a PRBS to 30 Hz "
                                       "added to the valve command about a proportional position hold)"
-            : o.source == "fakedaq" ? "through the fake DAQ (the comedi back-end on the simulated DTS, every other joint "
-                                      "held; a PRBS to 30 Hz added to the valve command about a proportional position "
-                                      "hold)"
+            : o.source == "fakedaq" ? "through the fake DAQ (the comedi back-end on the simulated DTS, its neighbours "
+                                      "locked and the board serving the driven joint's channels; a PRBS to 30 Hz added "
+                                      "to the valve command about a proportional position hold)"
             : o.source == "comedi"  ? "on the arm through the Comedi board (every other joint held; a PRBS to 30 Hz "
                                       "added to the valve command about a proportional position hold)"
                                     : "read from recorded logs")
-        << ", validated by pure simulation (judged) and one-step-ahead prediction (reported) on a held-out experiment"
+        << ", validated on a held-out experiment by pure simulation (its fit and its residual's independence of the "
+           "past excitation judged) and one-step-ahead prediction (its fit reported, its errors' whiteness judged)"
         << (o.source != "logs" ? " (a Schroeder multisine to 30 Hz)" : " (the last log)")
-        << ". Fit start: " << o.start_source << ". " << o.fit.evaluations << " closed-loop simulations, cost "
-        << std::setprecision(4) << o.fit.cost << ".";
+        << ". Fit start: " << o.start_source << ". " << o.fit.evaluations << " closed-loop simulations and "
+        << o.fit.sensitivity_evaluations << " with forward sensitivities, cost " << std::setprecision(4) << o.fit.cost
+        << ".";
   section.addParagraph(intro.str());
   section.addParagraph(
       o.plant_written
@@ -658,8 +660,8 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
 CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& table) {
   CLI::App* cmd = app.add_subcommand(
       "identify",
-      "Identify one joint's hydraulic parameter groups from closed-loop experiments (simulated DTS or recorded "
-      "logs); write the logs, identified.yaml, summary.json and report.html");
+      "Identify one joint's hydraulic parameter groups from closed-loop experiments (on the simulated DTS, the fake "
+      "DAQ or the arm, or from recorded logs); write the logs, identified.yaml, summary.json and report.html");
   OptionDeclarer declare(*cmd, table);
   CLI::Option* io = declare.choice("--io", o.io,
                                    "I/O back-end the experiments run on (sim: the joint alone on the simulated DTS; "

@@ -41,12 +41,19 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   for (auto& c : result.log.columns) c.reserve(excitation.value_v.size());
 
   hil::JointSample sample;
+  bool paced = true;
   const auto read = [&] {
-    if (options.before_read) options.before_read();
+    if (options.before_read && !options.before_read()) {
+      paced = false;
+      return false;
+    }
     return device.read(sample).ok();
   };
-  if (!read())
-    throw std::runtime_error(std::string("experiment: the device could not be read: ") + device.status().message);
+  const auto readFailure = [&] {
+    return paced ? std::string("device read failed: ") + device.status().message
+                 : std::string("the read came more than half a control period late (pacing overrun)");
+  };
+  if (!read()) throw std::runtime_error("experiment: the device could not be read: " + readFailure());
   result.hold_rad.assign(sample.q_rad.data(), sample.q_rad.data() + n);
   if (!(sample.q_rad[j] >= lo && sample.q_rad[j] <= hi)) {
     throw std::invalid_argument("experiment: joint " + std::to_string(j) + " starts at " +
@@ -61,7 +68,7 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   hil::IoVector command = hil::IoVector::Zero(n);
   for (std::size_t step = 0; step < total; ++step) {
     if (step > 0 && !read()) {
-      result.stop_reason = std::string("device read failed: ") + device.status().message;
+      result.stop_reason = readFailure();
       return result;
     }
     const double q = sample.q_rad[j];

@@ -995,6 +995,11 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
   }
   for (const auto& [name, spec] : {std::pair{"initial_speed_radps", &options.initial_speed},
                                    std::pair{"initial_torque_offset_nm", &options.initial_torque_offset}}) {
+    if (spec->free && !(std::isfinite(spec->min) && std::isfinite(spec->max) && spec->min < spec->max)) {
+      throw std::invalid_argument(std::string("grey-box fit: the bounds of ") + name + " (" +
+                                  std::to_string(spec->min) + ".." + std::to_string(spec->max) +
+                                  ") are not finite with min < max");
+    }
     if (spec->free && !(spec->min <= 0.0 && 0.0 <= spec->max)) {
       throw std::invalid_argument(std::string("grey-box fit: the bounds of ") + name + " (" +
                                   std::to_string(spec->min) + ".." + std::to_string(spec->max) +

@@ -76,12 +76,19 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
 
   StaticHoldRun run;
   hil::JointSample sample;
+  bool paced = true;
   const auto read = [&] {
-    if (options.before_read) options.before_read();
+    if (options.before_read && !options.before_read()) {
+      paced = false;
+      return false;
+    }
     return device.read(sample).ok();
   };
-  if (!read())
-    throw std::runtime_error(std::string("static holds: the device could not be read: ") + device.status().message);
+  const auto readFailure = [&] {
+    return paced ? std::string("device read failed: ") + device.status().message
+                 : std::string("the read came more than half a control period late (pacing overrun)");
+  };
+  if (!read()) throw std::runtime_error("static holds: the device could not be read: " + readFailure());
   device.activate();
   DeactivateOnExit guard{device};
 
@@ -98,7 +105,7 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
   // One control period towards `target`: read (the first one is the read above), check, write.
   auto step = [&](std::string& failure) -> bool {
     if (!first_read && !read()) {
-      failure = std::string("device read failed: ") + device.status().message;
+      failure = readFailure();
       return false;
     }
     first_read = false;

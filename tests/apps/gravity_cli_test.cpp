@@ -205,13 +205,17 @@ TEST(GravityCli, DeviceOptionsOutOfPlaceExitTwoNamingTheOption) {
   expectBad("--daq-config " + file, "--daq-config");
   expectBad("--hil-config " + file, "--hil-config");
   expectBad("--io sim --daq-config " + file, "--daq-config");
-  expectBad("--io comedi --plant " + file, "--plant");
-  expectBad("--io comedi --sim-arm " + file, "--sim-arm");
+  expectBad("--io comedi --confirm-arm-motion --plant " + file, "--plant");
+  expectBad("--io comedi --confirm-arm-motion --sim-arm " + file, "--sim-arm");
+  // The real arm moves only once the operator confirms its workspace is clear.
+  expectBad("--io comedi --postures 3", "--confirm-arm-motion");
+  expectBad("--io sim --confirm-arm-motion", "--confirm-arm-motion");
+  expectBad("--confirm-arm-motion", "--confirm-arm-motion");
   expectBad("--io lcm", "--io");
   expectBad("--io sim --holds " + file, "--holds");
   expectBad("--postures 5", "--postures");
   // No board on this machine: the error names the device file of the channel map.
-  expectBad("--io comedi --postures 3", "/dev/comedi0");
+  expectBad("--io comedi --confirm-arm-motion --postures 3", "/dev/comedi0");
 }
 
 }  // namespace

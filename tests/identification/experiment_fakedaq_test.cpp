@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 
 #include "fullarm/hil/io_backend.hpp"
 #include "fullarm/identification/experiment.hpp"
@@ -74,6 +76,7 @@ TEST(ExperimentFakeDaq, InjectedDeviceFaultStopsWithTheValvesAtNull) {
       volts_before_fault = rig.valveVolts(kElbow);
       rig.device().fault("injected fault");
     }
+    return true;
   };
   const ExperimentResult r = runExperiment(rig.device(), constant(0.4, 1.0), options);
   EXPECT_FALSE(r.completed);
@@ -118,6 +121,38 @@ TEST(ExperimentFakeDaq, JointDrivenIntoItsLimitMarginStopsWithTheValvesAtNull) {
   EXPECT_GT(r.log.columns[3].back(), start.q_rad[kElbow]);
   for (int k = 0; k < rig.device().numJoints(); ++k) EXPECT_LE(std::abs(rig.valveVolts(k)), kHalfOutputStep_v) << k;
   EXPECT_EQ(rig.device().state(), hil::IoState::kInactive);
+}
+
+TEST(ExperimentFakeDaq, PacingOverrunStopsBeforeTheLateReadWithTheValvesAtNull) {
+  FakeDaqSetup rig;
+  ExperimentOptions options;
+  options.joint = kElbow;
+  options.min_rad = 0.2;
+  options.max_rad = 2.2;
+  options.settle_s = 0.1;
+  options.log_control_time = true;
+  int reads = 0;
+  // The pacing reports a missed period on the 250th read (0.15 s into the excitation).
+  options.before_read = [&] { return ++reads != 250; };
+  const ExperimentResult r = runExperiment(rig.device(), constant(0.4, 1.0), options);
+  ASSERT_FALSE(r.completed);
+  EXPECT_NE(r.stop_reason.find("pacing overrun"), std::string::npos) << r.stop_reason;
+  // Reads 1 (before activation, serving period 0) .. 249 (period 248) were taken: 249 control
+  // periods, the first 100 settling, 149 logged.
+  EXPECT_EQ(r.log.rows(), 149u);
+  EXPECT_EQ(reads, 250);
+  for (int k = 0; k < rig.device().numJoints(); ++k) EXPECT_LE(std::abs(rig.valveVolts(k)), kHalfOutputStep_v) << k;
+  EXPECT_EQ(rig.device().state(), hil::IoState::kInactive);
+  // A pacing that misses its first period: nothing moves, the error says why.
+  FakeDaqSetup rig2;
+  options.before_read = [] { return false; };
+  try {
+    (void)runExperiment(rig2.device(), constant(0.4, 1.0), options);
+    FAIL() << "a run whose first read is late must not start";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("pacing overrun"), std::string::npos) << e.what();
+  }
+  EXPECT_NE(rig2.device().state(), hil::IoState::kActive);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 
 #include "fullarm/identification/excitation.hpp"
@@ -414,6 +415,13 @@ TEST(GreyBoxTest, InitialStateBoundsMustHoldRest) {
   FitOptions options = defaultFitOptions(want, 3.0);
   options.initial_speed = {true, 0.1, 2.0, false};
   EXPECT_THROW((void)fitGreyModel(data, want, options), std::invalid_argument);
+  // Bounds that hold 0 but are not finite, or empty, are refused before any simulation runs.
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const auto& [lo, hi] : {std::pair{-inf, 2.0}, std::pair{-2.0, inf}, std::pair{0.0, 0.0},
+                               std::pair{std::numeric_limits<double>::quiet_NaN(), 1.0}}) {
+    options.initial_speed = {true, lo, hi, false};
+    EXPECT_THROW((void)fitGreyModel(data, want, options), std::invalid_argument) << lo << ".." << hi;
+  }
 }
 
 TEST(GreyBoxTest, FitPercentMatchesItsDefinition) {

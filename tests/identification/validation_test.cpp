@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "fullarm/core/random.hpp"
@@ -69,6 +70,40 @@ TEST(ValidationTest, CrossCorrelationFindsAFilteredExcitationInTheResidual) {
   EXPECT_THROW((void)excitationResidualCorrelation(u, std::vector<double>(10, 1.0), -5, 5), std::invalid_argument);
   EXPECT_THROW((void)excitationResidualCorrelation(u, e, 5, 4), std::invalid_argument);
   EXPECT_THROW((void)residualAutocorrelation(std::vector<double>(100, 2.0), 5), std::invalid_argument);
+}
+
+// Independent coloured sequences (AR(1), a = 0.9 each): the cross-correlation's variance under
+// independence is P / N with P = sum_k a^(2|k|) = (1 + a^2) / (1 - a^2) = 9.53 (Ljung 16.6), so the
+// white-case bound 2.576 / sqrt(N) would see about 40 % of the lags outside; the bound used puts
+// about 1 % there.
+TEST(ValidationTest, CrossCorrelationBoundOfTwoIndependentColouredSequencesFollowsTheirSpectra) {
+  const double a = 0.9;
+  const double p_theory = (1.0 + a * a) / (1.0 - a * a);
+  const std::size_t n = 20000;
+  const auto ar = [&](std::uint64_t stream) {
+    const auto w = whiteNoise(n, stream);
+    std::vector<double> x(n);
+    x[0] = w[0];
+    for (std::size_t k = 1; k < n; ++k) x[k] = a * x[k - 1] + w[k];
+    return x;
+  };
+  const double white_bound = 2.5758293035489 / std::sqrt(static_cast<double>(n));
+  int outside = 0, outside_white = 0, lags = 0;
+  for (std::uint64_t pair = 0; pair < 8; ++pair) {
+    const auto u = ar(10 + 2 * pair);
+    const auto e = ar(11 + 2 * pair);
+    const CorrelationTest t = excitationResidualCorrelation(u, e, 0, 25);
+    EXPECT_NEAR(t.bound / white_bound, std::sqrt(p_theory), 0.15 * std::sqrt(p_theory)) << pair;
+    outside += t.outside;
+    for (double v : t.values) outside_white += std::abs(v) > white_bound ? 1 : 0;
+    lags += static_cast<int>(t.lags.size());
+  }
+  std::printf("outside: %d of %d lags (white-case bound: %d)\n", outside, lags, outside_white);
+  EXPECT_LE(outside, lags * 8 / 100);
+  EXPECT_GE(outside_white, lags / 5);
+  // One white sequence: the bound is the white case's (P = 1 up to the estimate's noise).
+  const CorrelationTest white = excitationResidualCorrelation(whiteNoise(n, 30), ar(31), 0, 25);
+  EXPECT_NEAR(white.bound / white_bound, 1.0, 0.1);
 }
 
 TEST(ValidationTest, VerdictPassesTheTrueModelAndFailsAWrongOne) {

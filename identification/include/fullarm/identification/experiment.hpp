@@ -38,8 +38,10 @@ struct ExperimentOptions {
   double held_drift_limit_rad = 0.1;  ///< stop when a held joint leaves its hold by more than this
   /// Called before every read of the run (empty: none). A simulated device advances one period
   /// per read; a real board answers at once, so the caller paces its reads here (a wait for the
-  /// next period on the real-time clock).
-  std::function<void()> before_read;
+  /// next period on the real-time clock). Returning false stops the run before that read (the
+  /// pacing missed its period: readings that no longer come a period apart would corrupt the
+  /// log's time base), with the stop reason saying so.
+  std::function<bool()> before_read;
   /// true: the log's `time_s` is the control time, the first logged reading's device time plus
   /// the periods since; false: each reading's device time. A board's readings carry the wall
   /// clock (with the wake-up jitter of a real board, and on the fake DAQ the wall clock of a

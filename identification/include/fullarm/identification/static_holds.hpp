@@ -47,8 +47,8 @@ struct StaticHoldOptions {
   std::vector<double> min_rad;        ///< lower limit of every device joint
   std::vector<double> max_rad;        ///< upper limit of every device joint
   /// Called before every read of the run (empty: none): the pacing of a real board, as in
-  /// ExperimentOptions::before_read.
-  std::function<void()> before_read;
+  /// ExperimentOptions::before_read (false stops the run).
+  std::function<bool()> before_read;
   /// Called with each hold as it is taken (empty: none): a command's progress line.
   std::function<void(const StaticHold&)> on_hold;
 };

@@ -33,7 +33,10 @@ struct CorrelationTest {
 
 /// Cross-correlation of the mean-removed excitation u with the residual e at lags
 /// min_lag .. max_lag, sum_k u_k e_{k+tau} / sqrt(sum u^2 sum e^2) (I7): a positive lag tau pairs the
-/// residual with the excitation tau samples before it.
+/// residual with the excitation tau samples before it. The 99 % bound is that of independent u and
+/// e, 2.576 sqrt(P / N) with P = sum_k rho_u(k) rho_e(k) over |k| <= 250 (or a quarter of the
+/// record), their sample autocorrelations: 2.576 / sqrt(N) when either is white, wider for a
+/// band-limited excitation and a coloured residual (P floored at 0.25).
 /// @throws std::invalid_argument for unequal lengths, min_lag > max_lag, a lag range reaching the
 ///   record's length or a zero signal
 [[nodiscard]] CorrelationTest excitationResidualCorrelation(const std::vector<double>& excitation,
