@@ -3,16 +3,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "device_run.hpp"
+
 namespace fullarm::identification {
-namespace {
-
-/// Deactivates the device however the experiment ends.
-struct DeactivateOnExit {
-  hil::IoDevice& device;
-  ~DeactivateOnExit() { device.deactivate(); }
-};
-
-}  // namespace
 
 ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excitation,
                                const ExperimentOptions& options) {
@@ -41,18 +34,9 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   for (auto& c : result.log.columns) c.reserve(excitation.value_v.size());
 
   hil::JointSample sample;
-  bool paced = true;
-  const auto read = [&] {
-    if (options.before_read && !options.before_read()) {
-      paced = false;
-      return false;
-    }
-    return device.read(sample).ok();
-  };
-  const auto readFailure = [&] {
-    return paced ? std::string("device read failed: ") + device.status().message
-                 : std::string("the read came more than half a control period late (pacing overrun)");
-  };
+  detail::PacedReader reader(device, options.before_read);
+  const auto read = [&] { return reader.read(sample); };
+  const auto readFailure = [&] { return reader.failure(); };
   if (!read()) throw std::runtime_error("experiment: the device could not be read: " + readFailure());
   result.hold_rad.assign(sample.q_rad.data(), sample.q_rad.data() + n);
   if (!(sample.q_rad[j] >= lo && sample.q_rad[j] <= hi)) {
@@ -62,7 +46,7 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   }
 
   device.activate();
-  DeactivateOnExit guard{device};
+  detail::DeactivateOnExit guard{device};
   const auto settle_steps = static_cast<std::size_t>(std::llround(options.settle_s / device.period()));
   const std::size_t total = settle_steps + excitation.value_v.size();
   hil::IoVector command = hil::IoVector::Zero(n);

@@ -7,16 +7,11 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "device_run.hpp"
 #include "fullarm/identification/signal_csv.hpp"
 
 namespace fullarm::identification {
 namespace {
-
-/// Deactivates the device however the run ends.
-struct DeactivateOnExit {
-  hil::IoDevice& device;
-  ~DeactivateOnExit() { device.deactivate(); }
-};
 
 std::string qColumn(const std::string& joint) {
   return "q_" + joint + "_rad";
@@ -76,21 +71,12 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
 
   StaticHoldRun run;
   hil::JointSample sample;
-  bool paced = true;
-  const auto read = [&] {
-    if (options.before_read && !options.before_read()) {
-      paced = false;
-      return false;
-    }
-    return device.read(sample).ok();
-  };
-  const auto readFailure = [&] {
-    return paced ? std::string("device read failed: ") + device.status().message
-                 : std::string("the read came more than half a control period late (pacing overrun)");
-  };
+  detail::PacedReader reader(device, options.before_read);
+  const auto read = [&] { return reader.read(sample); };
+  const auto readFailure = [&] { return reader.failure(); };
   if (!read()) throw std::runtime_error("static holds: the device could not be read: " + readFailure());
   device.activate();
-  DeactivateOnExit guard{device};
+  detail::DeactivateOnExit guard{device};
 
   const double dt = device.period();
   auto steps = [dt](double s) { return static_cast<long>(std::llround(s / dt)); };
