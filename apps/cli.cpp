@@ -153,11 +153,11 @@ int runDemo(const ArmOptions& options, const std::string& out_dir, int validate_
 
   const bool demo_pass = summary.holds_itself && plant_step.pass && tune_step.pass && validate_step.pass &&
                          haptics_step.pass && access_step.pass;
-  const std::string passed =
-      identify_step.pass ? "Every step passed"
-                         : "Every step passed; the identified elbow model fails its "
-                           "held-out validation (the reduced joint model misses the full simulated plant: "
-                           "docs/identification.md)";
+  const std::string passed = identify_step.pass
+                                 ? "Every step passed"
+                                 : "Every step passed; the identified elbow model fails its "
+                                   "held-out validation (the reduced joint model misses the full simulated plant: "
+                                   "docs/identification.md)";
   report.setVerdict(demo_pass, demo_pass               ? passed
                                : !summary.holds_itself ? "The arm model step failed"
                                : !plant_step.pass      ? "The plant step failed"

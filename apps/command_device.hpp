@@ -27,7 +27,7 @@ inline constexpr const char* kCommandIoNames[] = {"sim", "fakedaq", "comedi"};
 
 /// A device and everything it is built from.
 struct CommandDevice {
-  hil::HilConfig loop;     ///< the loop configuration (period, latency, safety, integrator)
+  hil::HilConfig loop;       ///< the loop configuration (period, latency, safety, integrator)
   plant::PlantConfig plant;  ///< the simulated DTS (sim, fakedaq)
   hil::DaqConfig daq;        ///< the channel map (fakedaq, comedi)
   std::unique_ptr<hil::IoBackend> backend;

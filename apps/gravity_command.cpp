@@ -5,15 +5,15 @@
 #include <sstream>
 
 #include "cli_values.hpp"
+#include "command_device.hpp"
 #include "exit_codes.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/core/config_error.hpp"
+#include "fullarm/core/random.hpp"
 #include "fullarm/identification/gravity_yaml.hpp"
 #include "fullarm/identification/reference_gravity.hpp"
 #include "fullarm/identification/signal_csv.hpp"
 #include "fullarm/identification/static_holds.hpp"
-#include "command_device.hpp"
-#include "fullarm/core/random.hpp"
 #include "fullarm/plant/plant_config.hpp"
 #include "output_files.hpp"
 
@@ -36,7 +36,8 @@ CLI::App* addGravityCommand(CLI::App& app, GravityOptions& o, OptionTable& table
       "arm), write their log holds.csv and fit it",
       {"sim", "fakedaq", "comedi"});
   io->excludes(cmd->get_option("--holds"));
-  declare.file("--plant", o.plant_config, "--io sim, fakedaq: the simulated DTS's plant YAML (default: config/dts_plant.yaml)");
+  declare.file("--plant", o.plant_config,
+               "--io sim, fakedaq: the simulated DTS's plant YAML (default: config/dts_plant.yaml)");
   declare.file("--sim-arm", o.sim_arm,
                "--io sim, fakedaq: the arm model the simulated DTS moves, the truth of a test (default: --config)");
   declare.file("--daq-config", o.daq_config, "--io fakedaq, comedi: channel map YAML (default: config/dts_daq.yaml)");
@@ -57,9 +58,9 @@ CLI::App* addGravityCommand(CLI::App& app, GravityOptions& o, OptionTable& table
 
 namespace {
 
-constexpr double kHoldPeriod_s = 1.0e-3;      // the holds run at the loop's 1 kHz
-constexpr int kDefaultDevicePostures = 16;   // --io without --postures
-constexpr double kPostureInset_rad = 0.1;    // device postures stay this far inside every limit
+constexpr double kHoldPeriod_s = 1.0e-3;    // the holds run at the loop's 1 kHz
+constexpr int kDefaultDevicePostures = 16;  // --io without --postures
+constexpr double kPostureInset_rad = 0.1;   // device postures stay this far inside every limit
 
 std::string readText(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -175,10 +176,9 @@ std::vector<Eigen::VectorXd> randomDevicePostures(const arm::ArmModel& model, co
 // Holds the postures on the device, writes the holds log `file`; returns why the holds stopped
 // early (empty when every posture was held from both sides).
 std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, const std::vector<std::string>& names,
-               const std::filesystem::path& file, std::ostream& out) {
+                      const std::filesystem::path& file, std::ostream& out) {
   const hil::IoKind kind = commandIoKind(o.io);
-  const arm::ArmModel simulated =
-      o.sim_arm.empty() ? nominal : arm::loadArmModel(std::filesystem::path(o.sim_arm));
+  const arm::ArmModel simulated = o.sim_arm.empty() ? nominal : arm::loadArmModel(std::filesystem::path(o.sim_arm));
   const plant::PlantConfig plant_config =
       plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), simulated);
   const std::unique_ptr<CommandDevice> device =
@@ -203,8 +203,8 @@ std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, con
     options.max_rad.push_back(limits.max_rad);
   }
   const int count = o.postures.value_or(kDefaultDevicePostures);
-  const auto postures = randomDevicePostures(nominal, io.joints(), count, kPostureInset_rad,
-                                             static_cast<std::uint64_t>(o.seed));
+  const auto postures =
+      randomDevicePostures(nominal, io.joints(), count, kPostureInset_rad, static_cast<std::uint64_t>(o.seed));
   out << "Holding " << count << " postures from both sides on " << o.io << "\n" << std::flush;
   options.on_hold = [&](const id::StaticHold& h) {
     out << "  posture " << h.posture_index + 1 << " of " << count << (h.side > 0 ? ", from above" : ", from below")

@@ -13,9 +13,9 @@ namespace fullarm::app {
 
 /// Options of `fullarm gravity`.
 struct GravityOptions {
-  std::string arm_config;  ///< --config (default: dts_master.yaml)
-  std::string holds;       ///< --holds: a static-holds log to fit (default: the reference's torques)
-  std::string io;          ///< --io: take the static holds on this device (sim | fakedaq | comedi) and fit them
+  std::string arm_config;    ///< --config (default: dts_master.yaml)
+  std::string holds;         ///< --holds: a static-holds log to fit (default: the reference's torques)
+  std::string io;            ///< --io: take the static holds on this device (sim | fakedaq | comedi) and fit them
   std::string plant_config;  ///< --plant: the simulated DTS of sim and fakedaq (default: dts_plant.yaml)
   std::string sim_arm;       ///< --sim-arm: the arm the simulated DTS moves (default: --config)
   std::string daq_config;    ///< --daq-config: the channel map of fakedaq and comedi
@@ -23,7 +23,7 @@ struct GravityOptions {
   /// --postures: random postures of the fit to the reference (default 400) or held on the
   /// device (default 16)
   std::optional<int> postures;
-  int seed = 1;            ///< --seed: which random postures (and the simulated sensors' noise)
+  int seed = 1;  ///< --seed: which random postures (and the simulated sensors' noise)
   /// --confirm-arm-motion: the operator has cleared the real arm's workspace (--io comedi moves
   /// it to random postures with no check for self-collision or its surroundings)
   bool confirm_arm_motion = false;

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "cli_values.hpp"
+#include "command_device.hpp"
 #include "exit_codes.hpp"
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
@@ -30,7 +31,6 @@
 #include "fullarm/identification/signal_csv.hpp"
 #include "fullarm/identification/validation.hpp"
 #include "fullarm/plant/plant_config.hpp"
-#include "command_device.hpp"
 #include "output_files.hpp"
 
 namespace fullarm::app {
@@ -165,8 +165,10 @@ Experiment runDeviceExperiment(CommandDevice& device, int device_joint, const pl
 void checkOptionCombination(const IdentifyOptions& o) {
   const auto refuse = [](const char* option, const std::string& why) { throw core::ConfigError({}, option, why); };
   if (!o.logs.empty()) {
-    if (!o.daq_config.empty()) refuse("--daq-config", "a channel map is read only when experiments run (not with --log)");
-    if (!o.hil_config.empty()) refuse("--hil-config", "the loop configuration is read only when experiments run (not with --log)");
+    if (!o.daq_config.empty())
+      refuse("--daq-config", "a channel map is read only when experiments run (not with --log)");
+    if (!o.hil_config.empty())
+      refuse("--hil-config", "the loop configuration is read only when experiments run (not with --log)");
     if (o.seed) refuse("--seed", "seeds the simulated sensors' noise: no experiment runs with --log");
     return;
   }
@@ -670,10 +672,11 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
   io->capture_default_str();
   declare.name("--joint", o.joint, "Joint to identify (short or model name)")->capture_default_str();
   declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
-  declare.integer("--seed", o.seed,
-                  "Seed of the simulated sensors' noise, default 1 (sim: the held-out experiment uses seed + 1; not with "
-                  "comedi)",
-                  0, 2147483647);
+  declare.integer(
+      "--seed", o.seed,
+      "Seed of the simulated sensors' noise, default 1 (sim: the held-out experiment uses seed + 1; not with "
+      "comedi)",
+      0, 2147483647);
   declare.file("--daq-config", o.daq_config, "fakedaq, comedi: channel map YAML (default: config/dts_daq.yaml)");
   declare.file("--hil-config", o.hil_config,
                "fakedaq, comedi: loop configuration YAML: period, latency, safety policy (default: config/hil.yaml)");

@@ -22,8 +22,8 @@ struct IdentifyOptions {
   std::string settings;      ///< --settings (default: identification.yaml)
   std::string joint = "EB";  ///< the driven joint (short or model name)
   std::string out_dir = "out/identify";
-  std::string daq_config;    ///< --daq-config: the channel map of fakedaq and comedi (default: dts_daq.yaml)
-  std::string hil_config;    ///< --hil-config: the loop configuration of fakedaq and comedi (default: hil.yaml)
+  std::string daq_config;  ///< --daq-config: the channel map of fakedaq and comedi (default: dts_daq.yaml)
+  std::string hil_config;  ///< --hil-config: the loop configuration of fakedaq and comedi (default: hil.yaml)
   /// Seed of the simulated sensors' noise (sim: experiment k uses seed + k; fakedaq: one arm for
   /// both); unset: 1. The real arm has no seed.
   std::optional<int> seed;

@@ -7,7 +7,9 @@
 namespace fullarm::hil {
 namespace {
 
-int clampCount(int n, int bound) noexcept { return std::clamp(n, 0, bound); }
+int clampCount(int n, int bound) noexcept {
+  return std::clamp(n, 0, bound);
+}
 
 /// Throws unless 0 <= n <= bound.
 void checkCount(const char* type, const char* field, long long n, int bound) {
@@ -339,8 +341,8 @@ fullarm_lcm::minima_set_t toFragment(const MinimaSetRecord& set, int index, std:
 }
 
 int checkFragment(const fullarm_lcm::minima_set_t& f) {
-  const std::string where = "minima_set_t (set " + std::to_string(f.set_id) + ", fragment " +
-                            std::to_string(f.fragment_index) + ")";
+  const std::string where =
+      "minima_set_t (set " + std::to_string(f.set_id) + ", fragment " + std::to_string(f.fragment_index) + ")";
   checkCount(where.c_str(), "num_minima_total", f.num_minima_total, kMaxMinimaPerSet);
   checkCount(where.c_str(), "num_joints", f.num_joints, kMaxRecordJoints);
   checkCount(where.c_str(), "num_minima", f.num_minima, kMaxMinimaPerFragment);
@@ -378,8 +380,8 @@ int checkFragment(const fullarm_lcm::minima_set_t& f) {
 
 bool MinimaSetAssembler::add(const fullarm_lcm::minima_set_t& f) {
   const int per = checkFragment(f);
-  const std::string where = "minima_set_t (set " + std::to_string(f.set_id) + ", fragment " +
-                            std::to_string(f.fragment_index) + ")";
+  const std::string where =
+      "minima_set_t (set " + std::to_string(f.set_id) + ", fragment " + std::to_string(f.fragment_index) + ")";
   const int count = f.fragment_count;  // checked against the total in the fragment's layout
   const int first = f.first_minimum_index;
   if (building_ && f.set_id < building_id_) {
@@ -392,8 +394,8 @@ bool MinimaSetAssembler::add(const fullarm_lcm::minima_set_t& f) {
     }
     older_last_id_ = f.set_id;
     std::int64_t back = 0;  // a difference beyond int64 (a damaged id) is far back too
-    const bool restart = __builtin_sub_overflow(building_id_, f.set_id, &back) || back > kSetRestartJump ||
-                         older_run_ >= kSetRestartRun;
+    const bool restart =
+        __builtin_sub_overflow(building_id_, f.set_id, &back) || back > kSetRestartJump || older_run_ >= kSetRestartRun;
     if (!restart) {
       ++ignored_;
       return false;

@@ -9,9 +9,9 @@
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/core/data_paths.hpp"
-#include "fullarm/hil/sim_io.hpp"
 #include "fullarm/hil/fake_daq.hpp"
 #include "fullarm/hil/lcm_io.hpp"
+#include "fullarm/hil/sim_io.hpp"
 
 namespace fullarm::hil {
 
@@ -55,7 +55,8 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
   options_.daq_config = orDefault(options.daq_config, defaultDaqConfigPath());
 
   if (build_device && options.io == IoKind::kComedi && options.clock == ClockKind::kLockstep) {
-    throw core::ConfigError({}, "--clock", "lockstep runs in simulated time: the real board (--io comedi) needs --clock realtime");
+    throw core::ConfigError({}, "--clock",
+                            "lockstep runs in simulated time: the real board (--io comedi) needs --clock realtime");
   }
   model_ = std::make_unique<arm::ArmModel>(arm::loadArmModel(options_.arm_config));
   scene_ = std::make_unique<haptics::Scene>(haptics::loadScene(options_.scene));
@@ -87,7 +88,8 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
   // The device's joints: the plant's joints for the simulated back-ends, the channel map's for
   // comedi.
   arm::JointSelection joints;
-  if (options.io == IoKind::kComedi || options.io == IoKind::kFakeDaq) daq_ = loadDaqConfig(options_.daq_config, *model_);
+  if (options.io == IoKind::kComedi || options.io == IoKind::kFakeDaq)
+    daq_ = loadDaqConfig(options_.daq_config, *model_);
   if (options.io == IoKind::kComedi) {
     std::vector<int> indices;
     for (const DaqJoint& j : daq_.joints) indices.push_back(model_->jointIndex(j.name));
@@ -120,12 +122,13 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
   device_ = &backend_->device();
   arm_ = backend_->simulatedArm();
   if (arm_ != nullptr) {
-    user_ = std::make_unique<ScriptedUser>(loadScriptedUser(options_.user), *model_, haptics::armBasePose(*scene_, *model_));
+    user_ = std::make_unique<ScriptedUser>(loadScriptedUser(options_.user), *model_,
+                                           haptics::armBasePose(*scene_, *model_));
     arm_->setUser(user_.get());
   }
   if (device_->joints().modelIndices() != joints.modelIndices()) {
-    throw DeviceError("the I/O device's joints differ from the tick's: check the channel map " +
-                             daq_.source.string() + " against the plant file " + plant_.source.string());
+    throw DeviceError("the I/O device's joints differ from the tick's: check the channel map " + daq_.source.string() +
+                      " against the plant file " + plant_.source.string());
   }
 }
 

@@ -30,9 +30,9 @@ enum class IoKind { kSim, kFakeDaq, kComedi, kLcm };
 /// How a back-end is built. The pointed-to files outlive the back-end.
 struct IoBackendOptions {
   IoKind io = IoKind::kSim;
-  double period_s = 1.0e-3;      ///< the control period
-  int latency_samples = 1;       ///< sim, fakedaq: the simulated arm's I/O latency
-  IoSafetyParams safety;         ///< the device's safety policy
+  double period_s = 1.0e-3;  ///< the control period
+  int latency_samples = 1;   ///< sim, fakedaq: the simulated arm's I/O latency
+  IoSafetyParams safety;     ///< the device's safety policy
   /// sim, fakedaq: the simulated DTS (its seed and integrator as given).
   const plant::PlantConfig* plant = nullptr;
   /// sim, fakedaq: the simulated arm's start posture (model order).

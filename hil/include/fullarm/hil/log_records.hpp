@@ -129,8 +129,8 @@ struct SupervisorEventRecord {
   int cause_code = 0;
   EventSeverity severity = EventSeverity::kInfo;
   int joint = -1;
-  double value = 0.0;  ///< NaN if none
-  double limit = 0.0;  ///< NaN if none
+  double value = 0.0;                                     ///< NaN if none
+  double limit = 0.0;                                     ///< NaN if none
   std::array<char, kMaxEventMessageChars + 1> message{};  ///< NUL-terminated
 
   /// Copies `text` into `message`, cut at kMaxEventMessageChars. @rt
