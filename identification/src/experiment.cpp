@@ -86,9 +86,8 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
     if (exciting) {
       auto& c = result.log.columns;
       const double t0 = c[0].empty() ? sample.t_s : c[0].front();
-      c[0].push_back(options.log_control_time
-                         ? t0 + static_cast<double>(step - settle_steps) * device.period()
-                         : sample.t_s);
+      c[0].push_back(options.log_control_time ? t0 + static_cast<double>(step - settle_steps) * device.period()
+                                              : sample.t_s);
       c[1].push_back(r);
       c[2].push_back(device.appliedCommand()[j]);
       c[3].push_back(q);
