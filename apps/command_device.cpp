@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "cli_values.hpp"
 #include "fullarm/core/config_error.hpp"
@@ -17,7 +18,8 @@ hil::IoKind commandIoKind(const std::string& name) {
   if (name == "sim") return hil::IoKind::kSim;
   if (name == "fakedaq") return hil::IoKind::kFakeDaq;
   if (name == "comedi") return hil::IoKind::kComedi;
-  throw core::ConfigError({}, "--io", "'" + name + "': expected sim, fakedaq or comedi");
+  if (name == "lcm") return hil::IoKind::kLcm;
+  throw core::ConfigError({}, "--io", "'" + name + "': expected sim, fakedaq, comedi or lcm");
 }
 
 PeriodClock::PeriodClock(double period_s) {
@@ -59,7 +61,7 @@ std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::Ar
                                                  const plant::PlantConfig& plant, const Eigen::VectorXd& posture,
                                                  std::uint64_t seed, const std::string& daq_config,
                                                  const std::string& hil_config, double period_s,
-                                                 const std::string& only_joint) {
+                                                 const std::string& only_joint, const std::string& lcm_url) {
   auto d = std::make_unique<CommandDevice>();
   d->loop = hil::loadHilConfig(configPathOr(hil_config, hil::defaultHilConfigPath));
   if (std::abs(d->loop.control_period_s - period_s) > 1e-12) {
@@ -73,7 +75,7 @@ std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::Ar
   if (kind == hil::IoKind::kFakeDaq || kind == hil::IoKind::kComedi) {
     d->daq = hil::loadDaqConfig(configPathOr(daq_config, hil::defaultDaqConfigPath), model);
   }
-  if (!only_joint.empty() && kind != hil::IoKind::kComedi) {
+  if (!only_joint.empty() && kind != hil::IoKind::kComedi && kind != hil::IoKind::kLcm) {
     const auto k = static_cast<std::size_t>(plant::findPlantJoint(d->plant, only_joint));
     d->plant.joints = {d->plant.joints[k]};
     if (kind == hil::IoKind::kFakeDaq) {
@@ -93,6 +95,14 @@ std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::Ar
   io.plant = &d->plant;
   io.posture = posture;
   io.daq = &d->daq;
+  if (kind == hil::IoKind::kLcm) {
+    // The node serves its plant file's joints; a reading may take as long as a loaded machine
+    // needs (lockstep: the node advances one period per command).
+    std::vector<int> indices;
+    for (const plant::JointParams& j : d->plant.joints) indices.push_back(model.jointIndex(j.name));
+    io.lcm_joints = arm::JointSelection(model.numJoints(), indices);
+    io.lcm_url = lcm_url;
+  }
   d->backend = std::make_unique<hil::IoBackend>(model, io);
   d->backend->device().configure();  // opens the board: a missing one is reported before anything runs
   if (kind == hil::IoKind::kComedi) d->pace = PeriodClock(d->loop.control_period_s);

@@ -19,9 +19,9 @@
 namespace fullarm::app {
 
 /// The back-ends a command can run its experiments on, by name.
-inline constexpr const char* kCommandIoNames[] = {"sim", "fakedaq", "comedi"};
+inline constexpr const char* kCommandIoNames[] = {"sim", "fakedaq", "comedi", "lcm"};
 
-/// "sim", "fakedaq" or "comedi" as a back-end.
+/// "sim", "fakedaq", "comedi" or "lcm" as a back-end.
 /// @throws core::ConfigError naming --io for any other name
 [[nodiscard]] hil::IoKind commandIoKind(const std::string& name);
 
@@ -32,8 +32,8 @@ struct CommandDevice {
   hil::DaqConfig daq;        ///< the channel map (fakedaq, comedi)
   std::unique_ptr<hil::IoBackend> backend;
   /// Called before every read: waits for the next control period on the real-time clock for
-  /// the real board (a simulated device advances one period per read and needs none); false when
-  /// the wait came too late to keep the period (PeriodClock).
+  /// the real board (a simulated device, here or behind an LCM plant node, advances one period
+  /// per read and needs none); false when the wait came too late to keep the period (PeriodClock).
   std::function<bool()> pace;
 };
 
@@ -57,12 +57,15 @@ class PeriodClock {
   long overruns_ = 0;
 };
 
-/// Builds the device of `kind` (sim, fakedaq or comedi; the arm at `posture` for the simulated
-/// ones, its sensors' noise from `seed`), configured (a board that cannot be opened is reported
-/// here, before anything moves). Empty file names take the shipped defaults.
+/// Builds the device of `kind` (sim, fakedaq, comedi or lcm; the arm at `posture` for the
+/// simulated ones, its sensors' noise from `seed`), configured (a board that cannot be opened, or
+/// an LCM plant node that does not answer at `lcm_url`, is reported here, before anything moves).
+/// Empty file names take the shipped defaults.
 /// `only_joint` (a model joint name; empty: every joint) makes a simulated device serve that
 /// joint alone: the simulated DTS locks the others at the posture (the real arm cannot) and the
-/// channel map keeps that joint's channels only. The real board always serves every joint.
+/// channel map keeps that joint's channels only. The real board always serves every joint; an
+/// LCM plant node (`fullarm plant serve`) serves the joints of its plant file, which `plant`
+/// must match (its posture and noise are the node's own: `posture` and `seed` are not used).
 /// @throws core::ConfigError for bad files (a loop period other than `period_s` names the loop
 ///   file's control_period_s); hil::DeviceError when the device cannot be opened
 [[nodiscard]] std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::ArmModel& model,
@@ -70,6 +73,7 @@ class PeriodClock {
                                                                const Eigen::VectorXd& posture, std::uint64_t seed,
                                                                const std::string& daq_config,
                                                                const std::string& hil_config, double period_s,
-                                                               const std::string& only_joint = {});
+                                                               const std::string& only_joint = {},
+                                                               const std::string& lcm_url = {});
 
 }  // namespace fullarm::app

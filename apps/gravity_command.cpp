@@ -33,16 +33,19 @@ CLI::App* addGravityCommand(CLI::App& app, GravityOptions& o, OptionTable& table
   CLI::Option* io = declare.choice(
       "--io", o.io,
       "Hold random postures on this device (sim: the simulated DTS; fakedaq: the comedi back-end on it; comedi: the "
-      "arm), write their log holds.csv and fit it",
-      {"sim", "fakedaq", "comedi"});
+      "arm; lcm: a plant node, fullarm plant serve --no-user), write their log holds.csv and fit it",
+      {"sim", "fakedaq", "comedi", "lcm"});
   io->excludes(cmd->get_option("--holds"));
   declare.file("--plant", o.plant_config,
-               "--io sim, fakedaq: the simulated DTS's plant YAML (default: config/dts_plant.yaml)");
+               "--io sim, fakedaq: the simulated DTS's plant YAML; lcm: the node's, for its joints (default: "
+               "config/dts_plant.yaml)");
   declare.file("--sim-arm", o.sim_arm,
                "--io sim, fakedaq: the arm model the simulated DTS moves, the truth of a test (default: --config)");
   declare.file("--daq-config", o.daq_config, "--io fakedaq, comedi: channel map YAML (default: config/dts_daq.yaml)");
   declare.file("--hil-config", o.hil_config,
                "--io: loop configuration YAML: period, latency, safety policy (default: config/hil.yaml)");
+  declare.name("--lcm-url", o.lcm_url,
+               "--io lcm: the plant node's LCM URL (default udpm://239.255.76.67:7667?ttl=0: this machine only)");
   declare.integer("--postures", o.postures,
                   "Random postures: of the fit to the reference (default 400, at least 10) or held on the device "
                   "with --io (default 16)",
@@ -129,7 +132,8 @@ void checkOptionCombination(const GravityOptions& o) {
     for (const auto& [name, value] : {std::pair<const char*, const std::string*>{"--plant", &o.plant_config},
                                       {"--sim-arm", &o.sim_arm},
                                       {"--daq-config", &o.daq_config},
-                                      {"--hil-config", &o.hil_config}}) {
+                                      {"--hil-config", &o.hil_config},
+                                      {"--lcm-url", &o.lcm_url}}) {
       if (!value->empty()) refuse(name, "is read only when the holds are taken on a device (--io)");
     }
     if (o.confirm_arm_motion) refuse("--confirm-arm-motion", "only --io comedi moves the real arm");
@@ -139,8 +143,12 @@ void checkOptionCombination(const GravityOptions& o) {
     return;
   }
   const hil::IoKind kind = commandIoKind(o.io);
-  if (kind == hil::IoKind::kSim && !o.daq_config.empty()) {
+  if ((kind == hil::IoKind::kSim || kind == hil::IoKind::kLcm) && !o.daq_config.empty()) {
     refuse("--daq-config", "only --io fakedaq and --io comedi read a channel map");
+  }
+  if (kind != hil::IoKind::kLcm && !o.lcm_url.empty()) refuse("--lcm-url", "only --io lcm talks to a plant node");
+  if (kind == hil::IoKind::kLcm && !o.sim_arm.empty()) {
+    refuse("--sim-arm", "the plant node moves its own arm (fullarm plant serve --config)");
   }
   if (kind != hil::IoKind::kComedi && o.confirm_arm_motion) {
     refuse("--confirm-arm-motion", "only --io comedi moves the real arm");
@@ -183,7 +191,7 @@ std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, con
       plant::loadPlantConfig(configPathOr(o.plant_config, plant::defaultPlantConfigPath), simulated);
   const std::unique_ptr<CommandDevice> device =
       openCommandDevice(kind, simulated, plant_config, simulated.defaultPosture(), static_cast<std::uint64_t>(o.seed),
-                        o.daq_config, o.hil_config, kHoldPeriod_s);
+                        o.daq_config, o.hil_config, kHoldPeriod_s, {}, o.lcm_url);
   hil::IoDevice& io = device->backend->device();
   if (io.joints().modelIndices() != armIndices(nominal)) {
     throw core::ConfigError({}, "--io",

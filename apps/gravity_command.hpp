@@ -15,11 +15,12 @@ namespace fullarm::app {
 struct GravityOptions {
   std::string arm_config;    ///< --config (default: dts_master.yaml)
   std::string holds;         ///< --holds: a static-holds log to fit (default: the reference's torques)
-  std::string io;            ///< --io: take the static holds on this device (sim | fakedaq | comedi) and fit them
+  std::string io;            ///< --io: take the static holds on this device (sim | fakedaq | comedi | lcm) and fit them
   std::string plant_config;  ///< --plant: the simulated DTS of sim and fakedaq (default: dts_plant.yaml)
   std::string sim_arm;       ///< --sim-arm: the arm the simulated DTS moves (default: --config)
   std::string daq_config;    ///< --daq-config: the channel map of fakedaq and comedi
-  std::string hil_config;    ///< --hil-config: the loop configuration of fakedaq and comedi
+  std::string hil_config;    ///< --hil-config: the loop configuration of the device
+  std::string lcm_url;       ///< --lcm-url: the plant node of lcm (empty: the default URL)
   /// --postures: random postures of the fit to the reference (default 400) or held on the
   /// device (default 16)
   std::optional<int> postures;

@@ -54,6 +54,10 @@ struct Experiment {
   id::ExperimentData data;
   bool completed = true;
   std::string stop_reason;
+  // The arm's posture during the experiment (model order): on a device, every joint it serves at
+  // its hold angle, the others at the default posture; empty for the simulated joint alone and
+  // for logs (the default posture).
+  Eigen::VectorXd posture;
 };
 
 // Everything a run produced, for the report and the summary.
@@ -150,21 +154,30 @@ int deviceJointIndex(hil::IoDevice& device, int model_joint, const std::string& 
 
 // One experiment on a device that stays built between experiments (the fake DAQ, the real arm):
 // every device joint held, the driven one excited; the limits are the plant file's.
-Experiment runDeviceExperiment(CommandDevice& device, int device_joint, const plant::JointParams& driven,
-                               const id::SampledSignal& excitation, const std::string& name) {
+Experiment runDeviceExperiment(const arm::ArmModel& model, CommandDevice& device, int device_joint,
+                               const plant::JointParams& driven, const id::SampledSignal& excitation,
+                               const std::string& name) {
   id::ExperimentOptions options;
   options.joint = device_joint;
   options.min_rad = driven.min_rad;
   options.max_rad = driven.max_rad;
   options.before_read = device.pace;
   options.log_control_time = true;
-  return experimentOf(id::runExperiment(device.backend->device(), excitation, options), name);
+  const id::ExperimentResult result = id::runExperiment(device.backend->device(), excitation, options);
+  Experiment e = experimentOf(result, name);
+  const arm::JointSelection& joints = device.backend->device().joints();
+  e.posture = model.defaultPosture();
+  for (int k = 0; k < joints.size() && static_cast<std::size_t>(k) < result.hold_rad.size(); ++k) {
+    e.posture[joints.modelIndex(k)] = result.hold_rad[static_cast<std::size_t>(k)];
+  }
+  return e;
 }
 
 // Options that mean nothing with the chosen source are refused, not ignored.
 void checkOptionCombination(const IdentifyOptions& o) {
   const auto refuse = [](const char* option, const std::string& why) { throw core::ConfigError({}, option, why); };
   if (!o.logs.empty()) {
+    if (!o.lcm_url.empty()) refuse("--lcm-url", "no experiment runs with --log");
     if (!o.daq_config.empty())
       refuse("--daq-config", "a channel map is read only when experiments run (not with --log)");
     if (!o.hil_config.empty())
@@ -177,12 +190,18 @@ void checkOptionCombination(const IdentifyOptions& o) {
     if (!o.daq_config.empty()) refuse("--daq-config", "only --io fakedaq and --io comedi read a channel map");
     if (!o.hil_config.empty()) {
       refuse("--hil-config",
-             "--io sim simulates the joint alone at 1 kHz with its own settings; only --io fakedaq and --io comedi "
+             "--io sim simulates the joint alone at 1 kHz with its own settings; only --io fakedaq, comedi and lcm "
              "read the loop configuration");
     }
   }
   if (kind == hil::IoKind::kComedi && o.seed) {
     refuse("--seed", "seeds the simulated sensors' noise: the real arm (--io comedi) has none");
+  }
+  if (kind == hil::IoKind::kLcm) {
+    if (o.seed) refuse("--seed", "the plant node seeds its own sensors' noise (fullarm plant serve --seed)");
+    if (!o.daq_config.empty()) refuse("--daq-config", "the plant node reads its own channel map, if any");
+  } else if (!o.lcm_url.empty()) {
+    refuse("--lcm-url", "only --io lcm talks to a plant node");
   }
 }
 
@@ -553,12 +572,12 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
       // single-joint model does not describe; docs/identification.md). The real arm holds them all.
       const std::unique_ptr<CommandDevice> device =
           openCommandDevice(kind, model, plant_config, posture, seed, o.daq_config, o.hil_config, kSamplePeriod_s,
-                            kind == hil::IoKind::kFakeDaq ? jp.name : std::string());
+                            kind == hil::IoKind::kFakeDaq ? jp.name : std::string(), o.lcm_url);
       const int device_joint = deviceJointIndex(device->backend->device(), model_joint, o.joint, o.io);
       progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint) + " through " + o.io);
-      r.fit_experiments.push_back(runDeviceExperiment(*device, device_joint, jp, fit_excitation, kFitLogFile));
+      r.fit_experiments.push_back(runDeviceExperiment(model, *device, device_joint, jp, fit_excitation, kFitLogFile));
       progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint) + " through " + o.io);
-      r.validation = runDeviceExperiment(*device, device_joint, jp, validation_excitation, kValidationLogFile);
+      r.validation = runDeviceExperiment(model, *device, device_joint, jp, validation_excitation, kValidationLogFile);
     }
     writeOutput(out / kFitLogFile, [&] { id::writeSignalCsv(out / kFitLogFile, r.fit_experiments[0].log); });
     writeOutput(out / kValidationLogFile, [&] { id::writeSignalCsv(out / kValidationLogFile, r.validation.log); });
@@ -581,9 +600,11 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
     }
   }
   // The start: a given model, or the plant joint's groups at the hold angle with the link's
-  // inertia and gravity load there (the other joints at the default posture).
+  // inertia and gravity load there (the other joints where the device held them, or at the
+  // default posture).
   const double q_hold = r.fit_experiments.front().data.hold_rad;
-  Eigen::VectorXd q = model.defaultPosture();
+  Eigen::VectorXd q =
+      r.fit_experiments.front().posture.size() > 0 ? r.fit_experiments.front().posture : model.defaultPosture();
   q[model_joint] = q_hold;
   arm::ArmData arm_data(model);
   arm::computeMassMatrix(model, arm_data, q);
@@ -667,8 +688,9 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
   OptionDeclarer declare(*cmd, table);
   CLI::Option* io = declare.choice("--io", o.io,
                                    "I/O back-end the experiments run on (sim: the joint alone on the simulated DTS; "
-                                   "fakedaq: the comedi back-end on the simulated DTS; comedi: the arm)",
-                                   {"sim", "fakedaq", "comedi"});
+                                   "fakedaq: the comedi back-end on the simulated DTS; comedi: the arm; lcm: a plant "
+                                   "node, fullarm plant serve, every joint held)",
+                                   {"sim", "fakedaq", "comedi", "lcm"});
   io->capture_default_str();
   declare.name("--joint", o.joint, "Joint to identify (short or model name)")->capture_default_str();
   declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
@@ -679,7 +701,10 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
       0, 2147483647);
   declare.file("--daq-config", o.daq_config, "fakedaq, comedi: channel map YAML (default: config/dts_daq.yaml)");
   declare.file("--hil-config", o.hil_config,
-               "fakedaq, comedi: loop configuration YAML: period, latency, safety policy (default: config/hil.yaml)");
+               "fakedaq, comedi, lcm: loop configuration YAML: period, latency, safety policy (default: "
+               "config/hil.yaml)");
+  declare.name("--lcm-url", o.lcm_url, "lcm: the plant node's LCM URL (default udpm://239.255.76.67:7667?ttl=0: this "
+               "machine only)");
   declare.number("--duration", o.duration_s, "Excitation time of each experiment", {0.5, 600.0, "s"})
       ->capture_default_str();
   declare.number("--amplitude", o.amplitude_v, "Peak of the excitation on the valve command", {0.01, 5.0, "V"})

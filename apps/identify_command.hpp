@@ -16,14 +16,15 @@ namespace fullarm::app {
 
 /// Options of `fullarm identify`.
 struct IdentifyOptions {
-  std::string io = "sim";    ///< the I/O back-end the experiments run on: sim | fakedaq | comedi
+  std::string io = "sim";    ///< the I/O back-end the experiments run on: sim | fakedaq | comedi | lcm
   std::string arm_config;    ///< --config (default: dts_master.yaml)
   std::string plant_config;  ///< --plant (default: dts_plant.yaml)
   std::string settings;      ///< --settings (default: identification.yaml)
   std::string joint = "EB";  ///< the driven joint (short or model name)
   std::string out_dir = "out/identify";
   std::string daq_config;  ///< --daq-config: the channel map of fakedaq and comedi (default: dts_daq.yaml)
-  std::string hil_config;  ///< --hil-config: the loop configuration of fakedaq and comedi (default: hil.yaml)
+  std::string hil_config;  ///< --hil-config: the loop configuration of fakedaq, comedi and lcm (default: hil.yaml)
+  std::string lcm_url;     ///< --lcm-url: the plant node of lcm (empty: the default URL)
   /// Seed of the simulated sensors' noise (sim: experiment k uses seed + k; fakedaq: one arm for
   /// both); unset: 1. The real arm has no seed.
   std::optional<int> seed;

@@ -11,11 +11,15 @@ CLI::App* addPlantServeCommand(CLI::App& app, PlantServeOptions& o, OptionTable&
   CLI::App* plant = app.get_subcommand("plant");
   CLI::App* cmd = plant->add_subcommand(
       "serve",
-      "Serve the simulated DTS as an LCM I/O node for `fullarm run --io lcm` (each command advances it one period)");
+      "Serve the simulated DTS as an LCM I/O node for `fullarm run`, `identify` and `gravity` with `--io lcm` (each "
+      "command advances it one period)");
   OptionDeclarer declare(*cmd, table);
   declare.name("--lcm-url", o.lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0: this machine only)");
   declareLoopFiles(declare, o.files);
-  declare.file("--user", o.user, "Scripted user YAML (default: config/user_reach_valve.yaml)");
+  CLI::Option* user = declare.file("--user", o.user, "Scripted user YAML (default: config/user_reach_valve.yaml)");
+  declare.flag("--no-user", o.no_user,
+               "Nobody strapped in: the arm moves only as commanded (for `identify` and `gravity` over LCM)")
+      ->excludes(user);
   declare.name("--start-posture", o.start_posture, "Scene posture the simulated arm starts in")->capture_default_str();
   declare.integer("--seed", o.seed, "Seed of the simulated sensors' noise", 0, 2147483647);
   declare
@@ -34,6 +38,7 @@ int runPlantServe(const PlantServeOptions& o, std::ostream& out) {
   ro.clock = hil::ClockKind::kLockstep;
   applyLoopFiles(o.files, ro);
   ro.user = pathOr(o.user);
+  ro.scripted_user = !o.no_user;
   ro.seed = o.seed;
   ro.start_posture = o.start_posture;
   hil::HilSession session(ro);  // the simulated arm, its user and the sim device

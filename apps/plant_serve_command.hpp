@@ -1,5 +1,6 @@
 #pragma once
-// `fullarm plant serve`: the simulated DTS as an LCM I/O node for `fullarm run --io lcm`.
+// `fullarm plant serve`: the simulated DTS as an LCM I/O node for `fullarm run`, `fullarm identify` and
+// `fullarm gravity` with `--io lcm`.
 
 #include <CLI/CLI.hpp>
 #include <ostream>
@@ -15,6 +16,7 @@ struct PlantServeOptions {
   std::string lcm_url;    ///< empty: the default URL (udpm, ttl=0: this machine only)
   LoopFileOptions files;  ///< scene and configuration files
   std::string user;       ///< scripted user YAML (default config/user_reach_valve.yaml)
+  bool no_user = false;   ///< nobody strapped in (identification, gravity holds)
   std::string start_posture = "ready";
   std::uint64_t seed = 1;
   double watchdog_s = 0.1;    ///< no command for this long: safe outputs

@@ -121,7 +121,7 @@ HilSession::HilSession(const RunOptions& options, bool build_device) : options_(
   backend_ = std::make_unique<IoBackend>(*model_, io);
   device_ = &backend_->device();
   arm_ = backend_->simulatedArm();
-  if (arm_ != nullptr) {
+  if (arm_ != nullptr && options_.scripted_user) {
     user_ = std::make_unique<ScriptedUser>(loadScriptedUser(options_.user), *model_,
                                            haptics::armBasePose(*scene_, *model_));
     arm_->setUser(user_.get());

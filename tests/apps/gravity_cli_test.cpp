@@ -211,7 +211,11 @@ TEST(GravityCli, DeviceOptionsOutOfPlaceExitTwoNamingTheOption) {
   expectBad("--io comedi --postures 3", "--confirm-arm-motion");
   expectBad("--io sim --confirm-arm-motion", "--confirm-arm-motion");
   expectBad("--confirm-arm-motion", "--confirm-arm-motion");
-  expectBad("--io lcm", "--io");
+  expectBad("--io udp", "--io");
+  expectBad("--lcm-url udpm://239.255.76.98:7698?ttl=0", "--lcm-url");
+  expectBad("--io sim --lcm-url udpm://239.255.76.98:7698?ttl=0", "--lcm-url");
+  expectBad("--io lcm --sim-arm " + file, "--sim-arm");
+  expectBad("--io lcm --daq-config " + file, "--daq-config");
   expectBad("--io sim --holds " + file, "--holds");
   expectBad("--postures 5", "--postures");
   // No board on this machine: the error names the device file of the channel map.

@@ -222,7 +222,11 @@ TEST(IdentifyCli, BackEndOptionsOutOfPlaceExitTwoNamingTheOption) {
   expectBad("--io sim --daq-config " + file, "--daq-config");
   expectBad("--io sim --hil-config " + file, "--hil-config");
   expectBad("--io comedi --seed 3", "--seed");
-  expectBad("--io lcm", "--io");
+  expectBad("--io udp", "--io");
+  expectBad("--io sim --lcm-url udpm://239.255.76.98:7698?ttl=0", "--lcm-url");
+  expectBad("--io lcm --seed 3", "--seed");
+  expectBad("--io lcm --daq-config " + file, "--daq-config");
+  expectBad("--log " + log + " " + log + " --lcm-url udpm://239.255.76.98:7698?ttl=0", "--lcm-url");
   expectBad("--log " + log + " " + log + " --daq-config " + file, "--daq-config");
   expectBad("--log " + log + " " + log + " --seed 2", "--seed");
   // No board on this machine: the error names the device file of the channel map.

@@ -5,7 +5,8 @@
 // in real time the three processes' contact forces agree with the in-process run's within a
 // bound derived from the measured latency; killing the plant node faults the run (communication
 // lost, supervisor trip, exit 1); killing the run makes the plant node's watchdog put out the
-// safe outputs.
+// safe outputs. `fullarm identify` and `fullarm gravity` run their experiments on a plant node
+// with nobody strapped in (`--io lcm`, `plant serve --no-user`).
 
 #include <fcntl.h>
 #include <signal.h>
@@ -20,11 +21,17 @@
 #include <iostream>
 #include <limits>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <thread>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "cli_runner.hpp"
+#include "fullarm/arm/arm_data.hpp"
+#include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_log.hpp"
@@ -363,6 +370,82 @@ TEST_F(LcmSplitCli, KillingTheRunMakesThePlantNodesWatchdogPutOutTheSafeOutputs)
   const std::string out = plant.output();
   EXPECT_NE(out.find("watchdog: no command for 0.05 s: safe outputs"), std::string::npos) << out;
   EXPECT_NE(out.find("outputs safe at exit"), std::string::npos) << out;
+}
+
+// Static holds over LCM on a plant node whose arm (--config) is not the model the holds are
+// fitted to: the fitted arm predicts the node's arm's gravity at postures it never held, to half
+// a load-cell step, as the holds taken in process do.
+TEST_F(LcmSplitCli, GravityHoldsOnThePlantNodePredictTheNodesArmsGravity) {
+  const test::CliResult truth_run = test::runFullarm("gravity --postures 10 --quiet --out " + (dir_ / "truth").string());
+  ASSERT_EQ(truth_run.exit_code, 0) << truth_run.output;
+  const auto truth_file = dir_ / "truth" / "arm.yaml";
+  Process plant({"--quiet", "plant", "serve", "--lcm-url", kUrl, "--no-user", "--config", truth_file.string(),
+                 "--idle-exit", "2"},
+                dir_ / "plant.txt");
+  Process gravity({"gravity", "--io", "lcm", "--lcm-url", kUrl, "--postures", "6", "--seed", "2", "--out",
+                   (dir_ / "held").string()},
+                  dir_ / "gravity.txt");
+  ASSERT_EQ(gravity.wait(), 0) << gravity.output() << plant.output();
+  EXPECT_NE(gravity.output().find("posture 6 of 6, from below"), std::string::npos) << gravity.output();
+  EXPECT_EQ(plant.wait(), 0) << plant.output();
+  EXPECT_NE(plant.output().find("0 stale, 0 rejected"), std::string::npos) << plant.output();
+  EXPECT_NE(plant.output().find("outputs safe at exit"), std::string::npos) << plant.output();
+
+  const arm::ArmModel truth = arm::loadArmModel(truth_file);
+  const arm::ArmModel fitted = arm::loadArmModel(dir_ / "held" / "arm.yaml");
+  const auto gravityAt = [](const arm::ArmModel& model, const Eigen::VectorXd& q) {
+    arm::ArmData data(model);
+    arm::computeGravityTorques(model, data, q);
+    return Eigen::VectorXd(data.tau_gravity);
+  };
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  double worst = 0.0;
+  for (int p = 0; p < 20; ++p) {
+    Eigen::VectorXd q = truth.defaultPosture();
+    for (int k = 0; k < 7; ++k) {
+      const auto& limits = truth.joints[static_cast<std::size_t>(k)].limits;
+      q[k] = limits.min_rad + 0.1 + unit(rng) * (limits.max_rad - limits.min_rad - 0.2);
+    }
+    worst = std::max(worst, (gravityAt(fitted, q) - gravityAt(truth, q)).head(7).cwiseAbs().maxCoeff());
+  }
+  std::printf("largest held-out gravity error over LCM: %.4f N m\n", worst);
+  EXPECT_LT(worst, 0.5 * 0.02488643);  // half a step of the 12-bit elbow load cell
+}
+
+// The two identification experiments over LCM, every joint of the node held: the node serves
+// exactly the commands of the two experiments (each a 1 s settle and the excitation), none stale
+// or damaged, and ends with safe outputs; the logs carry the excitation on the driven joint's hold
+// law; the command ends in its fit and verdict (exit 0 or 1, not a device error).
+TEST_F(LcmSplitCli, IdentifyRunsItsExperimentsOnThePlantNode) {
+  Process plant({"--quiet", "plant", "serve", "--lcm-url", kUrl, "--no-user", "--idle-exit", "2"}, dir_ / "plant.txt");
+  Process identify({"identify", "--io", "lcm", "--lcm-url", kUrl, "--duration", "1", "--out", (dir_ / "id").string()},
+                   dir_ / "identify.txt");
+  const int code = identify.wait();
+  EXPECT_TRUE(code == 0 || code == 1) << identify.output();
+  EXPECT_NE(identify.output().find("through lcm"), std::string::npos) << identify.output();
+  EXPECT_EQ(plant.wait(), 0) << plant.output();
+  EXPECT_NE(plant.output().find("4000 commands served, 0 stale, 0 rejected"), std::string::npos) << plant.output();
+  EXPECT_NE(plant.output().find("outputs safe at exit"), std::string::npos) << plant.output();
+  std::ifstream summary(dir_ / "id" / "summary.json");
+  std::stringstream s;
+  s << summary.rdbuf();
+  const nlohmann::json j = nlohmann::json::parse(s.str());
+  const nlohmann::json& experiments = j["results"]["identify"]["experiments"];
+  ASSERT_EQ(experiments.size(), 2u);
+  for (const nlohmann::json& e : experiments) {
+    EXPECT_EQ(e["samples"], 1000) << e.dump();
+    EXPECT_EQ(e["completed"], true) << e.dump();
+    EXPECT_NEAR(e["hold_gain_v_per_rad"].get<double>(), 10.0, 1e-6) << e.dump();
+  }
+}
+
+// No node at the URL: a clear device error naming the URL (exit 2), before anything moves.
+TEST_F(LcmSplitCli, IdentifyWithoutAPlantNodeExitsTwoNamingTheUrl) {
+  const test::CliResult r =
+      test::runFullarm("identify --io lcm --lcm-url '" + std::string(kUrl) + "' --out " + (dir_ / "id").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("239.255.76.98:7698"), std::string::npos) << r.output;
 }
 
 }  // namespace

@@ -51,6 +51,8 @@ struct RunOptions {
   double duration_s = 10.0;
   std::filesystem::path scene;  ///< default scenes/valve_wall.yaml
   std::filesystem::path user;   ///< default config/user_reach_valve.yaml
+  /// false: the simulated arm moves with nobody strapped in (no scripted user; `user` unread).
+  bool scripted_user = true;
   std::filesystem::path arm_config, plant_config, gains_config, haptics_config, hil_config, daq_config;
   std::string start_posture = "ready";  ///< a posture of the scene
   std::uint64_t seed = 1;               ///< the plant's sensor noise
