@@ -68,12 +68,9 @@ class PeriodClock {
 /// must match (its posture and noise are the node's own: `posture` and `seed` are not used).
 /// @throws core::ConfigError for bad files (a loop period other than `period_s` names the loop
 ///   file's control_period_s); hil::DeviceError when the device cannot be opened
-[[nodiscard]] std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::ArmModel& model,
-                                                               const plant::PlantConfig& plant,
-                                                               const Eigen::VectorXd& posture, std::uint64_t seed,
-                                                               const std::string& daq_config,
-                                                               const std::string& hil_config, double period_s,
-                                                               const std::string& only_joint = {},
-                                                               const std::string& lcm_url = {});
+[[nodiscard]] std::unique_ptr<CommandDevice> openCommandDevice(
+    hil::IoKind kind, const arm::ArmModel& model, const plant::PlantConfig& plant, const Eigen::VectorXd& posture,
+    std::uint64_t seed, const std::string& daq_config, const std::string& hil_config, double period_s,
+    const std::string& only_joint = {}, const std::string& lcm_url = {});
 
 }  // namespace fullarm::app

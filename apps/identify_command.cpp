@@ -703,7 +703,8 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
   declare.file("--hil-config", o.hil_config,
                "fakedaq, comedi, lcm: loop configuration YAML: period, latency, safety policy (default: "
                "config/hil.yaml)");
-  declare.name("--lcm-url", o.lcm_url, "lcm: the plant node's LCM URL (default udpm://239.255.76.67:7667?ttl=0: this "
+  declare.name("--lcm-url", o.lcm_url,
+               "lcm: the plant node's LCM URL (default udpm://239.255.76.67:7667?ttl=0: this "
                "machine only)");
   declare.number("--duration", o.duration_s, "Excitation time of each experiment", {0.5, 600.0, "s"})
       ->capture_default_str();

@@ -17,8 +17,9 @@ CLI::App* addPlantServeCommand(CLI::App& app, PlantServeOptions& o, OptionTable&
   declare.name("--lcm-url", o.lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0: this machine only)");
   declareLoopFiles(declare, o.files);
   CLI::Option* user = declare.file("--user", o.user, "Scripted user YAML (default: config/user_reach_valve.yaml)");
-  declare.flag("--no-user", o.no_user,
-               "Nobody strapped in: the arm moves only as commanded (for `identify` and `gravity` over LCM)")
+  declare
+      .flag("--no-user", o.no_user,
+            "Nobody strapped in: the arm moves only as commanded (for `identify` and `gravity` over LCM)")
       ->excludes(user);
   declare.name("--start-posture", o.start_posture, "Scene posture the simulated arm starts in")->capture_default_str();
   declare.integer("--seed", o.seed, "Seed of the simulated sensors' noise", 0, 2147483647);

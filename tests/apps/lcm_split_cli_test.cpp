@@ -18,9 +18,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <iostream>
 #include <limits>
-#include <fstream>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -376,7 +376,8 @@ TEST_F(LcmSplitCli, KillingTheRunMakesThePlantNodesWatchdogPutOutTheSafeOutputs)
 // fitted to: the fitted arm predicts the node's arm's gravity at postures it never held, to half
 // a load-cell step, as the holds taken in process do.
 TEST_F(LcmSplitCli, GravityHoldsOnThePlantNodePredictTheNodesArmsGravity) {
-  const test::CliResult truth_run = test::runFullarm("gravity --postures 10 --quiet --out " + (dir_ / "truth").string());
+  const test::CliResult truth_run =
+      test::runFullarm("gravity --postures 10 --quiet --out " + (dir_ / "truth").string());
   ASSERT_EQ(truth_run.exit_code, 0) << truth_run.output;
   const auto truth_file = dir_ / "truth" / "arm.yaml";
   Process plant({"--quiet", "plant", "serve", "--lcm-url", kUrl, "--no-user", "--config", truth_file.string(),
