@@ -333,7 +333,9 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
                                       "to the valve command about a proportional position hold)"
             : o.source == "comedi"  ? "on the arm through the Comedi board (every other joint held; a PRBS to 30 Hz "
                                       "added to the valve command about a proportional position hold)"
-                                    : "read from recorded logs")
+            : o.source == "lcm" ? "on a plant node over LCM (fullarm plant serve, every other joint held; a PRBS to "
+                                  "30 Hz added to the valve command about a proportional position hold)"
+                                : "read from recorded logs")
         << ", validated on a held-out experiment by pure simulation (its fit and its residual's independence of the "
            "past excitation judged) and one-step-ahead prediction (its fit reported, its errors' whiteness judged)"
         << (o.source != "logs" ? " (a Schroeder multisine to 30 Hz)" : " (the last log)")
@@ -373,6 +375,22 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   }
   table.significant_digits = 4;
   section.addTable(std::move(table));
+  // Each fitted experiment's initial state (the speed and the hydraulic torque's excess over the
+  // static load at the first simulated reading), estimated with the groups or held at rest.
+  if (cfg.fit.initial_speed.free || cfg.fit.initial_torque_offset.free) {
+    reports::Table states;
+    states.caption = "Initial state of each fitted experiment, estimated with the groups (a fixed one is at rest)";
+    states.columns = {"Experiment", "Initial speed [rad/s]", "Standard error", "Torque offset [N m]", "Standard error"};
+    for (std::size_t i = 0; i < o.fit_experiments.size() && i < o.fit.initial_states.size(); ++i) {
+      const id::InitialState& x0 = o.fit.initial_states[i];
+      const id::InitialState se =
+          i < o.fit.initial_state_standard_error.size() ? o.fit.initial_state_standard_error[i] : id::InitialState{};
+      states.rows.push_back(
+          {o.fit_experiments[i].name, x0.speed_radps, se.speed_radps, x0.torque_offset_nm, se.torque_offset_nm});
+    }
+    states.significant_digits = 4;
+    section.addTable(std::move(states));
+  }
   if (o.fit.unidentifiable.empty()) {
     section.addParagraph(
         "Unidentifiable directions: none (no singular value of the scaled Jacobian below 1e-6 of "

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 
 #include "cli_runner.hpp"
@@ -84,6 +85,14 @@ TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
   EXPECT_GE(result["validation"]["prediction_fit_angle_percent"].get<double>(), 90.0);
   EXPECT_GE(result["validation"]["prediction_fit_torque_percent"].get<double>(), 90.0);
   EXPECT_NE(r.output.find("one-step prediction fit"), std::string::npos) << r.output;
+  // The report names the source and tabulates the fitted experiment's estimated initial state.
+  {
+    std::ifstream in(dir / "report.html");
+    std::stringstream html;
+    html << in.rdbuf();
+    EXPECT_NE(html.str().find("on the simulated DTS (the joint alone"), std::string::npos);
+    EXPECT_NE(html.str().find("Initial state of each fitted experiment"), std::string::npos);
+  }
 
   // The identified plant file: a plant YAML whose elbow has the identified groups at the hold
   // angle (the inertia is the link's share plus the actuator's, checked in identified_plant_test),

@@ -439,6 +439,10 @@ TEST_F(LcmSplitCli, IdentifyRunsItsExperimentsOnThePlantNode) {
     EXPECT_EQ(e["completed"], true) << e.dump();
     EXPECT_NEAR(e["hold_gain_v_per_rad"].get<double>(), 10.0, 1e-6) << e.dump();
   }
+  std::ifstream report(dir_ / "id" / "report.html");
+  std::stringstream html;
+  html << report.rdbuf();
+  EXPECT_NE(html.str().find("on a plant node over LCM"), std::string::npos);
 }
 
 // No node at the URL: a clear device error naming the URL (exit 2), before anything moves.
