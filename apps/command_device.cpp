@@ -102,6 +102,8 @@ std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::Ar
     for (const plant::JointParams& j : d->plant.joints) indices.push_back(model.jointIndex(j.name));
     io.lcm_joints = arm::JointSelection(model.numJoints(), indices);
     io.lcm_url = lcm_url;
+    // A missed reply would repeat the last reading in the log: it stops the experiment instead.
+    io.lcm_max_missed_replies = 1;
   }
   d->backend = std::make_unique<hil::IoBackend>(model, io);
   d->backend->device().configure();  // opens the board: a missing one is reported before anything runs

@@ -37,8 +37,8 @@ CLI::App* addGravityCommand(CLI::App& app, GravityOptions& o, OptionTable& table
       {"sim", "fakedaq", "comedi", "lcm"});
   io->excludes(cmd->get_option("--holds"));
   declare.file("--plant", o.plant_config,
-               "--io sim, fakedaq: the simulated DTS's plant YAML; lcm: the node's, for its joints (default: "
-               "config/dts_plant.yaml)");
+               "--io sim, fakedaq: the simulated DTS's plant YAML; lcm: the node's --plant-config, for its joints "
+               "(default: config/dts_plant.yaml)");
   declare.file("--sim-arm", o.sim_arm,
                "--io sim, fakedaq: the arm model the simulated DTS moves, the truth of a test (default: --config)");
   declare.file("--daq-config", o.daq_config, "--io fakedaq, comedi: channel map YAML (default: config/dts_daq.yaml)");

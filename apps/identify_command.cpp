@@ -63,7 +63,7 @@ struct Experiment {
 // Everything a run produced, for the report and the summary.
 struct Outcome {
   std::string joint;
-  std::string source;  // the back-end ("sim", "fakedaq", "comedi") or "logs"
+  std::string source;  // the back-end ("sim", "fakedaq", "comedi", "lcm") or "logs"
   std::vector<Experiment> fit_experiments;
   Experiment validation;
   id::GreyModel start;
@@ -152,7 +152,8 @@ int deviceJointIndex(hil::IoDevice& device, int model_joint, const std::string& 
   throw core::ConfigError({}, "--joint", "'" + name + "' is not a joint of the " + io + " device's channel map");
 }
 
-// One experiment on a device that stays built between experiments (the fake DAQ, the real arm):
+// One experiment on a device that stays built between experiments (the fake DAQ, the real arm, a
+// plant node):
 // every device joint held, the driven one excited; the limits are the plant file's.
 Experiment runDeviceExperiment(const arm::ArmModel& model, CommandDevice& device, int device_joint,
                                const plant::JointParams& driven, const id::SampledSignal& excitation,
@@ -702,7 +703,8 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
   CLI::App* cmd = app.add_subcommand(
       "identify",
       "Identify one joint's hydraulic parameter groups from closed-loop experiments (on the simulated DTS, the fake "
-      "DAQ or the arm, or from recorded logs); write the logs, identified.yaml, summary.json and report.html");
+      "DAQ, the arm or a plant node over LCM, or from recorded logs); write the logs, identified.yaml, summary.json "
+      "and report.html");
   OptionDeclarer declare(*cmd, table);
   CLI::Option* io = declare.choice("--io", o.io,
                                    "I/O back-end the experiments run on (sim: the joint alone on the simulated DTS; "
@@ -715,7 +717,7 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
   declare.integer(
       "--seed", o.seed,
       "Seed of the simulated sensors' noise, default 1 (sim: the held-out experiment uses seed + 1; not with "
-      "comedi)",
+      "comedi or lcm)",
       0, 2147483647);
   declare.file("--daq-config", o.daq_config, "fakedaq, comedi: channel map YAML (default: config/dts_daq.yaml)");
   declare.file("--hil-config", o.hil_config,
@@ -731,8 +733,8 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
   declare.integer("--threads", o.threads, "Threads of the fit's simulations", 1, 64)->capture_default_str();
   declare.file("--start", o.start, "identified.yaml whose model starts the fit (default: the plant joint's groups)");
   declare.file("--plant", o.plant_config,
-               "Plant YAML: the simulated DTS of sim and fakedaq, the fit's start and the identified plant's base "
-               "(default: config/dts_plant.yaml)");
+               "Plant YAML: the simulated DTS of sim and fakedaq, the joints and limits of lcm (the node's "
+               "--plant-config), the fit's start and the identified plant's base (default: config/dts_plant.yaml)");
   declare.file("--config", o.arm_config, "Arm model YAML (default: config/dts_master.yaml)");
   declare.file("--settings", o.settings, "Identification settings YAML (default: config/identification.yaml)");
   declare

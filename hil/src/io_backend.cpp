@@ -55,6 +55,7 @@ IoBackend::IoBackend(const arm::ArmModel& model, const IoBackendOptions& options
       LcmIoOptions lcm;
       if (!options.lcm_url.empty()) lcm.url = options.lcm_url;
       if (options.lcm_reply_timeout_s > 0.0) lcm.reply_timeout_s = options.lcm_reply_timeout_s;
+      if (options.lcm_max_missed_replies > 0) lcm.max_missed_replies = options.lcm_max_missed_replies;
       device_ = std::make_unique<LcmIoDevice>(options.lcm_joints, options.period_s, options.safety, lcm);
       break;
     }

@@ -203,6 +203,26 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
   return {};
 }
 
+void LcmIoDevice::onDeactivate() noexcept {
+  held_v_.setZero();
+  held_enable_ = false;
+  if (!lcm_) return;
+  try {
+    fullarm_lcm::io_command_t c;
+    c.utime = wallMicros();
+    c.seq = ++seq_;
+    c.num_valves = static_cast<std::int8_t>(held_v_.size());
+    c.valve_command_v.assign(held_v_.data(), held_v_.data() + held_v_.size());
+    c.enable = 0;
+    encodeMessage(c, buffer_);
+    if (lcm_->publish(channel::kIoCommand, buffer_.data(), static_cast<unsigned int>(buffer_.size())) == 0) {
+      ++counters_.commands;
+    }
+  } catch (const std::exception&) {
+    // Not sent: the node's watchdog puts out the safe output when commands stop.
+  }
+}
+
 core::RtStatus LcmIoDevice::onWrite(const IoVector& valve_v, bool toggle_enable) noexcept {
   // Held until the next read carries it to the node, as a DAC holds its output.
   for (int k = 0; k < held_v_.size(); ++k) held_v_[k] = toggle_enable ? valve_v[k] : 0.0;

@@ -48,6 +48,9 @@ struct IoBackendOptions {
   arm::JointSelection lcm_joints;
   std::string lcm_url;
   double lcm_reply_timeout_s = 0.0;
+  /// lcm: consecutive unanswered reads that mean the link is lost (0: the device's default). 1
+  /// for a recording that must not repeat a reading (identification, static holds).
+  int lcm_max_missed_replies = 0;
 };
 
 /// The device of one back-end and what it drives in this process.

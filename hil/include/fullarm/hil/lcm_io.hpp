@@ -85,6 +85,9 @@ class LcmIoDevice final : public IoDevice {
   /// Opens the LCM URL and waits for the node's heartbeat.
   /// @throws DeviceError when the URL cannot be opened or no node answers in time
   void onConfigure() override;
+  /// Sends the safe output (null valves, enable off) at once, not waiting for a reply, so the
+  /// node puts it out without waiting for the next read or its watchdog.
+  void onDeactivate() noexcept override;
   /// Sends the held command and waits for its reading (allocates: LCM's receive path).
   core::RtStatus onRead(JointSample& sample) noexcept override;
   core::RtStatus onWrite(const IoVector& valve_v, bool toggle_enable) noexcept override;
