@@ -163,7 +163,9 @@ TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
   plant.join();
 
   EXPECT_EQ(remote.io_name, "lcm");
-  EXPECT_EQ(plant.result.commands, remote.telemetry.size());
+  // One command per tick, and the safe output the device sends when the run deactivates it.
+  EXPECT_EQ(plant.result.commands, remote.telemetry.size() + 1);
+  EXPECT_TRUE(plant.result.safe_at_exit);
   expectSameRun(in_process, remote);
 }
 
