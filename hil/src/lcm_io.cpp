@@ -138,19 +138,11 @@ void LcmIoDevice::onConfigure() {
 core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
   if (!lcm_) return core::RtStatus::fault(core::RtCode::kNotConfigured, kFaultDeviceRead, "lcm I/O: not connected");
   try {
-    fullarm_lcm::io_command_t c;
-    c.utime = wallMicros();
-    c.seq = ++seq_;
-    c.num_valves = static_cast<std::int8_t>(held_v_.size());
-    c.valve_command_v.assign(held_v_.data(), held_v_.data() + held_v_.size());
-    c.enable = held_enable_ ? 1 : 0;
-    handler_->want_seq = c.seq;
-    handler_->have_reading = false;
-    encodeMessage(c, buffer_);
-    if (lcm_->publish(channel::kIoCommand, buffer_.data(), static_cast<unsigned int>(buffer_.size())) != 0) {
+    if (!publishHeld()) {
       return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead, "lcm I/O: the command could not be sent");
     }
-    ++counters_.commands;
+    handler_->want_seq = seq_;  // replies are taken only by the handle calls below
+    handler_->have_reading = false;
     // Once a reply failed to come, later reads only take what has already arrived when the
     // timeout is longer than a period (lockstep): a lost node must not stall every later tick by
     // the whole timeout. A timeout within the period (real time) is always waited for.
@@ -203,21 +195,25 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
   return {};
 }
 
+bool LcmIoDevice::publishHeld() {
+  fullarm_lcm::io_command_t c;
+  c.utime = wallMicros();
+  c.seq = ++seq_;
+  c.num_valves = static_cast<std::int8_t>(held_v_.size());
+  c.valve_command_v.assign(held_v_.data(), held_v_.data() + held_v_.size());
+  c.enable = held_enable_ ? 1 : 0;
+  encodeMessage(c, buffer_);
+  if (lcm_->publish(channel::kIoCommand, buffer_.data(), static_cast<unsigned int>(buffer_.size())) != 0) return false;
+  ++counters_.commands;
+  return true;
+}
+
 void LcmIoDevice::onDeactivate() noexcept {
   held_v_.setZero();
   held_enable_ = false;
   if (!lcm_) return;
   try {
-    fullarm_lcm::io_command_t c;
-    c.utime = wallMicros();
-    c.seq = ++seq_;
-    c.num_valves = static_cast<std::int8_t>(held_v_.size());
-    c.valve_command_v.assign(held_v_.data(), held_v_.data() + held_v_.size());
-    c.enable = 0;
-    encodeMessage(c, buffer_);
-    if (lcm_->publish(channel::kIoCommand, buffer_.data(), static_cast<unsigned int>(buffer_.size())) == 0) {
-      ++counters_.commands;
-    }
+    (void)publishHeld();
   } catch (const std::exception&) {
     // Not sent: the node's watchdog puts out the safe output when commands stop.
   }

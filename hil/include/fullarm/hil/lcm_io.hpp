@@ -91,6 +91,9 @@ class LcmIoDevice final : public IoDevice {
   /// Sends the held command and waits for its reading (allocates: LCM's receive path).
   core::RtStatus onRead(JointSample& sample) noexcept override;
   core::RtStatus onWrite(const IoVector& valve_v, bool toggle_enable) noexcept override;
+  /// Sends the held command and enable under the next sequence number (counted in
+  /// counters_.commands); false when LCM could not send it. Throws what encoding throws.
+  bool publishHeld();
 
   LcmIoOptions options_;
   std::unique_ptr<lcm::LCM> lcm_;
