@@ -6,8 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <filesystem>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -179,8 +179,8 @@ TEST(GravityCli, HoldsOnADevicePredictTheSimulatedArmsGravityAndTheirLogRefitsTh
     EXPECT_GT(nominal_worst, 100.0 * tolerance_nm);
 
     // The written log read back with --holds: the same fit, the same residuals.
-    const Result again = runFullarm("gravity --holds " + (held / "holds.csv").string() + " --quiet --out " +
-                                    (held / "again").string());
+    const Result again =
+        runFullarm("gravity --holds " + (held / "holds.csv").string() + " --quiet --out " + (held / "again").string());
     ASSERT_EQ(again.exit_code, 0) << again.output;
     EXPECT_EQ(readFile(held / "again" / "gravity.csv"), readFile(held / "gravity.csv"));
     const fullarm::arm::ArmModel refit = fullarm::arm::loadArmModel(held / "again" / "arm.yaml");

@@ -115,8 +115,10 @@ class LcmSplitCli : public ::testing::Test {
     return "--user " + (dir_ / "hold.yaml").string() + " --start-posture reach_valve --seed 3";
   }
   [[nodiscard]] std::vector<std::string> plantArgs(const std::string& idle_exit) const {
-    return {"--quiet", "plant", "serve", "--lcm-url", kUrl, "--user", (dir_ / "hold.yaml").string(), "--start-posture",
-            "reach_valve", "--seed", "3", "--watchdog", "0.05", "--idle-exit", idle_exit};
+    return {
+        "--quiet",         "plant",       "serve",  "--lcm-url", kUrl,         "--user", (dir_ / "hold.yaml").string(),
+        "--start-posture", "reach_valve", "--seed", "3",         "--watchdog", "0.05",   "--idle-exit",
+        idle_exit};
   }
   std::filesystem::path dir_;
 };
@@ -213,10 +215,9 @@ TEST_F(LcmSplitCli, ThreeProcessesInRealTimeAgreeWithTheInProcessRunWithinTheLat
     EXPECT_EQ(global.wait(), 0);
     global_output = global.output();
     if (remote.exit_code == 0) break;
-    ASSERT_NE(remote.output.find("TRIPPED (communication lost)"), std::string::npos)
-        << remote.output << "\nplant:\n"
-        << plant.output() << "\nglobal:\n"
-        << global_output;
+    ASSERT_NE(remote.output.find("TRIPPED (communication lost)"), std::string::npos) << remote.output << "\nplant:\n"
+                                                                                     << plant.output() << "\nglobal:\n"
+                                                                                     << global_output;
     std::cout << "attempt " << attempt + 1 << ": the plant node's readings came late 20 times in a row (a loaded "
               << "machine): the run tripped safely; again\n";
   }
@@ -266,8 +267,7 @@ TEST_F(LcmSplitCli, ThreeProcessesInRealTimeAgreeWithTheInProcessRunWithinTheLat
   const std::size_t window = 20;
   double hand_speed_mps = 0.0;
   for (std::size_t k = window; k < hand.size(); ++k)
-    hand_speed_mps =
-        std::max(hand_speed_mps, (hand[k] - hand[k - window]).norm() / (static_cast<double>(window) * dt));
+    hand_speed_mps = std::max(hand_speed_mps, (hand[k] - hand[k - window]).norm() / (static_cast<double>(window) * dt));
   // Tolerance: a spring's force changes by at most k * (change of its distance); between the two
   // runs a link's minima differ by the set's age, at most the measured p99 latency plus one
   // search period here against the configured delivery delay there, travelled at the hand's
@@ -309,8 +309,9 @@ TEST_F(LcmSplitCli, ThreeProcessesInRealTimeAgreeWithTheInProcessRunWithinTheLat
     }
   }
   std::cout << "latency p50 " << quantile(age_s, 0.5) * 1e3 << " ms, p99 " << latency_p99_s * 1e3 << " ms over "
-            << age_s.size() << " sets; hand speed " << hand_speed_mps << " m/s; tolerance " << tolerance_n << " N; largest difference " << worst_n
-            << " N at tick " << worst_tick << " (largest force " << largest_n << " N)\n";
+            << age_s.size() << " sets; hand speed " << hand_speed_mps << " m/s; tolerance " << tolerance_n
+            << " N; largest difference " << worst_n << " N at tick " << worst_tick << " (largest force " << largest_n
+            << " N)\n";
   EXPECT_GT(largest_n, 1.0) << "the scenario should bring the arm into contact";
   EXPECT_LE(worst_n, tolerance_n);
 }
@@ -338,9 +339,9 @@ TEST_F(LcmSplitCli, KillingTheGlobalNodeInRealTimeIsCommunicationLoss) {
 
 TEST_F(LcmSplitCli, KillingThePlantNodeFaultsTheRun) {
   Process plant(plantArgs("5"), dir_ / "plant.txt");
-  Process run({"--quiet", "run", "--io", "lcm", "--lcm-url", kUrl, "--clock", "lockstep", "--duration", "20", "--no-oracle",
-               "--user", (dir_ / "hold.yaml").string(), "--start-posture", "reach_valve", "--seed", "3", "--out",
-               (dir_ / "run").string()},
+  Process run({"--quiet", "run", "--io", "lcm", "--lcm-url", kUrl, "--clock", "lockstep", "--duration", "20",
+               "--no-oracle", "--user", (dir_ / "hold.yaml").string(), "--start-posture", "reach_valve", "--seed", "3",
+               "--out", (dir_ / "run").string()},
               dir_ / "run.txt");
   ASSERT_TRUE(plant.waitForOutput("first command", 20.0)) << plant.output();
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
@@ -358,10 +359,10 @@ TEST_F(LcmSplitCli, KillingThePlantNodeFaultsTheRun) {
 
 TEST_F(LcmSplitCli, KillingTheRunMakesThePlantNodesWatchdogPutOutTheSafeOutputs) {
   Process plant(plantArgs("1"), dir_ / "plant.txt");
-  Process run({"--quiet", "run", "--io", "lcm", "--lcm-url", kUrl, "--clock", "lockstep", "--duration", "20", "--no-oracle",
-               "--user", (dir_ / "hold.yaml").string(), "--start-posture", "reach_valve", "--out",
-               (dir_ / "run").string()},
-              dir_ / "run.txt");
+  Process run(
+      {"--quiet", "run", "--io", "lcm", "--lcm-url", kUrl, "--clock", "lockstep", "--duration", "20", "--no-oracle",
+       "--user", (dir_ / "hold.yaml").string(), "--start-posture", "reach_valve", "--out", (dir_ / "run").string()},
+      dir_ / "run.txt");
   ASSERT_TRUE(plant.waitForOutput("amplifiers enabled", 20.0)) << plant.output() << run.output();
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   run.kill();
