@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -54,9 +55,8 @@ struct Experiment {
   id::ExperimentData data;
   bool completed = true;
   std::string stop_reason;
-  // The arm's posture during the experiment (model order): on a device, every joint it serves at
-  // its hold angle, the others at the default posture; empty for the simulated joint alone and
-  // for logs (the default posture).
+  // The arm's posture during the experiment (model order): the default posture with every held
+  // joint the log names (its `q_<joint>_rad` column) at its mean angle.
   Eigen::VectorXd posture;
 };
 
@@ -75,6 +75,8 @@ struct Outcome {
   bool plant_written = false;            // identified_plant.yaml
   std::string plant_note;                // why it was not written
   std::vector<std::string> plant_notes;  // groups it carries only approximately
+  double start_link_inertia = 0.0;       // the link's inertia at the start's posture [kg m^2]
+  std::optional<double> start_gravity_nm;  // the gravity load there (none with --start)
 };
 
 id::ExperimentData dataFromLog(const id::SignalTable& log, const std::string& file) {
@@ -83,6 +85,29 @@ id::ExperimentData dataFromLog(const id::SignalTable& log, const std::string& fi
   } catch (const std::invalid_argument& e) {
     throw core::ConfigError(file, "", e.what());
   }
+}
+
+// The posture an experiment ran in (model order): the default posture with each held joint of the
+// log at its mean angle over the log. A column naming no joint of the arm model, or the driven
+// joint (whose angle is `q_rad`), is bad input naming the file and the column.
+Eigen::VectorXd postureOfLog(const arm::ArmModel& model, const id::SignalTable& log, int driven_joint,
+                             const std::string& file) {
+  Eigen::VectorXd posture = model.defaultPosture();
+  for (const id::HeldAngle& held : id::heldAngles(log)) {
+    const int index = model.jointIndex(held.joint);
+    const std::string column = id::heldAngleColumn(held.joint);
+    if (index < 0) {
+      throw core::ConfigError(file, column,
+                              "'" + held.joint + "' is not a joint of the arm model (" +
+                                  model.source.filename().string() + "): expected a held joint's angle");
+    }
+    if (index == driven_joint) {
+      throw core::ConfigError(
+          file, column, "names the identified joint, whose angle is the column q_rad: expected a held joint's angle");
+    }
+    posture[index] = held.mean_rad;
+  }
+  return posture;
 }
 
 // PRBS over [0, duration): one period of the shortest register whose period covers it, cut.
@@ -164,13 +189,14 @@ Experiment runDeviceExperiment(const arm::ArmModel& model, CommandDevice& device
   options.max_rad = driven.max_rad;
   options.before_read = device.pace;
   options.log_control_time = true;
+  const arm::JointSelection& joints = device.backend->device().joints();
+  for (int k = 0; k < joints.size(); ++k) {
+    options.joint_names.push_back(model.joints[static_cast<std::size_t>(joints.modelIndex(k))].name);
+  }
+  const int model_joint = joints.modelIndex(device_joint);
   const id::ExperimentResult result = id::runExperiment(device.backend->device(), excitation, options);
   Experiment e = experimentOf(result, name);
-  const arm::JointSelection& joints = device.backend->device().joints();
-  e.posture = model.defaultPosture();
-  for (int k = 0; k < joints.size() && static_cast<std::size_t>(k) < result.hold_rad.size(); ++k) {
-    e.posture[joints.modelIndex(k)] = result.hold_rad[static_cast<std::size_t>(k)];
-  }
+  e.posture = postureOfLog(model, e.log, model_joint, name);
   return e;
 }
 
@@ -279,6 +305,9 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
                            {"stop_reason", e.stop_reason},
                            {"hold_gain_v_per_rad", e.data.hold_gain_v_per_rad},
                            {"hold_rad", e.data.hold_rad}});
+    nlohmann::json held = nlohmann::json::object();
+    for (const id::HeldAngle& h : id::heldAngles(e.log)) held[h.joint] = h.mean_rad;
+    experiments.back()["held_joints_rad"] = held;
   };
   for (std::size_t i = 0; i < o.fit_experiments.size(); ++i) {
     addExperiment(o.fit_experiments[i], "fit");
@@ -299,6 +328,8 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
       {"joint", o.joint},
       {"source", o.source},
       {"start", o.start_source},
+      {"start_link_inertia_kgm2", o.start_link_inertia},
+      {"start_gravity_load_nm", o.start_gravity_nm ? nlohmann::json(*o.start_gravity_nm) : nlohmann::json(nullptr)},
       {"settings", cfg.source.string()},
       {"experiments", experiments},
       {"delay_samples", o.fit.model.delay_samples},
@@ -344,6 +375,24 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
         << o.fit.sensitivity_evaluations << " with forward sensitivities, cost " << std::setprecision(4) << o.fit.cost
         << ".";
   section.addParagraph(intro.str());
+  {
+    std::ostringstream posture;
+    posture << std::setprecision(4) << "Posture: " << o.joint << " at its hold angle "
+            << o.fit_experiments.front().data.hold_rad << " rad";
+    const std::vector<id::HeldAngle> held = id::heldAngles(o.fit_experiments.front().log);
+    if (held.empty()) {
+      posture << ", every other joint at the arm's default posture";
+    } else {
+      posture << ", the held joints at their mean angles in " << o.fit_experiments.front().name << " (";
+      for (std::size_t k = 0; k < held.size(); ++k)
+        posture << (k > 0 ? ", " : "") << held[k].joint << " " << held[k].mean_rad;
+      posture << " rad), any other at the arm's default posture";
+    }
+    posture << ": there the link's inertia is " << o.start_link_inertia << " kg m^2";
+    if (o.start_gravity_nm) posture << " and its gravity load " << *o.start_gravity_nm << " N m, the fit's start";
+    posture << ".";
+    section.addParagraph(posture.str());
+  }
   section.addParagraph(
       o.plant_written
           ? std::string("Plant file: ") + kIdentifiedPlantFile +
@@ -610,6 +659,7 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
       Experiment e;
       e.name = o.logs[k];
       e.log = id::readSignalCsv(o.logs[k], id::kExperimentColumns);  // CsvFormatError: bad input (exit 2)
+      e.posture = postureOfLog(model, e.log, model_joint, o.logs[k]);
       e.data = dataFromLog(e.log, o.logs[k]);
       if (k + 1 < o.logs.size()) {
         r.fit_experiments.push_back(std::move(e));
@@ -619,8 +669,8 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
     }
   }
   // The start: a given model, or the plant joint's groups at the hold angle with the link's
-  // inertia and gravity load there (the other joints where the device held them, or at the
-  // default posture).
+  // inertia and gravity load there (the held joints at the angles the first fitted log records,
+  // the others at the default posture).
   const double q_hold = r.fit_experiments.front().data.hold_rad;
   Eigen::VectorXd q =
       r.fit_experiments.front().posture.size() > 0 ? r.fit_experiments.front().posture : model.defaultPosture();
@@ -628,12 +678,14 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
   arm::ArmData arm_data(model);
   arm::computeMassMatrix(model, arm_data, q);
   const double link_inertia = arm_data.mass_matrix(model_joint, model_joint);
+  r.start_link_inertia = link_inertia;
   if (!o.start.empty()) {
     const id::IdentifiedModel given = id::loadIdentifiedModel(o.start);
     r.start = given.model;
     r.start_source = o.start;
   } else {
     arm::computeGravityTorques(model, arm_data, q);
+    r.start_gravity_nm = arm_data.tau_gravity[model_joint];
     r.start = id::greyModelFromJoint(jp, q_hold, link_inertia, arm_data.tau_gravity[model_joint], 1);
     // The gravity load's gradient at the hold angle (central difference), the known load stiffness.
     constexpr double kStep_rad = 1.0e-4;

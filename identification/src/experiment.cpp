@@ -2,10 +2,34 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string_view>
 
 #include "device_run.hpp"
 
 namespace fullarm::identification {
+
+std::string heldAngleColumn(const std::string& joint) {
+  return "q_" + joint + "_rad";
+}
+
+std::vector<HeldAngle> heldAngles(const SignalTable& log) {
+  std::vector<HeldAngle> held;
+  for (std::size_t c = 0; c < log.names.size(); ++c) {
+    const std::string& name = log.names[c];
+    constexpr std::string_view kPrefix = "q_";
+    constexpr std::string_view kSuffix = "_rad";
+    if (name.size() <= kPrefix.size() + kSuffix.size() || !name.starts_with(kPrefix) || !name.ends_with(kSuffix)) {
+      continue;
+    }
+    const std::vector<double>& column = log.columns[c];
+    if (column.empty()) continue;
+    double sum = 0.0;
+    for (double v : column) sum += v;
+    held.push_back({name.substr(kPrefix.size(), name.size() - kPrefix.size() - kSuffix.size()),
+                    sum / static_cast<double>(column.size())});
+  }
+  return held;
+}
 
 ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excitation,
                                const ExperimentOptions& options) {
@@ -28,9 +52,33 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
                                 std::to_string(options.limit_margin_rad) + " rad");
   }
 
+  const bool log_held = !options.joint_names.empty();
+  if (log_held) {
+    if (options.joint_names.size() != static_cast<std::size_t>(n)) {
+      throw std::invalid_argument("experiment: " + std::to_string(options.joint_names.size()) +
+                                  " joint names for the device's " + std::to_string(n) + " joints");
+    }
+    for (std::size_t k = 0; k < options.joint_names.size(); ++k) {
+      const std::string& name = options.joint_names[k];
+      if (name.empty() || name.find_first_of(", \t\r\n\"") != std::string::npos) {
+        throw std::invalid_argument("experiment: joint name '" + name + "' cannot name a log column");
+      }
+      for (std::size_t other = 0; other < k; ++other) {
+        if (options.joint_names[other] == name) {
+          throw std::invalid_argument("experiment: joint name '" + name + "' given twice");
+        }
+      }
+    }
+  }
+
   ExperimentResult result;
   result.log.names = kExperimentColumns;
-  result.log.columns.assign(kExperimentColumns.size(), {});
+  if (log_held) {
+    for (int k = 0; k < n; ++k) {
+      if (k != j) result.log.names.push_back(heldAngleColumn(options.joint_names[static_cast<std::size_t>(k)]));
+    }
+  }
+  result.log.columns.assign(result.log.names.size(), {});
   for (auto& c : result.log.columns) c.reserve(excitation.value_v.size());
 
   hil::JointSample sample;
@@ -92,6 +140,12 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
       c[2].push_back(device.appliedCommand()[j]);
       c[3].push_back(q);
       c[4].push_back(sample.tau_load_cell_nm[j]);
+      if (log_held) {
+        std::size_t column = kExperimentColumns.size();
+        for (int k = 0; k < n; ++k) {
+          if (k != j) c[column++].push_back(sample.q_rad[k]);
+        }
+      }
     }
   }
   result.completed = true;

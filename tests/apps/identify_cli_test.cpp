@@ -14,6 +14,7 @@
 #include <sstream>
 #include <string>
 
+#include "arm_test_util.hpp"
 #include "cli_runner.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/identification/identified_model.hpp"
@@ -92,6 +93,20 @@ TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
     html << in.rdbuf();
     EXPECT_NE(html.str().find("on the simulated DTS (the joint alone"), std::string::npos);
     EXPECT_NE(html.str().find("Initial state of each fitted experiment"), std::string::npos);
+    EXPECT_NE(html.str().find("every other joint at the arm"), std::string::npos);
+  }
+
+  // The start's link inertia and gravity load are KDL's at the arm's default posture with the
+  // elbow at its hold angle (the other joints are locked there; the log names no held joint).
+  EXPECT_TRUE(result["experiments"][0]["held_joints_rad"].empty()) << result["experiments"][0].dump();
+  {
+    const fullarm::arm::ArmModel arm = fullarm::arm::loadArmModel(fullarm::arm::defaultArmModelPath());
+    Eigen::VectorXd q = arm.defaultPosture();
+    const int elbow = arm.jointIndex("R_EB");
+    q[elbow] = result["experiments"][0]["hold_rad"].get<double>();
+    const fullarm::arm::test::KdlJointAtRest kdl = fullarm::arm::test::kdlJointAtRest(arm, q, elbow);
+    EXPECT_NEAR(result["start_gravity_load_nm"].get<double>(), kdl.gravity_nm, 1e-9 * std::abs(kdl.gravity_nm));
+    EXPECT_NEAR(result["start_link_inertia_kgm2"].get<double>(), kdl.inertia_kgm2, 1e-9 * kdl.inertia_kgm2);
   }
 
   // The identified plant file: a plant YAML whose elbow has the identified groups at the hold
@@ -167,6 +182,24 @@ TEST(IdentifyCli, BadInputExitsTwoNamingTheOptionFileOrLine) {
   EXPECT_NE(m.output.find(bad_log.string()), std::string::npos) << m.output;
   EXPECT_NE(m.output.find("3"), std::string::npos) << m.output;
   EXPECT_NE(m.output.find("zero"), std::string::npos) << m.output;
+
+  // A held joint's column naming no joint of the arm, or the identified joint itself: exit 2
+  // naming the file and the column.
+  for (const std::string column : {"q_XX_rad", "q_R_EB_rad"}) {
+    const auto held_log = dir / "held.csv";
+    {
+      std::ofstream out(held_log);
+      out << "time_s,excitation_v,command_v,q_rad,tau_measured_nm," << column << "\n"
+          << "0,0,0,1.2,0,0.1\n"
+          << "0.001,0.1,0.1,1.2,0,0.1\n"
+          << "0.002,0.1,0.1,1.21,0,0.1\n";
+    }
+    const Result h = runFullarm("identify --quiet --joint EB --out " + dir.string() + " --log " + held_log.string() +
+                                " " + held_log.string());
+    EXPECT_EQ(h.exit_code, 2) << h.output;
+    EXPECT_NE(h.output.find(held_log.string()), std::string::npos) << h.output;
+    EXPECT_NE(h.output.find(column), std::string::npos) << h.output;
+  }
 
   // Only one log: nothing to hold out.
   const Result one = runFullarm("identify --quiet --out " + dir.string() + " --log " + bad_log.string());

@@ -28,6 +28,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "arm_test_util.hpp"
 #include "cli_runner.hpp"
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
@@ -35,6 +36,8 @@
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_log.hpp"
+#include "fullarm/identification/signal_csv.hpp"
+#include "fullarm/plant/plant_config.hpp"
 #include "private_network.hpp"
 #include "run_replay3d.hpp"
 
@@ -445,6 +448,51 @@ TEST_F(LcmSplitCli, IdentifyRunsItsExperimentsOnThePlantNode) {
   std::stringstream html;
   html << report.rdbuf();
   EXPECT_NE(html.str().find("on a plant node over LCM"), std::string::npos);
+  EXPECT_NE(html.str().find("the held joints at their mean angles in experiment_fit.csv"), std::string::npos);
+
+  // Each log records every other joint of the node, held, as a q_<joint>_rad column; the summary
+  // gives their means over the log.
+  const arm::ArmModel model = arm::loadArmModel(arm::defaultArmModelPath());
+  const plant::PlantConfig node_plant = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
+  const nlohmann::json& result = j["results"]["identify"];
+  const char* logs[] = {"experiment_fit.csv", "experiment_validation.csv"};
+  for (std::size_t e = 0; e < 2; ++e) {
+    const identification::SignalTable log = identification::readSignalCsv(dir_ / "id" / logs[e], {});
+    const nlohmann::json& held = experiments[e]["held_joints_rad"];
+    EXPECT_EQ(held.size(), node_plant.joints.size() - 1) << held.dump();
+    for (const plant::JointParams& joint : node_plant.joints) {
+      if (joint.name == "R_EB") {
+        EXPECT_FALSE(log.has("q_R_EB_rad"));
+        continue;
+      }
+      const std::vector<double>& column = log.column("q_" + joint.name + "_rad");
+      double sum = 0.0;
+      for (double v : column) sum += v;
+      EXPECT_NEAR(held[joint.name].get<double>(), sum / static_cast<double>(column.size()), 1e-12) << joint.name;
+    }
+  }
+  // The fit's start: KDL's link inertia and gravity load at the posture the first log records
+  // (the elbow at its hold angle, every held joint at its mean, any other at the default).
+  Eigen::VectorXd q = model.defaultPosture();
+  for (const auto& [name, angle] : experiments[0]["held_joints_rad"].items()) q[model.jointIndex(name)] = angle;
+  const int elbow = model.jointIndex("R_EB");
+  q[elbow] = experiments[0]["hold_rad"].get<double>();
+  const arm::test::KdlJointAtRest kdl = arm::test::kdlJointAtRest(model, q, elbow);
+  const double start_load = result["start_gravity_load_nm"].get<double>();
+  EXPECT_NEAR(start_load, kdl.gravity_nm, 1e-9 * std::abs(kdl.gravity_nm));
+  EXPECT_NEAR(result["start_link_inertia_kgm2"].get<double>(), kdl.inertia_kgm2, 1e-9 * kdl.inertia_kgm2);
+
+  // Fitting the written logs again starts from the same posture and reaches the same parameters.
+  const test::CliResult refit =
+      test::runFullarm("identify --quiet --joint EB --log " + (dir_ / "id" / logs[0]).string() + " " +
+                       (dir_ / "id" / logs[1]).string() + " --out " + (dir_ / "refit").string());
+  ASSERT_EQ(refit.exit_code, code) << refit.output;
+  std::ifstream refit_summary(dir_ / "refit" / "summary.json");
+  const nlohmann::json again = nlohmann::json::parse(refit_summary)["results"]["identify"];
+  EXPECT_EQ(again["start_gravity_load_nm"].get<double>(), start_load);
+  for (const auto& [name, parameter] : result["parameters"].items()) {
+    EXPECT_EQ(again["parameters"][name]["value"].get<double>(), parameter["value"].get<double>()) << name;
+  }
 }
 
 // No node at the URL: a clear device error naming the URL (exit 2), before anything moves.

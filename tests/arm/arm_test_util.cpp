@@ -3,7 +3,10 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include <kdl/treeidsolver_recursive_newton_euler.hpp>
+
 #include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/arm/kdl_conversion.hpp"
 
 namespace fullarm::arm::test {
 
@@ -52,6 +55,29 @@ Eigen::VectorXi kdlJointIndices(const ArmModel& model, const KDL::Tree& tree) {
     index[i] = static_cast<int>(GetTreeElementQNr(it->second));
   }
   return index;
+}
+
+KdlJointAtRest kdlJointAtRest(const ArmModel& model, const Eigen::VectorXd& q, int joint) {
+  const KDL::Tree tree = toKdlTree(model);
+  const Eigen::VectorXi index = kdlJointIndices(model, tree);
+  const unsigned n = tree.getNrOfJoints();
+  KDL::JntArray q_kdl(n);
+  for (int i = 0; i < q.size(); ++i) q_kdl(static_cast<unsigned>(index[i])) = q[i];
+  const KDL::JntArray zero(n);
+  KDL::JntArray unit(n);
+  unit(static_cast<unsigned>(index[joint])) = 1.0;
+  const KDL::WrenchMap no_wrenches;
+  KDL::JntArray tau(n);
+  const KDL::Vector g(model.gravity_W_mps2.x(), model.gravity_W_mps2.y(), model.gravity_W_mps2.z());
+  KDL::TreeIdSolver_RNE with_gravity(tree, g);
+  if (with_gravity.CartToJnt(q_kdl, zero, zero, no_wrenches, tau) < 0) throw std::runtime_error("KDL gravity failed");
+  KdlJointAtRest r;
+  r.gravity_nm = tau(static_cast<unsigned>(index[joint]));
+  KDL::TreeIdSolver_RNE without_gravity(tree, KDL::Vector::Zero());
+  if (without_gravity.CartToJnt(q_kdl, zero, unit, no_wrenches, tau) < 0)
+    throw std::runtime_error("KDL inertia failed");
+  r.inertia_kgm2 = tau(static_cast<unsigned>(index[joint]));
+  return r;
 }
 
 }  // namespace fullarm::arm::test

@@ -84,6 +84,51 @@ TEST(ExperimentTest, LogsTheHoldLawPlusExcitationAlignedWithTheReadings) {
   EXPECT_NEAR(t.front(), 0.101, 1e-9);
 }
 
+TEST(ExperimentTest, LogsTheHeldJointsAnglesUnderTheirNamesAndReadsBackTheirMeans) {
+  IntegratorDevice device(3, 0.0);
+  const SampledSignal r = linearChirp(0.5, 1.0, 20.0, 0.5, kT);
+  ExperimentOptions options;
+  options.joint = 1;
+  options.settle_s = 0.05;
+  options.joint_names = {"SFE", "EB", "WR"};
+  const ExperimentResult result = runExperiment(device, r, options);
+  ASSERT_TRUE(result.completed) << result.stop_reason;
+  ASSERT_EQ(result.log.names.size(), kExperimentColumns.size() + 2);
+  EXPECT_EQ(result.log.names[kExperimentColumns.size()], "q_SFE_rad");
+  EXPECT_EQ(result.log.names[kExperimentColumns.size() + 1], "q_WR_rad");
+  EXPECT_FALSE(result.log.has("q_EB_rad"));  // the driven joint's angle is q_rad
+  // The held joints start at 0.2 rad and their holds keep them there (no excitation, no load):
+  // the integrator device moves a held joint only by its own hold command, which is zero at 0.2.
+  const std::vector<HeldAngle> held = heldAngles(result.log);
+  ASSERT_EQ(held.size(), 2u);
+  EXPECT_EQ(held[0].joint, "SFE");
+  EXPECT_EQ(held[1].joint, "WR");
+  for (const HeldAngle& h : held) EXPECT_NEAR(h.mean_rad, 0.2, 1e-12);
+
+  // heldAngles averages each column, whatever its values, and skips the driven joint's q_rad.
+  SignalTable table;
+  table.names = {"time_s", "q_rad", "q_SAA_rad", "tau_SAA_nm"};
+  table.columns = {{0.0, 0.001, 0.002}, {5.0, 5.0, 5.0}, {0.1, 0.2, 0.6}, {1.0, 2.0, 3.0}};
+  const std::vector<HeldAngle> means = heldAngles(table);
+  ASSERT_EQ(means.size(), 1u);
+  EXPECT_EQ(means[0].joint, "SAA");
+  EXPECT_DOUBLE_EQ(means[0].mean_rad, 0.3);
+  EXPECT_EQ(heldAngleColumn("SAA"), "q_SAA_rad");
+
+  // Names that are not one usable name per device joint are refused before the arm moves.
+  IntegratorDevice fresh(3, 0.0);
+  options.joint_names = {"SFE", "EB"};
+  EXPECT_THROW((void)runExperiment(fresh, r, options), std::invalid_argument);
+  options.joint_names = {"SFE", "EB", "SFE"};
+  EXPECT_THROW((void)runExperiment(fresh, r, options), std::invalid_argument);
+  options.joint_names = {"SFE", "E,B", "WR"};
+  EXPECT_THROW((void)runExperiment(fresh, r, options), std::invalid_argument);
+  options.joint_names = {"SFE", "", "WR"};
+  EXPECT_THROW((void)runExperiment(fresh, r, options), std::invalid_argument);
+  EXPECT_NE(fresh.state(), hil::IoState::kActive);
+  EXPECT_EQ(fresh.appliedCommand()[0], 0.0);
+}
+
 TEST(ExperimentTest, StopsSafelyBeforeTheLimitAndOnDeviceFaults) {
   IntegratorDevice device(2, 0.0);
   ExperimentOptions options;

@@ -13,8 +13,11 @@
 /// fault.
 ///
 /// The log has one row per control period of the excitation: `time_s` (the reading's device
-/// time, or the control time: ExperimentOptions::log_control_time), `excitation_v`, `command_v` (what the device put out after its clamp, held over the
-/// next period), `q_rad` and `tau_measured_nm` (the driven joint's reading).
+/// time, or the control time: ExperimentOptions::log_control_time), `excitation_v`, `command_v`
+/// (what the device put out after its clamp, held over the next period), `q_rad` and
+/// `tau_measured_nm` (the driven joint's reading), then, when the device's joints are named
+/// (ExperimentOptions::joint_names), `q_<joint>_rad` for every held joint: the posture the driven
+/// joint moved in, which sets its link inertia and gravity load (heldAngles reads it back).
 
 #include <functional>
 #include <string>
@@ -47,6 +50,9 @@ struct ExperimentOptions {
   /// clock (with the wake-up jitter of a real board, and on the fake DAQ the wall clock of a
   /// simulation that runs faster than real time), while the fit needs a uniform time step.
   bool log_control_time = false;
+  /// The device joints' names, in device order (empty: the held joints' angles are not logged).
+  /// Each held joint's angle is logged as `q_<name>_rad`.
+  std::vector<std::string> joint_names;
 };
 
 /// Outcome of one experiment.
@@ -57,11 +63,26 @@ struct ExperimentResult {
   std::string stop_reason;       ///< why it stopped early (empty when completed)
 };
 
+/// A held joint's angle over an experiment log.
+struct HeldAngle {
+  std::string joint;    ///< the name in its column `q_<joint>_rad`
+  double mean_rad = 0;  ///< its mean over the log's rows
+};
+
+/// The held joints' angles of an experiment log: every column named `q_<joint>_rad` (the driven
+/// joint's `q_rad` is not one), in column order, each averaged over the rows. Empty for a log
+/// without them (a joint run alone, or a log written before they were logged).
+[[nodiscard]] std::vector<HeldAngle> heldAngles(const SignalTable& log);
+
+/// The column of a held joint's angle: `q_<joint>_rad`.
+[[nodiscard]] std::string heldAngleColumn(const std::string& joint);
+
 /// Runs the experiment: configures the device if needed, activates it, holds for
 /// `options.settle_s`, plays `excitation` on the driven joint, then deactivates the device
 /// (safe outputs) whatever happened.
 /// @throws std::invalid_argument for a joint outside the device, an excitation whose period
-///   differs from the device's, limits that leave no room, or a start outside the margins
+///   differs from the device's, limits that leave no room, a start outside the margins, or
+///   joint names that are not one non-empty name per device joint
 [[nodiscard]] ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excitation,
                                              const ExperimentOptions& options);
 
