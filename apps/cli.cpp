@@ -312,6 +312,7 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
         if (cli.gravity->count(option) > 0) throw core::ConfigError("", option, "not used with --holds");
       }
     }
+    cli.gravity_options.progress = &progress;
     return runGravity(cli.gravity_options, out);
   }
   return kExitBadInput;

@@ -184,7 +184,7 @@ std::vector<Eigen::VectorXd> randomDevicePostures(const arm::ArmModel& model, co
 // Holds the postures on the device, writes the holds log `file`; returns why the holds stopped
 // early (empty when every posture was held from both sides).
 std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, const std::vector<std::string>& names,
-                      const std::filesystem::path& file, std::ostream& out) {
+                      const std::filesystem::path& file) {
   const hil::IoKind kind = commandIoKind(o.io);
   const arm::ArmModel simulated = o.sim_arm.empty() ? nominal : arm::loadArmModel(std::filesystem::path(o.sim_arm));
   const plant::PlantConfig plant_config =
@@ -213,12 +213,17 @@ std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, con
   const int count = o.postures.value_or(kDefaultDevicePostures);
   const auto postures =
       randomDevicePostures(nominal, io.joints(), count, kPostureInset_rad, static_cast<std::uint64_t>(o.seed));
-  out << "Holding " << count << " postures from both sides on " << o.io << "\n" << std::flush;
+  core::Progress none;
+  core::Progress& progress = o.progress != nullptr ? *o.progress : none;
+  progress.begin("gravity: " + std::to_string(count) + " postures held from both sides on " + o.io,
+                 2 * static_cast<std::size_t>(count));
+  // A step is one short line on stderr (or a redraw), between two holds while the arm moves on.
   options.on_hold = [&](const id::StaticHold& h) {
-    out << "  posture " << h.posture_index + 1 << " of " << count << (h.side > 0 ? ", from above" : ", from below")
-        << ": held\n";  // no flush inside the control loop: the pacing would see the wait
+    progress.step("posture " + std::to_string(h.posture_index + 1) + " of " + std::to_string(count) +
+                  (h.side > 0 ? ", from above" : ", from below"));
   };
   const id::StaticHoldRun run = id::runStaticHolds(io, postures, options);
+  progress.end(run.completed ? "every posture held from both sides" : "stopped early");
   const std::vector<id::StaticHold>& holds = run.holds;
   const std::string stop_reason = run.stop_reason;
   writeOutput(file, [&] { id::writeStaticHoldsCsv(file, holds, names); });
@@ -243,7 +248,7 @@ int runGravity(const GravityOptions& o, std::ostream& out) {
   if (!o.io.empty()) {
     createOutputFolder(dir);
     const std::filesystem::path holds_file = dir / "holds.csv";
-    const std::string stop_reason = takeHolds(o, nominal, names, holds_file, out);
+    const std::string stop_reason = takeHolds(o, nominal, names, holds_file);
     if (!stop_reason.empty()) {
       out << "The holds stopped early, outputs at their safe value (" << stop_reason << "); the holds taken are in "
           << holds_file.string() << ", nothing fitted\n";

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "cli_options.hpp"
+#include "fullarm/core/progress.hpp"
 
 namespace fullarm::app {
 
@@ -29,6 +30,8 @@ struct GravityOptions {
   /// it to random postures with no check for self-collision or its surroundings)
   bool confirm_arm_motion = false;
   std::string out_dir = "out/gravity";
+  /// Progress of the holds (a step per hold; null: none).
+  core::Progress* progress = nullptr;
 };
 
 /// Adds `gravity` to `app`.
@@ -37,7 +40,7 @@ CLI::App* addGravityCommand(CLI::App& app, GravityOptions& options, OptionTable&
 /// Fits, prints the residual per joint, writes `arm.yaml` (the arm file with the fitted masses
 /// and centres of mass) and `gravity.csv` (the per-joint table) into --out. With --io it first
 /// holds the postures on the device and writes their log, `holds.csv` (what --holds reads),
-/// printing a line per hold.
+/// reporting a progress step per hold.
 /// @return 0 when written; 1 when the holds on the device stopped early (a limit, a fault: the
 ///   holds taken are in holds.csv, nothing is fitted)
 /// @throws core::ConfigError for bad input (a malformed holds log names the line); OutputError

@@ -189,6 +189,12 @@ TEST(GravityCli, HoldsOnADevicePredictTheSimulatedArmsGravityAndTheirLogRefitsTh
       EXPECT_EQ(refit.joints[k].inertial.com_m, fitted.joints[k].inertial.com_m) << k;
     }
   }
+
+  // The holds report their progress on stderr, which --quiet silences; the results stay.
+  const Result quiet = runFullarm("gravity --io sim --postures 2 --quiet --out " + (dir / "quiet").string());
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find("posture 1 of 2"), std::string::npos) << quiet.output;
+  EXPECT_NE(quiet.output.find("Gravity fitted to 2 postures held from both sides"), std::string::npos) << quiet.output;
 }
 
 TEST(GravityCli, DeviceOptionsOutOfPlaceExitTwoNamingTheOption) {
