@@ -94,6 +94,18 @@ TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
     EXPECT_NE(html.str().find("on the simulated DTS (the joint alone"), std::string::npos);
     EXPECT_NE(html.str().find("Initial state of each fitted experiment"), std::string::npos);
     EXPECT_NE(html.str().find("every other joint at the arm"), std::string::npos);
+    // The initial-state table's row holds the summary's estimates, to the table's four digits.
+    const nlohmann::json& x0 = result["experiments"][0]["initial_state"];
+    const auto cell = [](double v) {
+      char text[64];
+      std::snprintf(text, sizeof text, "<td class=\"num\">%.4g</td>", v);
+      return std::string(text);
+    };
+    const std::string row = "<tr><td>experiment_fit.csv</td>" + cell(x0["speed_radps"].get<double>()) +
+                            cell(x0["speed_standard_error"].get<double>()) +
+                            cell(x0["torque_offset_nm"].get<double>()) +
+                            cell(x0["torque_offset_standard_error"].get<double>()) + "</tr>";
+    EXPECT_NE(html.str().find(row), std::string::npos) << row;
   }
 
   // The start's link inertia and gravity load are KDL's at the arm's default posture with the
