@@ -475,12 +475,17 @@ struct Coordinates {
 
 class Problem {
  public:
-  explicit Problem(const std::vector<ExperimentData>& experiments) : experiments_(experiments) {
+  /// Residuals from reading `first` of each experiment on: the first d readings of a simulation
+  /// with a delay of d samples are taken as logged (no residual), so every delay up to the
+  /// largest tried is judged over the same readings, and a longer delay does not win by leaving
+  /// readings out.
+  Problem(const std::vector<ExperimentData>& experiments, int first) : experiments_(experiments) {
     for (const auto& e : experiments_) {
       q_scale_.push_back(spread(e.q_rad));
       tau_scale_.push_back(spread(e.tau_nm));
       offset_.push_back(residual_count_);
-      residual_count_ += 2 * static_cast<Eigen::Index>(e.q_rad.size());
+      first_.push_back(std::min(static_cast<std::size_t>(std::max(0, first)), e.q_rad.size()));
+      residual_count_ += 2 * static_cast<Eigen::Index>(e.q_rad.size() - first_.back());
     }
   }
   [[nodiscard]] Eigen::Index residualCount() const noexcept { return residual_count_; }
@@ -497,7 +502,7 @@ class Problem {
     for (std::size_t e = 0; e < experiments_.size(); ++e) {
       const ExperimentData& x = experiments_[e];
       const Simulation s = simulateClosedLoop(pt.model, x, pt.initial[e]);
-      for (std::size_t k = 0; k < x.q_rad.size(); ++k) {
+      for (std::size_t k = first_[e]; k < x.q_rad.size(); ++k) {
         const double rq = (s.q_rad[k] - x.q_rad[k]) / q_scale_[e];
         const double rt = (s.tau_nm[k] - x.tau_nm[k]) / tau_scale_[e];
         r[at++] = s.ok && std::isfinite(rq) ? rq : kDivergedResidual;
@@ -518,7 +523,7 @@ class Problem {
                   Eigen::MatrixXd& jac) const {
     const ExperimentData& x = experiments_[e];
     Eigen::Index at = offset_[e];
-    for (std::size_t k = 0; k < x.q_rad.size(); ++k) {
+    for (std::size_t k = first_[e]; k < x.q_rad.size(); ++k) {
       const double rq = (s.q_rad[k].v - x.q_rad[k]) / q_scale_[e];
       const double rt = (s.tau_nm[k].v - x.tau_nm[k]) / tau_scale_[e];
       jac(at++, col) = s.ok && std::isfinite(rq) ? s.q_rad[k].d[j] * factor / q_scale_[e] : 0.0;
@@ -530,6 +535,7 @@ class Problem {
   const std::vector<ExperimentData>& experiments_;
   std::vector<double> q_scale_, tau_scale_;
   std::vector<Eigen::Index> offset_;
+  std::vector<std::size_t> first_;
   Eigen::Index residual_count_ = 0;
 };
 
@@ -1007,7 +1013,7 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
     }
   }
   const Coordinates c(options, experiments.size());
-  Problem problem(experiments);
+  Problem problem(experiments, options.max_delay_samples);
   auto say = [&](const std::string& line) {
     if (options.progress) options.progress(line);
   };
