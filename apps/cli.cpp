@@ -303,6 +303,8 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
   if (cli.replay->parsed()) return runReplay(cli.replay_options);
   if (cli.identify->parsed()) {
     cli.identify_options.progress = &progress;
+    cli.identify_options.command_line = "fullarm";
+    for (const std::string& arg : args) cli.identify_options.command_line.append(" ").append(arg);
     return runIdentify(cli.identify_options);
   }
   if (cli.gravity->parsed()) {

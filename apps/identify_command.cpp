@@ -23,6 +23,7 @@
 #include "fullarm/hil/simulated_arm.hpp"
 #include "fullarm/identification/excitation.hpp"
 #include "fullarm/identification/experiment.hpp"
+#include "fullarm/identification/experiment_lcm.hpp"
 #include "fullarm/identification/frf.hpp"
 #include "fullarm/identification/grey_box.hpp"
 #include "fullarm/identification/identification_config.hpp"
@@ -45,8 +46,13 @@ constexpr int kLatencySamples = 1;          // the simulated DTS's I/O latency
 constexpr std::size_t kMaxPlotPoints = 1000;
 constexpr const char* kIdentifiedFile = "identified.yaml";
 constexpr const char* kIdentifiedPlantFile = "identified_plant.yaml";
-constexpr const char* kFitLogFile = "experiment_fit.csv";
-constexpr const char* kValidationLogFile = "experiment_validation.csv";
+constexpr const char* kFitLog = "experiment_fit";
+constexpr const char* kValidationLog = "experiment_validation";
+
+// A written experiment log's file name: `base` with the format's extension.
+std::string logFileName(const char* base, const std::string& format) {
+  return std::string(base) + (format == "lcm" ? ".lcm" : ".csv");
+}
 
 // One experiment: its log, where it came from and how it ended.
 struct Experiment {
@@ -205,6 +211,8 @@ void checkOptionCombination(const IdentifyOptions& o) {
   const auto refuse = [](const char* option, const std::string& why) { throw core::ConfigError({}, option, why); };
   if (!o.logs.empty()) {
     if (!o.lcm_url.empty()) refuse("--lcm-url", "no experiment runs with --log");
+    if (o.log_format != "csv")
+      refuse("--log-format", "no experiment log is written with --log (it reads either format)");
     if (!o.daq_config.empty())
       refuse("--daq-config", "a channel map is read only when experiments run (not with --log)");
     if (!o.hil_config.empty())
@@ -623,15 +631,16 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
     const hil::IoKind kind = commandIoKind(o.io);
     const auto seed = static_cast<std::uint64_t>(o.seed.value_or(1));
     const Eigen::VectorXd posture = model.defaultPosture();
+    const std::string fit_log = logFileName(kFitLog, o.log_format);
+    const std::string validation_log = logFileName(kValidationLog, o.log_format);
     const id::SampledSignal fit_excitation = fitExcitation(o.amplitude_v, o.duration_s);
     const id::SampledSignal validation_excitation = validationExcitation(o.amplitude_v, o.duration_s);
     if (kind == hil::IoKind::kSim) {
       progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint));
-      r.fit_experiments.push_back(
-          runSimExperiment(model, plant_config, joint, posture, fit_excitation, seed, kFitLogFile));
+      r.fit_experiments.push_back(runSimExperiment(model, plant_config, joint, posture, fit_excitation, seed, fit_log));
       progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint));
       r.validation =
-          runSimExperiment(model, plant_config, joint, posture, validation_excitation, seed + 1, kValidationLogFile);
+          runSimExperiment(model, plant_config, joint, posture, validation_excitation, seed + 1, validation_log);
     } else {
       // One device for both experiments, as on the real arm: the second starts where the first
       // left. On the fake DAQ the simulated DTS locks the other joints, as --io sim does, and the
@@ -643,12 +652,23 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
                             kind == hil::IoKind::kFakeDaq ? jp.name : std::string(), o.lcm_url);
       const int device_joint = deviceJointIndex(device->backend->device(), model_joint, o.joint, o.io);
       progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint) + " through " + o.io);
-      r.fit_experiments.push_back(runDeviceExperiment(model, *device, device_joint, jp, fit_excitation, kFitLogFile));
+      r.fit_experiments.push_back(runDeviceExperiment(model, *device, device_joint, jp, fit_excitation, fit_log));
       progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint) + " through " + o.io);
-      r.validation = runDeviceExperiment(model, *device, device_joint, jp, validation_excitation, kValidationLogFile);
+      r.validation = runDeviceExperiment(model, *device, device_joint, jp, validation_excitation, validation_log);
     }
-    writeOutput(out / kFitLogFile, [&] { id::writeSignalCsv(out / kFitLogFile, r.fit_experiments[0].log); });
-    writeOutput(out / kValidationLogFile, [&] { id::writeSignalCsv(out / kValidationLogFile, r.validation.log); });
+    for (const Experiment* e : {&r.fit_experiments[0], &r.validation}) {
+      const std::filesystem::path file = out / e->name;
+      if (o.log_format == "lcm") {
+        id::ExperimentLogInfo info;
+        info.command_line = o.command_line;
+        info.source = o.io;
+        info.joint = r.joint;
+        info.sample_period_s = kSamplePeriod_s;
+        writeOutput(file, [&] { id::writeExperimentLcmLog(file, e->log, info); });
+      } else {
+        writeOutput(file, [&] { id::writeSignalCsv(file, e->log); });
+      }
+    }
   } else {
     r.source = "logs";
     if (o.logs.size() < 2) {
@@ -658,7 +678,18 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
     for (std::size_t k = 0; k < o.logs.size(); ++k) {
       Experiment e;
       e.name = o.logs[k];
-      e.log = id::readSignalCsv(o.logs[k], id::kExperimentColumns);  // CsvFormatError: bad input (exit 2)
+      if (id::isLcmLog(o.logs[k])) {
+        // hil::RunLogError for a malformed log: bad input (exit 2)
+        id::ExperimentLcmLog recorded = id::readExperimentLcmLog(o.logs[k]);
+        if (recorded.info.joint != r.joint) {
+          throw core::ConfigError(o.logs[k], "joint",
+                                  "the log's experiment drove " + recorded.info.joint + ", --joint names " + r.joint);
+        }
+        if (!recorded.warning.empty()) text << "warning: " << recorded.warning << "\n";
+        e.log = std::move(recorded.table);
+      } else {
+        e.log = id::readSignalCsv(o.logs[k], id::kExperimentColumns);  // CsvFormatError: bad input (exit 2)
+      }
       e.posture = postureOfLog(model, e.log, model_joint, o.logs[k]);
       e.data = dataFromLog(e.log, o.logs[k]);
       if (k + 1 < o.logs.size()) {
@@ -791,9 +822,15 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
   declare.file("--settings", o.settings, "Identification settings YAML (default: config/identification.yaml)");
   declare
       .files("--log", o.logs,
-             "Recorded experiment logs (CSV) to fit instead of running experiments: all but the last are "
-             "fitted, the last is held out")
+             "Recorded experiment logs (CSV or LCM, as identify writes them) to fit instead of running "
+             "experiments: all but the last are fitted, the last is held out")
       ->excludes(io);
+  declare
+      .choice("--log-format", o.log_format,
+              "Format of the experiment logs written: csv (a column per signal) or lcm (an LCM log, for "
+              "lcm-logplayer and lcm-spy); --log reads either",
+              {"csv", "lcm"})
+      ->capture_default_str();
   return cmd;
 }
 
@@ -813,8 +850,8 @@ int runIdentify(const IdentifyOptions& o) {
                            r.validation_result.angle.prediction_fit_percent, "%");
   report.addHeadlineNumber("wall_time_s", "Wall time", r.wall_s, "s");
   if (r.source != "logs") {
-    report.addFile(kFitLogFile);
-    report.addFile(kValidationLogFile);
+    report.addFile(r.fit_experiments.front().name);
+    report.addFile(r.validation.name);
   }
   report.addFile(kIdentifiedFile);
   if (r.plant_written) report.addFile(kIdentifiedPlantFile);
@@ -836,7 +873,7 @@ IdentifyDemoStep runIdentifyDemoStep(const std::filesystem::path& out_dir, repor
   createOutputFolder(out);
   std::ostringstream text;
   const Outcome r = identify(o, out, progress, text);
-  for (const char* f : {kFitLogFile, kValidationLogFile, kIdentifiedFile}) {
+  for (const std::string& f : {r.fit_experiments.front().name, r.validation.name, std::string(kIdentifiedFile)}) {
     report.addFile(std::filesystem::path("identify") / f);
   }
   if (r.plant_written) report.addFile(std::filesystem::path("identify") / kIdentifiedPlantFile);

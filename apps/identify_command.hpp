@@ -33,6 +33,8 @@ struct IdentifyOptions {
   int threads = 2;                ///< threads of the fit's simulations
   std::string start;              ///< identified.yaml whose model starts the fit (default: the plant's groups)
   std::vector<std::string> logs;  ///< recorded logs: all but the last fitted, the last held out
+  std::string log_format = "csv";  ///< --log-format: the experiment logs written, csv | lcm
+  std::string command_line;        ///< the command as typed (recorded in LCM logs)
   core::Progress* progress = nullptr;
 };
 

@@ -17,6 +17,7 @@
 #include "arm_test_util.hpp"
 #include "cli_runner.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/identification/experiment_lcm.hpp"
 #include "fullarm/identification/identified_model.hpp"
 #include "fullarm/identification/joint_groups.hpp"
 #include "fullarm/plant/plant_config.hpp"
@@ -164,6 +165,67 @@ TEST(IdentifyCli, SimRunWritesItsFilesAndLogRunRefitsTheSameParameters) {
                               (dir / "identified.yaml").string() + " --out " + restart.string());
   EXPECT_TRUE(s.exit_code == 0 || s.exit_code == 1) << s.output;
   EXPECT_EQ(readSummary(restart)["results"]["identify"]["start"], (dir / "identified.yaml").string());
+}
+
+// The logs written as LCM logs (--log-format lcm) fit again through --log to the same parameters
+// as the run itself; a log of another joint, and --log-format beside --log, are exit 2.
+TEST(IdentifyCli, LcmLogsAreWrittenAndRefitToTheSameParameters) {
+  const auto dir = tempDir("lcm_logs");
+  const Result r =
+      runFullarm("identify --io sim --joint EB --duration 1 --log-format lcm --quiet --out " + dir.string());
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+  const auto fit_log = dir / "experiment_fit.lcm";
+  const auto validation_log = dir / "experiment_validation.lcm";
+  ASSERT_TRUE(std::filesystem::exists(fit_log));
+  ASSERT_TRUE(std::filesystem::exists(validation_log));
+  EXPECT_FALSE(std::filesystem::exists(dir / "experiment_fit.csv"));
+  const nlohmann::json summary = readSummary(dir);
+  EXPECT_EQ(summary["results"]["identify"]["experiments"][0]["file"], "experiment_fit.lcm");
+  // The log says what wrote it.
+  const id::ExperimentLcmLog recorded = id::readExperimentLcmLog(fit_log);
+  EXPECT_EQ(recorded.info.joint, "R_EB");
+  EXPECT_EQ(recorded.info.source, "sim");
+  EXPECT_NE(recorded.info.command_line.find("--log-format lcm"), std::string::npos) << recorded.info.command_line;
+  EXPECT_EQ(recorded.table.rows(), 1000u);
+
+  const auto again = tempDir("lcm_refit");
+  const Result l = runFullarm("identify --quiet --joint EB --log " + fit_log.string() + " " + validation_log.string() +
+                              " --out " + again.string());
+  ASSERT_EQ(l.exit_code, r.exit_code) << l.output;
+  const id::IdentifiedModel first = id::loadIdentifiedModel(dir / "identified.yaml");
+  const id::IdentifiedModel refit = id::loadIdentifiedModel(again / "identified.yaml");
+  for (int i = 0; i < id::kGreyParams; ++i) {
+    EXPECT_EQ(refit.model.value[static_cast<std::size_t>(i)], first.model.value[static_cast<std::size_t>(i)])
+        << id::greyParamName(i);
+  }
+
+  const Result other = runFullarm("identify --quiet --joint SFE --log " + fit_log.string() + " " +
+                                  validation_log.string() + " --out " + again.string());
+  EXPECT_EQ(other.exit_code, 2) << other.output;
+  EXPECT_NE(other.output.find(fit_log.string()), std::string::npos) << other.output;
+  EXPECT_NE(other.output.find("drove R_EB"), std::string::npos) << other.output;
+  const Result format = runFullarm("identify --quiet --log-format lcm --log " + fit_log.string() + " " +
+                                   validation_log.string() + " --out " + again.string());
+  EXPECT_EQ(format.exit_code, 2) << format.output;
+  EXPECT_NE(format.output.find("--log-format"), std::string::npos) << format.output;
+  const Result bad_format = runFullarm("identify --quiet --log-format hdf5 --out " + again.string());
+  EXPECT_EQ(bad_format.exit_code, 2) << bad_format.output;
+  EXPECT_NE(bad_format.output.find("--log-format"), std::string::npos) << bad_format.output;
+
+  // A damaged LCM log: exit 2 naming the file and the byte offset.
+  const auto damaged = dir / "damaged.lcm";
+  std::filesystem::copy_file(fit_log, damaged);
+  {
+    std::fstream f(damaged, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(400);
+    const char junk[8] = {'\x7f', '\x7f', '\x7f', '\x7f', '\x7f', '\x7f', '\x7f', '\x7f'};
+    f.write(junk, sizeof junk);
+  }
+  const Result d = runFullarm("identify --quiet --joint EB --log " + damaged.string() + " " + validation_log.string() +
+                              " --out " + again.string());
+  EXPECT_EQ(d.exit_code, 2) << d.output;
+  EXPECT_NE(d.output.find(damaged.string()), std::string::npos) << d.output;
+  EXPECT_NE(d.output.find("byte offset"), std::string::npos) << d.output;
 }
 
 TEST(IdentifyCli, BadInputExitsTwoNamingTheOptionFileOrLine) {

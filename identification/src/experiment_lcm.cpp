@@ -1,0 +1,226 @@
+#include "fullarm/identification/experiment_lcm.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include "fullarm/hil/run_log.hpp"
+#include "fullarm/identification/experiment.hpp"
+#include "fullarm_lcm/ident_experiment_t.hpp"
+#include "fullarm_lcm/ident_sample_t.hpp"
+
+namespace fullarm::identification {
+namespace {
+
+constexpr int kMaxHeldJoints = 64;
+
+[[noreturn]] void fail(const std::filesystem::path& file, const std::string& what, std::int64_t offset = -1,
+                       const std::string& channel = {}) {
+  throw hil::RunLogError(
+      file.string() + ": " +
+          (offset >= 0 ? "the event at byte offset " + std::to_string(offset) + " (channel " + channel + "): "
+                       : std::string()) +
+          what,
+      offset, channel);
+}
+
+template <class Message>
+void writeMessage(lcm::LogFile& log, const std::filesystem::path& file, const char* channel, std::int64_t utime_us,
+                  const Message& message) {
+  const int size = message.getEncodedSize();
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
+  if (message.encode(bytes.data(), 0, size) != size) {
+    throw std::invalid_argument(std::string("experiment LCM log: a ") + Message::getTypeName() + " does not encode");
+  }
+  lcm::LogEvent event{};
+  event.timestamp = utime_us;
+  event.channel = channel;
+  event.datalen = size;
+  event.data = bytes.data();
+  if (log.writeEvent(&event) != 0) {
+    fail(file, std::string("writing an event on ") + channel + " failed (" + std::strerror(errno) + ")");
+  }
+}
+
+std::int64_t microseconds(double t_s) {
+  return static_cast<std::int64_t>(std::llround(t_s * 1e6));
+}
+
+}  // namespace
+
+bool isLcmLog(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) fail(file, "cannot be opened");
+  std::array<unsigned char, 4> magic{};
+  in.read(reinterpret_cast<char*>(magic.data()), static_cast<std::streamsize>(magic.size()));
+  return in.gcount() == 4 && magic == std::array<unsigned char, 4>{0xED, 0xA1, 0xDA, 0x01};
+}
+
+void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable& table, const ExperimentLogInfo& info) {
+  std::vector<const std::vector<double>*> columns;
+  for (const std::string& name : kExperimentColumns) {
+    if (!table.has(name)) throw std::invalid_argument("experiment LCM log: the table has no column " + name);
+    columns.push_back(&table.column(name));
+  }
+  const std::vector<HeldAngle> held = heldAngles(table);
+  if (table.names.size() != kExperimentColumns.size() + held.size() || table.columns.size() != table.names.size()) {
+    throw std::invalid_argument(
+        "experiment LCM log: columns other than the experiment's and the held joints' angles (q_<joint>_rad)");
+  }
+  if (held.size() > static_cast<std::size_t>(kMaxHeldJoints)) {
+    throw std::invalid_argument("experiment LCM log: " + std::to_string(held.size()) + " held joints (at most " +
+                                std::to_string(kMaxHeldJoints) + ")");
+  }
+  std::vector<const std::vector<double>*> held_columns;
+  for (const HeldAngle& h : held) held_columns.push_back(&table.column(heldAngleColumn(h.joint)));
+  const std::size_t rows = table.rows();
+  for (const auto& c : table.columns) {
+    if (c.size() != rows) throw std::invalid_argument("experiment LCM log: columns of unequal length");
+  }
+
+  std::unique_ptr<lcm::LogFile> log;
+  {
+    std::FILE* probe = std::fopen(file.c_str(), "wb");
+    if (probe == nullptr) fail(file, std::string("cannot be created (") + std::strerror(errno) + ")");
+    std::fclose(probe);
+    log = std::make_unique<lcm::LogFile>(file.string(), "w");
+    if (!log->good()) fail(file, "cannot be created");
+  }
+  const double t0 = rows > 0 ? (*columns[0])[0] : 0.0;
+  fullarm_lcm::ident_experiment_t header;
+  header.utime = microseconds(t0);
+  header.fullarm_version = FULLARM_VERSION;
+  header.command_line = info.command_line;
+  header.source = info.source;
+  header.joint = info.joint;
+  header.sample_period_s = info.sample_period_s;
+  header.num_held = static_cast<std::int8_t>(held.size());
+  for (const HeldAngle& h : held) header.held_joints.push_back(h.joint);
+  writeMessage(*log, file, channel::kIdentExperiment, header.utime, header);
+
+  fullarm_lcm::ident_sample_t sample;
+  sample.num_held = header.num_held;
+  sample.held_q_rad.resize(held.size());
+  for (std::size_t k = 0; k < rows; ++k) {
+    sample.t_s = (*columns[0])[k];
+    sample.utime = microseconds(sample.t_s);
+    sample.seq = static_cast<std::int64_t>(k);
+    sample.excitation_v = (*columns[1])[k];
+    sample.command_v = (*columns[2])[k];
+    sample.q_rad = (*columns[3])[k];
+    sample.tau_measured_nm = (*columns[4])[k];
+    for (std::size_t j = 0; j < held.size(); ++j) sample.held_q_rad[j] = (*held_columns[j])[k];
+    writeMessage(*log, file, channel::kIdentSample, sample.utime, sample);
+  }
+  if (std::fflush(log->getFilePtr()) != 0) fail(file, std::string("flush failed (") + std::strerror(errno) + ")");
+}
+
+ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
+  hil::LcmLogReader reader(file);
+  ExperimentLcmLog out;
+  bool have_header = false;
+  fullarm_lcm::ident_experiment_t header;
+  std::int64_t next_seq = 0;
+  hil::LcmLogEvent event;
+  while (reader.next(event)) {
+    if (event.channel == channel::kIdentExperiment) {
+      if (have_header)
+        fail(file, "a second experiment description: one experiment per log", event.offset, event.channel);
+      header = hil::decodeEvent<fullarm_lcm::ident_experiment_t>(event, file);
+      have_header = true;
+      if (header.num_held < 0 || header.num_held > kMaxHeldJoints) {
+        fail(file, "num_held " + std::to_string(header.num_held) + ": expected 0 to " + std::to_string(kMaxHeldJoints),
+             event.offset, event.channel);
+      }
+      if (!(std::isfinite(header.sample_period_s) && header.sample_period_s > 0.0)) {
+        fail(file, "sample_period_s " + std::to_string(header.sample_period_s) + ": expected a positive period",
+             event.offset, event.channel);
+      }
+      if (header.joint.empty())
+        fail(file, "joint is empty: expected the driven joint's name", event.offset, event.channel);
+      out.table.names = kExperimentColumns;
+      for (const std::string& name : header.held_joints) {
+        if (name.empty() || name.find_first_of(", \t\r\n\"") != std::string::npos) {
+          fail(file, "held joint '" + name + "': expected a joint name", event.offset, event.channel);
+        }
+        const std::string column = heldAngleColumn(name);
+        for (const std::string& existing : out.table.names) {
+          if (existing == column) fail(file, "held joint '" + name + "' named twice", event.offset, event.channel);
+        }
+        out.table.names.push_back(column);
+      }
+      out.table.columns.assign(out.table.names.size(), {});
+      out.info.command_line = header.command_line;
+      out.info.source = header.source;
+      out.info.joint = header.joint;
+      out.info.sample_period_s = header.sample_period_s;
+      out.info.fullarm_version = header.fullarm_version;
+      continue;
+    }
+    if (event.channel != channel::kIdentSample) {
+      ++out.skipped;
+      continue;
+    }
+    if (!have_header) {
+      fail(file,
+           std::string("a sample before the experiment description: expected ") + channel::kIdentExperiment + " first",
+           event.offset, event.channel);
+    }
+    const auto s = hil::decodeEvent<fullarm_lcm::ident_sample_t>(event, file);
+    if (s.seq != next_seq) {
+      fail(file,
+           "sample seq " + std::to_string(s.seq) + " where " + std::to_string(next_seq) +
+               " was expected: " + (s.seq > next_seq ? "samples are missing" : "a sample is repeated or out of order"),
+           event.offset, event.channel);
+    }
+    if (s.num_held != header.num_held) {
+      fail(file,
+           "sample " + std::to_string(s.seq) + " carries " + std::to_string(s.num_held) +
+               " held angles, the description " + std::to_string(header.num_held),
+           event.offset, event.channel);
+    }
+    auto& c = out.table.columns;
+    const double values[] = {s.t_s, s.excitation_v, s.command_v, s.q_rad, s.tau_measured_nm};
+    for (std::size_t i = 0; i < 5; ++i) {
+      if (!std::isfinite(values[i])) {
+        fail(file,
+             "sample " + std::to_string(s.seq) + ": " + kExperimentColumns[i] + " is " + std::to_string(values[i]) +
+                 ": expected a finite number",
+             event.offset, event.channel);
+      }
+    }
+    for (std::size_t j = 0; j < s.held_q_rad.size(); ++j) {
+      if (!std::isfinite(s.held_q_rad[j])) {
+        fail(file,
+             "sample " + std::to_string(s.seq) + ": held joint " + header.held_joints[j] + "'s angle is " +
+                 std::to_string(s.held_q_rad[j]) + ": expected a finite number",
+             event.offset, event.channel);
+      }
+    }
+    if (!c[0].empty() && !(s.t_s > c[0].back())) {
+      fail(file,
+           "sample " + std::to_string(s.seq) + ": time " + std::to_string(s.t_s) + " s does not follow " +
+               std::to_string(c[0].back()) + " s: expected time to increase",
+           event.offset, event.channel);
+    }
+    for (std::size_t i = 0; i < 5; ++i) c[i].push_back(values[i]);
+    for (std::size_t j = 0; j < s.held_q_rad.size(); ++j) c[5 + j].push_back(s.held_q_rad[j]);
+    ++next_seq;
+  }
+  if (!have_header) {
+    fail(file, std::string("no ") + channel::kIdentExperiment + " event: not an identification experiment log");
+  }
+  if (next_seq == 0) fail(file, std::string("no ") + channel::kIdentSample + " event: the experiment has no samples");
+  out.warning = reader.warning();
+  return out;
+}
+
+}  // namespace fullarm::identification

@@ -1,0 +1,329 @@
+// Experiment logs as LCM logs: a table written and read back is the same table to the bit; the
+// reader refuses, naming the file and the byte offset, every way the log can be wrong (no
+// description, a sample before it, a second one, a lost or repeated sample, a held count that
+// differs, a non-finite value, time that does not increase, a payload that does not decode),
+// drops a truncated last event with a warning, skips other channels; a fuzzed log is read or
+// refused with a RunLogError, never anything else.
+
+#include "fullarm/identification/experiment_lcm.hpp"
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "fullarm/hil/run_log.hpp"
+#include "fullarm/identification/experiment.hpp"
+#include "fullarm_lcm/heartbeat_t.hpp"
+#include "fullarm_lcm/ident_experiment_t.hpp"
+#include "fullarm_lcm/ident_sample_t.hpp"
+
+namespace fullarm::identification {
+namespace {
+
+std::filesystem::path tempFile(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "fullarm_experiment_lcm_test";
+  std::filesystem::create_directories(dir);
+  return dir / name;
+}
+
+SignalTable table(std::size_t rows) {
+  SignalTable t;
+  t.names = kExperimentColumns;
+  t.names.push_back("q_R_SFE_rad");
+  t.names.push_back("q_R_WR_rad");
+  t.columns.assign(t.names.size(), {});
+  for (std::size_t k = 0; k < rows; ++k) {
+    const double x = static_cast<double>(k);
+    t.columns[0].push_back(1.001 + 1e-3 * x);  // the device time of the first excitation sample
+    t.columns[1].push_back(0.5 * std::sin(0.37 * x));
+    t.columns[2].push_back(0.1 / 3.0 + 0.5 * std::sin(0.37 * x));
+    t.columns[3].push_back(1.2 + 1e-4 * std::cos(0.11 * x));
+    t.columns[4].push_back(10.0 + std::sin(0.05 * x) / 7.0);
+    t.columns[5].push_back(-0.3 + 1e-6 * x);
+    t.columns[6].push_back(0.7 - 1e-6 * x);
+  }
+  return t;
+}
+
+ExperimentLogInfo info() {
+  ExperimentLogInfo i;
+  i.command_line = "fullarm identify --io lcm --log-format lcm";
+  i.source = "lcm";
+  i.joint = "R_EB";
+  i.sample_period_s = 1e-3;
+  return i;
+}
+
+/// A hand-made log: each event as given, for the ways a log can be wrong.
+class LogBuilder {
+ public:
+  explicit LogBuilder(const std::filesystem::path& file) : log_(file.string(), "w") {}
+  template <class Message>
+  void add(const char* channel, const Message& m) {
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+    m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    addRaw(channel, bytes);
+  }
+  void addRaw(const char* channel, std::vector<std::uint8_t> bytes) {
+    lcm::LogEvent e{};
+    e.timestamp = 0;
+    e.channel = channel;
+    e.datalen = static_cast<std::int32_t>(bytes.size());
+    e.data = bytes.data();
+    ASSERT_EQ(log_.writeEvent(&e), 0);
+  }
+
+ private:
+  lcm::LogFile log_;
+};
+
+fullarm_lcm::ident_experiment_t header(int held) {
+  fullarm_lcm::ident_experiment_t h;
+  h.utime = 0;
+  h.joint = "R_EB";
+  h.source = "sim";
+  h.sample_period_s = 1e-3;
+  h.num_held = static_cast<std::int8_t>(held);
+  for (int k = 0; k < held; ++k) {
+    std::string name = "J";
+    name += std::to_string(k);
+    h.held_joints.push_back(name);
+  }
+  return h;
+}
+
+fullarm_lcm::ident_sample_t sample(std::int64_t seq, int held) {
+  fullarm_lcm::ident_sample_t s;
+  s.utime = seq * 1000;
+  s.seq = seq;
+  s.t_s = 1e-3 * static_cast<double>(seq);
+  s.excitation_v = 0.1;
+  s.command_v = 0.2;
+  s.q_rad = 1.0;
+  s.tau_measured_nm = 5.0;
+  s.num_held = static_cast<std::int8_t>(held);
+  s.held_q_rad.assign(static_cast<std::size_t>(held), 0.5);
+  return s;
+}
+
+void expectRefused(const std::filesystem::path& file, const std::string& says, bool names_offset = true) {
+  try {
+    (void)readExperimentLcmLog(file);
+    ADD_FAILURE() << "accepted; expected: " << says;
+  } catch (const hil::RunLogError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(file.string()), std::string::npos) << what;
+    EXPECT_NE(what.find(says), std::string::npos) << what;
+    if (names_offset) {
+      EXPECT_NE(what.find("byte offset"), std::string::npos) << what;
+    }
+  }
+}
+
+TEST(ExperimentLcmLogTest, ATableWrittenAndReadBackIsTheSameToTheBit) {
+  const auto file = tempFile("round_trip.lcm");
+  const SignalTable written = table(500);
+  writeExperimentLcmLog(file, written, info());
+  EXPECT_TRUE(isLcmLog(file));
+  const ExperimentLcmLog read = readExperimentLcmLog(file);
+  EXPECT_EQ(read.table.names, written.names);
+  ASSERT_EQ(read.table.columns.size(), written.columns.size());
+  for (std::size_t c = 0; c < written.columns.size(); ++c) EXPECT_EQ(read.table.columns[c], written.columns[c]) << c;
+  EXPECT_EQ(read.info.joint, "R_EB");
+  EXPECT_EQ(read.info.source, "lcm");
+  EXPECT_EQ(read.info.command_line, info().command_line);
+  EXPECT_EQ(read.info.sample_period_s, 1e-3);
+  EXPECT_FALSE(read.info.fullarm_version.empty());
+  EXPECT_TRUE(read.warning.empty());
+  EXPECT_EQ(read.skipped, 0);
+  // The held joints' means are those of the CSV log's columns.
+  const std::vector<HeldAngle> held = heldAngles(read.table);
+  ASSERT_EQ(held.size(), 2u);
+  EXPECT_EQ(held[0].joint, "R_SFE");
+  EXPECT_EQ(held[1].joint, "R_WR");
+
+  // A CSV log is not an LCM log.
+  const auto csv = tempFile("log.csv");
+  writeSignalCsv(csv, written);
+  EXPECT_FALSE(isLcmLog(csv));
+  // And the writer refuses tables that are not experiment logs.
+  SignalTable other = written;
+  other.names[5] = "pressure_pa";
+  EXPECT_THROW(writeExperimentLcmLog(tempFile("bad.lcm"), other, info()), std::invalid_argument);
+  SignalTable missing = written;
+  missing.names[2] = "command_mv";
+  EXPECT_THROW(writeExperimentLcmLog(tempFile("bad.lcm"), missing, info()), std::invalid_argument);
+}
+
+TEST(ExperimentLcmLogTest, OtherChannelsAreSkippedAndATruncatedLastEventIsDroppedWithAWarning) {
+  const auto file = tempFile("mixed.lcm");
+  {
+    LogBuilder b(file);
+    fullarm_lcm::heartbeat_t beat{};
+    b.add("FULLARM_HEARTBEAT", beat);
+    b.add(channel::kIdentExperiment, header(1));
+    for (int k = 0; k < 5; ++k) {
+      b.add(channel::kIdentSample, sample(k, 1));
+      b.add("FULLARM_HEARTBEAT", beat);
+    }
+  }
+  const ExperimentLcmLog read = readExperimentLcmLog(file);
+  EXPECT_EQ(read.table.rows(), 5u);
+  EXPECT_EQ(read.skipped, 6);
+  EXPECT_EQ(read.table.names.back(), "q_J0_rad");
+
+  // Cut into the last sample: four rows and a warning naming the file.
+  const auto cut = tempFile("cut.lcm");
+  {
+    LogBuilder b(cut);
+    b.add(channel::kIdentExperiment, header(1));
+    for (int k = 0; k < 5; ++k) b.add(channel::kIdentSample, sample(k, 1));
+  }
+  std::filesystem::resize_file(cut, std::filesystem::file_size(cut) - 7);
+  const ExperimentLcmLog truncated = readExperimentLcmLog(cut);
+  EXPECT_EQ(truncated.table.rows(), 4u);
+  EXPECT_NE(truncated.warning.find(cut.string()), std::string::npos) << truncated.warning;
+  EXPECT_NE(truncated.warning.find("truncated"), std::string::npos) << truncated.warning;
+}
+
+TEST(ExperimentLcmLogTest, EveryWayALogCanBeWrongIsRefusedNamingTheFileAndTheOffset) {
+  const auto write = [](const std::string& name, const std::function<void(LogBuilder&)>& events) {
+    const auto file = tempFile(name);
+    {
+      LogBuilder b(file);
+      events(b);
+    }
+    return file;
+  };
+  {
+    const auto empty = tempFile("empty.lcm");
+    std::ofstream(empty).close();
+    expectRefused(empty, "not an identification experiment log", false);
+  }
+  expectRefused(write("no_header.lcm", [](LogBuilder& b) { b.add(channel::kIdentSample, sample(0, 0)); }),
+                "a sample before the experiment description");
+  expectRefused(write("no_samples.lcm", [](LogBuilder& b) { b.add(channel::kIdentExperiment, header(0)); }),
+                "has no samples", false);
+  expectRefused(write("two_headers.lcm",
+                      [](LogBuilder& b) {
+                        b.add(channel::kIdentExperiment, header(0));
+                        b.add(channel::kIdentSample, sample(0, 0));
+                        b.add(channel::kIdentExperiment, header(0));
+                      }),
+                "a second experiment description");
+  expectRefused(write("gap.lcm",
+                      [](LogBuilder& b) {
+                        b.add(channel::kIdentExperiment, header(0));
+                        b.add(channel::kIdentSample, sample(0, 0));
+                        b.add(channel::kIdentSample, sample(2, 0));
+                      }),
+                "samples are missing");
+  expectRefused(write("repeat.lcm",
+                      [](LogBuilder& b) {
+                        b.add(channel::kIdentExperiment, header(0));
+                        b.add(channel::kIdentSample, sample(0, 0));
+                        b.add(channel::kIdentSample, sample(0, 0));
+                      }),
+                "repeated or out of order");
+  expectRefused(write("held_count.lcm",
+                      [](LogBuilder& b) {
+                        b.add(channel::kIdentExperiment, header(2));
+                        b.add(channel::kIdentSample, sample(0, 1));
+                      }),
+                "carries 1 held angles, the description 2");
+  expectRefused(write("nan.lcm",
+                      [](LogBuilder& b) {
+                        b.add(channel::kIdentExperiment, header(0));
+                        auto s = sample(0, 0);
+                        s.tau_measured_nm = std::numeric_limits<double>::quiet_NaN();
+                        b.add(channel::kIdentSample, s);
+                      }),
+                "tau_measured_nm is nan");
+  expectRefused(write("held_inf.lcm",
+                      [](LogBuilder& b) {
+                        b.add(channel::kIdentExperiment, header(1));
+                        auto s = sample(0, 1);
+                        s.held_q_rad[0] = std::numeric_limits<double>::infinity();
+                        b.add(channel::kIdentSample, s);
+                      }),
+                "held joint J0's angle is inf");
+  expectRefused(write("time.lcm",
+                      [](LogBuilder& b) {
+                        b.add(channel::kIdentExperiment, header(0));
+                        b.add(channel::kIdentSample, sample(0, 0));
+                        auto s = sample(1, 0);
+                        s.t_s = 0.0;
+                        b.add(channel::kIdentSample, s);
+                      }),
+                "expected time to increase");
+  expectRefused(write("period.lcm",
+                      [](LogBuilder& b) {
+                        auto h = header(0);
+                        h.sample_period_s = -1e-3;
+                        b.add(channel::kIdentExperiment, h);
+                      }),
+                "expected a positive period");
+  expectRefused(write("duplicate_held.lcm",
+                      [](LogBuilder& b) {
+                        auto h = header(2);
+                        h.held_joints[1] = h.held_joints[0];
+                        b.add(channel::kIdentExperiment, h);
+                      }),
+                "named twice");
+  expectRefused(write("short_payload.lcm",
+                      [](LogBuilder& b) {
+                        b.add(channel::kIdentExperiment, header(0));
+                        std::vector<std::uint8_t> bytes(static_cast<std::size_t>(sample(0, 0).getEncodedSize()));
+                        sample(0, 0).encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+                        bytes.resize(bytes.size() - 3);
+                        b.addRaw(channel::kIdentSample, bytes);
+                      }),
+                "does not decode as ident_sample_t");
+  // A CSV file handed to the LCM reader.
+  const auto csv = tempFile("not_lcm.csv");
+  writeSignalCsv(csv, table(10));
+  EXPECT_THROW((void)readExperimentLcmLog(csv), hil::RunLogError);
+}
+
+TEST(ExperimentLcmLogTest, FuzzedLogsAreReadOrRefusedWithARunLogError) {
+  const auto good = tempFile("fuzz_source.lcm");
+  writeExperimentLcmLog(good, table(40), info());
+  std::vector<char> bytes(std::filesystem::file_size(good));
+  std::ifstream(good, std::ios::binary).read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  std::mt19937 rng(11);
+  int read = 0, refused = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<char> mutated = bytes;
+    std::uniform_int_distribution<std::size_t> at(0, mutated.size() - 1);
+    const int flips = 1 + trial % 4;
+    for (int f = 0; f < flips; ++f) mutated[at(rng)] = static_cast<char>(rng());
+    if (trial % 5 == 0) mutated.resize(at(rng));
+    const auto file = tempFile("fuzz.lcm");
+    std::ofstream(file, std::ios::binary | std::ios::trunc)
+        .write(mutated.data(), static_cast<std::streamsize>(mutated.size()));
+    try {
+      const ExperimentLcmLog log = readExperimentLcmLog(file);
+      // Whatever was read is a well-formed table: every column as long as the time, all finite.
+      for (const auto& column : log.table.columns) {
+        ASSERT_EQ(column.size(), log.table.rows());
+        for (double v : column) ASSERT_TRUE(std::isfinite(v));
+      }
+      ++read;
+    } catch (const hil::RunLogError& e) {
+      EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+      ++refused;
+    }
+  }
+  std::printf("fuzzed logs: %d read, %d refused\n", read, refused);
+  EXPECT_GT(refused, 0);
+}
+
+}  // namespace
+}  // namespace fullarm::identification
