@@ -264,6 +264,13 @@ struct CommandLine {
   }
 };
 
+// The command as typed, for the logs that record it.
+std::string commandLine(const std::vector<std::string>& args) {
+  std::string line = "fullarm";
+  for (const std::string& arg : args) line.append(" ").append(arg);
+  return line;
+}
+
 int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progress& progress, std::ostream& out) {
   if (cli.show->parsed()) return runArmShow(cli.arm_options, cli.q_text, cli.show_out, out);
   if (cli.demo->parsed()) {
@@ -296,15 +303,13 @@ int dispatch(CommandLine& cli, const std::vector<std::string>& args, core::Progr
     return cli.access_options.population ? runAccessPopulation(cli.access_options) : runAccess(cli.access_options);
   }
   if (cli.run->parsed() || cli.local->parsed()) {
-    std::string command_line = "fullarm";
-    for (const std::string& arg : args) command_line.append(" ").append(arg);
+    const std::string command_line = commandLine(args);
     return cli.run->parsed() ? runRun(cli.run_options, command_line) : runLocal(cli.local_options, command_line);
   }
   if (cli.replay->parsed()) return runReplay(cli.replay_options);
   if (cli.identify->parsed()) {
     cli.identify_options.progress = &progress;
-    cli.identify_options.command_line = "fullarm";
-    for (const std::string& arg : args) cli.identify_options.command_line.append(" ").append(arg);
+    cli.identify_options.command_line = commandLine(args);
     return runIdentify(cli.identify_options);
   }
   if (cli.gravity->parsed()) {

@@ -1,8 +1,13 @@
 #include "gravity_command.hpp"
 
+#include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+#include <thread>
+#include <utility>
+#include <vector>
 
 #include "cli_values.hpp"
 #include "command_device.hpp"
@@ -213,16 +218,46 @@ std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, con
   const int count = o.postures.value_or(kDefaultDevicePostures);
   const auto postures =
       randomDevicePostures(nominal, io.joints(), count, kPostureInset_rad, static_cast<std::uint64_t>(o.seed));
-  core::Progress none;
-  core::Progress& progress = o.progress != nullptr ? *o.progress : none;
+  core::Progress& progress = core::progressOrQuiet(o.progress);
   progress.begin("gravity: " + std::to_string(count) + " postures held from both sides on " + o.io,
                  2 * static_cast<std::size_t>(count));
-  // A step is one short line on stderr (or a redraw), between two holds while the arm moves on.
+  // The holds run paced by the device, where a write to a blocked terminal would make a read
+  // late: the control loop only records each hold, and a reporter thread shows them.
+  std::vector<std::pair<int, int>> taken(2 * static_cast<std::size_t>(count));  // (posture, side)
+  std::atomic<std::size_t> published{0};
+  std::atomic<bool> finished{false};
   options.on_hold = [&](const id::StaticHold& h) {
-    progress.step("posture " + std::to_string(h.posture_index + 1) + " of " + std::to_string(count) +
-                  (h.side > 0 ? ", from above" : ", from below"));
+    const std::size_t k = published.load(std::memory_order_relaxed);
+    if (k >= taken.size()) return;
+    taken[k] = {h.posture_index, h.side};
+    published.store(k + 1, std::memory_order_release);
   };
-  const id::StaticHoldRun run = id::runStaticHolds(io, postures, options);
+  std::thread reporter([&] {
+    std::size_t shown = 0;
+    for (;;) {
+      const bool last = finished.load(std::memory_order_acquire);
+      const std::size_t n = published.load(std::memory_order_acquire);
+      for (; shown < n; ++shown) {
+        progress.step("posture " + std::to_string(taken[shown].first + 1) + " of " + std::to_string(count) +
+                      (taken[shown].second > 0 ? ", from above" : ", from below"));
+      }
+      if (last) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
+  struct JoinReporter {
+    std::atomic<bool>& finished;
+    std::thread& thread;
+    ~JoinReporter() {
+      finished.store(true, std::memory_order_release);
+      thread.join();
+    }
+  };
+  id::StaticHoldRun run;
+  {
+    const JoinReporter join{finished, reporter};
+    run = id::runStaticHolds(io, postures, options);
+  }
   progress.end(run.completed ? "every posture held from both sides" : "stopped early");
   const std::vector<id::StaticHold>& holds = run.holds;
   const std::string stop_reason = run.stop_reason;

@@ -44,6 +44,7 @@ constexpr double kSamplePeriod_s = 1.0e-3;  // the loop's 1 kHz
 constexpr double kBandHz = 30.0;            // excitation band (PRBS flat band, multisine top)
 constexpr int kLatencySamples = 1;          // the simulated DTS's I/O latency
 constexpr std::size_t kMaxPlotPoints = 1000;
+constexpr std::size_t kMinLogSamples = 64;  // the shortest experiment fitted or validated
 constexpr const char* kIdentifiedFile = "identified.yaml";
 constexpr const char* kIdentifiedPlantFile = "identified_plant.yaml";
 constexpr const char* kFitLog = "experiment_fit";
@@ -62,7 +63,7 @@ struct Experiment {
   bool completed = true;
   std::string stop_reason;
   // The arm's posture during the experiment (model order): the default posture with every held
-  // joint the log names (its `q_<joint>_rad` column) at its mean angle.
+  // joint the log names (its `held_<joint>_rad` column) at its mean angle.
   Eigen::VectorXd posture;
 };
 
@@ -142,7 +143,7 @@ Experiment experimentOf(const id::ExperimentResult& r, const std::string& name) 
   e.log = r.log;
   e.completed = r.completed;
   e.stop_reason = r.stop_reason;
-  if (e.log.rows() < 64) {
+  if (e.log.rows() < kMinLogSamples) {
     throw core::ConfigError({}, "--joint",
                             "the experiment stopped after " + std::to_string(e.log.rows()) + " samples (" +
                                 r.stop_reason + "): expected a joint that can move about its start");
@@ -211,8 +212,7 @@ void checkOptionCombination(const IdentifyOptions& o) {
   const auto refuse = [](const char* option, const std::string& why) { throw core::ConfigError({}, option, why); };
   if (!o.logs.empty()) {
     if (!o.lcm_url.empty()) refuse("--lcm-url", "no experiment runs with --log");
-    if (o.log_format != "csv")
-      refuse("--log-format", "no experiment log is written with --log (it reads either format)");
+    if (o.log_format_given) refuse("--log-format", "no experiment log is written with --log (it reads either format)");
     if (!o.daq_config.empty())
       refuse("--daq-config", "a channel map is read only when experiments run (not with --log)");
     if (!o.hil_config.empty())
@@ -686,11 +686,19 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
                                   "the log's experiment drove " + recorded.info.joint + ", --joint names " + r.joint);
         }
         if (!recorded.warning.empty()) text << "warning: " << recorded.warning << "\n";
+        if (recorded.skipped > 0) {
+          text << o.logs[k] << ": " << recorded.skipped << " events on other channels skipped\n";
+        }
         e.log = std::move(recorded.table);
       } else {
         e.log = id::readSignalCsv(o.logs[k], id::kExperimentColumns);  // CsvFormatError: bad input (exit 2)
       }
       e.posture = postureOfLog(model, e.log, model_joint, o.logs[k]);
+      if (e.log.rows() < kMinLogSamples) {
+        throw core::ConfigError(o.logs[k], "",
+                                std::to_string(e.log.rows()) + " samples: expected at least " +
+                                    std::to_string(kMinLogSamples) + " to fit or validate");
+      }
       e.data = dataFromLog(e.log, o.logs[k]);
       if (k + 1 < o.logs.size()) {
         r.fit_experiments.push_back(std::move(e));
@@ -830,7 +838,7 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
               "Format of the experiment logs written: csv (a column per signal) or lcm (an LCM log, for "
               "lcm-logplayer and lcm-spy); --log reads either",
               {"csv", "lcm"})
-      ->capture_default_str();
+      ->each([&o](const std::string&) { o.log_format_given = true; });
   return cmd;
 }
 

@@ -34,6 +34,7 @@ struct IdentifyOptions {
   std::string start;              ///< identified.yaml whose model starts the fit (default: the plant's groups)
   std::vector<std::string> logs;  ///< recorded logs: all but the last fitted, the last held out
   std::string log_format = "csv";  ///< --log-format: the experiment logs written, csv | lcm
+  bool log_format_given = false;   ///< --log-format was on the command line
   std::string command_line;        ///< the command as typed (recorded in LCM logs)
   core::Progress* progress = nullptr;
 };

@@ -1,6 +1,7 @@
 #include "fullarm/identification/experiment.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string_view>
 
@@ -9,24 +10,28 @@
 namespace fullarm::identification {
 
 std::string heldAngleColumn(const std::string& joint) {
-  return "q_" + joint + "_rad";
+  return "held_" + joint + "_rad";
+}
+
+bool isLoggableJointName(const std::string& name) noexcept {
+  return !name.empty() && name.find_first_of(", \t\r\n\"") == std::string::npos;
 }
 
 std::vector<HeldAngle> heldAngles(const SignalTable& log) {
   std::vector<HeldAngle> held;
-  for (std::size_t c = 0; c < log.names.size(); ++c) {
+  constexpr std::string_view kPrefix = "held_";
+  constexpr std::string_view kSuffix = "_rad";
+  for (std::size_t c = 0; c < log.names.size() && c < log.columns.size(); ++c) {
     const std::string& name = log.names[c];
-    constexpr std::string_view kPrefix = "q_";
-    constexpr std::string_view kSuffix = "_rad";
     if (name.size() <= kPrefix.size() + kSuffix.size() || !name.starts_with(kPrefix) || !name.ends_with(kSuffix)) {
       continue;
     }
     const std::vector<double>& column = log.columns[c];
-    if (column.empty()) continue;
     double sum = 0.0;
     for (double v : column) sum += v;
-    held.push_back({name.substr(kPrefix.size(), name.size() - kPrefix.size() - kSuffix.size()),
-                    sum / static_cast<double>(column.size())});
+    held.push_back(
+        {name.substr(kPrefix.size(), name.size() - kPrefix.size() - kSuffix.size()),
+         column.empty() ? std::numeric_limits<double>::quiet_NaN() : sum / static_cast<double>(column.size())});
   }
   return held;
 }
@@ -60,7 +65,7 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
     }
     for (std::size_t k = 0; k < options.joint_names.size(); ++k) {
       const std::string& name = options.joint_names[k];
-      if (name.empty() || name.find_first_of(", \t\r\n\"") != std::string::npos) {
+      if (!isLoggableJointName(name)) {
         throw std::invalid_argument("experiment: joint name '" + name + "' cannot name a log column");
       }
       for (std::size_t other = 0; other < k; ++other) {

@@ -21,6 +21,8 @@ namespace fullarm::identification {
 namespace {
 
 constexpr int kMaxHeldJoints = 64;
+// An ident_sample_t's row values, in the order of kExperimentColumns.
+constexpr std::size_t kRowValues = 5;
 
 [[noreturn]] void fail(const std::filesystem::path& file, const std::string& what, std::int64_t offset = -1,
                        const std::string& channel = {}) {
@@ -73,7 +75,7 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
   const std::vector<HeldAngle> held = heldAngles(table);
   if (table.names.size() != kExperimentColumns.size() + held.size() || table.columns.size() != table.names.size()) {
     throw std::invalid_argument(
-        "experiment LCM log: columns other than the experiment's and the held joints' angles (q_<joint>_rad)");
+        "experiment LCM log: columns other than the experiment's and the held joints' angles (held_<joint>_rad)");
   }
   if (held.size() > static_cast<std::size_t>(kMaxHeldJoints)) {
     throw std::invalid_argument("experiment LCM log: " + std::to_string(held.size()) + " held joints (at most " +
@@ -85,15 +87,27 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
   for (const auto& c : table.columns) {
     if (c.size() != rows) throw std::invalid_argument("experiment LCM log: columns of unequal length");
   }
-
-  std::unique_ptr<lcm::LogFile> log;
-  {
-    std::FILE* probe = std::fopen(file.c_str(), "wb");
-    if (probe == nullptr) fail(file, std::string("cannot be created (") + std::strerror(errno) + ")");
-    std::fclose(probe);
-    log = std::make_unique<lcm::LogFile>(file.string(), "w");
-    if (!log->good()) fail(file, "cannot be created");
+  // What the reader refuses is not written.
+  if (rows == 0) throw std::invalid_argument("experiment LCM log: the table has no rows");
+  for (std::size_t c = 0; c < table.columns.size(); ++c) {
+    for (std::size_t k = 0; k < rows; ++k) {
+      if (!std::isfinite(table.columns[c][k])) {
+        throw std::invalid_argument("experiment LCM log: " + table.names[c] + " is not finite at row " +
+                                    std::to_string(k + 1));
+      }
+      if (c == 0 && k > 0 && !(table.columns[0][k] > table.columns[0][k - 1])) {
+        throw std::invalid_argument("experiment LCM log: time does not increase at row " + std::to_string(k + 1));
+      }
+    }
   }
+  if (!(std::isfinite(info.sample_period_s) && info.sample_period_s > 0.0)) {
+    throw std::invalid_argument("experiment LCM log: sample period " + std::to_string(info.sample_period_s) +
+                                " s, expected a positive period");
+  }
+
+  errno = 0;
+  auto log = std::make_unique<lcm::LogFile>(file.string(), "w");
+  if (!log->good()) fail(file, std::string("cannot be created (") + std::strerror(errno) + ")");
   const double t0 = rows > 0 ? (*columns[0])[0] : 0.0;
   fullarm_lcm::ident_experiment_t header;
   header.utime = microseconds(t0);
@@ -121,6 +135,7 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
     writeMessage(*log, file, channel::kIdentSample, sample.utime, sample);
   }
   if (std::fflush(log->getFilePtr()) != 0) fail(file, std::string("flush failed (") + std::strerror(errno) + ")");
+  if (std::ferror(log->getFilePtr()) != 0) fail(file, "a write failed");
 }
 
 ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
@@ -136,7 +151,7 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
         fail(file, "a second experiment description: one experiment per log", event.offset, event.channel);
       header = hil::decodeEvent<fullarm_lcm::ident_experiment_t>(event, file);
       have_header = true;
-      if (header.num_held < 0 || header.num_held > kMaxHeldJoints) {
+      if (header.num_held > kMaxHeldJoints) {
         fail(file, "num_held " + std::to_string(header.num_held) + ": expected 0 to " + std::to_string(kMaxHeldJoints),
              event.offset, event.channel);
       }
@@ -148,7 +163,7 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
         fail(file, "joint is empty: expected the driven joint's name", event.offset, event.channel);
       out.table.names = kExperimentColumns;
       for (const std::string& name : header.held_joints) {
-        if (name.empty() || name.find_first_of(", \t\r\n\"") != std::string::npos) {
+        if (!isLoggableJointName(name)) {
           fail(file, "held joint '" + name + "': expected a joint name", event.offset, event.channel);
         }
         const std::string column = heldAngleColumn(name);
@@ -188,8 +203,8 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
            event.offset, event.channel);
     }
     auto& c = out.table.columns;
-    const double values[] = {s.t_s, s.excitation_v, s.command_v, s.q_rad, s.tau_measured_nm};
-    for (std::size_t i = 0; i < 5; ++i) {
+    const std::array<double, kRowValues> values{s.t_s, s.excitation_v, s.command_v, s.q_rad, s.tau_measured_nm};
+    for (std::size_t i = 0; i < kRowValues; ++i) {
       if (!std::isfinite(values[i])) {
         fail(file,
              "sample " + std::to_string(s.seq) + ": " + kExperimentColumns[i] + " is " + std::to_string(values[i]) +
@@ -211,14 +226,26 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
                std::to_string(c[0].back()) + " s: expected time to increase",
            event.offset, event.channel);
     }
-    for (std::size_t i = 0; i < 5; ++i) c[i].push_back(values[i]);
-    for (std::size_t j = 0; j < s.held_q_rad.size(); ++j) c[5 + j].push_back(s.held_q_rad[j]);
+    for (std::size_t i = 0; i < kRowValues; ++i) c[i].push_back(values[i]);
+    for (std::size_t j = 0; j < s.held_q_rad.size(); ++j) c[kRowValues + j].push_back(s.held_q_rad[j]);
     ++next_seq;
   }
+  const std::string cut = reader.truncated() ? " (" + reader.warning() + ")" : std::string();
   if (!have_header) {
-    fail(file, std::string("no ") + channel::kIdentExperiment + " event: not an identification experiment log");
+    fail(file, std::string("no ") + channel::kIdentExperiment + " event: not an identification experiment log" + cut);
   }
-  if (next_seq == 0) fail(file, std::string("no ") + channel::kIdentSample + " event: the experiment has no samples");
+  if (next_seq == 0) {
+    fail(file, std::string("no ") + channel::kIdentSample + " event: the experiment has no samples" + cut);
+  }
+  // The description's period is the samples' time step (the fit's uniform time base).
+  const auto& t = out.table.columns[0];
+  if (t.size() >= 2) {
+    const double step = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+    if (std::abs(step - header.sample_period_s) > 1e-6 * header.sample_period_s) {
+      fail(file, "the samples come every " + std::to_string(step) + " s, the description says every " +
+                     std::to_string(header.sample_period_s) + " s");
+    }
+  }
   out.warning = reader.warning();
   return out;
 }

@@ -1013,6 +1013,17 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
     }
   }
   const Coordinates c(options, experiments.size());
+  // Each experiment must leave more residuals after the first max_delay_samples readings than the
+  // fit has coordinates.
+  for (std::size_t e = 0; e < experiments.size(); ++e) {
+    const auto rows = static_cast<Eigen::Index>(experiments[e].q_rad.size());
+    if (rows <= std::max(0, options.max_delay_samples) + c.size()) {
+      throw std::invalid_argument("grey-box fit: experiment " + std::to_string(e + 1) + " has " + std::to_string(rows) +
+                                  " samples; expected more than " +
+                                  std::to_string(std::max(0, options.max_delay_samples) + c.size()) +
+                                  " (the readings the delays take as logged, plus one per fitted coordinate)");
+    }
+  }
   Problem problem(experiments, options.max_delay_samples);
   auto say = [&](const std::string& line) {
     if (options.progress) options.progress(line);

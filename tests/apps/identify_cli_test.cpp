@@ -204,7 +204,7 @@ TEST(IdentifyCli, LcmLogsAreWrittenAndRefitToTheSameParameters) {
   EXPECT_EQ(other.exit_code, 2) << other.output;
   EXPECT_NE(other.output.find(fit_log.string()), std::string::npos) << other.output;
   EXPECT_NE(other.output.find("drove R_EB"), std::string::npos) << other.output;
-  const Result format = runFullarm("identify --quiet --log-format lcm --log " + fit_log.string() + " " +
+  const Result format = runFullarm("identify --quiet --log-format csv --log " + fit_log.string() + " " +
                                    validation_log.string() + " --out " + again.string());
   EXPECT_EQ(format.exit_code, 2) << format.output;
   EXPECT_NE(format.output.find("--log-format"), std::string::npos) << format.output;
@@ -259,7 +259,7 @@ TEST(IdentifyCli, BadInputExitsTwoNamingTheOptionFileOrLine) {
 
   // A held joint's column naming no joint of the arm, or the identified joint itself: exit 2
   // naming the file and the column.
-  for (const std::string column : {"q_XX_rad", "q_R_EB_rad"}) {
+  for (const std::string column : {"held_XX_rad", "held_R_EB_rad"}) {
     const auto held_log = dir / "held.csv";
     {
       std::ofstream out(held_log);
@@ -274,6 +274,19 @@ TEST(IdentifyCli, BadInputExitsTwoNamingTheOptionFileOrLine) {
     EXPECT_NE(h.output.find(held_log.string()), std::string::npos) << h.output;
     EXPECT_NE(h.output.find(column), std::string::npos) << h.output;
   }
+
+  // A log too short to fit: exit 2 naming the file.
+  const auto short_log = dir / "short.csv";
+  {
+    std::ofstream out(short_log);
+    out << "time_s,excitation_v,command_v,q_rad,tau_measured_nm\n";
+    for (int k = 0; k < 5; ++k) out << 0.001 * k << ",0.1," << 0.1 - 0.01 * k << "," << 1.2 + 0.001 * k << ",0\n";
+  }
+  const Result s = runFullarm("identify --quiet --joint EB --out " + dir.string() + " --log " + short_log.string() +
+                              " " + short_log.string());
+  EXPECT_EQ(s.exit_code, 2) << s.output;
+  EXPECT_NE(s.output.find(short_log.string()), std::string::npos) << s.output;
+  EXPECT_NE(s.output.find("expected at least 64"), std::string::npos) << s.output;
 
   // Only one log: nothing to hold out.
   const Result one = runFullarm("identify --quiet --out " + dir.string() + " --log " + bad_log.string());

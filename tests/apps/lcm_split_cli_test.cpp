@@ -450,7 +450,7 @@ TEST_F(LcmSplitCli, IdentifyRunsItsExperimentsOnThePlantNode) {
   EXPECT_NE(html.str().find("on a plant node over LCM"), std::string::npos);
   EXPECT_NE(html.str().find("the held joints at their mean angles in experiment_fit.csv"), std::string::npos);
 
-  // Each log records every other joint of the node, held, as a q_<joint>_rad column; the summary
+  // Each log records every other joint of the node, held, as a held_<joint>_rad column; the summary
   // gives their means over the log.
   const arm::ArmModel model = arm::loadArmModel(arm::defaultArmModelPath());
   const plant::PlantConfig node_plant = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model);
@@ -462,10 +462,10 @@ TEST_F(LcmSplitCli, IdentifyRunsItsExperimentsOnThePlantNode) {
     EXPECT_EQ(held.size(), node_plant.joints.size() - 1) << held.dump();
     for (const plant::JointParams& joint : node_plant.joints) {
       if (joint.name == "R_EB") {
-        EXPECT_FALSE(log.has("q_R_EB_rad"));
+        EXPECT_FALSE(log.has("held_R_EB_rad"));
         continue;
       }
-      const std::vector<double>& column = log.column("q_" + joint.name + "_rad");
+      const std::vector<double>& column = log.column("held_" + joint.name + "_rad");
       double sum = 0.0;
       for (double v : column) sum += v;
       EXPECT_NEAR(held[joint.name].get<double>(), sum / static_cast<double>(column.size()), 1e-12) << joint.name;

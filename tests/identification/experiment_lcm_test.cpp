@@ -36,8 +36,8 @@ std::filesystem::path tempFile(const std::string& name) {
 SignalTable table(std::size_t rows) {
   SignalTable t;
   t.names = kExperimentColumns;
-  t.names.push_back("q_R_SFE_rad");
-  t.names.push_back("q_R_WR_rad");
+  t.names.push_back("held_R_SFE_rad");
+  t.names.push_back("held_R_WR_rad");
   t.columns.assign(t.names.size(), {});
   for (std::size_t k = 0; k < rows; ++k) {
     const double x = static_cast<double>(k);
@@ -149,10 +149,13 @@ TEST(ExperimentLcmLogTest, ATableWrittenAndReadBackIsTheSameToTheBit) {
   EXPECT_EQ(held[0].joint, "R_SFE");
   EXPECT_EQ(held[1].joint, "R_WR");
 
-  // A CSV log is not an LCM log.
+  // A CSV log is not an LCM log, and read back it gives the LCM log's table to the bit.
   const auto csv = tempFile("log.csv");
   writeSignalCsv(csv, written);
   EXPECT_FALSE(isLcmLog(csv));
+  const SignalTable from_csv = readSignalCsv(csv, kExperimentColumns);
+  EXPECT_EQ(from_csv.names, read.table.names);
+  EXPECT_EQ(from_csv.columns, read.table.columns);
   // And the writer refuses tables that are not experiment logs.
   SignalTable other = written;
   other.names[5] = "pressure_pa";
@@ -160,6 +163,18 @@ TEST(ExperimentLcmLogTest, ATableWrittenAndReadBackIsTheSameToTheBit) {
   SignalTable missing = written;
   missing.names[2] = "command_mv";
   EXPECT_THROW(writeExperimentLcmLog(tempFile("bad.lcm"), missing, info()), std::invalid_argument);
+  // Nor does it write what its reader would refuse: no rows, a NaN, time that does not increase,
+  // a period that is not positive.
+  EXPECT_THROW(writeExperimentLcmLog(tempFile("bad.lcm"), table(0), info()), std::invalid_argument);
+  SignalTable nan = written;
+  nan.columns[6][17] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(writeExperimentLcmLog(tempFile("bad.lcm"), nan, info()), std::invalid_argument);
+  SignalTable back = written;
+  back.columns[0][9] = back.columns[0][8];
+  EXPECT_THROW(writeExperimentLcmLog(tempFile("bad.lcm"), back, info()), std::invalid_argument);
+  ExperimentLogInfo no_period = info();
+  no_period.sample_period_s = 0.0;
+  EXPECT_THROW(writeExperimentLcmLog(tempFile("bad.lcm"), written, no_period), std::invalid_argument);
 }
 
 TEST(ExperimentLcmLogTest, OtherChannelsAreSkippedAndATruncatedLastEventIsDroppedWithAWarning) {
@@ -177,7 +192,7 @@ TEST(ExperimentLcmLogTest, OtherChannelsAreSkippedAndATruncatedLastEventIsDroppe
   const ExperimentLcmLog read = readExperimentLcmLog(file);
   EXPECT_EQ(read.table.rows(), 5u);
   EXPECT_EQ(read.skipped, 6);
-  EXPECT_EQ(read.table.names.back(), "q_J0_rad");
+  EXPECT_EQ(read.table.names.back(), "held_J0_rad");
 
   // Cut into the last sample: four rows and a warning naming the file.
   const auto cut = tempFile("cut.lcm");
@@ -286,6 +301,34 @@ TEST(ExperimentLcmLogTest, EveryWayALogCanBeWrongIsRefusedNamingTheFileAndTheOff
                         b.addRaw(channel::kIdentSample, bytes);
                       }),
                 "does not decode as ident_sample_t");
+  expectRefused(write("too_many_held.lcm",
+                      [](LogBuilder& b) {
+                        b.add(channel::kIdentExperiment, header(65));
+                        b.add(channel::kIdentSample, sample(0, 65));
+                      }),
+                "num_held 65: expected 0 to 64");
+  expectRefused(write("no_joint.lcm",
+                      [](LogBuilder& b) {
+                        auto h = header(0);
+                        h.joint.clear();
+                        b.add(channel::kIdentExperiment, h);
+                      }),
+                "joint is empty");
+  expectRefused(write("comma.lcm",
+                      [](LogBuilder& b) {
+                        auto h = header(1);
+                        h.held_joints[0] = "R,SFE";
+                        b.add(channel::kIdentExperiment, h);
+                      }),
+                "held joint 'R,SFE': expected a joint name");
+  expectRefused(write("period_mismatch.lcm",
+                      [](LogBuilder& b) {
+                        auto h = header(0);
+                        h.sample_period_s = 2e-3;
+                        b.add(channel::kIdentExperiment, h);
+                        for (int k = 0; k < 3; ++k) b.add(channel::kIdentSample, sample(k, 0));
+                      }),
+                "the description says every 0.002", false);
   // A CSV file handed to the LCM reader.
   const auto csv = tempFile("not_lcm.csv");
   writeSignalCsv(csv, table(10));

@@ -94,9 +94,9 @@ TEST(ExperimentTest, LogsTheHeldJointsAnglesUnderTheirNamesAndReadsBackTheirMean
   const ExperimentResult result = runExperiment(device, r, options);
   ASSERT_TRUE(result.completed) << result.stop_reason;
   ASSERT_EQ(result.log.names.size(), kExperimentColumns.size() + 2);
-  EXPECT_EQ(result.log.names[kExperimentColumns.size()], "q_SFE_rad");
-  EXPECT_EQ(result.log.names[kExperimentColumns.size() + 1], "q_WR_rad");
-  EXPECT_FALSE(result.log.has("q_EB_rad"));  // the driven joint's angle is q_rad
+  EXPECT_EQ(result.log.names[kExperimentColumns.size()], "held_SFE_rad");
+  EXPECT_EQ(result.log.names[kExperimentColumns.size() + 1], "held_WR_rad");
+  EXPECT_FALSE(result.log.has("held_EB_rad"));  // the driven joint's angle is q_rad
   // The held joints start at 0.2 rad and their holds keep them there (no excitation, no load):
   // the integrator device moves a held joint only by its own hold command, which is zero at 0.2.
   const std::vector<HeldAngle> held = heldAngles(result.log);
@@ -105,15 +105,16 @@ TEST(ExperimentTest, LogsTheHeldJointsAnglesUnderTheirNamesAndReadsBackTheirMean
   EXPECT_EQ(held[1].joint, "WR");
   for (const HeldAngle& h : held) EXPECT_NEAR(h.mean_rad, 0.2, 1e-12);
 
-  // heldAngles averages each column, whatever its values, and skips the driven joint's q_rad.
+  // heldAngles averages each held_<joint>_rad column, whatever its values, and leaves the other
+  // angle columns alone (the driven joint's q_rad, a tool's q_cmd_rad).
   SignalTable table;
-  table.names = {"time_s", "q_rad", "q_SAA_rad", "tau_SAA_nm"};
-  table.columns = {{0.0, 0.001, 0.002}, {5.0, 5.0, 5.0}, {0.1, 0.2, 0.6}, {1.0, 2.0, 3.0}};
+  table.names = {"time_s", "q_rad", "held_SAA_rad", "q_cmd_rad", "tau_SAA_nm"};
+  table.columns = {{0.0, 0.001, 0.002}, {5.0, 5.0, 5.0}, {0.1, 0.2, 0.6}, {7.0, 7.0, 7.0}, {1.0, 2.0, 3.0}};
   const std::vector<HeldAngle> means = heldAngles(table);
   ASSERT_EQ(means.size(), 1u);
   EXPECT_EQ(means[0].joint, "SAA");
   EXPECT_DOUBLE_EQ(means[0].mean_rad, 0.3);
-  EXPECT_EQ(heldAngleColumn("SAA"), "q_SAA_rad");
+  EXPECT_EQ(heldAngleColumn("SAA"), "held_SAA_rad");
 
   // Names that are not one usable name per device joint are refused before the arm moves.
   IntegratorDevice fresh(3, 0.0);

@@ -275,8 +275,22 @@ TEST(GreyBoxTest, ADelayDoesNotWinByHidingTheFirstReadings) {
   options.global_samples = 8;
   options.polished_candidates = 1;
   options.threads = 2;
-  const FitResult fit = fitGreyModel(data, want, options);
+  GreyModel start = want;  // off the truth, and at the delay the glitch would favour
+  start.value[kFlowGain] *= 1.3;
+  start.value[kStiffness] /= 1.3;
+  start.value[kInertia] *= 1.2;
+  start.value[kCoulomb] /= 1.5;
+  start.delay_samples = 4;
+  const FitResult fit = fitGreyModel(data, start, options);
   expectWithin(fit.model, want, 0.02, "glitched start");
+
+  // Too short to fit at every delay: refused, not fitted on no residuals.
+  std::vector<ExperimentData> short_data = {data.front()};
+  for (auto* column :
+       {&short_data[0].q_rad, &short_data[0].tau_nm, &short_data[0].command_v, &short_data[0].excitation_v}) {
+    column->resize(6);
+  }
+  EXPECT_THROW((void)fitGreyModel(short_data, want, options), std::invalid_argument);
 }
 
 TEST(GreyBoxTest, AFreedAngleOffsetIsNamedUnidentifiable) {

@@ -16,8 +16,8 @@
 /// time, or the control time: ExperimentOptions::log_control_time), `excitation_v`, `command_v`
 /// (what the device put out after its clamp, held over the next period), `q_rad` and
 /// `tau_measured_nm` (the driven joint's reading), then, when the device's joints are named
-/// (ExperimentOptions::joint_names), `q_<joint>_rad` for every held joint: the posture the driven
-/// joint moved in, which sets its link inertia and gravity load (heldAngles reads it back).
+/// (ExperimentOptions::joint_names), `held_<joint>_rad` for every held joint: the posture the
+/// driven joint moved in, which sets its link inertia and gravity load (heldAngles reads it back).
 
 #include <functional>
 #include <string>
@@ -51,7 +51,7 @@ struct ExperimentOptions {
   /// simulation that runs faster than real time), while the fit needs a uniform time step.
   bool log_control_time = false;
   /// The device joints' names, in device order (empty: the held joints' angles are not logged).
-  /// Each held joint's angle is logged as `q_<name>_rad`.
+  /// Each held joint's angle is logged as `held_<name>_rad`.
   std::vector<std::string> joint_names;
 };
 
@@ -65,17 +65,21 @@ struct ExperimentResult {
 
 /// A held joint's angle over an experiment log.
 struct HeldAngle {
-  std::string joint;    ///< the name in its column `q_<joint>_rad`
+  std::string joint;    ///< the name in its column `held_<joint>_rad`
   double mean_rad = 0;  ///< its mean over the log's rows
 };
 
-/// The held joints' angles of an experiment log: every column named `q_<joint>_rad` (the driven
-/// joint's `q_rad` is not one), in column order, each averaged over the rows. Empty for a log
-/// without them (a joint run alone, or a log written before they were logged).
+/// The held joints' angles of an experiment log: every column named `held_<joint>_rad`, in column
+/// order, each averaged over the rows (NaN for a log without rows). Empty for a log without them
+/// (a joint run alone, or a log written before they were logged).
 [[nodiscard]] std::vector<HeldAngle> heldAngles(const SignalTable& log);
 
-/// The column of a held joint's angle: `q_<joint>_rad`.
+/// The column of a held joint's angle: `held_<joint>_rad`.
 [[nodiscard]] std::string heldAngleColumn(const std::string& joint);
+
+/// True when `name` can name a joint in a log: not empty, and none of the characters a CSV
+/// field or header would split on (comma, white space, quote).
+[[nodiscard]] bool isLoggableJointName(const std::string& name) noexcept;
 
 /// Runs the experiment: configures the device if needed, activates it, holds for
 /// `options.settle_s`, plays `excitation` on the driven joint, then deactivates the device

@@ -36,7 +36,7 @@ struct ExperimentLogInfo {
   std::string fullarm_version;   ///< set by the reader (the writer puts its own)
 };
 
-/// Writes `table` (kExperimentColumns, then `q_<joint>_rad` per held joint, as runExperiment logs
+/// Writes `table` (kExperimentColumns, then `held_<joint>_rad` per held joint, as runExperiment logs
 /// it) as an LCM log.
 /// @throws std::invalid_argument for a table without the experiment columns, columns of unequal
 ///   length or other extra columns; hil::RunLogError naming the file when it cannot be written

@@ -207,6 +207,7 @@ struct FitOptions {
   ParamSpec initial_speed{false, -1.0, 1.0, false};
   ParamSpec initial_torque_offset{false, -20.0, 20.0, false};
   JacobianMethod jacobian = JacobianMethod::kSensitivities;
+  /// The global stage tries every delay 0 .. this; the cost counts from this reading on.
   int max_delay_samples = 4;
   int global_samples = 200;     ///< points of the global stage (per delay)
   int polished_candidates = 3;  ///< best global points polished
@@ -227,7 +228,7 @@ struct FitOptions {
 /// Result of a fit.
 struct FitResult {
   GreyModel model;
-  double cost = 0.0;                                 ///< half the sum of squared normalised residuals
+  double cost = 0.0;  ///< half the sum of squared normalised residuals (from reading max_delay_samples on)
   std::array<double, kGreyParams> standard_error{};  ///< in the parameter's unit (0 when fixed)
   Eigen::MatrixXd correlation;                       ///< of the free parameters, in order
   std::vector<int> free_params;                      ///< indices of the free parameters
@@ -245,8 +246,12 @@ struct FitResult {
 /// Free initial states start, at every point of the global stage, from the data: the speed
 /// from the slope of ten angles from reading d on (the reading that shows the first state) and
 /// the torque offset from load-cell reading d, each clamped into its bounds.
+/// The cost counts each experiment's residuals from reading `max_delay_samples` on, at every
+/// delay: a simulation with a delay of d takes its first d readings as logged, and a cost over all
+/// the readings it simulates would favour longer delays.
 /// @throws std::invalid_argument for no experiments, bounds that do not hold the start, or
-///   non-positive bounds of a log-scaled parameter, or initial-state bounds that do not hold 0
+///   non-positive bounds of a log-scaled parameter, or initial-state bounds that do not hold 0,
+///   or an experiment with no more samples than max_delay_samples plus the fit's coordinates
 [[nodiscard]] FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const GreyModel& start,
                                      const FitOptions& options);
 
