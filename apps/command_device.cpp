@@ -115,7 +115,8 @@ std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::Ar
                              "does: start it with `fullarm plant serve --no-user`");
     }
   }
-  if (kind == hil::IoKind::kComedi) d->pace = PeriodClock(d->loop.control_period_s);
+  // The real board, or a node serving real hardware, answers a read at once: the reads are paced.
+  if (kind == hil::IoKind::kComedi || (d->node && !d->node->simulated)) d->pace = PeriodClock(d->loop.control_period_s);
   return d;
 }
 

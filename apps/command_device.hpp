@@ -37,8 +37,9 @@ struct CommandDevice {
   /// the other back-ends.
   std::optional<hil::IoNodeInfo> node;
   /// Called before every read: waits for the next control period on the real-time clock for
-  /// the real board (a simulated device, here or behind an LCM plant node, advances one period
-  /// per read and needs none); false when the wait came too late to keep the period (PeriodClock).
+  /// the real board and for an LCM node that says it serves real hardware (a simulated device,
+  /// here or behind an LCM plant node, advances one period per read and needs none); false when
+  /// the wait came too late to keep the period (PeriodClock).
   std::function<bool()> pace;
 };
 
