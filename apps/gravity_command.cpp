@@ -160,7 +160,9 @@ void checkOptionCombination(const GravityOptions& o) {
     refuse("--confirm-arm-motion", "only --io comedi and --io lcm (a node serving the real arm) move the real arm");
   }
   if (kind == hil::IoKind::kComedi) {
-    if (!o.confirm_arm_motion) refuse("--confirm-arm-motion", std::string("is required with --io comedi: ") + kRealArmMotion);
+    if (!o.confirm_arm_motion) {
+      refuse("--confirm-arm-motion", std::string("is required with --io comedi: ") + kRealArmMotion);
+    }
     if (!o.plant_config.empty()) refuse("--plant", "the real arm (--io comedi) is no simulated plant");
     if (!o.sim_arm.empty()) refuse("--sim-arm", "the real arm (--io comedi) is no simulated plant");
   }

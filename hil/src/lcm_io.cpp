@@ -266,8 +266,7 @@ void LcmIoDevice::onConfigure() {
   }
   if (!handler_->have_info) {
     throw DeviceError("lcm I/O: the node at " + options_.url + " did not say what it serves within " +
-                      std::to_string(options_.connect_timeout_s) +
-                      " s (io_node_info_t on " + channel::kIoNodeInfo +
+                      std::to_string(options_.connect_timeout_s) + " s (io_node_info_t on " + channel::kIoNodeInfo +
                       "): start it with a `fullarm plant serve` of this version");
   }
   const IoNodeInfo info = fromMessage(handler_->info);
@@ -446,7 +445,8 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
   LcmPublisher publisher(tx, beat);
   publisher.setNodeState(-1, true);
   log("serving " + describeJointsAndPeriod(info.joint_names, info.period_us) + " on " + options_.url + " (" +
-      (info.simulated ? "simulated" : "real arm") + (info.scripted_user ? ", a scripted user strapped in" : ", no user") +
+      (info.simulated ? "simulated" : "real arm") +
+      (info.scripted_user ? ", a scripted user strapped in" : ", no user") +
       (info.plant.empty() ? "" : ", plant " + info.plant) + ")");
   publishInfo();
 

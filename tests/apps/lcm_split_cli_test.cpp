@@ -29,12 +29,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "arm_test_util.hpp"
 #include "cli_runner.hpp"
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/kinematics.hpp"
-#include "arm_test_util.hpp"
 #include "fullarm/hil/lcm_io.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_log.hpp"
@@ -456,8 +456,7 @@ TEST_F(LcmSplitCli, IdentifyRunsItsExperimentsOnThePlantNode) {
 TEST_F(LcmSplitCli, IdentifyAndGravityRefuseANodeWithAScriptedUser) {
   Process plant({"--quiet", "plant", "serve", "--lcm-url", kUrl, "--idle-exit", "5"}, dir_ / "plant.txt");
   const std::string url = " --io lcm --lcm-url '" + std::string(kUrl) + "'";
-  const test::CliResult identify =
-      test::runFullarm("identify" + url + " --duration 1 --out " + (dir_ / "id").string());
+  const test::CliResult identify = test::runFullarm("identify" + url + " --duration 1 --out " + (dir_ / "id").string());
   const test::CliResult gravity = test::runFullarm("gravity" + url + " --postures 2 --out " + (dir_ / "g").string());
   plant.terminate();
   EXPECT_EQ(plant.wait(), 0) << plant.output();
@@ -517,8 +516,8 @@ TEST_F(LcmSplitCli, ARunAgainstANodeServingOtherJointsExitsTwoNamingBoth) {
       {"--quiet", "plant", "serve", "--lcm-url", kUrl, "--plant-config", swapped.string(), "--idle-exit", "5"},
       dir_ / "plant.txt");
   const test::CliResult r = test::runFullarm("--quiet run --io lcm --lcm-url '" + std::string(kUrl) +
-                                             "' --clock lockstep --duration 0.1 --no-oracle " + scenario() +
-                                             " --out " + (dir_ / "run").string());
+                                             "' --clock lockstep --duration 0.1 --no-oracle " + scenario() + " --out " +
+                                             (dir_ / "run").string());
   plant.terminate();
   (void)plant.wait();
   EXPECT_EQ(r.exit_code, 2) << r.output << plant.output();

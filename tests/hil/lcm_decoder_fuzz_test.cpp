@@ -177,7 +177,9 @@ std::vector<Case> cases() {
                    return s;
                  },
                  {}});
-  out.push_back({"io_node_info_t", channel::kIoNodeInfo, ioNodeInfoBytes(),
+  out.push_back({"io_node_info_t",
+                 channel::kIoNodeInfo,
+                 ioNodeInfoBytes(),
                  [](const Bytes& b) {
                    fullarm_lcm::io_node_info_t m;
                    const DecodeStatus s = decodeChecked(b, m);

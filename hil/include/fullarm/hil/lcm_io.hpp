@@ -122,6 +122,7 @@ struct LcmIoCounters {
 /// process (LcmPlantNode, `fullarm plant serve`).
 class LcmIoDevice final : public IoDevice {
  public:
+  /// @throws std::invalid_argument when options.joint_names are not one name per joint
   LcmIoDevice(arm::JointSelection joints, double period_s, const IoSafetyParams& safety, LcmIoOptions options);
   ~LcmIoDevice() override;
   [[nodiscard]] std::string_view name() const noexcept override { return "lcm"; }
