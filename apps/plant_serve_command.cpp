@@ -2,6 +2,7 @@
 
 #include "exit_codes.hpp"
 #include "fullarm/hil/lcm_io.hpp"
+#include "fullarm/hil/node_description.hpp"
 #include "fullarm/hil/run.hpp"
 #include "loop_options.hpp"
 

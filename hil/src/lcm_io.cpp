@@ -6,12 +6,9 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
-#include <filesystem>
 #include <stdexcept>
 #include <string_view>
 
-#include "fullarm/hil/run.hpp"
-#include "fullarm/hil/run_recording.hpp"
 #include "lcm_node.hpp"
 
 namespace fullarm::hil {
@@ -117,20 +114,6 @@ std::string describeJointsAndPeriod(const std::vector<std::string>& joint_names,
   for (const std::string& name : joint_names) text += (text.empty() ? "" : ",") + name;
   if (joint_names.empty()) text = "no joints";
   return text + " every " + std::to_string(period_us) + " us";
-}
-
-IoNodeInfo describeSessionDevice(HilSession& session) {
-  IoNodeInfo info;
-  const IoDevice& device = session.device();
-  for (int k = 0; k < device.joints().size(); ++k) {
-    info.joint_names.push_back(session.model().joints[static_cast<std::size_t>(device.joints().modelIndex(k))].name);
-  }
-  info.period_us = static_cast<std::int32_t>(std::lround(device.period() * 1e6));
-  info.simulated = session.simulatedArm() != nullptr;
-  info.scripted_user = session.user() != nullptr;
-  const std::filesystem::path& plant = session.options().plant_config;
-  if (info.simulated && !plant.empty()) info.plant = plant.filename().string() + " sha256 " + sha256File(plant);
-  return info;
 }
 
 DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_command_t& out) noexcept {

@@ -36,6 +36,7 @@
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/kinematics.hpp"
 #include "fullarm/hil/lcm_io.hpp"
+#include "fullarm/hil/node_description.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_log.hpp"
 #include "private_network.hpp"

@@ -14,6 +14,7 @@
 
 #include "fullarm/hil/lcm_io.hpp"
 #include "fullarm/hil/lcm_search.hpp"
+#include "fullarm/hil/node_description.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_recording.hpp"
 #include "fullarm/hil/sim_io.hpp"

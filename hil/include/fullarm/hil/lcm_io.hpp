@@ -42,8 +42,6 @@
 
 namespace fullarm::hil {
 
-class HilSession;
-
 namespace channel {
 inline constexpr const char* kIoCommand = "FULLARM_IO_COMMAND";
 inline constexpr const char* kIoReading = "FULLARM_IO_READING";
@@ -74,11 +72,6 @@ struct IoNodeInfo {
 [[nodiscard]] IoNodeInfo fromMessage(const fullarm_lcm::io_node_info_t& m);
 /// "SFE,SAA,HR every 1000 us".
 [[nodiscard]] std::string describeJointsAndPeriod(const std::vector<std::string>& joint_names, std::int32_t period_us);
-/// What the device of `session` serves: its joints' names in device order, its period, its
-/// scripted user (simulated back-ends) and its plant file's name and SHA-256. `simulated` is
-/// true for the simulated back-ends (sim, fakedaq).
-/// @throws std::runtime_error naming the plant file if it cannot be read
-[[nodiscard]] IoNodeInfo describeSessionDevice(HilSession& session);
 
 /// Decodes and checks an io_command_t (counts within kMaxIoJoints, array sizes). Never throws.
 DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_command_t& out) noexcept;
@@ -167,7 +160,7 @@ class LcmIoDevice final : public IoDevice {
 /// Options of the plant node.
 struct PlantNodeOptions {
   std::string url = kDefaultLcmUrl;
-  /// What the node says it serves (describeSessionDevice() for a session's device). Its joint
+  /// What the node says it serves (describeSessionDevice() for the device of a HilSession). Its joint
   /// names must be as many as the device's joints; its period_us 0 takes the device's period.
   IoNodeInfo info;
   /// No command for this long: safe outputs until commands resume [s].
