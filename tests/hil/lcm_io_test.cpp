@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <thread>
 
 #include "fullarm/hil/lcm_io.hpp"
@@ -161,12 +162,33 @@ RunOptions overTheNodes(RunOptions local, bool remote_search) {
   return local;
 }
 
+/// Listens to the plant node's heartbeats on kUrl for up to 2 s; true as soon as one satisfies `done`.
+bool waitForPlantHeartbeat(const std::function<bool(const HeartbeatRecord&)>& done) {
+  lcm::LCM listen(kUrl);
+  LcmReceiverOptions o;
+  o.heartbeat = true;
+  LcmReceiver rx(listen, o);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  while (std::chrono::steady_clock::now() < until) {
+    rx.drainWait(0.02);
+    const HeartbeatRecord* h = rx.lastHeartbeat(NodeKind::kPlant);
+    if (h != nullptr && done(*h)) return true;
+  }
+  return false;
+}
+
 TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
   RunOptions local = holdAtTheWheel(1.5);
   const RunResult in_process = runHil(local);
 
   SessionPlantThread plant(local, plantOptions());  // the same files and seed
   const RunResult remote = runHil(overTheNodes(local, false));
+  // The safe output at the end is sent without a reply: the node is stopped once its heartbeat
+  // says it served that command (on a loaded machine the node's thread may not have run yet).
+  const auto last_command = static_cast<std::int64_t>(remote.telemetry.size() + 1);
+  EXPECT_TRUE(waitForPlantHeartbeat([last_command](const HeartbeatRecord& h) {
+    return h.tick == last_command && h.safe_output;
+  })) << "the node's heartbeat never said it served command " << last_command;
   plant.join();
 
   EXPECT_EQ(remote.io_name, "lcm");
