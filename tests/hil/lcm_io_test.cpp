@@ -186,9 +186,9 @@ TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
   // The safe output at the end is sent without a reply: the node is stopped once its heartbeat
   // says it served that command (on a loaded machine the node's thread may not have run yet).
   const auto last_command = static_cast<std::int64_t>(remote.telemetry.size() + 1);
-  EXPECT_TRUE(waitForPlantHeartbeat([last_command](const HeartbeatRecord& h) {
-    return h.tick == last_command && h.safe_output;
-  })) << "the node's heartbeat never said it served command " << last_command;
+  const bool served_last = waitForPlantHeartbeat(
+      [last_command](const HeartbeatRecord& h) { return h.tick == last_command && h.safe_output; });
+  EXPECT_TRUE(served_last) << "the node's heartbeat never said it served command " << last_command;
   plant.join();
 
   EXPECT_EQ(remote.io_name, "lcm");
