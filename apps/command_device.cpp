@@ -107,7 +107,16 @@ std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::Ar
   }
   d->backend = std::make_unique<hil::IoBackend>(model, io);
   d->backend->device().configure();  // opens the board: a missing one is reported before anything runs
-  if (kind == hil::IoKind::kComedi) d->pace = PeriodClock(d->loop.control_period_s);
+  if (const auto* lcm = dynamic_cast<const hil::LcmIoDevice*>(&d->backend->device()); lcm != nullptr) {
+    d->node = *lcm->nodeInfo();  // configure() succeeded: the node described itself
+    if (d->node->scripted_user) {
+      throw hil::DeviceError("lcm I/O: the node at " + (lcm_url.empty() ? std::string(hil::kDefaultLcmUrl) : lcm_url) +
+                             " has a scripted user strapped in, who moves the arm; the experiments assume nobody "
+                             "does: start it with `fullarm plant serve --no-user`");
+    }
+  }
+  // The real board, or a node serving real hardware, answers a read at once: the reads are paced.
+  if (kind == hil::IoKind::kComedi || (d->node && !d->node->simulated)) d->pace = PeriodClock(d->loop.control_period_s);
   return d;
 }
 

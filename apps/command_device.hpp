@@ -8,12 +8,14 @@
 #include <ctime>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "fullarm/arm/arm_model.hpp"
 #include "fullarm/hil/daq_config.hpp"
 #include "fullarm/hil/hil_config.hpp"
 #include "fullarm/hil/io_backend.hpp"
+#include "fullarm/hil/lcm_io.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::app {
@@ -31,9 +33,13 @@ struct CommandDevice {
   plant::PlantConfig plant;  ///< the simulated DTS (sim, fakedaq)
   hil::DaqConfig daq;        ///< the channel map (fakedaq, comedi)
   std::unique_ptr<hil::IoBackend> backend;
+  /// lcm: what the plant node said it serves (its joints and period are the device's); empty for
+  /// the other back-ends.
+  std::optional<hil::IoNodeInfo> node;
   /// Called before every read: waits for the next control period on the real-time clock for
-  /// the real board (a simulated device, here or behind an LCM plant node, advances one period
-  /// per read and needs none); false when the wait came too late to keep the period (PeriodClock).
+  /// the real board and for an LCM node that says it serves real hardware (a simulated device,
+  /// here or behind an LCM plant node, advances one period per read and needs none); false when
+  /// the wait came too late to keep the period (PeriodClock).
   std::function<bool()> pace;
 };
 
@@ -65,9 +71,12 @@ class PeriodClock {
 /// joint alone: the simulated DTS locks the others at the posture (the real arm cannot) and the
 /// channel map keeps that joint's channels only. The real board always serves every joint; an
 /// LCM plant node (`fullarm plant serve`) serves the joints of its plant file, which `plant`
-/// must match (its posture and noise are the node's own: `posture` and `seed` are not used).
+/// must match (its posture and noise are the node's own: `posture` and `seed` are not used): the
+/// device refuses a node serving other joints or another period, and a node with a scripted user
+/// strapped in is refused here (the experiments assume that nobody moves the arm).
 /// @throws core::ConfigError for bad files (a loop period other than `period_s` names the loop
-///   file's control_period_s); hil::DeviceError when the device cannot be opened
+///   file's control_period_s); hil::DeviceError when the device cannot be opened, or (lcm) the
+///   node serves other joints or another period, or has a scripted user strapped in
 [[nodiscard]] std::unique_ptr<CommandDevice> openCommandDevice(
     hil::IoKind kind, const arm::ArmModel& model, const plant::PlantConfig& plant, const Eigen::VectorXd& posture,
     std::uint64_t seed, const std::string& daq_config, const std::string& hil_config, double period_s,

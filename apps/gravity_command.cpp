@@ -58,7 +58,8 @@ CLI::App* addGravityCommand(CLI::App& app, GravityOptions& o, OptionTable& table
   declare.integer("--seed", o.seed, "Seed of the random postures (and of the simulated sensors' noise)", 0, 2147483647)
       ->capture_default_str();
   declare.flag("--confirm-arm-motion", o.confirm_arm_motion,
-               "--io comedi: the arm's workspace is clear; the holds move every joint at once to random postures "
+               "--io comedi, or --io lcm on a node serving the real arm: the arm's workspace is clear; the holds move "
+               "every joint at once to random postures "
                "inside the limits less 0.1 rad, with no check for self-collision or the arm's surroundings");
   declare.folder("--out", o.out_dir, "Output folder")->capture_default_str();
   return cmd;
@@ -130,6 +131,11 @@ arm::ArmModel fitHoldsLog(const arm::ArmModel& nominal, const std::vector<std::s
   return id::withGravityParameters(nominal, fit.parameters);
 }
 
+// Why the holds on the real arm need --confirm-arm-motion.
+constexpr const char* kRealArmMotion =
+    "the holds move the real arm, every joint at once, to random postures inside its limits less 0.1 rad, with no "
+    "check for self-collision or the arm's surroundings; clear the workspace, then give --confirm-arm-motion";
+
 // Options that mean nothing with the chosen source are refused, not ignored.
 void checkOptionCombination(const GravityOptions& o) {
   const auto refuse = [](const char* option, const std::string& why) { throw core::ConfigError({}, option, why); };
@@ -155,15 +161,12 @@ void checkOptionCombination(const GravityOptions& o) {
   if (kind == hil::IoKind::kLcm && !o.sim_arm.empty()) {
     refuse("--sim-arm", "the plant node moves its own arm (fullarm plant serve --config)");
   }
-  if (kind != hil::IoKind::kComedi && o.confirm_arm_motion) {
-    refuse("--confirm-arm-motion", "only --io comedi moves the real arm");
+  if (kind != hil::IoKind::kComedi && kind != hil::IoKind::kLcm && o.confirm_arm_motion) {
+    refuse("--confirm-arm-motion", "only --io comedi and --io lcm (a node serving the real arm) move the real arm");
   }
   if (kind == hil::IoKind::kComedi) {
     if (!o.confirm_arm_motion) {
-      refuse("--confirm-arm-motion",
-             "is required with --io comedi: the holds move the real arm, every joint at once, to random postures "
-             "inside its limits less 0.1 rad, with no check for self-collision or the arm's surroundings; clear the "
-             "workspace, then give --confirm-arm-motion");
+      refuse("--confirm-arm-motion", std::string("is required with --io comedi: ") + kRealArmMotion);
     }
     if (!o.plant_config.empty()) refuse("--plant", "the real arm (--io comedi) is no simulated plant");
     if (!o.sim_arm.empty()) refuse("--sim-arm", "the real arm (--io comedi) is no simulated plant");
@@ -197,6 +200,12 @@ std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, con
   const std::unique_ptr<CommandDevice> device =
       openCommandDevice(kind, simulated, plant_config, simulated.defaultPosture(), static_cast<std::uint64_t>(o.seed),
                         o.daq_config, o.hil_config, kHoldPeriod_s, {}, o.lcm_url);
+  if (device->node && !device->node->simulated && !o.confirm_arm_motion) {
+    throw core::ConfigError({}, "--confirm-arm-motion",
+                            "is required with --io lcm on a node serving the real arm (the node at " +
+                                (o.lcm_url.empty() ? std::string(hil::kDefaultLcmUrl) : o.lcm_url) +
+                                " says it is not simulated): " + kRealArmMotion);
+  }
   hil::IoDevice& io = device->backend->device();
   if (io.joints().modelIndices() != armIndices(nominal)) {
     throw core::ConfigError({}, "--io",

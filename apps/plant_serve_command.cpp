@@ -2,6 +2,7 @@
 
 #include "exit_codes.hpp"
 #include "fullarm/hil/lcm_io.hpp"
+#include "fullarm/hil/node_description.hpp"
 #include "fullarm/hil/run.hpp"
 #include "loop_options.hpp"
 
@@ -46,6 +47,7 @@ int runPlantServe(const PlantServeOptions& o, std::ostream& out) {
 
   hil::PlantNodeOptions node_options;
   if (!o.lcm_url.empty()) node_options.url = o.lcm_url;
+  node_options.info = hil::describeSessionDevice(session);
   node_options.watchdog_timeout_s = o.watchdog_s;
   node_options.idle_exit_s = o.idle_exit_s;
   node_options.on_log = [&out](const std::string& line) { out << "fullarm plant serve: " << line << std::endl; };

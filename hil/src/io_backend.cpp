@@ -56,6 +56,9 @@ IoBackend::IoBackend(const arm::ArmModel& model, const IoBackendOptions& options
       if (!options.lcm_url.empty()) lcm.url = options.lcm_url;
       if (options.lcm_reply_timeout_s > 0.0) lcm.reply_timeout_s = options.lcm_reply_timeout_s;
       if (options.lcm_max_missed_replies > 0) lcm.max_missed_replies = options.lcm_max_missed_replies;
+      for (int k = 0; k < options.lcm_joints.size(); ++k) {
+        lcm.joint_names.push_back(model.joints[static_cast<std::size_t>(options.lcm_joints.modelIndex(k))].name);
+      }
       device_ = std::make_unique<LcmIoDevice>(options.lcm_joints, options.period_s, options.safety, lcm);
       break;
     }

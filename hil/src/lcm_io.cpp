@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <stdexcept>
 #include <string_view>
 
 #include "lcm_node.hpp"
@@ -40,7 +41,80 @@ DecodeStatus decodeIo(std::span<const std::uint8_t> bytes, Message& m) noexcept 
   return DecodeStatus::kOk;
 }
 
+/// Big-endian int32 at `at` (the caller checked that four bytes are there).
+std::int32_t int32At(std::span<const std::uint8_t> bytes, std::size_t at) noexcept {
+  std::uint32_t v = 0;
+  for (std::size_t i = 0; i < 4; ++i) v = (v << 8) | bytes[at + i];
+  return static_cast<std::int32_t>(v);
+}
+
+/// Checks the LCM string at `at` (an int32 length counting the terminating NUL, then the
+/// characters and the NUL): its length within [min_chars, max_chars] characters and inside the
+/// payload. Moves `at` past it. kTruncated when the payload ends inside it.
+DecodeStatus checkString(std::span<const std::uint8_t> bytes, std::size_t& at, std::size_t min_chars,
+                         std::size_t max_chars) noexcept {
+  if (bytes.size() - at < 4) return DecodeStatus::kTruncated;
+  const std::int32_t len = int32At(bytes, at);
+  at += 4;
+  if (len < 1) return DecodeStatus::kMalformed;  // the generated decoder would assign len - 1 characters
+  const auto n = static_cast<std::size_t>(len);
+  if (n > bytes.size() - at) return DecodeStatus::kTruncated;
+  if (n - 1 < min_chars || n - 1 > max_chars) return DecodeStatus::kMalformed;
+  at += n;
+  return DecodeStatus::kOk;
+}
+
+/// The layout of an io_node_info_t's strings, walked before the generated decoder reads them:
+/// hash(8) utime(8) seq(8) num_joints(1), the names, period_us(4) simulated(1)
+/// scripted_user(1), plant.
+DecodeStatus checkNodeInfoLayout(std::span<const std::uint8_t> bytes) noexcept {
+  std::size_t at = 24;
+  if (bytes.size() < at + 1) return DecodeStatus::kTruncated;
+  const auto num_joints = static_cast<std::int8_t>(bytes[at]);
+  at += 1;
+  if (num_joints < 0 || num_joints > kMaxIoJoints) return DecodeStatus::kMalformed;
+  for (int k = 0; k < num_joints; ++k) {
+    const DecodeStatus s = checkString(bytes, at, 1, kMaxNodeJointNameChars);
+    if (s != DecodeStatus::kOk) return s;
+  }
+  if (bytes.size() - at < 6) return DecodeStatus::kTruncated;
+  at += 6;
+  return checkString(bytes, at, 0, kMaxNodePlantChars);
+}
+
+bool printable(const std::string& text) noexcept {
+  return std::all_of(text.begin(), text.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x20; });
+}
+
 }  // namespace
+
+fullarm_lcm::io_node_info_t toMessage(const IoNodeInfo& info) {
+  fullarm_lcm::io_node_info_t m;
+  m.num_joints = static_cast<std::int8_t>(info.joint_names.size());
+  m.joint_names = info.joint_names;
+  m.period_us = info.period_us;
+  m.simulated = info.simulated ? 1 : 0;
+  m.scripted_user = info.scripted_user ? 1 : 0;
+  m.plant = info.plant;
+  return m;
+}
+
+IoNodeInfo fromMessage(const fullarm_lcm::io_node_info_t& m) {
+  IoNodeInfo info;
+  info.joint_names = m.joint_names;
+  info.period_us = m.period_us;
+  info.simulated = m.simulated != 0;
+  info.scripted_user = m.scripted_user != 0;
+  info.plant = m.plant;
+  return info;
+}
+
+std::string describeJointsAndPeriod(const std::vector<std::string>& joint_names, std::int32_t period_us) {
+  std::string text;
+  for (const std::string& name : joint_names) text += (text.empty() ? "" : ",") + name;
+  if (joint_names.empty()) text = "no joints";
+  return text + " every " + std::to_string(period_us) + " us";
+}
 
 DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_command_t& out) noexcept {
   const DecodeStatus s = decodeIo(bytes, out);
@@ -63,6 +137,29 @@ DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_
   return DecodeStatus::kOk;
 }
 
+DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_node_info_t& out) noexcept {
+  if (bytes.size() > static_cast<std::size_t>(INT_MAX)) return DecodeStatus::kMalformed;
+  if (bytes.size() < 8) return DecodeStatus::kTruncated;
+  std::uint64_t h = 0;
+  for (std::size_t i = 0; i < 8; ++i) h = (h << 8) | bytes[i];
+  if (static_cast<std::int64_t>(h) != fullarm_lcm::io_node_info_t::getHash()) return DecodeStatus::kWrongHash;
+  // The generated decoder trusts each string's length (a length of 0 or less would be read as
+  // a huge one): the layout is checked first.
+  const DecodeStatus layout = checkNodeInfoLayout(bytes);
+  if (layout != DecodeStatus::kOk) return layout;
+  const DecodeStatus s = decodeIo(bytes, out);
+  if (s != DecodeStatus::kOk) return s;
+  if (out.num_joints < 0 || out.num_joints > kMaxIoJoints ||
+      out.joint_names.size() != static_cast<std::size_t>(out.num_joints)) {
+    return DecodeStatus::kMalformed;
+  }
+  if (!std::all_of(out.joint_names.begin(), out.joint_names.end(), printable) || !printable(out.plant)) {
+    return DecodeStatus::kMalformed;
+  }
+  if (out.period_us <= 0 || out.period_us > kMaxNodePeriodUs) return DecodeStatus::kMalformed;
+  return DecodeStatus::kOk;
+}
+
 // --- the lcm back-end --------------------------------------------------------------------------
 
 /// Receives the node's readings and heartbeats for an LcmIoDevice.
@@ -71,14 +168,27 @@ struct LcmIoDevice::Handler {
   bool have_reading = false;  ///< `reading` answers the current command
   std::int64_t want_seq = 0;
   std::uint64_t heartbeats = 0;
+  fullarm_lcm::io_node_info_t info;
+  bool have_info = false;  ///< `info` holds the node's description
   LcmIoCounters* counters = nullptr;
 
   void onMessage(std::span<const std::uint8_t> bytes, const char* channel) {
     if (std::string_view(channel) == channel::kHeartbeat) {
       onHeartbeat(bytes);
+    } else if (std::string_view(channel) == channel::kIoNodeInfo) {
+      onInfo(bytes);
     } else {
       onReading(bytes);
     }
+  }
+  void onInfo(std::span<const std::uint8_t> bytes) {
+    fullarm_lcm::io_node_info_t m;
+    if (decodeChecked(bytes, m) != DecodeStatus::kOk) {
+      ++counters->rejected;
+      return;
+    }
+    info = std::move(m);
+    have_info = true;
   }
   void onReading(std::span<const std::uint8_t> bytes) {
     fullarm_lcm::io_reading_t m;
@@ -106,6 +216,10 @@ struct LcmIoDevice::Handler {
 LcmIoDevice::LcmIoDevice(arm::JointSelection joints, double period_s, const IoSafetyParams& safety,
                          LcmIoOptions options)
     : IoDevice(std::move(joints), period_s, safety), options_(std::move(options)) {
+  if (static_cast<int>(options_.joint_names.size()) != numJoints()) {
+    throw std::invalid_argument("lcm I/O: " + std::to_string(options_.joint_names.size()) + " joint names for " +
+                                std::to_string(numJoints()) + " joints");
+  }
   held_v_ = IoVector::Zero(numJoints());
 }
 
@@ -119,14 +233,35 @@ void LcmIoDevice::onConfigure() {
   // Subscriptions end with the LCM instance (lcm_destroy).
   lcm_subscription_t* r = detail::subscribeRaw(*lcm_, channel::kIoReading, handler_.get(), 64);
   lcm_subscription_t* h = detail::subscribeRaw(*lcm_, channel::kHeartbeat, handler_.get(), 64);
-  if (r == nullptr || h == nullptr) throw DeviceError("lcm I/O: cannot subscribe on " + options_.url);
+  lcm_subscription_t* d = detail::subscribeRaw(*lcm_, channel::kIoNodeInfo, handler_.get(), 8);
+  if (r == nullptr || h == nullptr || d == nullptr) throw DeviceError("lcm I/O: cannot subscribe on " + options_.url);
+  have_info_ = false;
   const auto deadline = detail::after(options_.connect_timeout_s);
-  while (handler_->heartbeats == 0 && Clock::now() < deadline) lcm_->handleTimeout(detail::millisUntil(deadline) + 1);
+  while ((handler_->heartbeats == 0 || !handler_->have_info) && Clock::now() < deadline) {
+    lcm_->handleTimeout(detail::millisUntil(deadline) + 1);
+  }
+  // The description is read here only: the reads do not decode it.
+  lcm_unsubscribe(lcm_->getUnderlyingLCM(), d);
   if (handler_->heartbeats == 0) {
     throw DeviceError("lcm I/O: no plant node answered on " + options_.url + " within " +
                       std::to_string(options_.connect_timeout_s) +
                       " s (start `fullarm plant serve` with the same --lcm-url)");
   }
+  if (!handler_->have_info) {
+    throw DeviceError("lcm I/O: the node at " + options_.url + " did not say what it serves within " +
+                      std::to_string(options_.connect_timeout_s) + " s (io_node_info_t on " + channel::kIoNodeInfo +
+                      "): start it with a `fullarm plant serve` of this version");
+  }
+  const IoNodeInfo info = fromMessage(handler_->info);
+  const auto period_us = static_cast<std::int32_t>(std::lround(period() * 1e6));
+  if (info.joint_names != options_.joint_names || info.period_us != period_us) {
+    throw DeviceError("lcm I/O: the node at " + options_.url + " serves joints " +
+                      describeJointsAndPeriod(info.joint_names, info.period_us) + "; expected " +
+                      describeJointsAndPeriod(options_.joint_names, period_us) +
+                      " (start `fullarm plant serve` with the same plant file and loop configuration)");
+  }
+  info_ = info;
+  have_info_ = true;
   held_v_.setZero();
   held_enable_ = false;
   seq_ = 0;
@@ -238,6 +373,31 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
   lcm::LCM& tx = node.tx;
   const auto log = [&node](const std::string& what) { node.log(what); };
 
+  IoNodeInfo info = options_.info;
+  const auto device_period_us = static_cast<std::int32_t>(std::lround(device_.period() * 1e6));
+  if (info.period_us == 0) info.period_us = device_period_us;
+  if (static_cast<int>(info.joint_names.size()) != device_.numJoints() || info.period_us != device_period_us) {
+    throw std::invalid_argument("plant node: the description names " +
+                                describeJointsAndPeriod(info.joint_names, info.period_us) + " for a device of " +
+                                std::to_string(device_.numJoints()) + " joints every " +
+                                std::to_string(device_period_us) + " us");
+  }
+  fullarm_lcm::io_node_info_t info_message = toMessage(info);
+  std::vector<std::uint8_t> info_buffer;
+  // With every heartbeat (or at the default heartbeat period when the node sends none).
+  const auto info_period = std::chrono::duration<double>(
+      options_.heartbeat_period_s > 0.0 ? options_.heartbeat_period_s : PlantNodeOptions{}.heartbeat_period_s);
+  auto last_info = Clock::now();
+  const auto publishInfo = [&] {
+    info_message.utime = wallMicros();
+    ++info_message.seq;
+    encodeMessage(info_message, info_buffer);
+    if (tx.publish(channel::kIoNodeInfo, info_buffer.data(), static_cast<unsigned int>(info_buffer.size())) != 0) {
+      log("the description could not be sent");
+    }
+    last_info = Clock::now();
+  };
+
   device_.configure();  // safe outputs
   bool safe = true;
   std::int64_t last_seq = 0;
@@ -267,7 +427,11 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
   beat.heartbeat_period_s = options_.heartbeat_period_s;
   LcmPublisher publisher(tx, beat);
   publisher.setNodeState(-1, true);
-  log("serving " + std::to_string(device_.numJoints()) + " joints on " + options_.url);
+  log("serving " + describeJointsAndPeriod(info.joint_names, info.period_us) + " on " + options_.url + " (" +
+      (info.simulated ? "simulated" : "real arm") +
+      (info.scripted_user ? ", a scripted user strapped in" : ", no user") +
+      (info.plant.empty() ? "" : ", plant " + info.plant) + ")");
+  publishInfo();
 
   JointSample sample;
   IoVector valve = IoVector::Zero(device_.numJoints());
@@ -278,6 +442,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
   for (;;) {
     if (stop && stop()) break;
     const auto now = Clock::now();
+    if (now - last_info >= info_period) publishInfo();
     if (commanded && !safe && now - last_command > watchdog) {
       (void)device_.onWrite(zero, false);
       safe = true;

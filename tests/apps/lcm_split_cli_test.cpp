@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -34,6 +35,8 @@
 #include "fullarm/arm/arm_yaml.hpp"
 #include "fullarm/arm/dynamics.hpp"
 #include "fullarm/arm/kinematics.hpp"
+#include "fullarm/hil/lcm_io.hpp"
+#include "fullarm/hil/node_description.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_log.hpp"
 #include "fullarm/identification/signal_csv.hpp"
@@ -493,6 +496,85 @@ TEST_F(LcmSplitCli, IdentifyRunsItsExperimentsOnThePlantNode) {
   for (const auto& [name, parameter] : result["parameters"].items()) {
     EXPECT_EQ(again["parameters"][name]["value"].get<double>(), parameter["value"].get<double>()) << name;
   }
+}
+
+// A node with a scripted user strapped in (`plant serve` without --no-user): identify and gravity
+// refuse it before anything moves (exit 2), naming `plant serve --no-user`; the node serves no
+// command.
+TEST_F(LcmSplitCli, IdentifyAndGravityRefuseANodeWithAScriptedUser) {
+  Process plant({"--quiet", "plant", "serve", "--lcm-url", kUrl, "--idle-exit", "5"}, dir_ / "plant.txt");
+  const std::string url = " --io lcm --lcm-url '" + std::string(kUrl) + "'";
+  const test::CliResult identify = test::runFullarm("identify" + url + " --duration 1 --out " + (dir_ / "id").string());
+  const test::CliResult gravity = test::runFullarm("gravity" + url + " --postures 2 --out " + (dir_ / "g").string());
+  plant.terminate();
+  EXPECT_EQ(plant.wait(), 0) << plant.output();
+  for (const test::CliResult* r : {&identify, &gravity}) {
+    EXPECT_EQ(r->exit_code, 2) << r->output;
+    EXPECT_NE(r->output.find("the node at " + std::string(kUrl) + " has a scripted user strapped in"),
+              std::string::npos)
+        << r->output;
+    EXPECT_NE(r->output.find("`fullarm plant serve --no-user`"), std::string::npos) << r->output;
+  }
+  EXPECT_NE(plant.output().find("a scripted user strapped in"), std::string::npos) << plant.output();
+  EXPECT_NE(plant.output().find(" 0 commands served"), std::string::npos) << plant.output();
+}
+
+// A node that says it serves the real arm (simulated = false; here the simulated DTS served from
+// this process, saying so): gravity's holds need --confirm-arm-motion, as on --io comedi.
+TEST_F(LcmSplitCli, GravityOnANodeServingTheRealArmNeedsConfirmArmMotion) {
+  hil::RunOptions options;  // the shipped files
+  options.scripted_user = false;
+  hil::HilSession session(options);
+  hil::PlantNodeOptions po;
+  po.url = kUrl;
+  po.idle_exit_s = 5.0;
+  po.info = hil::describeSessionDevice(session);
+  po.info.simulated = false;
+  hil::LcmPlantNode node(session.device(), po);
+  std::atomic<bool> stop{false};
+  hil::PlantNodeResult served;
+  std::thread thread([&] { served = node.serve([&stop] { return stop.load(); }); });
+  const test::CliResult r = test::runFullarm("gravity --io lcm --lcm-url '" + std::string(kUrl) +
+                                             "' --postures 2 --out " + (dir_ / "g").string());
+  stop = true;
+  thread.join();
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--confirm-arm-motion"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the node at " + std::string(kUrl) + " says it is not simulated"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(served.commands, 0u) << "nothing moved";
+}
+
+// A node serving another plant file's joints (two joints' entries swapped: the device's order
+// differs): the run stops before its first tick (exit 2), naming the node's URL, what it serves
+// and what the run expects.
+TEST_F(LcmSplitCli, ARunAgainstANodeServingOtherJointsExitsTwoNamingBoth) {
+  std::ifstream in(arm::test::sourcePath("config/dts_plant.yaml"));
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string full = text.str();
+  const std::size_t saa = full.find("  - name: R_SAA");
+  const std::size_t hr = full.find("  - name: R_HR");
+  const std::size_t eb = full.find("  - name: R_EB");
+  ASSERT_TRUE(saa != std::string::npos && saa < hr && hr < eb && eb != std::string::npos);
+  const auto swapped = dir_ / "plant_swapped.yaml";
+  std::ofstream(swapped) << full.substr(0, saa) << full.substr(hr, eb - hr) << full.substr(saa, hr - saa)
+                         << full.substr(eb);
+  Process plant(
+      {"--quiet", "plant", "serve", "--lcm-url", kUrl, "--plant-config", swapped.string(), "--idle-exit", "5"},
+      dir_ / "plant.txt");
+  const test::CliResult r = test::runFullarm("--quiet run --io lcm --lcm-url '" + std::string(kUrl) +
+                                             "' --clock lockstep --duration 0.1 --no-oracle " + scenario() + " --out " +
+                                             (dir_ / "run").string());
+  plant.terminate();
+  (void)plant.wait();
+  EXPECT_EQ(r.exit_code, 2) << r.output << plant.output();
+  EXPECT_NE(r.output.find("the node at " + std::string(kUrl) +
+                          " serves joints R_SFE,R_HR,R_SAA,R_EB,R_WR,R_WFE,R_WAA every 1000 us; expected "
+                          "R_SFE,R_SAA,R_HR,R_EB,R_WR,R_WFE,R_WAA every 1000 us"),
+            std::string::npos)
+      << r.output << plant.output();
+  EXPECT_NE(plant.output().find(" 0 commands served"), std::string::npos) << plant.output();
 }
 
 // No node at the URL: a clear device error naming the URL (exit 2), before anything moves.

@@ -83,6 +83,19 @@ Bytes ioReadingBytes() {
   return b;
 }
 
+Bytes ioNodeInfoBytes() {
+  IoNodeInfo info;
+  info.joint_names = {"SFE", "SAA", "HR", "EFE", "WR", "WFE", "WAA"};
+  info.period_us = 1000;
+  info.scripted_user = true;
+  info.plant = "dts_plant.yaml sha256 00ff";
+  fullarm_lcm::io_node_info_t m = toMessage(info);
+  m.seq = 3;
+  Bytes b;
+  encodeMessage(m, b);
+  return b;
+}
+
 /// One decoder under test: its valid payload, its checked decoder, and its bounds check on a
 /// record it accepted (independent of the decoder: the record's own invariants).
 struct Case {
@@ -164,6 +177,25 @@ std::vector<Case> cases() {
                    return s;
                  },
                  {}});
+  out.push_back({"io_node_info_t",
+                 channel::kIoNodeInfo,
+                 ioNodeInfoBytes(),
+                 [](const Bytes& b) {
+                   fullarm_lcm::io_node_info_t m;
+                   const DecodeStatus s = decodeChecked(b, m);
+                   if (s == DecodeStatus::kOk) {
+                     EXPECT_TRUE(m.num_joints >= 0 && m.num_joints <= kMaxIoJoints);
+                     EXPECT_EQ(m.joint_names.size(), static_cast<std::size_t>(m.num_joints));
+                     for (const std::string& name : m.joint_names) {
+                       EXPECT_TRUE(!name.empty() && name.size() <= kMaxNodeJointNameChars);
+                       for (const char c : name) EXPECT_GE(static_cast<unsigned char>(c), 0x20);
+                     }
+                     EXPECT_LE(m.plant.size(), kMaxNodePlantChars);
+                     EXPECT_TRUE(m.period_us > 0 && m.period_us <= kMaxNodePeriodUs);
+                   }
+                   return s;
+                 },
+                 {}});
   return out;
 }
 
@@ -229,6 +261,86 @@ TEST(LcmDecoderFuzz, CountsBeyondTheirBoundsOrNegativeAreRejected) {
   Bytes h = heartbeatBytes();
   h[24] = 7;
   EXPECT_EQ(cases()[2].decode(h), DecodeStatus::kMalformed);
+}
+
+// io_node_info_t: hash(8) utime(8) seq(8) num_joints(1), then each name as an int32 length
+// (counting its NUL) and its bytes. The generated decoder would take a length of 0 or less as
+// a huge one: the checked decoder refuses it before.
+TEST(LcmDecoderFuzz, NodeInfoStringLengthsAndFieldsOutOfBoundsAreRejected) {
+  const Case node_info = cases().back();
+  ASSERT_STREQ(node_info.name, "io_node_info_t");
+  const auto setLength = [](Bytes& b, std::size_t at, std::uint32_t len) {
+    for (std::size_t i = 0; i < 4; ++i) b[at + i] = static_cast<std::uint8_t>(len >> (8 * (3 - i)));
+  };
+  const std::size_t first_name_at = 25;
+  for (const std::uint32_t len : {0u, 0xFFFFFFFFu, 0x80000000u, 0x7FFFFFFFu}) {
+    Bytes b = ioNodeInfoBytes();
+    setLength(b, first_name_at, len);
+    EXPECT_NE(node_info.decode(b), DecodeStatus::kOk) << "name length " << len;
+  }
+  // An empty name (length 1: the NUL alone).
+  {
+    IoNodeInfo info;
+    info.joint_names = {"SFE", ""};
+    info.period_us = 1000;
+    Bytes b;
+    encodeMessage(toMessage(info), b);
+    EXPECT_EQ(node_info.decode(b), DecodeStatus::kMalformed);
+  }
+  // Names and plant at their bounds, and one character beyond.
+  for (const bool beyond : {false, true}) {
+    IoNodeInfo info;
+    info.joint_names = {std::string(kMaxNodeJointNameChars + (beyond ? 1 : 0), 'J')};
+    info.period_us = 1000;
+    Bytes b;
+    encodeMessage(toMessage(info), b);
+    EXPECT_EQ(node_info.decode(b), beyond ? DecodeStatus::kMalformed : DecodeStatus::kOk);
+    info.joint_names = {"SFE"};
+    info.plant = std::string(kMaxNodePlantChars + (beyond ? 1 : 0), 'p');
+    encodeMessage(toMessage(info), b);
+    EXPECT_EQ(node_info.decode(b), beyond ? DecodeStatus::kMalformed : DecodeStatus::kOk);
+  }
+  // A control character in a name; a period that is not positive or beyond a second; a
+  // negative joint count.
+  {
+    IoNodeInfo info;
+    info.joint_names = {"SF\nE"};
+    info.period_us = 1000;
+    Bytes b;
+    encodeMessage(toMessage(info), b);
+    EXPECT_EQ(node_info.decode(b), DecodeStatus::kMalformed);
+    info.joint_names = {"SFE"};
+    for (const std::int32_t period_us : {0, -1000, kMaxNodePeriodUs + 1}) {
+      info.period_us = period_us;
+      encodeMessage(toMessage(info), b);
+      EXPECT_EQ(node_info.decode(b), DecodeStatus::kMalformed) << period_us << " us";
+    }
+  }
+  Bytes b = ioNodeInfoBytes();
+  b[24] = 0xFF;  // num_joints = -1
+  EXPECT_EQ(node_info.decode(b), DecodeStatus::kMalformed);
+  b[24] = static_cast<std::uint8_t>(kMaxIoJoints + 1);
+  EXPECT_NE(node_info.decode(b), DecodeStatus::kOk);
+}
+
+TEST(LcmDecoderFuzz, NodeInfoRoundTrips) {
+  IoNodeInfo info;
+  info.joint_names = {"SFE", "SAA", "HR"};
+  info.period_us = 2000;
+  info.simulated = false;
+  info.scripted_user = true;
+  info.plant = "plant.yaml sha256 abc";
+  Bytes b;
+  encodeMessage(toMessage(info), b);
+  fullarm_lcm::io_node_info_t m;
+  ASSERT_EQ(decodeChecked(b, m), DecodeStatus::kOk);
+  const IoNodeInfo back = fromMessage(m);
+  EXPECT_EQ(back.joint_names, info.joint_names);
+  EXPECT_EQ(back.period_us, 2000);
+  EXPECT_FALSE(back.simulated);
+  EXPECT_TRUE(back.scripted_user);
+  EXPECT_EQ(back.plant, info.plant);
+  EXPECT_EQ(describeJointsAndPeriod(back.joint_names, back.period_us), "SFE,SAA,HR every 2000 us");
 }
 
 TEST(LcmDecoderFuzz, RandomDamageNeverCrashesAndTheReceiverCountsIt) {

@@ -10,10 +10,12 @@
 #include <chrono>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <thread>
 
 #include "fullarm/hil/lcm_io.hpp"
 #include "fullarm/hil/lcm_search.hpp"
+#include "fullarm/hil/node_description.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_recording.hpp"
 #include "fullarm/hil/sim_io.hpp"
@@ -108,10 +110,16 @@ struct GlobalThread {
   std::thread thread;
 };
 
+/// `options` saying what the device of `session` serves.
+PlantNodeOptions described(HilSession& session, PlantNodeOptions options) {
+  options.info = describeSessionDevice(session);
+  return options;
+}
+
 /// A plant node serving a run's simulated arm (its files and seed) from a thread.
 struct SessionPlantThread {
   SessionPlantThread(const RunOptions& options, PlantNodeOptions node_options)
-      : session(options), node(session.device(), std::move(node_options)) {
+      : session(options), node(session.device(), described(session, std::move(node_options))) {
     thread = std::thread([this] { result = node.serve([this] { return stop.load(); }); });
   }
   ~SessionPlantThread() { join(); }
@@ -154,12 +162,33 @@ RunOptions overTheNodes(RunOptions local, bool remote_search) {
   return local;
 }
 
+/// Listens to the plant node's heartbeats on kUrl for up to 2 s; true as soon as one satisfies `done`.
+bool waitForPlantHeartbeat(const std::function<bool(const HeartbeatRecord&)>& done) {
+  lcm::LCM listen(kUrl);
+  LcmReceiverOptions o;
+  o.heartbeat = true;
+  LcmReceiver rx(listen, o);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  while (std::chrono::steady_clock::now() < until) {
+    rx.drainWait(0.02);
+    const HeartbeatRecord* h = rx.lastHeartbeat(NodeKind::kPlant);
+    if (h != nullptr && done(*h)) return true;
+  }
+  return false;
+}
+
 TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
   RunOptions local = holdAtTheWheel(1.5);
   const RunResult in_process = runHil(local);
 
   SessionPlantThread plant(local, plantOptions());  // the same files and seed
   const RunResult remote = runHil(overTheNodes(local, false));
+  // The safe output at the end is sent without a reply: the node is stopped once its heartbeat
+  // says it served that command (on a loaded machine the node's thread may not have run yet).
+  const auto last_command = static_cast<std::int64_t>(remote.telemetry.size() + 1);
+  const bool served_last = waitForPlantHeartbeat(
+      [last_command](const HeartbeatRecord& h) { return h.tick == last_command && h.safe_output; });
+  EXPECT_TRUE(served_last) << "the node's heartbeat never said it served command " << last_command;
   plant.join();
 
   EXPECT_EQ(remote.io_name, "lcm");
@@ -393,10 +422,25 @@ TEST_F(LcmIo, ALostGlobalNodeHeartbeatInRealTimeIsCommunicationLossAfterTheFade)
   EXPECT_TRUE(replay.identical()) << replay.first_mismatch;
 }
 
+/// The names of test::armJoints(), in order.
+std::vector<std::string> armJointNames() {
+  std::vector<std::string> names;
+  for (int k = 0; k < test::armJoints().size(); ++k) {
+    names.push_back(test::model().joints[static_cast<std::size_t>(test::armJoints().modelIndex(k))].name);
+  }
+  return names;
+}
+
+/// `options` saying that the node serves test::armJoints() (unless it names joints already).
+PlantNodeOptions withArmJoints(PlantNodeOptions options) {
+  if (options.info.joint_names.empty()) options.info.joint_names = armJointNames();
+  return options;
+}
+
 /// A plant node serving a simulated arm from a thread.
 struct PlantThread {
   explicit PlantThread(PlantNodeOptions options)
-      : arm(test::makeArm(1)), device(*arm, SimIoOptions{}, IoSafetyParams{}), node(device, std::move(options)) {
+      : arm(test::makeArm(1)), device(*arm, SimIoOptions{}, IoSafetyParams{}), node(device, withArmJoints(options)) {
     thread = std::thread([this] { result = node.serve([this] { return stop.load(); }); });
   }
   ~PlantThread() { join(); }
@@ -420,6 +464,7 @@ struct PlantThread {
 LcmIoOptions deviceOptions() {
   LcmIoOptions o;
   o.url = kUrl;
+  o.joint_names = armJointNames();
   o.connect_timeout_s = 5.0;
   o.reply_timeout_s = 0.2;
   return o;
@@ -493,6 +538,87 @@ TEST_F(LcmIo, ConsecutiveReadsWithoutAnAnswerFaultTheDevice) {
   EXPECT_EQ(device.state(), IoState::kFault);
   EXPECT_EQ(device.counters().timeouts, static_cast<std::uint64_t>(n));
   EXPECT_EQ(device.counters().readings, 5u);
+}
+
+/// The message of configure() on `device`, or "" when it succeeded.
+std::string configureError(LcmIoDevice& device) {
+  try {
+    device.configure();
+  } catch (const DeviceError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST_F(LcmIo, TheDeviceReceivesWhatTheNodeSaysItServes) {
+  PlantNodeOptions po;
+  po.url = kUrl;
+  po.idle_exit_s = 5.0;
+  po.info.scripted_user = true;
+  po.info.plant = "dts_plant.yaml sha256 0123abcd";
+  PlantThread plant(po);
+  LcmIoDevice device(test::armJoints(), 1e-3, IoSafetyParams{}, deviceOptions());
+  EXPECT_EQ(device.nodeInfo(), nullptr) << "nothing heard before configure()";
+  ASSERT_EQ(configureError(device), "");
+  const IoNodeInfo* info = device.nodeInfo();
+  ASSERT_NE(info, nullptr);
+  EXPECT_EQ(info->joint_names, armJointNames());
+  EXPECT_EQ(info->period_us, 1000) << "the node states its device's period";
+  EXPECT_TRUE(info->simulated);
+  EXPECT_TRUE(info->scripted_user);
+  EXPECT_EQ(info->plant, "dts_plant.yaml sha256 0123abcd");
+  EXPECT_EQ(device.counters().rejected, 0u);
+}
+
+TEST_F(LcmIo, ConfiguringAgainstANodeServingOtherJointsNamesTheMismatch) {
+  PlantNodeOptions po;
+  po.url = kUrl;
+  po.idle_exit_s = 5.0;
+  po.info.joint_names = armJointNames();
+  std::swap(po.info.joint_names[1], po.info.joint_names[2]);  // the same joints in another order
+  PlantThread plant(po);
+  LcmIoDevice device(test::armJoints(), 1e-3, IoSafetyParams{}, deviceOptions());
+  const std::string error = configureError(device);
+  const std::vector<std::string> names = armJointNames();
+  std::string expected;
+  for (const std::string& n : names) expected += (expected.empty() ? "" : ",") + n;
+  EXPECT_NE(error.find("the node at " + std::string(kUrl) + " serves joints " + names[0] + "," + names[2] + "," +
+                       names[1] + ","),
+            std::string::npos)
+      << error;
+  EXPECT_NE(error.find("; expected " + expected + " every 1000 us"), std::string::npos) << error;
+  EXPECT_EQ(device.nodeInfo(), nullptr);
+}
+
+TEST_F(LcmIo, ConfiguringAgainstANodeOfAnotherPeriodNamesTheMismatch) {
+  PlantNodeOptions po;
+  po.url = kUrl;
+  po.idle_exit_s = 5.0;
+  PlantThread plant(po);  // a simulated arm stepped every 1 ms
+  LcmIoDevice device(test::armJoints(), 2e-3, IoSafetyParams{}, deviceOptions());
+  const std::string error = configureError(device);
+  EXPECT_NE(error.find("the node at " + std::string(kUrl) + " serves joints"), std::string::npos) << error;
+  EXPECT_NE(error.find(" every 1000 us; expected "), std::string::npos) << error;
+  EXPECT_NE(error.find(" every 2000 us"), std::string::npos) << error;
+}
+
+TEST_F(LcmIo, ASessionsDeviceIsDescribedByItsFilesAndUser) {
+  RunOptions local = test::shippedRun(0.1);
+  local.scripted_user = false;
+  HilSession session(local);
+  const IoNodeInfo info = describeSessionDevice(session);
+  ASSERT_EQ(static_cast<int>(info.joint_names.size()), session.device().numJoints());
+  for (int k = 0; k < session.device().numJoints(); ++k) {
+    EXPECT_EQ(info.joint_names[static_cast<std::size_t>(k)],
+              session.model().joints[static_cast<std::size_t>(session.device().joints().modelIndex(k))].name);
+  }
+  EXPECT_EQ(info.period_us, std::lround(session.config().control_period_s * 1e6));
+  EXPECT_TRUE(info.simulated);
+  EXPECT_FALSE(info.scripted_user);
+  const std::filesystem::path plant = session.options().plant_config;
+  EXPECT_EQ(info.plant, plant.filename().string() + " sha256 " + sha256File(plant));
+  HilSession with_user(test::shippedRun(0.1));
+  EXPECT_TRUE(describeSessionDevice(with_user).scripted_user);
 }
 
 TEST_F(LcmIo, ConfiguringWithoutAPlantNodeIsADeviceError) {

@@ -20,6 +20,12 @@
 /// watchdog: when no command has come for `watchdog_timeout_s` it puts out the safe output (null valves, amplifiers
 /// disabled) and says so in its heartbeat and its log, until commands resume; a command with enable = false is the safe
 /// output too.
+///
+/// **Description.** The node says what it serves in an io_node_info_t (IoNodeInfo) when it
+/// starts and with every heartbeat: its joints' names in device order, its control period,
+/// whether its arm is simulated, whether a scripted user is strapped in, and its plant file.
+/// configure() waits for it and refuses a node whose joints or period differ from the device's;
+/// the commands that move the arm by themselves check the rest (nodeInfo()).
 
 #include <cstdint>
 #include <functional>
@@ -31,6 +37,7 @@
 #include "fullarm/hil/io_device.hpp"
 #include "fullarm/hil/lcm_transport.hpp"
 #include "fullarm_lcm/io_command_t.hpp"
+#include "fullarm_lcm/io_node_info_t.hpp"
 #include "fullarm_lcm/io_reading_t.hpp"
 
 namespace fullarm::hil {
@@ -38,18 +45,51 @@ namespace fullarm::hil {
 namespace channel {
 inline constexpr const char* kIoCommand = "FULLARM_IO_COMMAND";
 inline constexpr const char* kIoReading = "FULLARM_IO_READING";
+inline constexpr const char* kIoNodeInfo = "FULLARM_IO_NODE_INFO";
 }  // namespace channel
+
+/// Characters a joint name of an io_node_info_t has at most.
+inline constexpr std::size_t kMaxNodeJointNameChars = 64;
+/// Characters the plant field of an io_node_info_t has at most.
+inline constexpr std::size_t kMaxNodePlantChars = 512;
+/// The longest control period an io_node_info_t may state [us] (1 s).
+inline constexpr std::int32_t kMaxNodePeriodUs = 1'000'000;
+
+/// What an I/O node serves, as it says in its io_node_info_t.
+struct IoNodeInfo {
+  std::vector<std::string> joint_names;  ///< the device's joints, in device order
+  /// Control period: one command advances the device this long [us]. In PlantNodeOptions: 0
+  /// takes the served device's period.
+  std::int32_t period_us = 0;
+  bool simulated = true;       ///< a simulated arm (false: real hardware, which moves when commanded)
+  bool scripted_user = false;  ///< a scripted user is strapped in: the arm moves by itself
+  std::string plant;           ///< the plant file, "<file name> sha256 <hex>" (empty: none)
+};
+
+/// The message of `info` (utime and seq left for the sender).
+[[nodiscard]] fullarm_lcm::io_node_info_t toMessage(const IoNodeInfo& info);
+/// The description an io_node_info_t carries.
+[[nodiscard]] IoNodeInfo fromMessage(const fullarm_lcm::io_node_info_t& m);
+/// "SFE,SAA,HR every 1000 us".
+[[nodiscard]] std::string describeJointsAndPeriod(const std::vector<std::string>& joint_names, std::int32_t period_us);
 
 /// Decodes and checks an io_command_t (counts within kMaxIoJoints, array sizes). Never throws.
 DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_command_t& out) noexcept;
 /// Decodes and checks an io_reading_t (counts within kMaxIoJoints, array sizes, a known status
 /// code). Never throws.
 DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_reading_t& out) noexcept;
+/// Decodes and checks an io_node_info_t: the string lengths before the generated decoder reads
+/// them (each joint name 1 to kMaxNodeJointNameChars characters, the plant at most
+/// kMaxNodePlantChars, no control characters), counts within kMaxIoJoints, a period in
+/// (0, kMaxNodePeriodUs]. Never throws.
+DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_node_info_t& out) noexcept;
 
 /// Options of the `lcm` back-end.
 struct LcmIoOptions {
   std::string url = kDefaultLcmUrl;  ///< LCM URL shared with the node
-  /// configure(): how long to wait for the node's heartbeat [s].
+  /// The device's joints' names, in device order: configure() refuses a node serving others.
+  std::vector<std::string> joint_names;
+  /// configure(): how long to wait for the node's heartbeat and description [s].
   double connect_timeout_s = 5.0;
   /// read(): how long to wait for the reading that answers the command [s]. Long, for lockstep
   /// runs, which a loaded machine must not change; a real-time run sets it within the period.
@@ -75,15 +115,22 @@ struct LcmIoCounters {
 /// process (LcmPlantNode, `fullarm plant serve`).
 class LcmIoDevice final : public IoDevice {
  public:
+  /// @throws std::invalid_argument when options.joint_names are not one name per joint
   LcmIoDevice(arm::JointSelection joints, double period_s, const IoSafetyParams& safety, LcmIoOptions options);
   ~LcmIoDevice() override;
   [[nodiscard]] std::string_view name() const noexcept override { return "lcm"; }
   [[nodiscard]] const LcmIoCounters& counters() const noexcept { return counters_; }
+  /// What the node said it serves (its joints and period are the device's), or nullptr before
+  /// the first configure().
+  [[nodiscard]] const IoNodeInfo* nodeInfo() const noexcept { return have_info_ ? &info_ : nullptr; }
 
  private:
   struct Handler;
-  /// Opens the LCM URL and waits for the node's heartbeat.
-  /// @throws DeviceError when the URL cannot be opened or no node answers in time
+  /// Opens the LCM URL and waits for the node's heartbeat and description, and checks the
+  /// description's joints and period against the device's.
+  /// @throws DeviceError when the URL cannot be opened, no node answers or describes itself in
+  ///   time, or the node serves other joints or another period (naming the URL, what the node
+  ///   serves and what the device expects)
   void onConfigure() override;
   /// Sends the safe output (null valves, enable off) at once, not waiting for a reply, so the
   /// node puts it out without waiting for the next read or its watchdog.
@@ -106,11 +153,16 @@ class LcmIoDevice final : public IoDevice {
   bool lost_ = false;  ///< the last read got no reply in time: later reads do not wait
   std::vector<std::uint8_t> buffer_;
   LcmIoCounters counters_;
+  IoNodeInfo info_;
+  bool have_info_ = false;
 };
 
 /// Options of the plant node.
 struct PlantNodeOptions {
   std::string url = kDefaultLcmUrl;
+  /// What the node says it serves (describeSessionDevice() for the device of a HilSession). Its joint
+  /// names must be as many as the device's joints; its period_us 0 takes the device's period.
+  IoNodeInfo info;
   /// No command for this long: safe outputs until commands resume [s].
   double watchdog_timeout_s = 0.1;
   /// Stop serving after this long without a command (also before the first) [s]; <= 0: never.
@@ -136,7 +188,8 @@ class LcmPlantNode {
   /// @param device the device whose back-end is served (not owned; configured by serve())
   LcmPlantNode(IoDevice& device, PlantNodeOptions options);
   /// Serves until idle for idle_exit_s or until `stop` returns true (checked every few ms).
-  /// @throws DeviceError when the LCM URL cannot be opened
+  /// @throws DeviceError when the LCM URL cannot be opened; std::invalid_argument when
+  ///   options.info names another number of joints than the device's or another period
   PlantNodeResult serve(const std::function<bool()>& stop = {});
 
  private:
