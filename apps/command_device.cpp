@@ -11,6 +11,7 @@
 
 #include "cli_values.hpp"
 #include "fullarm/core/config_error.hpp"
+#include "fullarm/hil/run_recording.hpp"
 
 namespace fullarm::app {
 
@@ -109,10 +110,25 @@ std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::Ar
   d->backend->device().configure();  // opens the board: a missing one is reported before anything runs
   if (const auto* lcm = dynamic_cast<const hil::LcmIoDevice*>(&d->backend->device()); lcm != nullptr) {
     d->node = *lcm->nodeInfo();  // configure() succeeded: the node described itself
+    const std::string url = lcm_url.empty() ? std::string(hil::kDefaultLcmUrl) : lcm_url;
     if (d->node->scripted_user) {
-      throw hil::DeviceError("lcm I/O: the node at " + (lcm_url.empty() ? std::string(hil::kDefaultLcmUrl) : lcm_url) +
+      throw hil::DeviceError("lcm I/O: the node at " + url +
                              " has a scripted user strapped in, who moves the arm; the experiments assume nobody "
                              "does: start it with `fullarm plant serve --no-user`");
+    }
+    // A simulated node names its plant file and the file's SHA-256: the limits and the fit's start
+    // come from --plant, so it must be the same file's contents (its name may differ).
+    const std::string& served = d->node->plant;
+    const std::size_t hash_at = served.rfind(" sha256 ");
+    if (hash_at != std::string::npos && !plant.source.empty()) {
+      const std::string node_hash = served.substr(hash_at + 8);
+      const std::string own_hash = hil::sha256File(plant.source);
+      if (node_hash != own_hash) {
+        throw core::ConfigError({}, "--plant",
+                                plant.source.string() + " (sha256 " + own_hash +
+                                    ") is not the plant file the node at " + url + " serves (" + served +
+                                    "): give --plant the node's --plant-config");
+      }
     }
   }
   // The real board, or a node serving real hardware, answers a read at once: the reads are paced.

@@ -519,6 +519,46 @@ TEST_F(LcmSplitCli, IdentifyAndGravityRefuseANodeWithAScriptedUser) {
   EXPECT_NE(plant.output().find(" 0 commands served"), std::string::npos) << plant.output();
 }
 
+// A node serving the same joints from another plant file (the elbow's viscous friction changed):
+// identify and gravity over it refuse --plant naming both files, before anything moves.
+TEST_F(LcmSplitCli, IdentifyAndGravityRefuseAPlantFileOtherThanTheNodes) {
+  std::ifstream in(arm::test::sourcePath("config/dts_plant.yaml"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string edited = text.str();
+  const std::size_t eb = edited.find("  - name: R_EB");
+  const std::size_t viscous = edited.find("viscous_nms_per_rad:", eb);
+  ASSERT_TRUE(eb != std::string::npos && viscous != std::string::npos);
+  const std::size_t value = viscous + std::string("viscous_nms_per_rad:").size();
+  const std::size_t end = edited.find_first_of(",}\n", value);
+  edited.replace(value, end - value, " 0.2");
+  const auto other = dir_ / "plant_other.yaml";
+  std::ofstream(other) << edited;
+  Process plant({"--quiet", "plant", "serve", "--lcm-url", kUrl, "--no-user", "--plant-config", other.string(),
+                 "--idle-exit", "5"},
+                dir_ / "plant.txt");
+  const std::string url = " --io lcm --lcm-url '" + std::string(kUrl) + "'";
+  const test::CliResult identify = test::runFullarm("identify" + url + " --duration 1 --out " + (dir_ / "id").string());
+  const test::CliResult gravity = test::runFullarm("gravity" + url + " --postures 2 --out " + (dir_ / "g").string());
+  plant.terminate();
+  EXPECT_EQ(plant.wait(), 0) << plant.output();
+  for (const test::CliResult* r : {&identify, &gravity}) {
+    EXPECT_EQ(r->exit_code, 2) << r->output;
+    EXPECT_NE(r->output.find("--plant"), std::string::npos) << r->output;
+    EXPECT_NE(r->output.find("dts_plant.yaml"), std::string::npos) << r->output;
+    EXPECT_NE(r->output.find("plant_other.yaml sha256"), std::string::npos) << r->output;
+  }
+  EXPECT_NE(plant.output().find(" 0 commands served"), std::string::npos) << plant.output();
+  // Given the node's file, identify runs.
+  Process again({"--quiet", "plant", "serve", "--lcm-url", kUrl, "--no-user", "--plant-config", other.string(),
+                 "--idle-exit", "2"},
+                dir_ / "plant2.txt");
+  const test::CliResult same = test::runFullarm("identify" + url + " --plant " + other.string() +
+                                                " --duration 1 --quiet --out " + (dir_ / "id2").string());
+  EXPECT_TRUE(same.exit_code == 0 || same.exit_code == 1) << same.output;
+  EXPECT_EQ(again.wait(), 0) << again.output();
+}
+
 // A node that says it serves the real arm (simulated = false; here the simulated DTS served from
 // this process, saying so): gravity's holds need --confirm-arm-motion, as on --io comedi.
 TEST_F(LcmSplitCli, GravityOnANodeServingTheRealArmNeedsConfirmArmMotion) {
