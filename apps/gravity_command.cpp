@@ -147,7 +147,9 @@ void checkOptionCombination(const GravityOptions& o) {
                                       {"--lcm-url", &o.lcm_url}}) {
       if (!value->empty()) refuse(name, "is read only when the holds are taken on a device (--io)");
     }
-    if (o.confirm_arm_motion) refuse("--confirm-arm-motion", "only --io comedi moves the real arm");
+    if (o.confirm_arm_motion) {
+      refuse("--confirm-arm-motion", "only --io comedi and --io lcm (a node serving the real arm) move the real arm");
+    }
     if (o.holds.empty() && o.postures && *o.postures < 10) {
       refuse("--postures", "the fit to the reference needs at least 10 postures, got " + std::to_string(*o.postures));
     }
@@ -205,6 +207,11 @@ std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, con
                             "is required with --io lcm on a node serving the real arm (the node at " +
                                 (o.lcm_url.empty() ? std::string(hil::kDefaultLcmUrl) : o.lcm_url) +
                                 " says it is not simulated): " + kRealArmMotion);
+  }
+  if (device->node && device->node->simulated && o.confirm_arm_motion) {
+    throw core::ConfigError({}, "--confirm-arm-motion",
+                            "the node at " + (o.lcm_url.empty() ? std::string(hil::kDefaultLcmUrl) : o.lcm_url) +
+                                " serves a simulated arm: no real arm moves");
   }
   hil::IoDevice& io = device->backend->device();
   if (io.joints().modelIndices() != armIndices(nominal)) {

@@ -82,8 +82,13 @@ DecodeStatus checkNodeInfoLayout(std::span<const std::uint8_t> bytes) noexcept {
   return checkString(bytes, at, 0, kMaxNodePlantChars);
 }
 
+// Printable ASCII only: no control characters (C0, DEL, C1) and no bytes of other encodings,
+// which would reach error messages and terminal logs as they are.
 bool printable(const std::string& text) noexcept {
-  return std::all_of(text.begin(), text.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x20; });
+  return std::all_of(text.begin(), text.end(), [](char c) {
+    const auto b = static_cast<unsigned char>(c);
+    return b >= 0x20 && b <= 0x7E;
+  });
 }
 
 }  // namespace
@@ -226,6 +231,7 @@ LcmIoDevice::LcmIoDevice(arm::JointSelection joints, double period_s, const IoSa
 LcmIoDevice::~LcmIoDevice() = default;
 
 void LcmIoDevice::onConfigure() {
+  have_info_ = false;  // a failed configure keeps no earlier node's description
   lcm_ = std::make_unique<lcm::LCM>(options_.url);
   if (!lcm_->good()) throw DeviceError("lcm I/O: cannot open the LCM URL " + options_.url);
   handler_ = std::make_unique<Handler>();
@@ -235,7 +241,6 @@ void LcmIoDevice::onConfigure() {
   lcm_subscription_t* h = detail::subscribeRaw(*lcm_, channel::kHeartbeat, handler_.get(), 64);
   lcm_subscription_t* d = detail::subscribeRaw(*lcm_, channel::kIoNodeInfo, handler_.get(), 8);
   if (r == nullptr || h == nullptr || d == nullptr) throw DeviceError("lcm I/O: cannot subscribe on " + options_.url);
-  have_info_ = false;
   const auto deadline = detail::after(options_.connect_timeout_s);
   while ((handler_->heartbeats == 0 || !handler_->have_info) && Clock::now() < deadline) {
     lcm_->handleTimeout(detail::millisUntil(deadline) + 1);
@@ -244,12 +249,15 @@ void LcmIoDevice::onConfigure() {
   lcm_unsubscribe(lcm_->getUnderlyingLCM(), d);
   if (handler_->heartbeats == 0) {
     throw DeviceError("lcm I/O: no plant node answered on " + options_.url + " within " +
-                      std::to_string(options_.connect_timeout_s) +
-                      " s (start `fullarm plant serve` with the same --lcm-url)");
+                      detail::seconds(options_.connect_timeout_s) +
+                      " (start `fullarm plant serve` with the same --lcm-url)");
   }
   if (!handler_->have_info) {
     throw DeviceError("lcm I/O: the node at " + options_.url + " did not say what it serves within " +
-                      std::to_string(options_.connect_timeout_s) + " s (io_node_info_t on " + channel::kIoNodeInfo +
+                      detail::seconds(options_.connect_timeout_s) + " (io_node_info_t on " + channel::kIoNodeInfo +
+                      (counters_.rejected > 0
+                           ? "; " + std::to_string(counters_.rejected) + " malformed messages were dropped"
+                           : std::string()) +
                       "): start it with a `fullarm plant serve` of this version");
   }
   const IoNodeInfo info = fromMessage(handler_->info);
@@ -384,7 +392,20 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
   }
   fullarm_lcm::io_node_info_t info_message = toMessage(info);
   std::vector<std::uint8_t> info_buffer;
-  // With every heartbeat (or at the default heartbeat period when the node sends none).
+  {
+    // What the tick side's decoder would drop is refused here, naming the bounds.
+    encodeMessage(info_message, info_buffer);
+    fullarm_lcm::io_node_info_t decoded;
+    if (decodeChecked(info_buffer, decoded) != DecodeStatus::kOk) {
+      throw std::invalid_argument(
+          "plant node: the description (" + describeJointsAndPeriod(info.joint_names, info.period_us) +
+          ") is outside what the protocol carries: joint names of 1 to " + std::to_string(kMaxNodeJointNameChars) +
+          " printable ASCII characters, at most " + std::to_string(kMaxIoJoints) + " joints, a period up to " +
+          std::to_string(kMaxNodePeriodUs) + " us, a plant field of at most " + std::to_string(kMaxNodePlantChars) +
+          " characters");
+    }
+  }
+  // At the heartbeat period (the default one when the node sends no heartbeats).
   const auto info_period = std::chrono::duration<double>(
       options_.heartbeat_period_s > 0.0 ? options_.heartbeat_period_s : PlantNodeOptions{}.heartbeat_period_s);
   auto last_info = Clock::now();

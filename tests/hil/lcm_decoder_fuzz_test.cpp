@@ -304,11 +304,15 @@ TEST(LcmDecoderFuzz, NodeInfoStringLengthsAndFieldsOutOfBoundsAreRejected) {
   // negative joint count.
   {
     IoNodeInfo info;
-    info.joint_names = {"SF\nE"};
     info.period_us = 1000;
     Bytes b;
-    encodeMessage(toMessage(info), b);
-    EXPECT_EQ(node_info.decode(b), DecodeStatus::kMalformed);
+    // C0, DEL, a C1 control and a byte of another encoding: printable ASCII only.
+    for (const std::string& name :
+         {std::string("SF\nE"), std::string("SF\x7F"), std::string("SF\x9B"), std::string("SF\xC3\xA9")}) {
+      info.joint_names = {name};
+      encodeMessage(toMessage(info), b);
+      EXPECT_EQ(node_info.decode(b), DecodeStatus::kMalformed) << name;
+    }
     info.joint_names = {"SFE"};
     for (const std::int32_t period_us : {0, -1000, kMaxNodePeriodUs + 1}) {
       info.period_us = period_us;

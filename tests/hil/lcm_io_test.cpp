@@ -621,6 +621,57 @@ TEST_F(LcmIo, ASessionsDeviceIsDescribedByItsFilesAndUser) {
   EXPECT_TRUE(describeSessionDevice(with_user).scripted_user);
 }
 
+// A node whose description the tick side's decoder would drop (a joint name longer than the
+// protocol carries) refuses to serve, naming the bounds, rather than leave the tick to time out.
+TEST_F(LcmIo, ANodeRefusesADescriptionTheProtocolCannotCarry) {
+  std::unique_ptr<SimulatedArm> arm = test::makeArm(1);
+  SimIoDevice device(*arm, SimIoOptions{}, IoSafetyParams{});
+  PlantNodeOptions po;
+  po.url = kUrl;
+  po.idle_exit_s = 0.1;
+  po.info.joint_names = armJointNames();
+  po.info.joint_names[3] = std::string(kMaxNodeJointNameChars + 1, 'J');
+  LcmPlantNode node(device, po);
+  try {
+    (void)node.serve([] { return false; });
+    ADD_FAILURE() << "served";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("joint names of 1 to " + std::to_string(kMaxNodeJointNameChars)),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Heartbeats but no description (a node of an older protocol): the device error names the URL and
+// the description's channel once the connection time is up.
+TEST_F(LcmIo, ANodeThatNeverDescribesItselfIsADeviceErrorNamingTheChannel) {
+  // Heartbeats from a publisher of the test (a node of this version always describes itself).
+  lcm::LCM lcm(kUrl);
+  ASSERT_TRUE(lcm.good());
+  std::atomic<bool> stop{false};
+  std::thread beats([&] {
+    fullarm_lcm::heartbeat_t beat{};
+    beat.node = 0;
+    std::vector<std::uint8_t> bytes;
+    while (!stop) {
+      ++beat.seq;
+      encodeMessage(beat, bytes);
+      lcm.publish(channel::kHeartbeat, bytes.data(), static_cast<unsigned int>(bytes.size()));
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  LcmIoOptions o = deviceOptions();
+  o.connect_timeout_s = 0.3;
+  LcmIoDevice device(test::armJoints(), 1e-3, IoSafetyParams{}, o);
+  const std::string error = configureError(device);
+  stop = true;
+  beats.join();
+  EXPECT_NE(error.find("the node at " + std::string(kUrl) + " did not say what it serves within 0.3 s"),
+            std::string::npos)
+      << error;
+  EXPECT_NE(error.find(channel::kIoNodeInfo), std::string::npos) << error;
+}
+
 TEST_F(LcmIo, ConfiguringWithoutAPlantNodeIsADeviceError) {
   LcmIoOptions o = deviceOptions();
   o.connect_timeout_s = 0.2;

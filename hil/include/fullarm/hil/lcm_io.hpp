@@ -22,7 +22,7 @@
 /// output too.
 ///
 /// **Description.** The node says what it serves in an io_node_info_t (IoNodeInfo) when it
-/// starts and with every heartbeat: its joints' names in device order, its control period,
+/// starts and at its heartbeat period: its joints' names in device order, its control period,
 /// whether its arm is simulated, whether a scripted user is strapped in, and its plant file.
 /// configure() waits for it and refuses a node whose joints or period differ from the device's;
 /// the commands that move the arm by themselves check the rest (nodeInfo()).
