@@ -619,6 +619,21 @@ TEST_F(LcmIo, ASessionsDeviceIsDescribedByItsFilesAndUser) {
   EXPECT_EQ(info.plant, plant.filename().string() + " sha256 " + sha256File(plant));
   HilSession with_user(test::shippedRun(0.1));
   EXPECT_TRUE(describeSessionDevice(with_user).scripted_user);
+
+  // A plant file whose name is not ASCII: the name travels with '?' for each other byte, the hash
+  // unchanged, and the description is one the tick side's decoder accepts.
+  const auto renamed = fullarm::test::scratchDir("hil_lcm_io_names") / "pl\xC3\xA4nt.yaml";
+  std::filesystem::copy_file(plant, renamed, std::filesystem::copy_options::overwrite_existing);
+  RunOptions other = test::shippedRun(0.1);
+  other.scripted_user = false;
+  other.plant_config = renamed;
+  HilSession session_renamed(other);
+  const IoNodeInfo described = describeSessionDevice(session_renamed);
+  EXPECT_EQ(described.plant, "pl??nt.yaml sha256 " + sha256File(plant));
+  std::vector<std::uint8_t> bytes;
+  encodeMessage(toMessage(described), bytes);
+  fullarm_lcm::io_node_info_t decoded;
+  EXPECT_EQ(decodeChecked(bytes, decoded), DecodeStatus::kOk);
 }
 
 // A node whose description the tick side's decoder would drop (a joint name longer than the
