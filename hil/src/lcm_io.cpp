@@ -228,10 +228,25 @@ LcmIoDevice::LcmIoDevice(arm::JointSelection joints, double period_s, const IoSa
   held_v_ = IoVector::Zero(numJoints());
 }
 
+std::int64_t descriptionId(const IoNodeInfo& info) {
+  fullarm_lcm::io_node_info_t m = toMessage(info);
+  m.utime = 0;
+  m.seq = 0;
+  std::vector<std::uint8_t> bytes;
+  encodeMessage(m, bytes);
+  std::uint64_t h = 14695981039346656037ULL;  // FNV-1a, 64 bits
+  for (const std::uint8_t b : bytes) {
+    h ^= b;
+    h *= 1099511628211ULL;
+  }
+  return h == 0 ? 1 : static_cast<std::int64_t>(h);
+}
+
 LcmIoDevice::~LcmIoDevice() = default;
 
 void LcmIoDevice::onConfigure() {
   have_info_ = false;  // a failed configure keeps no earlier node's description
+  description_id_ = 0;
   lcm_ = std::make_unique<lcm::LCM>(options_.url);
   if (!lcm_->good()) throw DeviceError("lcm I/O: cannot open the LCM URL " + options_.url);
   handler_ = std::make_unique<Handler>();
@@ -270,6 +285,7 @@ void LcmIoDevice::onConfigure() {
   }
   info_ = info;
   have_info_ = true;
+  description_id_ = descriptionId(info);
   held_v_.setZero();
   held_enable_ = false;
   seq_ = 0;
@@ -318,6 +334,11 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
   if (m.num_joints != numJoints()) {
     return core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead,
                                  "lcm I/O: the node serves another number of joints");
+  }
+  if (m.description_id != description_id_) {
+    return core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead,
+                                 "lcm I/O: the node now serves under another description (restarted with other files "
+                                 "or user?): configure the device again");
   }
   ++counters_.readings;
   const int n = numJoints();
@@ -391,6 +412,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
                                 std::to_string(device_period_us) + " us");
   }
   fullarm_lcm::io_node_info_t info_message = toMessage(info);
+  const std::int64_t description_id = descriptionId(info);
   std::vector<std::uint8_t> info_buffer;
   {
     // What the tick side's decoder would drop is refused here, naming the bounds.
@@ -517,6 +539,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     reading.out_of_range_mask = static_cast<std::int32_t>(sample.out_of_range_mask);
     reading.status_code = static_cast<std::int8_t>(status.code);
     reading.status_faults = static_cast<std::int32_t>(status.faults);
+    reading.description_id = description_id;
     encodeMessage(reading, buffer);
     if (tx.publish(channel::kIoReading, buffer.data(), static_cast<unsigned int>(buffer.size())) != 0) {
       log("a reading could not be sent");

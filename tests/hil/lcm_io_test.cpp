@@ -687,6 +687,56 @@ TEST_F(LcmIo, ANodeThatNeverDescribesItselfIsADeviceErrorNamingTheChannel) {
   EXPECT_NE(error.find(channel::kIoNodeInfo), std::string::npos) << error;
 }
 
+// A node restarted at the same URL under another description (here another plant file) while the
+// device runs: its readings carry another description id, and the device faults at the first one
+// rather than take readings of another plant.
+TEST_F(LcmIo, ANodeRestartedUnderAnotherDescriptionFaultsTheDevice) {
+  PlantNodeOptions first;
+  first.url = kUrl;
+  first.idle_exit_s = 5.0;
+  first.info.plant = "dts_plant.yaml sha256 0123";
+  auto plant = std::make_unique<PlantThread>(first);
+  LcmIoDevice device(test::armJoints(), 1e-3, IoSafetyParams{}, deviceOptions());
+  device.configure();
+  EXPECT_EQ(device.acceptedDescriptionId(), descriptionId(*device.nodeInfo()));
+  EXPECT_NE(device.acceptedDescriptionId(), 0);
+  device.activate();
+  JointSample s;
+  for (int k = 0; k < 5; ++k) ASSERT_TRUE(device.read(s).ok());
+  plant->join();
+  PlantNodeOptions second = first;
+  second.info.plant = "other_plant.yaml sha256 4567";
+  plant = std::make_unique<PlantThread>(second);
+  // Wait until the new node listens (it beats): a read sent before would find nobody and count as a
+  // missed reply, which is another fault.
+  {
+    lcm::LCM listen(kUrl);
+    ASSERT_TRUE(listen.good());
+    struct Beats {
+      int count = 0;
+      void onBeat(const lcm::ReceiveBuffer*, const std::string&) { ++count; }
+    } beats;
+    listen.subscribe(channel::kHeartbeat, &Beats::onBeat, &beats);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (beats.count < 2 && std::chrono::steady_clock::now() < deadline) listen.handleTimeout(100);
+    ASSERT_GE(beats.count, 2) << "the second node did not start";
+  }
+  const core::RtStatus status = device.read(s);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.faults & kFaultDeviceRead, 0u);
+  EXPECT_NE(std::string(status.message).find("another description"), std::string::npos) << status.message;
+  EXPECT_EQ(device.state(), IoState::kFault);
+  // The ids differ for any field of the description, and not for the sequence or time.
+  IoNodeInfo a = *device.nodeInfo();
+  IoNodeInfo b = a;
+  EXPECT_EQ(descriptionId(a), descriptionId(b));
+  b.scripted_user = !a.scripted_user;
+  EXPECT_NE(descriptionId(a), descriptionId(b));
+  b = a;
+  b.period_us += 1;
+  EXPECT_NE(descriptionId(a), descriptionId(b));
+}
+
 TEST_F(LcmIo, ConfiguringWithoutAPlantNodeIsADeviceError) {
   LcmIoOptions o = deviceOptions();
   o.connect_timeout_s = 0.2;

@@ -66,6 +66,12 @@ struct IoNodeInfo {
   std::string plant;           ///< the plant file, "<file name> sha256 <hex>" (empty: none)
 };
 
+/// An identifier of a description's content (FNV-1a over its encoding with utime and seq zero):
+/// the node puts it in every io_reading_t, so a node restarted at the same URL under another
+/// description (other joints, period, user or plant file) is told from the one configure()
+/// accepted. Never 0.
+[[nodiscard]] std::int64_t descriptionId(const IoNodeInfo& info);
+
 /// The message of `info` (utime and seq left for the sender).
 [[nodiscard]] fullarm_lcm::io_node_info_t toMessage(const IoNodeInfo& info);
 /// The description an io_node_info_t carries.
@@ -123,6 +129,8 @@ class LcmIoDevice final : public IoDevice {
   /// What the node said it serves (its joints and period are the device's), or nullptr before
   /// the first configure().
   [[nodiscard]] const IoNodeInfo* nodeInfo() const noexcept { return have_info_ ? &info_ : nullptr; }
+  /// hil::descriptionId() of the description configure() accepted (0 before).
+  [[nodiscard]] std::int64_t acceptedDescriptionId() const noexcept { return description_id_; }
 
  private:
   struct Handler;
@@ -155,6 +163,7 @@ class LcmIoDevice final : public IoDevice {
   LcmIoCounters counters_;
   IoNodeInfo info_;
   bool have_info_ = false;
+  std::int64_t description_id_ = 0;
 };
 
 /// Options of the plant node.
