@@ -79,10 +79,10 @@ struct Outcome {
   id::FitResult fit;
   id::ModelValidation validation_result;
   double wall_s = 0.0;
-  bool plant_written = false;            // identified_plant.yaml
-  std::string plant_note;                // why it was not written
-  std::vector<std::string> plant_notes;  // groups it carries only approximately
-  double start_link_inertia = 0.0;       // the link's inertia at the start's posture [kg m^2]
+  bool plant_written = false;              // identified_plant.yaml
+  std::string plant_note;                  // why it was not written
+  std::vector<std::string> plant_notes;    // groups it carries only approximately
+  double start_link_inertia = 0.0;         // the link's inertia at the start's posture [kg m^2]
   std::optional<double> start_gravity_nm;  // the gravity load there (none with --start)
 };
 

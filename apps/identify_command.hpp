@@ -28,11 +28,11 @@ struct IdentifyOptions {
   /// Seed of the simulated sensors' noise (sim: experiment k uses seed + k; fakedaq: one arm for
   /// both); unset: 1. The real arm has no seed.
   std::optional<int> seed;
-  double duration_s = 5.0;        ///< excitation time of each experiment
-  double amplitude_v = 0.5;       ///< peak of the excitation added to the valve command
-  int threads = 2;                ///< threads of the fit's simulations
-  std::string start;              ///< identified.yaml whose model starts the fit (default: the plant's groups)
-  std::vector<std::string> logs;  ///< recorded logs: all but the last fitted, the last held out
+  double duration_s = 5.0;         ///< excitation time of each experiment
+  double amplitude_v = 0.5;        ///< peak of the excitation added to the valve command
+  int threads = 2;                 ///< threads of the fit's simulations
+  std::string start;               ///< identified.yaml whose model starts the fit (default: the plant's groups)
+  std::vector<std::string> logs;   ///< recorded logs: all but the last fitted, the last held out
   std::string log_format = "csv";  ///< --log-format: the experiment logs written, csv | lcm
   bool log_format_given = false;   ///< --log-format was on the command line
   std::string command_line;        ///< the command as typed (recorded in LCM logs)

@@ -886,8 +886,9 @@ constexpr std::array<double, kStates> kStateStep{1e-7, 1e-6, 1e-5, 1e-7, 1e-4, 1
 Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, const PredictorNoise& noise) {
   if (!(noise.angle_rad > 0.0 && noise.torque_nm > 0.0 && noise.process_torque_nm > 0.0 &&
         noise.process_speed_radps > 0.0 && noise.torque_cell_nm >= 0.0)) {
-    throw std::invalid_argument("one-step prediction: every noise level must be positive (the load cell's analog "
-                                "noise non-negative)");
+    throw std::invalid_argument(
+        "one-step prediction: every noise level must be positive (the load cell's analog "
+        "noise non-negative)");
   }
   const std::size_t n = data.q_rad.size();
   Simulation s;
@@ -917,8 +918,7 @@ Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, co
   } else {
     torque_reading_var += noise.torque_cell_nm * noise.torque_cell_nm;
   }
-  const Eigen::Matrix2d r_meas =
-      Eigen::Vector2d(noise.angle_rad * noise.angle_rad, torque_reading_var).asDiagonal();
+  const Eigen::Matrix2d r_meas = Eigen::Vector2d(noise.angle_rad * noise.angle_rad, torque_reading_var).asDiagonal();
   const std::size_t d = static_cast<std::size_t>(std::max(0, model.delay_samples));
   const Eigen::Vector2d first = readings(model, x);
   for (std::size_t j = 0; j < std::min(d, n); ++j) {

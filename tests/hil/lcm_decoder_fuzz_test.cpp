@@ -154,7 +154,9 @@ std::vector<Case> cases() {
                  },
                  [](const LcmReceiverCounters& c) -> const LcmChannelCounters& { return c.minima_fragment; }});
   // The remote-I/O messages (no LcmReceiver channel: the device and the node decode them).
-  out.push_back({"io_command_t", channel::kIoCommand, ioCommandBytes(),
+  out.push_back({"io_command_t",
+                 channel::kIoCommand,
+                 ioCommandBytes(),
                  [](const Bytes& b) {
                    fullarm_lcm::io_command_t m;
                    const DecodeStatus s = decodeChecked(b, m);
@@ -165,7 +167,9 @@ std::vector<Case> cases() {
                    return s;
                  },
                  {}});
-  out.push_back({"io_reading_t", channel::kIoReading, ioReadingBytes(),
+  out.push_back({"io_reading_t",
+                 channel::kIoReading,
+                 ioReadingBytes(),
                  [](const Bytes& b) {
                    fullarm_lcm::io_reading_t m;
                    const DecodeStatus s = decodeChecked(b, m);

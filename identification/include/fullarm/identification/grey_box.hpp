@@ -162,8 +162,8 @@ struct SimulationSensitivity {
 /// Noise levels of the one-step-ahead predictor's Kalman filter (predictOneStep), as standard
 /// deviations.
 struct PredictorNoise {
-  double angle_rad = 3.0e-4;           ///< of the angle reading (noise and quantisation)
-  double torque_nm = 0.1;              ///< of the load-cell reading, white at the reading (its quantisation)
+  double angle_rad = 3.0e-4;  ///< of the angle reading (noise and quantisation)
+  double torque_nm = 0.1;     ///< of the load-cell reading, white at the reading (its quantisation)
   /// Of the load cell's analog noise ahead of its filter (0: none). Through the filter it is
   /// coloured, so the filter carries it as process noise on its state, (1 - a) sigma per sample
   /// with a = exp(-2 pi f_c T); a model without the filter adds it to the reading's.
