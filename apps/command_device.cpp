@@ -110,7 +110,8 @@ std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::Ar
   d->backend->device().configure();  // opens the board: a missing one is reported before anything runs
   if (const auto* lcm = dynamic_cast<const hil::LcmIoDevice*>(&d->backend->device()); lcm != nullptr) {
     d->node = *lcm->nodeInfo();  // configure() succeeded: the node described itself
-    const std::string url = lcm_url.empty() ? std::string(hil::kDefaultLcmUrl) : lcm_url;
+    d->lcm_url = lcm_url.empty() ? std::string(hil::kDefaultLcmUrl) : lcm_url;
+    const std::string& url = d->lcm_url;
     if (d->node->scripted_user) {
       throw hil::DeviceError("lcm I/O: the node at " + url +
                              " has a scripted user strapped in, who moves the arm; the experiments assume nobody "

@@ -36,6 +36,8 @@ struct CommandDevice {
   /// lcm: what the plant node said it serves (its joints and period are the device's); empty for
   /// the other back-ends.
   std::optional<hil::IoNodeInfo> node;
+  /// lcm: the node's URL (the default when none was given), for messages; empty otherwise.
+  std::string lcm_url;
   /// Called before every read: waits for the next control period on the real-time clock for
   /// the real board and for an LCM node that says it serves real hardware (a simulated device,
   /// here or behind an LCM plant node, advances one period per read and needs none); false when

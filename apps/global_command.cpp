@@ -13,7 +13,7 @@ CLI::App* addGlobalCommand(CLI::App& app, GlobalCommandOptions& o, OptionTable& 
       "Serve the global search as an LCM node for `fullarm local` and `fullarm run --search lcm` (a minima set per "
       "lockstep query; in real time, sets on the newest live joint state)");
   OptionDeclarer declare(*cmd, table);
-  declare.name("--lcm-url", o.lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0: this machine only)");
+  declare.name("--lcm-url", o.lcm_url, std::string("LCM URL (default ") + hil::kDefaultLcmUrl + ": this machine only)");
   declare.choice("--mode", o.mode, "Haptic rendering (as the run's)", {"full-arm", "hand-only"})->capture_default_str();
   declareLoopFiles(declare, o.files);
   declare

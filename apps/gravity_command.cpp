@@ -49,8 +49,9 @@ CLI::App* addGravityCommand(CLI::App& app, GravityOptions& o, OptionTable& table
   declare.file("--daq-config", o.daq_config, "--io fakedaq, comedi: channel map YAML (default: config/dts_daq.yaml)");
   declare.file("--hil-config", o.hil_config,
                "--io: loop configuration YAML: period, latency, safety policy (default: config/hil.yaml)");
-  declare.name("--lcm-url", o.lcm_url,
-               "--io lcm: the plant node's LCM URL (default udpm://239.255.76.67:7667?ttl=0: this machine only)");
+  declare.name(
+      "--lcm-url", o.lcm_url,
+      std::string("--io lcm: the plant node's LCM URL (default ") + hil::kDefaultLcmUrl + ": this machine only)");
   declare.integer("--postures", o.postures,
                   "Random postures: of the fit to the reference (default 400, at least 10) or held on the device "
                   "with --io (default 16)",
@@ -204,14 +205,12 @@ std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, con
                         o.daq_config, o.hil_config, kHoldPeriod_s, {}, o.lcm_url);
   if (device->node && !device->node->simulated && !o.confirm_arm_motion) {
     throw core::ConfigError({}, "--confirm-arm-motion",
-                            "is required with --io lcm on a node serving the real arm (the node at " +
-                                (o.lcm_url.empty() ? std::string(hil::kDefaultLcmUrl) : o.lcm_url) +
+                            "is required with --io lcm on a node serving the real arm (the node at " + device->lcm_url +
                                 " says it is not simulated): " + kRealArmMotion);
   }
   if (device->node && device->node->simulated && o.confirm_arm_motion) {
     throw core::ConfigError({}, "--confirm-arm-motion",
-                            "the node at " + (o.lcm_url.empty() ? std::string(hil::kDefaultLcmUrl) : o.lcm_url) +
-                                " serves a simulated arm: no real arm moves");
+                            "the node at " + device->lcm_url + " serves a simulated arm: no real arm moves");
   }
   hil::IoDevice& io = device->backend->device();
   if (io.joints().modelIndices() != armIndices(nominal)) {

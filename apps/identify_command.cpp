@@ -815,8 +815,7 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
                "fakedaq, comedi, lcm: loop configuration YAML: period, latency, safety policy (default: "
                "config/hil.yaml)");
   declare.name("--lcm-url", o.lcm_url,
-               "lcm: the plant node's LCM URL (default udpm://239.255.76.67:7667?ttl=0: this "
-               "machine only)");
+               std::string("lcm: the plant node's LCM URL (default ") + hil::kDefaultLcmUrl + ": this machine only)");
   declare.number("--duration", o.duration_s, "Excitation time of each experiment", {0.5, 600.0, "s"})
       ->capture_default_str();
   declare.number("--amplitude", o.amplitude_v, "Peak of the excitation on the valve command", {0.01, 5.0, "V"})

@@ -15,7 +15,7 @@ CLI::App* addPlantServeCommand(CLI::App& app, PlantServeOptions& o, OptionTable&
       "Serve the simulated DTS as an LCM I/O node for `fullarm run`, `identify` and `gravity` with `--io lcm` (each "
       "command advances it one period)");
   OptionDeclarer declare(*cmd, table);
-  declare.name("--lcm-url", o.lcm_url, "LCM URL (default udpm://239.255.76.67:7667?ttl=0: this machine only)");
+  declare.name("--lcm-url", o.lcm_url, std::string("LCM URL (default ") + hil::kDefaultLcmUrl + ": this machine only)");
   declareLoopFiles(declare, o.files);
   CLI::Option* user = declare.file("--user", o.user, "Scripted user YAML (default: config/user_reach_valve.yaml)");
   declare

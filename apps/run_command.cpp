@@ -328,7 +328,7 @@ void declareRunOptions(CLI::App& cmd, RunCommandOptions& o, OptionTable& table, 
   }
   declare.name("--lcm-url", o.lcm_url,
                std::string(flavour == RunFlavour::kRun ? "--io lcm, --search lcm: " : "") +
-                   "LCM URL of the plant and global nodes (default udpm://239.255.76.67:7667?ttl=0)");
+                   std::string("LCM URL of the plant and global nodes (default ") + hil::kDefaultLcmUrl + ")");
   if (flavour == RunFlavour::kRun) {
     declare
         .choice("--mode", o.mode,
