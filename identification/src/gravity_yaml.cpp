@@ -3,6 +3,7 @@
 #include <cctype>
 #include <charconv>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -127,7 +128,13 @@ std::string armYamlWithGravity(std::string_view yaml_text, const std::string& so
                                   " has no mass_kg, com_m and inertia_kgm2 lines to rewrite");
     }
   }
-  std::string text;
+  // A header that says what this file is: the source's own header below it still describes the
+  // source (its kinematics, limits and sensors are unchanged).
+  std::string text =
+      "# The arm file " + std::filesystem::path(source_name).filename().string() +
+      " with the gravity set of the links marked\n# \"" + std::string(note) +
+      "\"\n# (mass and centre of mass; their inertias scaled by the mass ratio). Every other line is the\n" +
+      "# source's, below.\n#\n";
   for (const auto& line : lines) text.append(line).append("\n");
   return text;
 }

@@ -15,7 +15,8 @@ namespace fullarm::identification {
 /// masses and centres of mass of `fitted`. A link whose mass or centre of mass changed gets them
 /// at 10 significant digits with the comment `note`, and its inertia scaled by the mass ratio
 /// (the same solid body with the new mass, so each line's "solid cylinder" comment stays true
-/// in shape). Links that did not change keep their lines.
+/// in shape). Links that did not change keep their lines. A header comment names the source
+/// file (by its file name only, so the text does not depend on where it was read) and `note`.
 /// @throws std::invalid_argument naming the joint when a changed link's lines are not found, or
 ///   for models of different joints
 [[nodiscard]] std::string armYamlWithGravity(std::string_view yaml_text, const std::string& source_name,
