@@ -47,6 +47,34 @@ TEST(GravityCli, FitToTheReferenceWritesAnArmYamlWithTheReferencesGravity) {
   }
 }
 
+// The shipped config/dts_master_reference_gravity.yaml is the arm file `fullarm gravity` writes
+// with its defaults (the fit to the reference's torques on the default arm), byte for byte, and
+// its gravity is the reference's at the three published postures.
+TEST(GravityCli, TheShippedReferenceGravityArmIsWhatTheDefaultFitWrites) {
+  const auto dir = tempDir("shipped");
+  const Result r = runFullarm("gravity --quiet --out " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::filesystem::path shipped =
+      fullarm::arm::defaultArmModelPath().parent_path() / "dts_master_reference_gravity.yaml";
+  const auto text = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  const std::string written = text(dir / "arm.yaml");
+  ASSERT_FALSE(written.empty());
+  EXPECT_EQ(written, text(shipped)) << "regenerate with: fullarm gravity --out DIR; cp DIR/arm.yaml " << shipped;
+  const fullarm::arm::ArmModel model = fullarm::arm::loadArmModel(shipped);
+  fullarm::arm::ArmData data(model);
+  for (const id::PublishedGravity& p : id::publishedGravity()) {
+    Eigen::VectorXd q = model.defaultPosture();
+    for (int k = 0; k < 7; ++k) q[k] = p.q_rad[static_cast<std::size_t>(k)];
+    fullarm::arm::computeGravityTorques(model, data, q);
+    for (int k = 0; k < 7; ++k) EXPECT_NEAR(data.tau_gravity[k], p.tau_nm[static_cast<std::size_t>(k)], 1e-5) << k;
+  }
+}
+
 TEST(GravityCli, HoldsLogIsFittedAndAMalformedOneNamesTheLine) {
   const auto dir = tempDir("holds");
   const std::string header =

@@ -117,6 +117,64 @@ TEST(TuneCli, OneJointWithTheDefaultBudgetReproducesTheShippedGains) {
   EXPECT_EQ(sfe(tuned).impedance.damping_nms_per_rad, sfe(start).impedance.damping_nms_per_rad);
 }
 
+// The arm fitted to the DTS reference's gravity torques ships with its own gains:
+// config/dts_gains_reference_gravity.yaml is `fullarm tune --config
+// config/dts_master_reference_gravity.yaml --nonlinear-rounds 6` (below its header). One joint
+// tuned the same way writes its gains bit for bit, and `validate` passes every joint on that arm.
+std::filesystem::path referenceGravityArmPath() {
+  return fullarm::arm::defaultArmModelPath().parent_path() / "dts_master_reference_gravity.yaml";
+}
+std::filesystem::path referenceGravityGainsPath() {
+  return fullarm::controllers::defaultGainsConfigPath().parent_path() / "dts_gains_reference_gravity.yaml";
+}
+
+TEST(TuneCli, OneJointOnTheReferenceGravityArmReproducesItsShippedGains) {
+  const auto dir = tempDir("wr_reference_gravity");
+  const Result r = runFullarm("tune --joints WR --nonlinear-rounds 6 --config " + referenceGravityArmPath().string() +
+                              " --out " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fullarm::arm::ArmModel model = fullarm::arm::loadArmModel(referenceGravityArmPath());
+  const auto tuned = fullarm::controllers::loadGainsConfig(dir / "gains.yaml", model);
+  const auto shipped = fullarm::controllers::loadGainsConfig(referenceGravityGainsPath(), model);
+  const auto wr = [](const fullarm::controllers::GainsConfig& g) {
+    return g.joints[static_cast<std::size_t>(fullarm::controllers::findGainsJoint(g, "WR"))];
+  };
+  EXPECT_EQ(wr(tuned).impedance.inertia_kgm2, wr(shipped).impedance.inertia_kgm2);
+  EXPECT_EQ(wr(tuned).impedance.damping_nms_per_rad, wr(shipped).impedance.damping_nms_per_rad);
+  EXPECT_EQ(wr(tuned).impedance.stiffness_nm_per_rad, wr(shipped).impedance.stiffness_nm_per_rad);
+  EXPECT_EQ(wr(tuned).sliding_mode.lambda_per_s, wr(shipped).sliding_mode.lambda_per_s);
+  EXPECT_EQ(wr(tuned).sliding_mode.boundary_layer_radps, wr(shipped).sliding_mode.boundary_layer_radps);
+  // Tuned on the heavier arm: not the default arm's gains.
+  const auto default_gains =
+      fullarm::controllers::loadGainsConfig(fullarm::controllers::defaultGainsConfigPath(), model);
+  bool differs = false;
+  for (std::size_t j = 0; j < shipped.joints.size(); ++j) {
+    differs =
+        differs ||
+        shipped.joints[j].impedance.damping_nms_per_rad != default_gains.joints[j].impedance.damping_nms_per_rad ||
+        shipped.joints[j].sliding_mode.boundary_layer_radps !=
+            default_gains.joints[j].sliding_mode.boundary_layer_radps;
+  }
+  EXPECT_TRUE(differs);
+}
+
+TEST(TuneCli, TheReferenceGravityArmsShippedGainsPassValidate) {
+  const auto dir = tempDir("validate_reference_gravity");
+  const Result r = runFullarm("validate --quiet --config " + referenceGravityArmPath().string() + " --gains " +
+                              referenceGravityGainsPath().string() + " --out " + dir.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(in);
+  const nlohmann::json& v = summary["results"]["validate"];
+  EXPECT_TRUE(v["pass"].get<bool>());
+  ASSERT_EQ(v["joints"].size(), 7u);
+  for (const nlohmann::json& j : v["joints"]) {
+    EXPECT_TRUE(j["pass"].get<bool>()) << j["name"];
+    EXPECT_EQ(j["monte_carlo"]["samples"].get<int>(), 300) << j["name"];
+    EXPECT_EQ(j["monte_carlo"]["failures"].get<int>(), 0) << j["name"];
+  }
+}
+
 TEST(TuneCli, UnknownJointIsBadInput) {
   const Result r = runFullarm("tune --joints XX --out " + tempDir("bad").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
