@@ -44,7 +44,7 @@ RunLogWriter::RunLogWriter(RunLogWriterOptions options) : options_(std::move(opt
   log_ = std::make_unique<lcm::LogFile>(options_.file.string(), "w");
   if (!log_->good()) {
     const int err = errno;
-    throw RunLogError(options_.file.string() + ": cannot create the run log" +
+    throw RunLogError(options_.file.string() + ": cannot create the LCM log" +
                       (err != 0 ? std::string(" (") + std::strerror(err) + ")" : std::string()));
   }
   if (options_.drain_period.count() <= 0 || options_.flush_period.count() < 0) {

@@ -1,14 +1,8 @@
 #include "fullarm/identification/experiment_lcm.hpp"
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <array>
-#include <cerrno>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <fstream>
-#include <memory>
 #include <stdexcept>
 #include <vector>
 
@@ -32,24 +26,6 @@ constexpr std::size_t kRowValues = 5;
                        : std::string()) +
           what,
       offset, channel);
-}
-
-template <class Message>
-void writeMessage(lcm::LogFile& log, const std::filesystem::path& file, const char* channel, std::int64_t utime_us,
-                  const Message& message) {
-  const int size = message.getEncodedSize();
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
-  if (message.encode(bytes.data(), 0, size) != size) {
-    throw std::invalid_argument(std::string("experiment LCM log: a ") + Message::getTypeName() + " does not encode");
-  }
-  lcm::LogEvent event{};
-  event.timestamp = utime_us;
-  event.channel = channel;
-  event.datalen = size;
-  event.data = bytes.data();
-  if (log.writeEvent(&event) != 0) {
-    fail(file, std::string("writing an event on ") + channel + " failed (" + std::strerror(errno) + ")");
-  }
 }
 
 std::int64_t microseconds(double t_s) {
@@ -105,9 +81,10 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
                                 " s, expected a positive period");
   }
 
-  errno = 0;
-  auto log = std::make_unique<lcm::LogFile>(file.string(), "w");
-  if (!log->good()) fail(file, std::string("cannot be created (") + std::strerror(errno) + ")");
+  // The run log's writer, driven synchronously: no rings, no thread.
+  hil::RunLogWriterOptions options;
+  options.file = file;
+  hil::RunLogWriter log(options);
   const double t0 = rows > 0 ? (*columns[0])[0] : 0.0;
   fullarm_lcm::ident_experiment_t header;
   header.utime = microseconds(t0);
@@ -118,7 +95,7 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
   header.sample_period_s = info.sample_period_s;
   header.num_held = static_cast<std::int8_t>(held.size());
   for (const HeldAngle& h : held) header.held_joints.push_back(h.joint);
-  writeMessage(*log, file, channel::kIdentExperiment, header.utime, header);
+  log.writeMessage(channel::kIdentExperiment, header.utime, header);
 
   fullarm_lcm::ident_sample_t sample;
   sample.num_held = header.num_held;
@@ -132,10 +109,13 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
     sample.q_rad = (*columns[3])[k];
     sample.tau_measured_nm = (*columns[4])[k];
     for (std::size_t j = 0; j < held.size(); ++j) sample.held_q_rad[j] = (*held_columns[j])[k];
-    writeMessage(*log, file, channel::kIdentSample, sample.utime, sample);
+    log.writeMessage(channel::kIdentSample, sample.utime, sample);
   }
-  if (std::fflush(log->getFilePtr()) != 0) fail(file, std::string("flush failed (") + std::strerror(errno) + ")");
-  if (std::ferror(log->getFilePtr()) != 0) fail(file, "a write failed");
+  log.stop();  // flushes
+  // Write errors name the file already; an encoding error names the channel only.
+  if (const std::string e = log.error(); !e.empty()) {
+    throw hil::RunLogError(e.rfind(file.string(), 0) == 0 ? e : file.string() + ": " + e);
+  }
 }
 
 ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {

@@ -175,6 +175,17 @@ TEST(ExperimentLcmLogTest, ATableWrittenAndReadBackIsTheSameToTheBit) {
   ExperimentLogInfo no_period = info();
   no_period.sample_period_s = 0.0;
   EXPECT_THROW(writeExperimentLcmLog(tempFile("bad.lcm"), written, no_period), std::invalid_argument);
+  // A file that cannot be created, and one that runs out of room (/dev/full takes the open and
+  // fails every write), are errors naming the file.
+  for (const std::filesystem::path& unwritable : {file / "below_a_file.lcm", std::filesystem::path("/dev/full")}) {
+    if (unwritable == "/dev/full" && !std::filesystem::exists(unwritable)) continue;
+    try {
+      writeExperimentLcmLog(unwritable, written, info());
+      ADD_FAILURE() << unwritable << " was written";
+    } catch (const fullarm::hil::RunLogError& e) {
+      EXPECT_NE(std::string(e.what()).find(unwritable.string()), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(ExperimentLcmLogTest, OtherChannelsAreSkippedAndATruncatedLastEventIsDroppedWithAWarning) {
