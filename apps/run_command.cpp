@@ -545,6 +545,11 @@ int runReplay(const ReplayCommandOptions& o) {
             << "  valve commands: " << r.valve_mismatches << " ticks differ; contact torques: " << r.torque_mismatches
             << "; link forces: " << r.force_mismatches << "\n"
             << (pass ? "  reproduced bit for bit\n" : "  NOT reproduced: " + r.first_mismatch + "\n");
+  if (!r.io_node.empty()) {
+    std::cout << "  recorded over LCM on a node that said it serves:";
+    for (const auto& [key, value] : r.io_node) std::cout << " " << key << "=" << (value.empty() ? "(none)" : value);
+    std::cout << "\n";
+  }
   if (!o.out_dir.empty()) {
     reports::Report report("replay", "Replay of " + std::filesystem::path(o.log).filename().string());
     report.setVerdict(pass, pass ? "Every force, torque and valve command reproduced bit for bit"
@@ -561,7 +566,9 @@ int runReplay(const ReplayCommandOptions& o) {
                                   {"force_mismatches", r.force_mismatches},
                                   {"truncated", r.truncated},
                                   {"warning", r.warning},
-                                  {"changed_files", r.changed_files}};
+                                  {"changed_files", r.changed_files},
+                                  {"io_node", nlohmann::json::object()}};
+    for (const auto& [key, value] : r.io_node) report.results()["replay"]["io_node"][key] = value;
     // What the log shows of the run: its 3D replay and its charts over time.
     const hil::HilSession session(r.options, false);
     const hil::RunResult logged = runFromLog(o.log, session);

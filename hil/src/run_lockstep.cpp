@@ -69,11 +69,13 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
   std::vector<double> compute_s;
   compute_s.reserve(ticks);
 
+  // The device first: its configure() is what an LCM node's description is known from, which
+  // the log's header records.
+  device_->configure();
   std::unique_ptr<RunRecorder> recorder;
   if (!options_.log.empty()) recorder = std::make_unique<RunRecorder>(options_.log, *this, options_.command_line, false);
   MinimaSetRecord set_record;
 
-  device_->configure();
   device_->activate();
   JointSample sample;
   IoVector valve;

@@ -142,6 +142,9 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
   double search_s = 0.0;
   std::uint64_t searches = 0;
 
+  // The device first: a missing board ends the run before any thread starts, and an LCM node's
+  // description, which the log's header records, is known from its configure().
+  device_->configure();
   std::unique_ptr<RunRecorder> recorder;
   if (!options_.log.empty()) recorder = std::make_unique<RunRecorder>(options_.log, *this, options_.command_line, true);
   // The global node over LCM, when the search is remote: no node is an error before any thread
@@ -150,8 +153,6 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
   if (!options_.search_url.empty()) {
     remote = std::make_unique<LcmLiveSearchClient>(options_.search_url, 5.0, config_.heartbeat_period_s);
   }
-  // The device first: a missing board ends the run before any thread starts.
-  device_->configure();
   device_->activate();
 
   // Sets from the global node over LCM: each whole set that arrives is handed to the tick. Its

@@ -1,12 +1,15 @@
 #include "fullarm/hil/run_recording.hpp"
 
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <sstream>
+#include <string_view>
 
 #include "fullarm/core/config_error.hpp"
+#include "fullarm/hil/lcm_io.hpp"
 
 namespace fullarm::hil {
 
@@ -106,6 +109,19 @@ RunRecorder::RunRecorder(const std::filesystem::path& file, const HilSession& se
                   parameter("global_period_ticks", std::to_string(session.config().global_period_ticks)),
                   parameter("delivery_delay_ticks", std::to_string(session.config().delivery_delay_ticks)),
                   parameter("oracle", o.oracle ? "true" : "false")};
+  // A remote plant or I/O node (--io lcm): what it said it serves when configure() accepted it
+  // (its plant file is the node's, not the `plant` file above, which gives the tick its joints).
+  if (const auto* lcm = dynamic_cast<const LcmIoDevice*>(session.deviceOrNull()); lcm != nullptr) {
+    if (const IoNodeInfo* node = lcm->nodeInfo(); node != nullptr) {
+      std::string names;
+      for (const std::string& n : node->joint_names) names += (names.empty() ? "" : ",") + n;
+      h.parameters.push_back(parameter("io_node_joints", names));
+      h.parameters.push_back(parameter("io_node_period_us", std::to_string(node->period_us)));
+      h.parameters.push_back(parameter("io_node_simulated", node->simulated ? "true" : "false"));
+      h.parameters.push_back(parameter("io_node_scripted_user", node->scripted_user ? "true" : "false"));
+      h.parameters.push_back(parameter("io_node_plant", node->plant));
+    }
+  }
   h.num_parameters = static_cast<std::int16_t>(h.parameters.size());
   writer_->writeMessage(channel::kRunHeader, 0, h);
   writer_->addSource(joints_, channel::kJointState);
@@ -231,6 +247,34 @@ struct LoggedTick {
   fullarm_lcm::haptic_status_t haptics;
 };
 
+/// A header parameter's value as a finite duration > 0 in seconds: the whole text, as written by
+/// exact(); anything else is an error naming the log and the parameter.
+double headerSeconds(const fullarm_lcm::run_parameter_t& p, const std::filesystem::path& log) {
+  double v = 0.0;
+  const char* first = p.value.data();
+  const char* last = first + p.value.size();
+  const auto [end, ec] = std::from_chars(first, last, v);
+  if (p.value.empty() || ec != std::errc() || end != last || !std::isfinite(v) || v <= 0.0) {
+    throw core::ConfigError(log, "run header parameter " + p.key,
+                            "expected a finite number of seconds > 0, got '" + p.value + "'");
+  }
+  return v;
+}
+
+/// A header parameter's value as a whole number of ticks >= `min`, else an error naming the log
+/// and the parameter.
+int headerTicks(const fullarm_lcm::run_parameter_t& p, const std::filesystem::path& log, int min) {
+  int v = 0;
+  const char* first = p.value.data();
+  const char* last = first + p.value.size();
+  const auto [end, ec] = std::from_chars(first, last, v);
+  if (p.value.empty() || ec != std::errc() || end != last || v < min) {
+    throw core::ConfigError(log, "run header parameter " + p.key,
+                            "expected a whole number of ticks >= " + std::to_string(min) + ", got '" + p.value + "'");
+  }
+  return v;
+}
+
 RunOptions optionsFromHeader(const fullarm_lcm::run_header_t& h, const std::filesystem::path& log) {
   RunOptions o;
   if (h.io == "sim") {
@@ -258,10 +302,10 @@ RunOptions optionsFromHeader(const fullarm_lcm::run_header_t& h, const std::file
     if (f.role == "daq") o.daq_config = f.path;
   }
   for (const fullarm_lcm::run_parameter_t& p : h.parameters) {
-    if (p.key == "duration_s") o.duration_s = std::stod(p.value);
+    if (p.key == "duration_s") o.duration_s = headerSeconds(p, log);
     if (p.key == "start_posture") o.start_posture = p.value;
-    if (p.key == "global_period_ticks") o.global_period_ticks = std::stoi(p.value);
-    if (p.key == "delivery_delay_ticks") o.delivery_delay_ticks = std::stoi(p.value);
+    if (p.key == "global_period_ticks") o.global_period_ticks = headerTicks(p, log, 1);
+    if (p.key == "delivery_delay_ticks") o.delivery_delay_ticks = headerTicks(p, log, 1);
   }
   o.oracle = false;
   return o;
@@ -306,6 +350,10 @@ ReplayReport replayLog(const std::filesystem::path& log) {
   report.warning = reader.warning();
   if (!have_header) throw RunLogError(log.string() + ": no run header: not a fullarm run log");
   report.options = optionsFromHeader(header, log);
+  for (const fullarm_lcm::run_parameter_t& p : header.parameters) {
+    static constexpr std::string_view kNode = "io_node_";
+    if (p.key.compare(0, kNode.size(), kNode) == 0) report.io_node.emplace_back(p.key.substr(kNode.size()), p.value);
+  }
   report.clock = header.clock;
   for (const fullarm_lcm::run_file_t& f : header.files) {
     std::string now;

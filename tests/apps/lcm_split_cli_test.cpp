@@ -39,6 +39,7 @@
 #include "fullarm/hil/node_description.hpp"
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_log.hpp"
+#include "fullarm/hil/run_recording.hpp"
 #include "fullarm/identification/signal_csv.hpp"
 #include "fullarm/plant/plant_config.hpp"
 #include "private_network.hpp"
@@ -162,6 +163,25 @@ TEST_F(LcmSplitCli, ALockstepRunOverThePlantNodeWritesTheInProcessRunsLog) {
     ASSERT_EQ(a[i].first, b[i].first) << "event " << i;
     ASSERT_TRUE(a[i].second == b[i].second) << "event " << i << " on " << a[i].first << " differs";
   }
+
+  // The header records the node the run was served by; `fullarm replay` names it (and names no
+  // node for the in-process run).
+  const test::CliResult replay = test::runFullarm("--quiet replay " + (dir_ / "lcm" / "run.lcmlog").string() +
+                                                  " --out " + (dir_ / "replay").string());
+  ASSERT_EQ(replay.exit_code, 0) << replay.output;
+  EXPECT_NE(replay.output.find("recorded over LCM on a node that said it serves:"), std::string::npos) << replay.output;
+  std::ifstream in(dir_ / "replay" / "summary.json");
+  const nlohmann::json node = nlohmann::json::parse(in)["results"]["replay"]["io_node"];
+  const std::filesystem::path plant_file = plant::defaultPlantConfigPath();
+  EXPECT_EQ(node.value("plant", ""), plant_file.filename().string() + " sha256 " + hil::sha256File(plant_file))
+      << node.dump();
+  EXPECT_EQ(node.value("simulated", ""), "true") << node.dump();
+  EXPECT_EQ(node.value("scripted_user", ""), "true") << node.dump();
+  EXPECT_EQ(node.value("period_us", ""), "1000") << node.dump();
+  EXPECT_NE(node.value("joints", "").find("R_EB"), std::string::npos) << node.dump();
+  const test::CliResult replay_sim = test::runFullarm("--quiet replay " + (dir_ / "sim" / "run.lcmlog").string());
+  ASSERT_EQ(replay_sim.exit_code, 0) << replay_sim.output;
+  EXPECT_EQ(replay_sim.output.find("recorded over LCM"), std::string::npos) << replay_sim.output;
 }
 
 TEST_F(LcmSplitCli, ThreeProcessesInLockstepWriteTheInProcessRunsLog) {

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <thread>
 
 #include "fullarm/hil/lcm_io.hpp"
@@ -19,6 +20,7 @@
 #include "fullarm/hil/run.hpp"
 #include "fullarm/hil/run_recording.hpp"
 #include "fullarm/hil/sim_io.hpp"
+#include "fullarm/plant/plant_config.hpp"
 #include "hil_fixture.hpp"
 #include "private_network.hpp"
 #include "run_fixture.hpp"
@@ -177,12 +179,16 @@ bool waitForPlantHeartbeat(const std::function<bool(const HeartbeatRecord&)>& do
   return false;
 }
 
+std::vector<std::string> armJointNames();
+
 TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
   RunOptions local = holdAtTheWheel(1.5);
   const RunResult in_process = runHil(local);
 
   SessionPlantThread plant(local, plantOptions());  // the same files and seed
-  const RunResult remote = runHil(overTheNodes(local, false));
+  RunOptions over = overTheNodes(local, false);
+  over.log = fullarm::test::scratchDir("hil_lcm_io_remote_log") / "run.lcmlog";
+  const RunResult remote = runHil(over);
   // The safe output at the end is sent without a reply: the node is stopped once its heartbeat
   // says it served that command (on a loaded machine the node's thread may not have run yet).
   const auto last_command = static_cast<std::int64_t>(remote.telemetry.size() + 1);
@@ -196,6 +202,21 @@ TEST_F(LcmIo, ARunOverRemoteIoEqualsTheInProcessRunBitForBit) {
   EXPECT_EQ(plant.result.commands, remote.telemetry.size() + 1);
   EXPECT_TRUE(plant.result.safe_at_exit);
   expectSameRun(in_process, remote);
+
+  // The log's header records what the node said it serves; the log replays bit for bit.
+  const ReplayReport replay = replayLog(over.log);
+  EXPECT_TRUE(replay.identical()) << replay.first_mismatch;
+  std::map<std::string, std::string> node(replay.io_node.begin(), replay.io_node.end());
+  std::string joints;
+  for (const std::string& n : armJointNames()) joints += (joints.empty() ? "" : ",") + n;
+  EXPECT_EQ(node["joints"], joints);
+  EXPECT_EQ(node["period_us"], "1000");
+  EXPECT_EQ(node["simulated"], "true");
+  EXPECT_EQ(node["scripted_user"], "true");  // the node's session straps in the run's user
+  const std::filesystem::path plant_file =
+      local.plant_config.empty() ? plant::defaultPlantConfigPath() : local.plant_config;
+  EXPECT_EQ(node["plant"], plant_file.filename().string() + " sha256 " + sha256File(plant_file));
+  EXPECT_EQ(replay.io_node.size(), 5u);
 }
 
 TEST_F(LcmIo, ThreeNodesInLockstepEqualTheInProcessRunBitForBit) {

@@ -1,12 +1,20 @@
 // The run's LCM log: SHA-256 of the header's inputs (FIPS 180-4 vectors), a lockstep run's log
 // replayed through the same tick bit for bit, a truncated log replayed up to its last complete
-// event with a warning naming the offset, a corrupt one rejected naming the offset.
+// event with a warning naming the offset, a corrupt one rejected naming the offset, a header
+// parameter that does not read as its kind rejected naming it.
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "fullarm/core/config_error.hpp"
+#include "fullarm/hil/run_log.hpp"
 
 #include "fullarm/hil/run_recording.hpp"
 #include "run_fixture.hpp"
@@ -82,6 +90,68 @@ TEST(RunLog, ACorruptLogIsAnErrorNamingTheOffset) {
     EXPECT_NE(std::string(e.what()).find("offset"), std::string::npos) << e.what();
     EXPECT_GE(e.offset(), 0);
   }
+}
+
+// The recorded log with one header parameter's value replaced, every other event as it was.
+std::filesystem::path logWithHeaderParameter(const std::filesystem::path& dir, const std::string& key,
+                                             const std::string& value) {
+  const auto out = dir / (key + ".lcmlog");
+  RunLogWriterOptions options;
+  options.file = out;
+  RunLogWriter writer(options);
+  RunLogReader reader(recordedLog());
+  RunLogEntry entry;
+  bool replaced = false;
+  while (reader.next(entry)) {
+    if (auto* h = std::get_if<fullarm_lcm::run_header_t>(&entry.message)) {
+      for (fullarm_lcm::run_parameter_t& p : h->parameters) {
+        if (p.key == key) {
+          p.value = value;
+          replaced = true;
+        }
+      }
+    }
+    std::visit([&](const auto& m) { writer.writeMessage(entry.event.channel, entry.event.utime_us, m); },
+               entry.message);
+  }
+  EXPECT_TRUE(replaced) << key;
+  return out;
+}
+
+// A header whose numbers do not read as their kind is an error naming the log and the parameter,
+// not an exception from the standard library's parsers nor a run with another setting.
+TEST(RunLog, AHeaderParameterThatIsNotItsKindIsAnErrorNamingIt) {
+  const auto dir = fullarm::test::scratchDir("hil_bad_header");
+  const std::vector<std::pair<std::string, std::string>> bad = {{"duration_s", "abc"},
+                                                                {"duration_s", "nan"},
+                                                                {"duration_s", "inf"},
+                                                                {"duration_s", "-2"},
+                                                                {"duration_s", "0"},
+                                                                {"duration_s", "2 s"},
+                                                                {"duration_s", ""},
+                                                                {"global_period_ticks", "1.5"},
+                                                                {"global_period_ticks", "0"},
+                                                                {"global_period_ticks", "99999999999"},
+                                                                {"delivery_delay_ticks", "x"},
+                                                                {"delivery_delay_ticks", "-1"}};
+  for (const auto& [key, value] : bad) {
+    SCOPED_TRACE(key + " = '" + value + "'");
+    const auto log = logWithHeaderParameter(dir, key, value);
+    try {
+      (void)replayLog(log);
+      FAIL() << "a bad header value must be an error";
+    } catch (const core::ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(log.string()), std::string::npos) << what;
+      EXPECT_NE(what.find("run header parameter " + key), std::string::npos) << what;
+      EXPECT_NE(what.find("'" + value + "'"), std::string::npos) << what;
+    }
+  }
+  // The same rewriting with the recorded values replays bit for bit: the errors come from the
+  // values alone.
+  const ReplayReport report = replayLog(logWithHeaderParameter(dir, "duration_s", "2"));
+  EXPECT_TRUE(report.identical()) << report.first_mismatch;
+  EXPECT_EQ(report.ticks, 2000u);
 }
 
 }  // namespace

@@ -199,6 +199,8 @@ class HilSession {
   [[nodiscard]] const HilConfig& config() const noexcept { return config_; }
   [[nodiscard]] const haptics::HapticsParams& hapticsParams() const noexcept { return haptics_; }
   [[nodiscard]] IoDevice& device() noexcept { return *device_; }
+  /// The device, or nullptr for a session built without one (replay).
+  [[nodiscard]] const IoDevice* deviceOrNull() const noexcept { return device_; }
   /// The simulated arm behind sim and fakedaq (nullptr for comedi).
   [[nodiscard]] SimulatedArm* simulatedArm() noexcept { return arm_; }
   [[nodiscard]] const ScriptedUser* user() const noexcept { return user_.get(); }

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fullarm/hil/log_records.hpp"
@@ -91,6 +92,10 @@ struct ReplayReport {
   bool truncated = false;
   std::string warning;                     ///< names the offset of a truncated log
   std::vector<std::string> changed_files;  ///< input files whose SHA-256 differs from the header's
+  /// A run over remote I/O (--io lcm): what the node said it serves, from the header's `io_node_*`
+  /// parameters, as (joints, period_us, simulated, scripted_user, plant) keys and values; empty
+  /// for the other back-ends.
+  std::vector<std::pair<std::string, std::string>> io_node;
   [[nodiscard]] bool identical() const noexcept {
     return valve_mismatches == 0 && torque_mismatches == 0 && force_mismatches == 0 && ticks > 0;
   }
