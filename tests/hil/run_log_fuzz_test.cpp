@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <climits>
 #include <fstream>
 #include <optional>
 #include <random>
@@ -184,6 +185,37 @@ TEST_F(RunLogFuzz, EveryByteFlippedInHeadersChannelsAndPayloads) {
         }
       }
     }
+  }
+}
+
+// The run header's strings carry their own int32 length (with the terminating NUL): a length of
+// zero or below, or past the payload's end, is a corrupt header naming its offset, never a string
+// read out of bounds or an exception of the standard library's.
+TEST_F(RunLogFuzz, AHeaderStringLengthOutOfRangeIsCorruptNamingTheHeader) {
+  std::size_t header = spans_.size();
+  for (std::size_t k = 0; k < spans_.size(); ++k) {
+    if (original_[k].channel == channel::kRunHeader) header = k;
+  }
+  ASSERT_LT(header, spans_.size());
+  const Span& h = spans_[header];
+  // The payload: the type's hash (8 bytes), utime, seq and wall_utime (8 each), then the first
+  // string's length.
+  const auto at = static_cast<std::size_t>(h.offset + 28 + h.channel_len + 8 + 24);
+  for (const std::int64_t len :
+       {std::int64_t{0}, std::int64_t{-1}, std::int64_t{INT32_MIN}, std::int64_t{INT32_MAX}, h.data_len - 31}) {
+    SCOPED_TRACE("length " + std::to_string(len));
+    Bytes bytes = clean_;
+    const auto u = static_cast<std::uint32_t>(static_cast<std::int32_t>(len));
+    bytes[at] = static_cast<std::uint8_t>(u >> 24);
+    bytes[at + 1] = static_cast<std::uint8_t>(u >> 16);
+    bytes[at + 2] = static_cast<std::uint8_t>(u >> 8);
+    bytes[at + 3] = static_cast<std::uint8_t>(u);
+    writeBytes(damaged_, bytes, bytes.size());
+    const Verdict v = readAll(damaged_);
+    ASSERT_TRUE(v.error.has_value()) << "a damaged string length went unnoticed";
+    EXPECT_EQ(v.error->offset(), h.offset);
+    EXPECT_EQ(v.error->channel(), channel::kRunHeader);
+    expectPrefixIntact(v, header);
   }
 }
 

@@ -36,6 +36,7 @@
 #include <variant>
 #include <vector>
 
+#include "fullarm/hil/lcm_layout.hpp"
 #include "fullarm/hil/log_records.hpp"
 #include "fullarm/hil/spsc_ring.hpp"
 #include "fullarm_lcm/haptic_status_t.hpp"
@@ -335,10 +336,13 @@ template <class Message>
 Message decodeEvent(const LcmLogEvent& event, const std::filesystem::path& file) {
   Message message;
   int used = -1;
-  try {
-    used = message.decode(event.data.data(), 0, static_cast<int>(event.data.size()));
-  } catch (const std::exception&) {
-    used = -1;  // an impossible array length in the payload (std::length_error, bad_alloc)
+  // A string length the generated decoder would read past the payload with is refused first.
+  if (stringLengthsInPayload(event.data, static_cast<const Message*>(nullptr))) {
+    try {
+      used = message.decode(event.data.data(), 0, static_cast<int>(event.data.size()));
+    } catch (const std::exception&) {
+      used = -1;  // an impossible array length in the payload (std::length_error, bad_alloc)
+    }
   }
   if (used < 0 || used != static_cast<int>(event.data.size())) {
     throw RunLogError(file.string() + ": corrupt LCM log at byte offset " + std::to_string(event.offset) +
