@@ -546,9 +546,9 @@ int runReplay(const ReplayCommandOptions& o) {
             << "; link forces: " << r.force_mismatches << "\n"
             << (pass ? "  reproduced bit for bit\n" : "  NOT reproduced: " + r.first_mismatch + "\n");
   if (!r.io_node.empty()) {
-    std::cout << "  recorded over LCM on a node that said it serves:";
-    for (const auto& [key, value] : r.io_node) std::cout << " " << key << "=" << (value.empty() ? "(none)" : value);
-    std::cout << "\n";
+    std::cout << "  recorded over LCM on a node that said it serves:\n";
+    for (const auto& [key, value] : r.io_node)
+      std::cout << "    " << key << ": " << (value.empty() ? "(none)" : value) << "\n";
   }
   if (!o.out_dir.empty()) {
     reports::Report report("replay", "Replay of " + std::filesystem::path(o.log).filename().string());

@@ -69,12 +69,15 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
   std::vector<double> compute_s;
   compute_s.reserve(ticks);
 
-  // The device first: its configure() is what an LCM node's description is known from, which
-  // the log's header records.
-  device_->configure();
+  // The log is created first (a run that fails to start leaves an empty file, not an earlier
+  // run's log); its header follows the device's configure(), which is where an LCM node's
+  // description, recorded in it, is known from.
   std::unique_ptr<RunRecorder> recorder;
-  if (!options_.log.empty()) recorder = std::make_unique<RunRecorder>(options_.log, *this, options_.command_line, false);
+  if (!options_.log.empty()) recorder = std::make_unique<RunRecorder>(options_.log, false);
   MinimaSetRecord set_record;
+
+  device_->configure();
+  if (recorder) recorder->begin(*this, options_.command_line);
 
   device_->activate();
   JointSample sample;

@@ -142,11 +142,13 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
   double search_s = 0.0;
   std::uint64_t searches = 0;
 
-  // The device first: a missing board ends the run before any thread starts, and an LCM node's
-  // description, which the log's header records, is known from its configure().
-  device_->configure();
+  // The log is created first (a run that fails to start leaves an empty file, not an earlier
+  // run's log); then the device: a missing board ends the run before any thread starts, and an
+  // LCM node's description, which the log's header records, is known from its configure().
   std::unique_ptr<RunRecorder> recorder;
-  if (!options_.log.empty()) recorder = std::make_unique<RunRecorder>(options_.log, *this, options_.command_line, true);
+  if (!options_.log.empty()) recorder = std::make_unique<RunRecorder>(options_.log, true);
+  device_->configure();
+  if (recorder) recorder->begin(*this, options_.command_line);
   // The global node over LCM, when the search is remote: no node is an error before any thread
   // starts.
   std::unique_ptr<LcmLiveSearchClient> remote;

@@ -73,8 +73,7 @@ std::uint32_t encodeInputFlags(const RecordedTick& tick, std::uint64_t previous_
   return f;
 }
 
-RunRecorder::RunRecorder(const std::filesystem::path& file, const HilSession& session, const std::string& command_line,
-                         bool threaded)
+RunRecorder::RunRecorder(const std::filesystem::path& file, bool threaded)
     : joints_(kTickRingRecords),
       valves_(kTickRingRecords),
       haptics_(kTickRingRecords),
@@ -84,6 +83,9 @@ RunRecorder::RunRecorder(const std::filesystem::path& file, const HilSession& se
   RunLogWriterOptions options;
   options.file = file;
   writer_ = std::make_unique<RunLogWriter>(options);
+}
+
+void RunRecorder::begin(const HilSession& session, const std::string& command_line) {
   const RunOptions& o = session.options();
   fullarm_lcm::run_header_t h;
   h.utime = 0;

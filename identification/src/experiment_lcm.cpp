@@ -110,6 +110,7 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
     sample.tau_measured_nm = (*columns[4])[k];
     for (std::size_t j = 0; j < held.size(); ++j) sample.held_q_rad[j] = (*held_columns[j])[k];
     log.writeMessage(channel::kIdentSample, sample.utime, sample);
+    if (k % 1024 == 1023 && !log.error().empty()) break;  // a failed write: the rest would fail too
   }
   log.stop();  // flushes
   // Write errors name the file already; an encoding error names the channel only.

@@ -11,6 +11,9 @@
 namespace fullarm::identification {
 namespace {
 
+/// The first words of the header armYamlWithGravity writes.
+const std::string kHeaderStart = "# The arm file ";
+
 std::string number(double v) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.10g", v == 0.0 ? 0.0 : v);  // no "-0"
@@ -84,6 +87,13 @@ std::string armYamlWithGravity(std::string_view yaml_text, const std::string& so
     std::istringstream in{std::string(yaml_text)};
     for (std::string line; std::getline(in, line);) lines.push_back(line);
   }
+  // A source that is itself a written file: its header (up to the first bare "#") described an
+  // earlier fit and gives way to this one's.
+  if (!lines.empty() && lines.front().rfind(kHeaderStart, 0) == 0) {
+    std::size_t end = 0;
+    while (end < lines.size() && lines[end] != "#") ++end;
+    if (end < lines.size()) lines.erase(lines.begin(), lines.begin() + static_cast<std::ptrdiff_t>(end + 1));
+  }
   for (std::size_t j = 0; j < source.joints.size(); ++j) {
     const auto& before = source.joints[j];
     const auto& after = fitted.joints[j];
@@ -131,7 +141,7 @@ std::string armYamlWithGravity(std::string_view yaml_text, const std::string& so
   // A header that says what this file is: the source's own header below it still describes the
   // source (its kinematics, limits and sensors are unchanged).
   std::string text =
-      "# The arm file " + std::filesystem::path(source_name).filename().string() +
+      kHeaderStart + std::filesystem::path(source_name).filename().string() +
       " with the gravity set of the links marked\n# \"" + std::string(note) +
       "\"\n# (mass and centre of mass; their inertias scaled by the mass ratio). Every other line is the\n" +
       "# source's, below.\n#\n";

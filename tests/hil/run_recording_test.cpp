@@ -1,7 +1,8 @@
 // The run's LCM log: SHA-256 of the header's inputs (FIPS 180-4 vectors), a lockstep run's log
 // replayed through the same tick bit for bit, a truncated log replayed up to its last complete
 // event with a warning naming the offset, a corrupt one rejected naming the offset, a header
-// parameter that does not read as its kind rejected naming it.
+// parameter that does not read as its kind rejected naming it, a run that cannot configure its
+// device leaving an empty log.
 
 #include <gtest/gtest.h>
 
@@ -90,6 +91,27 @@ TEST(RunLog, ACorruptLogIsAnErrorNamingTheOffset) {
     EXPECT_NE(std::string(e.what()).find("offset"), std::string::npos) << e.what();
     EXPECT_GE(e.offset(), 0);
   }
+}
+
+// A run whose device cannot be configured (the real board, in real time, on a machine without
+// one) writes no header and no tick, and leaves no earlier run's log under its name: the file is
+// created empty.
+TEST(RunLog, ARunThatCannotConfigureItsDeviceLeavesAnEmptyLogNotAnEarlierOne) {
+  const auto dir = fullarm::test::scratchDir("hil_no_board_log");
+  RunOptions o = test::shippedRun(1.0);
+  o.io = IoKind::kComedi;
+  o.clock = ClockKind::kRealtime;
+  o.log = dir / "run.lcmlog";
+  std::filesystem::copy_file(recordedLog(), o.log, std::filesystem::copy_options::overwrite_existing);
+  ASSERT_GT(std::filesystem::file_size(o.log), 0u);
+  try {
+    (void)runHil(o);
+    FAIL() << "no board: the run must not start";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot open the Comedi device"), std::string::npos) << e.what();
+  }
+  ASSERT_TRUE(std::filesystem::exists(o.log));
+  EXPECT_EQ(std::filesystem::file_size(o.log), 0u);
 }
 
 // The recorded log with one header parameter's value replaced, every other event as it was.

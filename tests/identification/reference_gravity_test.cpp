@@ -7,6 +7,7 @@
 
 #include <cstdio>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include "arm_test_util.hpp"
@@ -113,6 +114,17 @@ TEST(ReferenceGravityTest, FittedSetWrittenAsArmYamlReadsBackToTheSameGravity) {
     arm::computeGravityTorques(result.fitted, b, q);
     EXPECT_LT((a.tau_gravity - b.tau_gravity).cwiseAbs().maxCoeff(), 1e-7);
   }
+  // The header names the source by its file name and the note; the source's own text follows.
+  const std::string name = std::filesystem::path(path).filename().string();
+  EXPECT_EQ(yaml.rfind("# The arm file " + name + " with the gravity set of the links marked\n# \"fitted\"", 0), 0u)
+      << yaml.substr(0, 300);
+  EXPECT_NE(yaml.find("#\n" + text.str().substr(0, 40)), std::string::npos);
+  // Written again from a written file, the earlier header gives way: one header, the new note.
+  const std::string again = armYamlWithGravity(yaml, "out/arm.yaml", read, source, "refitted");
+  EXPECT_EQ(again.rfind("# The arm file arm.yaml with the gravity set of the links marked\n# \"refitted\"", 0), 0u)
+      << again.substr(0, 300);
+  EXPECT_EQ(again.find("\"fitted\""), std::string::npos);
+  EXPECT_NE(again.find("#\n" + text.str().substr(0, 40)), std::string::npos);
 }
 
 }  // namespace

@@ -44,10 +44,13 @@ inline constexpr std::uint32_t kInputFlagPeerHeartbeatLost = 1u << 24;  ///< a p
 /// by the writer's own thread (threaded) or by pump() (lockstep).
 class RunRecorder {
  public:
-  /// Creates the log and writes its header.
+  /// Creates the log (an earlier file of that name is replaced at once, so a run that stops
+  /// before its first tick does not leave another run's log behind); begin() writes its header.
   /// @throws RunLogError naming the file if it cannot be created
-  RunRecorder(const std::filesystem::path& file, const HilSession& session, const std::string& command_line,
-              bool threaded);
+  RunRecorder(const std::filesystem::path& file, bool threaded);
+  /// Writes the header (the session's inputs and, for remote I/O, what the node said it serves:
+  /// call it after the device's configure()) and starts recording. Once, before the first tick.
+  void begin(const HilSession& session, const std::string& command_line);
   ~RunRecorder();
   RunRecorder(const RunRecorder&) = delete;
   RunRecorder& operator=(const RunRecorder&) = delete;
