@@ -89,6 +89,19 @@ TEST(TuneCli, ContactGoalIsReportedAndMetWhenMadeHard) {
   }
 }
 
+/// The gains `tune` searches, of `joint`, equal bit for bit in `a` and `b`.
+void expectSameTunedGains(const fullarm::controllers::GainsConfig& a, const fullarm::controllers::GainsConfig& b,
+                          const std::string& joint) {
+  const auto at = [&](const fullarm::controllers::GainsConfig& g) {
+    return g.joints[static_cast<std::size_t>(fullarm::controllers::findGainsJoint(g, joint))];
+  };
+  EXPECT_EQ(at(a).impedance.inertia_kgm2, at(b).impedance.inertia_kgm2) << joint;
+  EXPECT_EQ(at(a).impedance.damping_nms_per_rad, at(b).impedance.damping_nms_per_rad) << joint;
+  EXPECT_EQ(at(a).impedance.stiffness_nm_per_rad, at(b).impedance.stiffness_nm_per_rad) << joint;
+  EXPECT_EQ(at(a).sliding_mode.lambda_per_s, at(b).sliding_mode.lambda_per_s) << joint;
+  EXPECT_EQ(at(a).sliding_mode.boundary_layer_radps, at(b).sliding_mode.boundary_layer_radps) << joint;
+}
+
 // Reproducibility: `fullarm tune` starts from the fixed config/dts_tune_start.yaml (not from the
 // gains file it writes) and keys each joint's random draws by its name, so tuning one joint with
 // the default budget writes exactly the gains the shipped config/dts_gains.yaml holds for it (that
@@ -102,14 +115,7 @@ TEST(TuneCli, OneJointWithTheDefaultBudgetReproducesTheShippedGains) {
   const auto tuned = fullarm::controllers::loadGainsConfig(dir / "gains.yaml", model);
   const auto shipped = fullarm::controllers::loadGainsConfig(fullarm::controllers::defaultGainsConfigPath(), model);
   const auto start = fullarm::controllers::loadGainsConfig(fullarm::controllers::defaultTuneStartGainsPath(), model);
-  const auto at = [](const fullarm::controllers::GainsConfig& g) {
-    return g.joints[static_cast<std::size_t>(fullarm::controllers::findGainsJoint(g, "WR"))];
-  };
-  EXPECT_EQ(at(tuned).impedance.inertia_kgm2, at(shipped).impedance.inertia_kgm2);
-  EXPECT_EQ(at(tuned).impedance.damping_nms_per_rad, at(shipped).impedance.damping_nms_per_rad);
-  EXPECT_EQ(at(tuned).impedance.stiffness_nm_per_rad, at(shipped).impedance.stiffness_nm_per_rad);
-  EXPECT_EQ(at(tuned).sliding_mode.lambda_per_s, at(shipped).sliding_mode.lambda_per_s);
-  EXPECT_EQ(at(tuned).sliding_mode.boundary_layer_radps, at(shipped).sliding_mode.boundary_layer_radps);
+  expectSameTunedGains(tuned, shipped, "WR");
   // The untuned joints are copied from the start file, not from the shipped gains.
   const auto sfe = [](const fullarm::controllers::GainsConfig& g) {
     return g.joints[static_cast<std::size_t>(fullarm::controllers::findGainsJoint(g, "SFE"))];
@@ -136,14 +142,7 @@ TEST(TuneCli, OneJointOnTheReferenceGravityArmReproducesItsShippedGains) {
   const fullarm::arm::ArmModel model = fullarm::arm::loadArmModel(referenceGravityArmPath());
   const auto tuned = fullarm::controllers::loadGainsConfig(dir / "gains.yaml", model);
   const auto shipped = fullarm::controllers::loadGainsConfig(referenceGravityGainsPath(), model);
-  const auto wr = [](const fullarm::controllers::GainsConfig& g) {
-    return g.joints[static_cast<std::size_t>(fullarm::controllers::findGainsJoint(g, "WR"))];
-  };
-  EXPECT_EQ(wr(tuned).impedance.inertia_kgm2, wr(shipped).impedance.inertia_kgm2);
-  EXPECT_EQ(wr(tuned).impedance.damping_nms_per_rad, wr(shipped).impedance.damping_nms_per_rad);
-  EXPECT_EQ(wr(tuned).impedance.stiffness_nm_per_rad, wr(shipped).impedance.stiffness_nm_per_rad);
-  EXPECT_EQ(wr(tuned).sliding_mode.lambda_per_s, wr(shipped).sliding_mode.lambda_per_s);
-  EXPECT_EQ(wr(tuned).sliding_mode.boundary_layer_radps, wr(shipped).sliding_mode.boundary_layer_radps);
+  expectSameTunedGains(tuned, shipped, "WR");
   // Tuned on the heavier arm: not the default arm's gains.
   const auto default_gains =
       fullarm::controllers::loadGainsConfig(fullarm::controllers::defaultGainsConfigPath(), model);
