@@ -13,7 +13,6 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -221,13 +220,18 @@ TEST(LcmLayout, TheWalkAgreesWithTheDecoderOnDamagedMessages) {
 TEST(LcmLayout, EveryTypeWithAStringIsWalked) {
   const char* root = std::getenv("FULLARM_SOURCE_DIR");
   ASSERT_NE(root, nullptr) << "FULLARM_SOURCE_DIR is set by CTest";
-  const std::regex string_field(R"(^\s*string\s)");
+  // A field declared `string name;` or `string name[count];`: the line's first word.
+  const auto declaresString = [](const std::string& line) {
+    std::istringstream words(line);
+    std::string first;
+    return static_cast<bool>(words >> first) && first == "string";
+  };
   std::set<std::string> with_strings;
   for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(root) / "hil" / "lcm")) {
     if (entry.path().extension() != ".lcm") continue;
     std::ifstream in(entry.path());
     for (std::string line; std::getline(in, line);) {
-      if (std::regex_search(line, string_field)) with_strings.insert(entry.path().stem().string());
+      if (declaresString(line)) with_strings.insert(entry.path().stem().string());
     }
   }
   const std::set<std::string> walked = {"run_header_t",       "run_file_t",         "run_parameter_t",
