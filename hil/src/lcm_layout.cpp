@@ -34,6 +34,9 @@ class Walk {
   /// An array count of `width` bytes (int8_t or int16_t): not negative.
   bool count(std::size_t width, std::int64_t& n) noexcept { return signedBigEndian(width, n) && n >= 0; }
   [[nodiscard]] bool started() const noexcept { return bytes_.size() >= 8; }
+  /// The walk ended at the payload's end: a field the walk does not know of (a layout that
+  /// changed) is not passed unchecked.
+  [[nodiscard]] bool done() const noexcept { return at_ == bytes_.size(); }
 
  private:
   bool signedBigEndian(std::size_t width, std::int64_t& out) noexcept {
@@ -60,14 +63,14 @@ bool stringLengthsInPayload(std::span<const std::uint8_t> bytes, const fullarm_l
   std::int64_t files = 0;
   std::int64_t parameters = 0;
   return w.started() && w.skip(24) && w.strings(5) && w.skip(12) && w.count(2, files) && w.strings(3 * files) &&
-         w.count(2, parameters) && w.strings(2 * parameters);
+         w.count(2, parameters) && w.strings(2 * parameters) && w.done();
 }
 
 bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
                             const fullarm_lcm::supervisor_event_t* /*type*/) noexcept {
   // utime, seq, tick; cause_code; severity, joint; value, limit; message.
   Walk w(bytes);
-  return w.started() && w.skip(24 + 2 + 2 + 16) && w.string();
+  return w.started() && w.skip(24 + 2 + 2 + 16) && w.string() && w.done();
 }
 
 bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
@@ -75,7 +78,7 @@ bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
   // utime; fullarm_version, command_line, source, joint; sample_period_s; num_held and the names.
   Walk w(bytes);
   std::int64_t held = 0;
-  return w.started() && w.skip(8) && w.strings(4) && w.skip(8) && w.count(1, held) && w.strings(held);
+  return w.started() && w.skip(8) && w.strings(4) && w.skip(8) && w.count(1, held) && w.strings(held) && w.done();
 }
 
 }  // namespace fullarm::hil

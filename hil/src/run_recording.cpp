@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 #include <string_view>
 
 #include "fullarm/core/config_error.hpp"
@@ -86,6 +87,8 @@ RunRecorder::RunRecorder(const std::filesystem::path& file, bool threaded)
 }
 
 void RunRecorder::begin(const HilSession& session, const std::string& command_line) {
+  if (begun_) throw std::logic_error("RunRecorder::begin: the header is written once");
+  begun_ = true;
   const RunOptions& o = session.options();
   fullarm_lcm::run_header_t h;
   h.utime = 0;

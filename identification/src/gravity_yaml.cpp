@@ -128,7 +128,9 @@ std::string armYamlWithGravity(std::string_view yaml_text, const std::string& so
         if (out.empty())
           throw std::invalid_argument(source_name + ": joint " + before.name + ": unreadable inertia line");
         const std::size_t hash = out.find('#');
-        if (hash != std::string::npos) out.insert(hash + 1, " scaled to the fitted mass from:");
+        const std::string prefix = " scaled to the fitted mass from:";
+        if (hash != std::string::npos && out.compare(hash + 1, prefix.size(), prefix) != 0)
+          out.insert(hash + 1, prefix);
         line = out;
         inertia_done = true;
       }

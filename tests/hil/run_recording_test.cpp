@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <variant>
@@ -102,6 +103,20 @@ TEST(RunLog, ARunThatCannotConfigureItsDeviceLeavesAnEmptyLogNotAnEarlierOne) {
   o.io = IoKind::kComedi;
   o.clock = ClockKind::kRealtime;
   o.log = dir / "run.lcmlog";
+  // The shipped channel map with a device file that exists nowhere, so that a machine with the
+  // board does not move the arm here.
+  {
+    std::ifstream in(arm::test::sourcePath("config/dts_daq.yaml"));
+    std::ostringstream text;
+    text << in.rdbuf();
+    std::string map = text.str();
+    const std::string shipped = "device: /dev/comedi0";
+    const std::size_t at = map.find(shipped);
+    ASSERT_NE(at, std::string::npos);
+    map.replace(at, shipped.size(), "device: " + (dir / "no_such_board").string());
+    std::ofstream(dir / "daq.yaml") << map;
+    o.daq_config = dir / "daq.yaml";
+  }
   std::filesystem::copy_file(recordedLog(), o.log, std::filesystem::copy_options::overwrite_existing);
   ASSERT_GT(std::filesystem::file_size(o.log), 0u);
   try {
@@ -109,6 +124,7 @@ TEST(RunLog, ARunThatCannotConfigureItsDeviceLeavesAnEmptyLogNotAnEarlierOne) {
     FAIL() << "no board: the run must not start";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("cannot open the Comedi device"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no_such_board"), std::string::npos) << e.what();
   }
   ASSERT_TRUE(std::filesystem::exists(o.log));
   EXPECT_EQ(std::filesystem::file_size(o.log), 0u);

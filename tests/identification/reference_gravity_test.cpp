@@ -121,6 +121,8 @@ TEST(ReferenceGravityTest, FittedSetWrittenAsArmYamlReadsBackToTheSameGravity) {
   EXPECT_NE(yaml.find("#\n" + text.str().substr(0, 40)), std::string::npos);
   // Written again from a written file, the earlier header gives way: one header, the new note.
   const std::string again = armYamlWithGravity(yaml, "out/arm.yaml", read, source, "refitted");
+  // The inertia comments are not prefixed twice either.
+  EXPECT_EQ(again.find("scaled to the fitted mass from: scaled to the fitted mass from:"), std::string::npos);
   EXPECT_EQ(again.rfind("# The arm file arm.yaml with the gravity set of the links marked\n# \"refitted\"", 0), 0u)
       << again.substr(0, 300);
   EXPECT_EQ(again.find("\"fitted\""), std::string::npos);

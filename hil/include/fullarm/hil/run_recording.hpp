@@ -50,6 +50,7 @@ class RunRecorder {
   RunRecorder(const std::filesystem::path& file, bool threaded);
   /// Writes the header (the HilSession's inputs and, for remote I/O, what the node said it serves:
   /// call it after the device's configure()) and starts recording. Once, before the first tick.
+  /// @throws std::logic_error when called again
   void begin(const HilSession& session, const std::string& command_line);
   ~RunRecorder();
   RunRecorder(const RunRecorder&) = delete;
@@ -76,6 +77,7 @@ class RunRecorder {
   std::uint64_t previous_heartbeat_ = 0;
   std::int64_t seq_joints_ = 0, seq_valves_ = 0, seq_haptics_ = 0, seq_events_ = 0, seq_sets_ = 0;
   bool finished_ = false;
+  bool begun_ = false;
 };
 
 /// The set record of a lockstep search result adopted at `adopted_tick`.
