@@ -9,7 +9,6 @@
 #include <gtest/gtest.h>
 
 #include <climits>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -18,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "arm_test_util.hpp"
 namespace fullarm::hil {
 namespace {
 
@@ -224,8 +224,6 @@ TEST(LcmLayout, TheWalkAgreesWithTheDecoderOnDamagedMessages) {
 // in one that is (run_file_t and run_parameter_t in run_header_t), or by its own decoder
 // (io_node_info_t, lcm_io.cpp). A new type with a string fails this test until it is.
 TEST(LcmLayout, EveryTypeWithAStringIsWalked) {
-  const char* root = std::getenv("FULLARM_SOURCE_DIR");
-  ASSERT_NE(root, nullptr) << "FULLARM_SOURCE_DIR is set by CTest";
   // A field declared `string name;` or `string name[count];`: the line's first word.
   const auto declaresString = [](const std::string& line) {
     std::istringstream words(line);
@@ -233,7 +231,7 @@ TEST(LcmLayout, EveryTypeWithAStringIsWalked) {
     return static_cast<bool>(words >> first) && first == "string";
   };
   std::set<std::string> with_strings;
-  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(root) / "hil" / "lcm")) {
+  for (const auto& entry : std::filesystem::directory_iterator(arm::test::sourcePath("hil/lcm"))) {
     if (entry.path().extension() != ".lcm") continue;
     std::ifstream in(entry.path());
     for (std::string line; std::getline(in, line);) {
