@@ -178,8 +178,9 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
     }
     const auto t4 = Clock::now();
     if (oracle) {
-      oracle->check(k, data.q,
-                    std::span<const haptics::LocalMinimum>(data.tracked.data(), static_cast<std::size_t>(data.num_tracked)));
+      oracle->check(
+          k, data.q,
+          std::span<const haptics::LocalMinimum>(data.tracked.data(), static_cast<std::size_t>(data.num_tracked)));
     }
     const auto t5 = Clock::now();
 
@@ -213,7 +214,8 @@ RunResult HilSession::runLockstep(const RunHooks& hooks) {
     r.missed_contacts = oracle->missed();
     r.link_min_distance_m = oracle->minDistance();
     r.link_max_penetration_m = oracle->maxPenetration();
-    for (const std::uint64_t n : oracle->penetrationTicks()) r.link_penetration_s.push_back(static_cast<double>(n) * period);
+    for (const std::uint64_t n : oracle->penetrationTicks())
+      r.link_penetration_s.push_back(static_cast<double>(n) * period);
   }
   finishResult(r);
   return r;

@@ -18,7 +18,9 @@ std::uint64_t bigEndian(const std::uint8_t* p, int n) noexcept {
   return v;
 }
 
-bool printable(std::uint8_t c) noexcept { return c >= 0x20 && c <= 0x7e; }
+bool printable(std::uint8_t c) noexcept {
+  return c >= 0x20 && c <= 0x7e;
+}
 
 std::string hexByte(std::uint8_t c) {
   static const char* digits = "0123456789abcdef";
@@ -55,7 +57,9 @@ RunLogWriter::RunLogWriter(RunLogWriterOptions options) : options_(std::move(opt
   last_flush_ = std::chrono::steady_clock::now();
 }
 
-RunLogWriter::~RunLogWriter() { stop(); }
+RunLogWriter::~RunLogWriter() {
+  stop();
+}
 
 void RunLogWriter::start() {
   if (running() || stopped_) throw RunLogError(options_.file.string() + ": the run log writer starts only once");
@@ -128,13 +132,13 @@ void RunLogWriter::writeEncoded(const std::string& channel, std::int64_t utime_u
   event.datalen = size;
   event.data = const_cast<void*>(data);  // lcm::LogFile takes a non-const pointer; it only reads
   if (log_->writeEvent(&event) != 0) {
-    noteErrorLocked(options_.file.string() + ": writing an event on " + channel + " failed (" +
-                        std::strerror(errno) + ")",
-                    false);
+    noteErrorLocked(
+        options_.file.string() + ": writing an event on " + channel + " failed (" + std::strerror(errno) + ")", false);
     return;
   }
   ++stats_.events_written;
-  stats_.bytes_written += static_cast<std::uint64_t>(kLcmEventHeaderBytes) + channel.size() + static_cast<std::uint64_t>(size);
+  stats_.bytes_written +=
+      static_cast<std::uint64_t>(kLcmEventHeaderBytes) + channel.size() + static_cast<std::uint64_t>(size);
 }
 
 void RunLogWriter::noteErrorLocked(const std::string& what, bool encode) {
@@ -241,16 +245,19 @@ bool LcmLogReader::next(LcmLogEvent& event) {
   const auto channel_len = static_cast<std::int32_t>(bigEndian(&header[20], 4));
   const auto data_len = static_cast<std::int32_t>(bigEndian(&header[24], 4));
   if (channel_len < 1 || channel_len > kMaxLcmChannelChars) {
-    corrupt(start, "", "impossible channel length " + std::to_string(channel_len) + " (expected 1 .. " +
-                           std::to_string(kMaxLcmChannelChars) + ")");
+    corrupt(start, "",
+            "impossible channel length " + std::to_string(channel_len) + " (expected 1 .. " +
+                std::to_string(kMaxLcmChannelChars) + ")");
   }
   if (data_len < 0 || data_len > kMaxLcmMessageBytes) {
-    corrupt(start, "", "impossible data length " + std::to_string(data_len) + " (expected 0 .. " +
-                           std::to_string(kMaxLcmMessageBytes) + ")");
+    corrupt(start, "",
+            "impossible data length " + std::to_string(data_len) + " (expected 0 .. " +
+                std::to_string(kMaxLcmMessageBytes) + ")");
   }
   if (event_number < 0 || event_number <= last_event_number_) {
-    corrupt(start, "", "event number " + std::to_string(event_number) + " after " +
-                           std::to_string(last_event_number_) + " (event numbers increase)");
+    corrupt(start, "",
+            "event number " + std::to_string(event_number) + " after " + std::to_string(last_event_number_) +
+                " (event numbers increase)");
   }
   const std::int64_t channel_at = start + kLcmEventHeaderBytes;
   const auto channel_have = static_cast<int>(std::min<std::int64_t>(channel_len, size_ - channel_at));
@@ -259,8 +266,9 @@ bool LcmLogReader::next(LcmLogEvent& event) {
   for (int i = 0; i < channel_have; ++i) {
     const auto c = static_cast<std::uint8_t>(channel[static_cast<std::size_t>(i)]);
     if (!printable(c)) {
-      corrupt(start, "", "the channel name is not text (byte " + hexByte(c) + " at offset " +
-                             std::to_string(channel_at + i) + ")");
+      corrupt(
+          start, "",
+          "the channel name is not text (byte " + hexByte(c) + " at offset " + std::to_string(channel_at + i) + ")");
     }
   }
   if (channel_have < channel_len) {
@@ -275,10 +283,12 @@ bool LcmLogReader::next(LcmLogEvent& event) {
     // begins inside what the length claims (then the length itself is wrong).
     const std::int64_t later = findNextEventHeader(data_at, event_number);
     if (later >= 0) {
-      corrupt(start, channel, "data length " + std::to_string(data_len) + " runs past the end of the file, but the next event begins at byte offset " + std::to_string(later));
+      corrupt(start, channel,
+              "data length " + std::to_string(data_len) +
+                  " runs past the end of the file, but the next event begins at byte offset " + std::to_string(later));
     }
-    markTruncated(start, "channel " + channel + ": the file ends after " + std::to_string(size_ - data_at) + " of its " +
-                             std::to_string(data_len) + " data bytes");
+    markTruncated(start, "channel " + channel + ": the file ends after " + std::to_string(size_ - data_at) +
+                             " of its " + std::to_string(data_len) + " data bytes");
     return false;
   }
   event.offset = start;

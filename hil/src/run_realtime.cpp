@@ -85,14 +85,16 @@ std::string makeRealtime(int priority, int cpu, bool& fifo_granted) {
       note += pin == 0 ? ", pinned to CPU " + std::to_string(cpu)
                        : ", WARNING: pinning to CPU " + std::to_string(cpu) + " refused (" + std::strerror(pin) + ")";
     } else {
-      note += ", WARNING: CPU " + std::to_string(cpu) + " does not exist (" + std::to_string(cpus) + " online): not pinned";
+      note +=
+          ", WARNING: CPU " + std::to_string(cpu) + " does not exist (" + std::to_string(cpus) + " online): not pinned";
     }
   }
   return note;
 }
 
 struct ScopedSignals {
-  struct sigaction old_int {}, old_term {};
+  struct sigaction old_int {
+  }, old_term{};
   ScopedSignals() {
     g_stop_signal.store(false);
     struct sigaction sa {};
@@ -215,7 +217,8 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
       sleepUntil(next);
       next += global_ns;
       angles.consumeAll([&](const JointStateRecord& rec) {
-        for (int k = 0; k < rec.num_joints; ++k) q[tick_.device_joints.modelIndex(k)] = rec.q_rad[static_cast<std::size_t>(k)];
+        for (int k = 0; k < rec.num_joints; ++k)
+          q[tick_.device_joints.modelIndex(k)] = rec.q_rad[static_cast<std::size_t>(k)];
         query_tick = rec.tick;
         have_q = true;
       });
@@ -312,7 +315,8 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
         data.supervisor.num_events = 0;
         supervisorLimitOutputs(tick_.supervisor, data.supervisor, valve);
         for (int e = 0; e < data.supervisor.num_events && telemetry.num_events < kMaxEventsPerTick; ++e) {
-          telemetry.events[static_cast<std::size_t>(telemetry.num_events++)] = data.supervisor.events[static_cast<std::size_t>(e)];
+          telemetry.events[static_cast<std::size_t>(telemetry.num_events++)] =
+              data.supervisor.events[static_cast<std::size_t>(e)];
         }
         telemetry.supervisor_state = data.supervisor.state;
         telemetry.trip_cause = data.supervisor.trip_cause;
@@ -369,7 +373,8 @@ RunResult HilSession::runRealtime(const RunHooks& hooks) {
         consecutive = 0;
       }
       // A stop signal ends the run 0.1 s after the E-stop, with the valves at null meanwhile.
-      if (requests.estop_signal && stop_at == ticks) stop_at = std::min(ticks, k + static_cast<std::uint64_t>(0.1 / period));
+      if (requests.estop_signal && stop_at == ticks)
+        stop_at = std::min(ticks, k + static_cast<std::uint64_t>(0.1 / period));
     }
     wall_s = static_cast<double>(nowNs() - start) * 1e-9;
     tick_done.store(true);

@@ -93,9 +93,9 @@ void RunRecorder::begin(const HilSession& session, const std::string& command_li
   fullarm_lcm::run_header_t h;
   h.utime = 0;
   h.seq = 0;
-  h.wall_utime = std::chrono::duration_cast<std::chrono::microseconds>(
-                     std::chrono::system_clock::now().time_since_epoch())
-                     .count();
+  h.wall_utime =
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count();
   h.fullarm_version = FULLARM_VERSION;
   h.command_line = command_line;
   h.io = ioKindName(o.io);
@@ -103,14 +103,13 @@ void RunRecorder::begin(const HilSession& session, const std::string& command_li
   h.mode = modeName(o.mode);
   h.seed = static_cast<std::int64_t>(o.seed);
   h.tick_period_us = static_cast<std::int32_t>(std::lround(session.config().control_period_s * 1e6));
-  h.files = {fileEntry("arm", o.arm_config),         fileEntry("plant", o.plant_config),
-             fileEntry("gains", o.gains_config),     fileEntry("haptics", o.haptics_config),
-             fileEntry("hil", o.hil_config),         fileEntry("scene", o.scene),
+  h.files = {fileEntry("arm", o.arm_config),     fileEntry("plant", o.plant_config),
+             fileEntry("gains", o.gains_config), fileEntry("haptics", o.haptics_config),
+             fileEntry("hil", o.hil_config),     fileEntry("scene", o.scene),
              fileEntry("user", o.user)};
   if (o.io == IoKind::kFakeDaq || o.io == IoKind::kComedi) h.files.push_back(fileEntry("daq", o.daq_config));
   h.num_files = static_cast<std::int16_t>(h.files.size());
-  h.parameters = {parameter("duration_s", exact(o.duration_s)),
-                  parameter("start_posture", o.start_posture),
+  h.parameters = {parameter("duration_s", exact(o.duration_s)), parameter("start_posture", o.start_posture),
                   parameter("global_period_ticks", std::to_string(session.config().global_period_ticks)),
                   parameter("delivery_delay_ticks", std::to_string(session.config().delivery_delay_ticks)),
                   parameter("oracle", o.oracle ? "true" : "false")};
@@ -154,8 +153,8 @@ void RunRecorder::recordTick(const RecordedTick& inputs, const TickTelemetry& t,
     for (int k = 0; k < t.num_device_joints; ++k) {
       const std::size_t i = static_cast<std::size_t>(k);
       r.q_rad[i] = k < inputs.sample.q_rad.size() ? inputs.sample.q_rad[k] : std::numeric_limits<double>::quiet_NaN();
-      r.tau_measured_nm[i] =
-          k < inputs.sample.tau_load_cell_nm.size() ? inputs.sample.tau_load_cell_nm[k] : std::numeric_limits<double>::quiet_NaN();
+      r.tau_measured_nm[i] = k < inputs.sample.tau_load_cell_nm.size() ? inputs.sample.tau_load_cell_nm[k]
+                                                                       : std::numeric_limits<double>::quiet_NaN();
       r.valve_command_v[i] = t.valve_v[i];
     }
     r.input_flags = flags;
@@ -234,10 +233,12 @@ void toSetRecord(const RecordedSet& set, double period_s, MinimaSetRecord& recor
   record.utime_us = static_cast<std::int64_t>(std::llround(static_cast<double>(set.adopted_tick) * period_s * 1e6));
   record.set_id = set.id;
   record.computed_tick = static_cast<std::int64_t>(set.query_tick);
-  record.computed_utime_us = static_cast<std::int64_t>(std::llround(static_cast<double>(set.query_tick) * period_s * 1e6));
+  record.computed_utime_us =
+      static_cast<std::int64_t>(std::llround(static_cast<double>(set.query_tick) * period_s * 1e6));
   record.adopted_tick = set.adopted_tick;
   record.num_joints = static_cast<int>(std::min<std::size_t>(set.query_q_rad.size(), kMaxRecordJoints));
-  for (int j = 0; j < record.num_joints; ++j) record.q_rad[static_cast<std::size_t>(j)] = set.query_q_rad[static_cast<std::size_t>(j)];
+  for (int j = 0; j < record.num_joints; ++j)
+    record.q_rad[static_cast<std::size_t>(j)] = set.query_q_rad[static_cast<std::size_t>(j)];
   fillMinima(set.minima, record);
   record.num_minima_dropped += set.found - static_cast<int>(set.minima.size());
 }
@@ -406,7 +407,8 @@ ReplayReport replayLog(const std::filesystem::path& log) {
     if (const auto it = adopted.find(js.tick); it != adopted.end()) {
       const MinimaSetRecord& set = it->second;
       minima.clear();
-      for (int i = 0; i < set.num_minima; ++i) minima.push_back(toLocalMinimum(set.minima[static_cast<std::size_t>(i)]));
+      for (int i = 0; i < set.num_minima; ++i)
+        minima.push_back(toLocalMinimum(set.minima[static_cast<std::size_t>(i)]));
       query_q.assign(set.q_rad.begin(), set.q_rad.begin() + set.num_joints);
       delivery.set_id = set.set_id;
       delivery.minima = minima;

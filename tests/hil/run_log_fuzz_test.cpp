@@ -144,7 +144,8 @@ TEST_F(RunLogFuzz, EveryByteFlippedInHeadersChannelsAndPayloads) {
       expectPrefixIntact(v, k);  // everything before the damaged event reads as it was
       if (v.error) {
         EXPECT_GE(v.error->offset(), s.offset);
-        EXPECT_NE(std::string(v.error->what()).find("byte offset " + std::to_string(v.error->offset())), std::string::npos);
+        EXPECT_NE(std::string(v.error->what()).find("byte offset " + std::to_string(v.error->offset())),
+                  std::string::npos);
       }
       if (rel < 4) {  // sync word
         ASSERT_TRUE(v.error.has_value());
@@ -270,11 +271,11 @@ TEST_F(RunLogFuzz, RandomGarbageIsCorruptOrEmpty) {
     EXPECT_TRUE(v.events.empty()) << trial;
     EXPECT_TRUE(v.error.has_value() || v.truncated) << trial;
     if (v.error) {
-        EXPECT_EQ(v.error->offset(), 0) << trial;
-      }
+      EXPECT_EQ(v.error->offset(), 0) << trial;
+    }
     if (v.truncated) {
-        EXPECT_EQ(v.truncated_offset, 0) << trial;
-      }
+      EXPECT_EQ(v.truncated_offset, 0) << trial;
+    }
   }
 }
 

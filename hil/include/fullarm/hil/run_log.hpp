@@ -85,7 +85,7 @@ struct RunLogWriterOptions {
 /// Counters of a RunLogWriter.
 struct RunLogStats {
   std::uint64_t events_written = 0;
-  std::uint64_t bytes_written = 0;    ///< headers, channels and payloads
+  std::uint64_t bytes_written = 0;  ///< headers, channels and payloads
   std::uint64_t flushes = 0;
   std::uint64_t records_dropped = 0;  ///< refused by full rings (sum of SpscRing::dropped())
   std::uint64_t encode_errors = 0;    ///< records that could not become a message (skipped)
@@ -190,9 +190,9 @@ void writeRecord(RunLogWriter& writer, const std::string& channel, const MinimaS
 
 /// One raw event of an LCM log.
 struct LcmLogEvent {
-  std::int64_t offset = 0;        ///< byte offset of its header in the file
+  std::int64_t offset = 0;  ///< byte offset of its header in the file
   std::int64_t event_number = 0;
-  std::int64_t utime_us = 0;      ///< the event's timestamp
+  std::int64_t utime_us = 0;  ///< the event's timestamp
   std::string channel;
   std::vector<std::uint8_t> data;
 };
@@ -241,9 +241,9 @@ class LcmLogReader {
 };
 
 /// A decoded run-log message.
-using RunLogMessage = std::variant<fullarm_lcm::run_header_t, fullarm_lcm::joint_state_t, fullarm_lcm::valve_command_t,
-                                   fullarm_lcm::minima_set_t, fullarm_lcm::haptic_status_t,
-                                   fullarm_lcm::supervisor_event_t>;
+using RunLogMessage =
+    std::variant<fullarm_lcm::run_header_t, fullarm_lcm::joint_state_t, fullarm_lcm::valve_command_t,
+                 fullarm_lcm::minima_set_t, fullarm_lcm::haptic_status_t, fullarm_lcm::supervisor_event_t>;
 
 /// One event of a run log, decoded.
 struct RunLogEntry {

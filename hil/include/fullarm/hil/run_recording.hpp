@@ -48,7 +48,7 @@ class RunRecorder {
   /// before its first tick does not leave another run's log behind); begin() writes its header.
   /// @throws RunLogError naming the file if it cannot be created
   RunRecorder(const std::filesystem::path& file, bool threaded);
-  /// Writes the header (the HilSession's inputs and, for remote I/O, what the node said it serves:
+  /// Writes the header (the run's inputs and, for remote I/O, what the node said it serves:
   /// call it after the device's configure()) and starts recording. Once, before the first tick.
   /// @throws std::logic_error when called again
   void begin(const HilSession& session, const std::string& command_line);
