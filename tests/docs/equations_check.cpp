@@ -132,7 +132,9 @@ std::vector<FunctionDefinition> findDefinitions(const std::vector<fs::path>& dir
   for (const auto& [file, lines] : sources(dirs)) {
     for (std::size_t i = 0; i < lines.size(); ++i) {
       const std::string& line = lines[i];
-      if (isCommentLine(line) || !std::regex_search(line, head)) continue;
+      // The plain search first: the regular expression runs only on the few lines that hold
+      // the name, not on every line of the tree for every name.
+      if (line.find(name) == std::string::npos || isCommentLine(line) || !std::regex_search(line, head)) continue;
       // A definition starts at column 0 (free functions and out-of-class members) or inside a
       // class (inline members); a call is indented inside another body and followed by ';'.
       // Read on to the first ';' or '{' outside parentheses.
