@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "lcm_node.hpp"
+#include "lcm_walk.hpp"
 
 namespace fullarm::hil {
 
@@ -41,45 +42,23 @@ DecodeStatus decodeIo(std::span<const std::uint8_t> bytes, Message& m) noexcept 
   return DecodeStatus::kOk;
 }
 
-/// Big-endian int32 at `at` (the caller checked that four bytes are there).
-std::int32_t int32At(std::span<const std::uint8_t> bytes, std::size_t at) noexcept {
-  std::uint32_t v = 0;
-  for (std::size_t i = 0; i < 4; ++i) v = (v << 8) | bytes[at + i];
-  return static_cast<std::int32_t>(v);
-}
-
-/// Checks the LCM string at `at` (an int32 length counting the terminating NUL, then the
-/// characters and the NUL): its length within [min_chars, max_chars] characters and inside the
-/// payload. Moves `at` past it. kTruncated when the payload ends inside it.
-DecodeStatus checkString(std::span<const std::uint8_t> bytes, std::size_t& at, std::size_t min_chars,
-                         std::size_t max_chars) noexcept {
-  if (bytes.size() - at < 4) return DecodeStatus::kTruncated;
-  const std::int32_t len = int32At(bytes, at);
-  at += 4;
-  if (len < 1) return DecodeStatus::kMalformed;  // the generated decoder would assign len - 1 characters
-  const auto n = static_cast<std::size_t>(len);
-  if (n > bytes.size() - at) return DecodeStatus::kTruncated;
-  if (n - 1 < min_chars || n - 1 > max_chars) return DecodeStatus::kMalformed;
-  at += n;
-  return DecodeStatus::kOk;
-}
-
-/// The layout of an io_node_info_t's strings, walked before the generated decoder reads them:
-/// hash(8) utime(8) seq(8) num_joints(1), the names, period_us(4) simulated(1)
-/// scripted_user(1), plant.
+/// The layout of an io_node_info_t, walked before the generated decoder reads its strings:
+/// utime, seq; num_joints and the joint names; period_us, simulated, scripted_user; plant.
 DecodeStatus checkNodeInfoLayout(std::span<const std::uint8_t> bytes) noexcept {
-  std::size_t at = 24;
-  if (bytes.size() < at + 1) return DecodeStatus::kTruncated;
-  const auto num_joints = static_cast<std::int8_t>(bytes[at]);
-  at += 1;
-  if (num_joints < 0 || num_joints > kMaxIoJoints) return DecodeStatus::kMalformed;
-  for (int k = 0; k < num_joints; ++k) {
-    const DecodeStatus s = checkString(bytes, at, 1, kMaxNodeJointNameChars);
-    if (s != DecodeStatus::kOk) return s;
+  detail::LcmWalk w(bytes);
+  w.skip(16);
+  w.strings(w.count(1, kMaxIoJoints), 1, kMaxNodeJointNameChars);
+  w.skip(6);
+  w.string(0, kMaxNodePlantChars);
+  switch (w.finish()) {
+    case detail::LcmWalk::Outcome::kOk:
+      return DecodeStatus::kOk;
+    case detail::LcmWalk::Outcome::kTruncated:
+      return DecodeStatus::kTruncated;
+    case detail::LcmWalk::Outcome::kMalformed:
+      break;
   }
-  if (bytes.size() - at < 6) return DecodeStatus::kTruncated;
-  at += 6;
-  return checkString(bytes, at, 0, kMaxNodePlantChars);
+  return DecodeStatus::kMalformed;
 }
 
 // Printable ASCII only: no control characters (C0, DEL, C1) and no bytes of other encodings,
