@@ -50,15 +50,7 @@ DecodeStatus checkNodeInfoLayout(std::span<const std::uint8_t> bytes) noexcept {
   w.strings(w.count(1, kMaxIoJoints), 1, kMaxNodeJointNameChars);
   w.skip(6);
   w.string(0, kMaxNodePlantChars);
-  switch (w.finish()) {
-    case detail::LcmWalk::Outcome::kOk:
-      return DecodeStatus::kOk;
-    case detail::LcmWalk::Outcome::kTruncated:
-      return DecodeStatus::kTruncated;
-    case detail::LcmWalk::Outcome::kMalformed:
-      break;
-  }
-  return DecodeStatus::kMalformed;
+  return w.finish();
 }
 
 // Printable ASCII only: no control characters (C0, DEL, C1) and no bytes of other encodings,

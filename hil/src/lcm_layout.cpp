@@ -15,7 +15,7 @@ bool stringLengthsInPayload(std::span<const std::uint8_t> bytes, const fullarm_l
   w.skip(12);
   w.strings(3 * w.count(2));
   w.strings(2 * w.count(2));
-  return w.finish() == LcmWalk::Outcome::kOk;
+  return w.finish() == DecodeStatus::kOk;
 }
 
 bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
@@ -24,7 +24,7 @@ bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
   LcmWalk w(bytes);
   w.skip(24 + 2 + 2 + 16);
   w.string();
-  return w.finish() == LcmWalk::Outcome::kOk;
+  return w.finish() == DecodeStatus::kOk;
 }
 
 bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
@@ -35,7 +35,7 @@ bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
   w.strings(4);
   w.skip(8);
   w.strings(w.count(1));
-  return w.finish() == LcmWalk::Outcome::kOk;
+  return w.finish() == DecodeStatus::kOk;
 }
 
 }  // namespace fullarm::hil

@@ -12,22 +12,23 @@
 #include <limits>
 #include <span>
 
+#include "fullarm/hil/lcm_transport.hpp"
+
 namespace fullarm::hil::detail {
 
+/// Its verdicts are the decoders' own: DecodeStatus kOk, kTruncated or kMalformed.
 class LcmWalk {
  public:
-  enum class Outcome { kOk, kTruncated, kMalformed };
-
   /// Starts past the 8-byte type hash; a message shorter than the hash is truncated.
   explicit LcmWalk(std::span<const std::uint8_t> bytes) noexcept : bytes_(bytes) {
-    if (bytes_.size() < kHashBytes) outcome_ = Outcome::kTruncated;
+    if (bytes_.size() < kHashBytes) outcome_ = DecodeStatus::kTruncated;
   }
 
   /// Fixed-size fields of `n` bytes in all.
   void skip(std::size_t n) noexcept {
     if (!ok()) return;
     if (bytes_.size() - at_ < n) {
-      outcome_ = Outcome::kTruncated;
+      outcome_ = DecodeStatus::kTruncated;
       return;
     }
     at_ += n;
@@ -40,13 +41,16 @@ class LcmWalk {
     std::int64_t len = 0;
     if (!signedBigEndian(4, len)) return;
     if (len < 1) {
-      outcome_ = Outcome::kMalformed;
-    } else if (static_cast<std::uint64_t>(len) > bytes_.size() - at_) {
-      outcome_ = Outcome::kTruncated;
-    } else if (static_cast<std::uint64_t>(len) - 1 < min_chars || static_cast<std::uint64_t>(len) - 1 > max_chars) {
-      outcome_ = Outcome::kMalformed;
+      outcome_ = DecodeStatus::kMalformed;
+      return;
+    }
+    const auto n = static_cast<std::uint64_t>(len);  // with the NUL
+    if (n > bytes_.size() - at_) {
+      outcome_ = DecodeStatus::kTruncated;
+    } else if (n - 1 < min_chars || n - 1 > max_chars) {
+      outcome_ = DecodeStatus::kMalformed;
     } else {
-      at_ += static_cast<std::size_t>(len);
+      at_ += static_cast<std::size_t>(n);
     }
   }
 
@@ -63,7 +67,7 @@ class LcmWalk {
     std::int64_t n = 0;
     if (!signedBigEndian(width, n)) return 0;
     if (n < 0 || n > max) {
-      outcome_ = Outcome::kMalformed;
+      outcome_ = DecodeStatus::kMalformed;
       return 0;
     }
     return n;
@@ -71,19 +75,19 @@ class LcmWalk {
 
   /// The walk's verdict once every field was walked: the first failure, or malformed when
   /// bytes are left over (a field the walk does not know of is not passed unchecked).
-  [[nodiscard]] Outcome finish() const noexcept {
+  [[nodiscard]] DecodeStatus finish() const noexcept {
     if (!ok()) return outcome_;
-    return at_ == bytes_.size() ? Outcome::kOk : Outcome::kMalformed;
+    return at_ == bytes_.size() ? DecodeStatus::kOk : DecodeStatus::kMalformed;
   }
 
  private:
   static constexpr std::size_t kHashBytes = 8;
 
-  [[nodiscard]] bool ok() const noexcept { return outcome_ == Outcome::kOk; }
+  [[nodiscard]] bool ok() const noexcept { return outcome_ == DecodeStatus::kOk; }
   bool signedBigEndian(std::size_t width, std::int64_t& out) noexcept {
     if (!ok()) return false;
     if (bytes_.size() - at_ < width) {
-      outcome_ = Outcome::kTruncated;
+      outcome_ = DecodeStatus::kTruncated;
       return false;
     }
     std::uint64_t v = 0;
@@ -97,7 +101,7 @@ class LcmWalk {
 
   std::span<const std::uint8_t> bytes_;
   std::size_t at_ = kHashBytes;
-  Outcome outcome_ = Outcome::kOk;
+  DecodeStatus outcome_ = DecodeStatus::kOk;
 };
 
 }  // namespace fullarm::hil::detail
