@@ -418,7 +418,7 @@ TEST_F(LcmIo, ALostGlobalNodeHeartbeatInRealTimeIsCommunicationLossAfterTheFade)
   ASSERT_NE(trip, nullptr);
   const double dt = session.config().control_period_s;
   const double timeout_s = session.config().supervisor.peer_heartbeat_timeout_s;
-  // The node's last heartbeat is at most one heartbeat period before it stopped, and later when
+  // The node's last heartbeat is at most one heartbeat period before it stopped, or earlier when
   // its thread waited for a core; the watcher and the tick add a few milliseconds. The ticks
   // count wall time only while the loop keeps its period, which a loaded 2-core machine can
   // break for a few milliseconds: the lower bound allows for that, and a trip well before the
