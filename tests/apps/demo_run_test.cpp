@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -43,6 +44,26 @@ TEST(DemoRun, ReportIsAtMostTwoMegabytes) {
   const auto size = std::filesystem::file_size(kDemoDir / "report.html");
   EXPECT_LE(size, 2'000'000U) << size << " bytes";
   EXPECT_GT(size, 1'000'000U) << "the charting library is missing from the report";
+}
+
+// The demo tunes with `fullarm tune`'s own budget and start, so its gains file is, below the
+// header, exactly the shipped config/dts_gains.yaml: every joint of the shipped gains reproduces.
+TEST(DemoRun, TunedGainsAreTheShippedGains) {
+  const char* source_dir = std::getenv("FULLARM_SOURCE_DIR");
+  ASSERT_NE(source_dir, nullptr) << "FULLARM_SOURCE_DIR is not set (ctest sets it)";
+  const auto withoutComments = [](const std::string& text) {
+    std::istringstream in(text);
+    std::string kept;
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line.front() != '#') kept += line + "\n";
+    }
+    return kept;
+  };
+  const std::string tuned = withoutComments(readFile(kDemoDir / "tuned_gains.yaml"));
+  const std::string shipped =
+      withoutComments(readFile(std::filesystem::path(source_dir) / "config" / "dts_gains.yaml"));
+  EXPECT_GT(tuned.size(), 1000U) << "the demo's gains file is nearly empty";
+  EXPECT_EQ(tuned, shipped) << "the demo's tuned gains differ from config/dts_gains.yaml";
 }
 
 TEST(DemoRun, PassesAndRunsEveryStep) {

@@ -119,16 +119,6 @@ TEST(TuneArm, AJointsResultDependsNeitherOnTheOtherJointsNorOnTheThreadCount) {
   EXPECT_EQ(with_eb.pass, with_eb.stages[0].verified && with_eb.stages[1].verified);
 }
 
-// config/dts_gains.yaml is the output of `fullarm tune` with the default budget, all joints: one
-// joint tuned alone with the same budget writes exactly its gains. WR: its stage needs no search.
-TEST(TuneArm, TheDefaultBudgetReproducesTheShippedGainsOfAJoint) {
-  ArmTuningOptions o;
-  o.joints = {"WR"};
-  const ArmTuningResult run = tuneArm(test::dtsModel(), test::dtsPlant(), startGains(), validation(), o);
-  EXPECT_TRUE(run.pass);
-  expectSameGains(jointOf(run.tuned, "WR"), jointOf(test::dtsGains(), "WR"));
-}
-
 TEST(TuneArm, BadInputNamesItsKey) {
   controllers::GainsConfig pid = startGains();
   pid.controller = controllers::ControllerKind::kTorquePid;
