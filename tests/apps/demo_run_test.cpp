@@ -91,8 +91,9 @@ TEST(DemoRun, PassesAndRunsEveryStep) {
   EXPECT_EQ(summary["results"]["steps"][0]["status"], "done");
   EXPECT_EQ(summary["results"]["steps"][1]["status"], "done");  // plant chirp experiment
   EXPECT_EQ(summary["results"]["steps"][2]["status"], identified ? "done" : "done, the model fails its validation");
-  EXPECT_EQ(summary["verdict"]["headline"].get<std::string>().find("fails its held-out validation") != std::string::npos,
-            !identified);
+  EXPECT_EQ(
+      summary["verdict"]["headline"].get<std::string>().find("fails its held-out validation") != std::string::npos,
+      !identified);
   EXPECT_EQ(summary["results"]["steps"][3]["status"], "done");  // tune: every joint verified
   EXPECT_EQ(summary["verdict"]["pass"].get<bool>(), exit_code == 0);
   EXPECT_EQ(summary["results"]["steps"][4]["status"],
