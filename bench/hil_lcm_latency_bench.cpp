@@ -361,7 +361,7 @@ void codec(int n, std::vector<double>& encode_us, std::vector<double>& decode_us
   MinimaSetRecord set = set64();
   const int k = fragmentCount(set.num_minima);
   std::vector<std::vector<std::uint8_t>> bytes(static_cast<std::size_t>(k));
-  fullarm_lcm::minima_set_t fragment;
+  fullarm_lcm::minima_set_t fragment{};
   MinimaSetAssembler assembler;
   std::int64_t seq = 0;
   for (int i = 0; i < n; ++i) {

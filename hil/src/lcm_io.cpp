@@ -65,7 +65,7 @@ bool printable(const std::string& text) noexcept {
 }  // namespace
 
 fullarm_lcm::io_node_info_t toMessage(const IoNodeInfo& info) {
-  fullarm_lcm::io_node_info_t m;
+  fullarm_lcm::io_node_info_t m{};
   m.num_joints = static_cast<std::int8_t>(info.joint_names.size());
   m.joint_names = info.joint_names;
   m.period_us = info.period_us;
@@ -140,11 +140,11 @@ DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_
 
 /// Receives the node's readings and heartbeats for an LcmIoDevice.
 struct LcmIoDevice::Handler {
-  fullarm_lcm::io_reading_t reading;
+  fullarm_lcm::io_reading_t reading{};
   bool have_reading = false;  ///< `reading` answers the current command
   std::int64_t want_seq = 0;
   std::uint64_t heartbeats = 0;
-  fullarm_lcm::io_node_info_t info;
+  fullarm_lcm::io_node_info_t info{};
   bool have_info = false;  ///< `info` holds the node's description
   LcmIoCounters* counters = nullptr;
 
@@ -158,7 +158,7 @@ struct LcmIoDevice::Handler {
     }
   }
   void onInfo(std::span<const std::uint8_t> bytes) {
-    fullarm_lcm::io_node_info_t m;
+    fullarm_lcm::io_node_info_t m{};
     if (decodeChecked(bytes, m) != DecodeStatus::kOk) {
       ++counters->rejected;
       return;
@@ -167,7 +167,7 @@ struct LcmIoDevice::Handler {
     have_info = true;
   }
   void onReading(std::span<const std::uint8_t> bytes) {
-    fullarm_lcm::io_reading_t m;
+    fullarm_lcm::io_reading_t m{};
     if (decodeChecked(bytes, m) != DecodeStatus::kOk) {
       ++counters->rejected;
       return;
@@ -331,7 +331,7 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
 }
 
 bool LcmIoDevice::publishHeld() {
-  fullarm_lcm::io_command_t c;
+  fullarm_lcm::io_command_t c{};
   c.utime = wallMicros();
   c.seq = ++seq_;
   c.num_valves = static_cast<std::int8_t>(held_v_.size());
@@ -388,7 +388,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
   {
     // What the tick side's decoder would drop is refused here, naming the bounds.
     encodeMessage(info_message, info_buffer);
-    fullarm_lcm::io_node_info_t decoded;
+    fullarm_lcm::io_node_info_t decoded{};
     if (decodeChecked(info_buffer, decoded) != DecodeStatus::kOk) {
       throw std::invalid_argument(
           "plant node: the description (" + describeJointsAndPeriod(info.joint_names, info.period_us) +
@@ -419,7 +419,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
   auto last_command = Clock::now();
   bool commanded = false;
 
-  fullarm_lcm::io_command_t command;
+  fullarm_lcm::io_command_t command{};
   bool have_command = false;
   struct Sink {
     fullarm_lcm::io_command_t* command;
@@ -499,7 +499,7 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     ++result.commands;
     publisher.setNodeState(last_seq, safe);
 
-    fullarm_lcm::io_reading_t reading;
+    fullarm_lcm::io_reading_t reading{};
     reading.utime = wallMicros();
     reading.seq = command.seq;
     reading.t_s = sample.t_s;

@@ -69,7 +69,7 @@ void increment(std::atomic<std::uint64_t>& n) noexcept { n.store(n.load(std::mem
 }  // namespace
 
 fullarm_lcm::heartbeat_t toMessage(const HeartbeatRecord& r) {
-  fullarm_lcm::heartbeat_t m;
+  fullarm_lcm::heartbeat_t m{};
   m.utime = r.utime_us;
   m.seq = r.seq;
   m.node = static_cast<std::int8_t>(r.node);

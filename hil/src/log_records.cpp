@@ -39,7 +39,7 @@ void copyHead(const std::vector<double>& v, std::array<double, N>& a) {
 }
 
 fullarm_lcm::minimum_t toMessage(const MinimumRecord& r) {
-  fullarm_lcm::minimum_t m;
+  fullarm_lcm::minimum_t m{};
   m.link = static_cast<std::int16_t>(r.link);
   m.object = static_cast<std::int16_t>(r.object);
   m.tri_link = r.tri_link;
@@ -155,7 +155,7 @@ void fillMinima(std::span<const haptics::LocalMinimum> minima, MinimaSetRecord& 
 }
 
 fullarm_lcm::joint_state_t toMessage(const JointStateRecord& r) {
-  fullarm_lcm::joint_state_t m;
+  fullarm_lcm::joint_state_t m{};
   const int n = clampCount(r.num_joints, kMaxRecordJoints);
   m.utime = r.utime_us;
   m.seq = r.seq;
@@ -169,7 +169,7 @@ fullarm_lcm::joint_state_t toMessage(const JointStateRecord& r) {
 }
 
 fullarm_lcm::valve_command_t toMessage(const ValveCommandRecord& r) {
-  fullarm_lcm::valve_command_t m;
+  fullarm_lcm::valve_command_t m{};
   const int n = clampCount(r.num_valves, kMaxRecordJoints);
   m.utime = r.utime_us;
   m.seq = r.seq;
@@ -181,7 +181,7 @@ fullarm_lcm::valve_command_t toMessage(const ValveCommandRecord& r) {
 }
 
 fullarm_lcm::haptic_status_t toMessage(const HapticStatusRecord& r) {
-  fullarm_lcm::haptic_status_t m;
+  fullarm_lcm::haptic_status_t m{};
   const int nj = clampCount(r.num_joints, kMaxRecordJoints);
   const int nl = clampCount(r.num_links, kMaxRecordJoints);
   m.utime = r.utime_us;
@@ -211,7 +211,7 @@ fullarm_lcm::haptic_status_t toMessage(const HapticStatusRecord& r) {
 }
 
 fullarm_lcm::supervisor_event_t toMessage(const SupervisorEventRecord& r) {
-  fullarm_lcm::supervisor_event_t m;
+  fullarm_lcm::supervisor_event_t m{};
   m.utime = r.utime_us;
   m.seq = r.seq;
   m.tick = r.tick;
@@ -320,7 +320,7 @@ fullarm_lcm::minima_set_t toFragment(const MinimaSetRecord& set, int index, std:
   const int first = index * kMaxMinimaPerFragment;
   const int n = std::min(kMaxMinimaPerFragment, total - first);
   const int nj = clampCount(set.num_joints, kMaxRecordJoints);
-  fullarm_lcm::minima_set_t m;
+  fullarm_lcm::minima_set_t m{};
   m.utime = set.utime_us;
   m.seq = seq;
   m.set_id = set.set_id;

@@ -33,7 +33,7 @@ EventSeverity severityOf(const SupervisorEvent& e) noexcept {
 }
 
 fullarm_lcm::run_file_t fileEntry(const std::string& role, const std::filesystem::path& path) {
-  fullarm_lcm::run_file_t f;
+  fullarm_lcm::run_file_t f{};
   f.role = role;
   f.path = std::filesystem::absolute(path).string();
   f.sha256 = sha256File(path);
@@ -41,7 +41,7 @@ fullarm_lcm::run_file_t fileEntry(const std::string& role, const std::filesystem
 }
 
 fullarm_lcm::run_parameter_t parameter(const std::string& key, const std::string& value) {
-  fullarm_lcm::run_parameter_t p;
+  fullarm_lcm::run_parameter_t p{};
   p.key = key;
   p.value = value;
   return p;
@@ -90,7 +90,7 @@ void RunRecorder::begin(const HilSession& session, const std::string& command_li
   if (begun_) throw std::logic_error("RunRecorder::begin: the header is written once");
   begun_ = true;
   const RunOptions& o = session.options();
-  fullarm_lcm::run_header_t h;
+  fullarm_lcm::run_header_t h{};
   h.utime = 0;
   h.seq = 0;
   h.wall_utime =
@@ -248,9 +248,9 @@ void toSetRecord(const RecordedSet& set, double period_s, MinimaSetRecord& recor
 namespace {
 
 struct LoggedTick {
-  fullarm_lcm::joint_state_t joints;
+  fullarm_lcm::joint_state_t joints{};
   bool have_haptics = false;
-  fullarm_lcm::haptic_status_t haptics;
+  fullarm_lcm::haptic_status_t haptics{};
 };
 
 /// A header parameter's value as a finite duration > 0 in seconds: the whole text, as written by
@@ -325,7 +325,7 @@ ReplayReport replayLog(const std::filesystem::path& log) {
   RunLogReader reader(log);
   RunLogEntry entry;
   bool have_header = false;
-  fullarm_lcm::run_header_t header;
+  fullarm_lcm::run_header_t header{};
   std::vector<LoggedTick> ticks;
   // The writer drains its rings one after the other while the tick runs on: a tick's haptic
   // status may precede its joint state in the log. They are joined by tick once all is read.

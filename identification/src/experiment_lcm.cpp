@@ -86,7 +86,7 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
   options.file = file;
   hil::RunLogWriter log(options);
   const double t0 = rows > 0 ? (*columns[0])[0] : 0.0;
-  fullarm_lcm::ident_experiment_t header;
+  fullarm_lcm::ident_experiment_t header{};
   header.utime = microseconds(t0);
   header.fullarm_version = FULLARM_VERSION;
   header.command_line = info.command_line;
@@ -97,7 +97,7 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
   for (const HeldAngle& h : held) header.held_joints.push_back(h.joint);
   log.writeMessage(channel::kIdentExperiment, header.utime, header);
 
-  fullarm_lcm::ident_sample_t sample;
+  fullarm_lcm::ident_sample_t sample{};
   sample.num_held = header.num_held;
   sample.held_q_rad.resize(held.size());
   for (std::size_t k = 0; k < rows; ++k) {
@@ -123,7 +123,7 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
   hil::LcmLogReader reader(file);
   ExperimentLcmLog out;
   bool have_header = false;
-  fullarm_lcm::ident_experiment_t header;
+  fullarm_lcm::ident_experiment_t header{};
   std::int64_t next_seq = 0;
   hil::LcmLogEvent event;
   while (reader.next(event)) {

@@ -61,7 +61,7 @@ Bytes fragmentBytes() {
 }
 
 Bytes ioCommandBytes() {
-  fullarm_lcm::io_command_t m;
+  fullarm_lcm::io_command_t m{};
   m.seq = 3;
   m.num_valves = 7;
   m.valve_command_v.assign(7, 1.5);
@@ -72,7 +72,7 @@ Bytes ioCommandBytes() {
 }
 
 Bytes ioReadingBytes() {
-  fullarm_lcm::io_reading_t m;
+  fullarm_lcm::io_reading_t m{};
   m.seq = 3;
   m.t_s = 0.003;
   m.num_joints = 7;
@@ -142,7 +142,7 @@ std::vector<Case> cases() {
                  [](const LcmReceiverCounters& c) -> const LcmChannelCounters& { return c.heartbeat; }});
   out.push_back({"minima_set_t", channel::kMinimaSet, fragmentBytes(),
                  [](const Bytes& b) {
-                   fullarm_lcm::minima_set_t f;
+                   fullarm_lcm::minima_set_t f{};
                    const DecodeStatus s = decodeChecked(b, f);
                    if (s == DecodeStatus::kOk) {
                      EXPECT_TRUE(f.num_minima >= 0 && f.num_minima <= kMaxMinimaPerFragment);
@@ -158,7 +158,7 @@ std::vector<Case> cases() {
                  channel::kIoCommand,
                  ioCommandBytes(),
                  [](const Bytes& b) {
-                   fullarm_lcm::io_command_t m;
+                   fullarm_lcm::io_command_t m{};
                    const DecodeStatus s = decodeChecked(b, m);
                    if (s == DecodeStatus::kOk) {
                      EXPECT_TRUE(m.num_valves >= 0 && m.num_valves <= kMaxIoJoints);
@@ -171,7 +171,7 @@ std::vector<Case> cases() {
                  channel::kIoReading,
                  ioReadingBytes(),
                  [](const Bytes& b) {
-                   fullarm_lcm::io_reading_t m;
+                   fullarm_lcm::io_reading_t m{};
                    const DecodeStatus s = decodeChecked(b, m);
                    if (s == DecodeStatus::kOk) {
                      EXPECT_TRUE(m.num_joints >= 0 && m.num_joints <= kMaxIoJoints);
@@ -185,7 +185,7 @@ std::vector<Case> cases() {
                  channel::kIoNodeInfo,
                  ioNodeInfoBytes(),
                  [](const Bytes& b) {
-                   fullarm_lcm::io_node_info_t m;
+                   fullarm_lcm::io_node_info_t m{};
                    const DecodeStatus s = decodeChecked(b, m);
                    if (s == DecodeStatus::kOk) {
                      EXPECT_TRUE(m.num_joints >= 0 && m.num_joints <= kMaxIoJoints);
@@ -340,7 +340,7 @@ TEST(LcmDecoderFuzz, NodeInfoRoundTrips) {
   info.plant = "plant.yaml sha256 abc";
   Bytes b;
   encodeMessage(toMessage(info), b);
-  fullarm_lcm::io_node_info_t m;
+  fullarm_lcm::io_node_info_t m{};
   ASSERT_EQ(decodeChecked(b, m), DecodeStatus::kOk);
   const IoNodeInfo back = fromMessage(m);
   EXPECT_EQ(back.joint_names, info.joint_names);

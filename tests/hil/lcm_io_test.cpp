@@ -657,7 +657,7 @@ TEST_F(LcmIo, ASessionsDeviceIsDescribedByItsFilesAndUser) {
   EXPECT_EQ(described.plant, "pl??nt.yaml sha256 " + sha256File(plant));
   std::vector<std::uint8_t> bytes;
   encodeMessage(toMessage(described), bytes);
-  fullarm_lcm::io_node_info_t decoded;
+  fullarm_lcm::io_node_info_t decoded{};
   EXPECT_EQ(decodeChecked(bytes, decoded), DecodeStatus::kOk);
 }
 

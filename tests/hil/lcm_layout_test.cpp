@@ -31,7 +31,7 @@ Bytes encode(const Message& m) {
 }
 
 fullarm_lcm::run_header_t header() {
-  fullarm_lcm::run_header_t h;
+  fullarm_lcm::run_header_t h{};
   h.utime = 1;
   h.seq = 0;
   h.wall_utime = 2;
@@ -58,7 +58,7 @@ fullarm_lcm::run_header_t header() {
 }
 
 fullarm_lcm::supervisor_event_t event() {
-  fullarm_lcm::supervisor_event_t e;
+  fullarm_lcm::supervisor_event_t e{};
   e.utime = 5;
   e.seq = 1;
   e.tick = 7;
@@ -72,7 +72,7 @@ fullarm_lcm::supervisor_event_t event() {
 }
 
 fullarm_lcm::ident_experiment_t experiment() {
-  fullarm_lcm::ident_experiment_t x;
+  fullarm_lcm::ident_experiment_t x{};
   x.utime = 9;
   x.fullarm_version = "1.0";
   x.command_line = "fullarm identify";

@@ -136,7 +136,7 @@ TEST(LogRecords, JointStateRoundTripsThroughItsEncodedMessage) {
   const fullarm_lcm::joint_state_t m = toMessage(r);
   std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
   ASSERT_EQ(m.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
-  fullarm_lcm::joint_state_t decoded;
+  fullarm_lcm::joint_state_t decoded{};
   ASSERT_EQ(decoded.decode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
   const JointStateRecord back = fromMessage(decoded);
   EXPECT_EQ(back.utime_us, r.utime_us);
@@ -201,7 +201,7 @@ TEST(LogRecords, EventMessageIsCutAtItsBufferWithoutAllocating) {
 }
 
 TEST(LogRecords, FromMessageRejectsCountsBeyondTheRecord) {
-  fullarm_lcm::joint_state_t m;
+  fullarm_lcm::joint_state_t m{};
   m.num_joints = kMaxRecordJoints + 1;
   m.q_rad.assign(static_cast<std::size_t>(m.num_joints), 0.0);
   m.tau_measured_nm = m.q_rad;

@@ -12,7 +12,7 @@ namespace fullarm::hil::test {
 
 /// What went into a sample log.
 struct SampleRun {
-  fullarm_lcm::run_header_t header;
+  fullarm_lcm::run_header_t header{};
   std::vector<JointStateRecord> joints;
   std::vector<HapticStatusRecord> haptics;
   std::vector<MinimaSetRecord> minima;

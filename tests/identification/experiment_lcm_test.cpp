@@ -85,7 +85,7 @@ class LogBuilder {
 };
 
 fullarm_lcm::ident_experiment_t header(int held) {
-  fullarm_lcm::ident_experiment_t h;
+  fullarm_lcm::ident_experiment_t h{};
   h.utime = 0;
   h.joint = "R_EB";
   h.source = "sim";
@@ -100,7 +100,7 @@ fullarm_lcm::ident_experiment_t header(int held) {
 }
 
 fullarm_lcm::ident_sample_t sample(std::int64_t seq, int held) {
-  fullarm_lcm::ident_sample_t s;
+  fullarm_lcm::ident_sample_t s{};
   s.utime = seq * 1000;
   s.seq = seq;
   s.t_s = 1e-3 * static_cast<double>(seq);

@@ -31,7 +31,7 @@ int main() {
   const fullarm_lcm::joint_state_t message = fullarm::hil::toMessage(out);
   std::vector<unsigned char> bytes(static_cast<std::size_t>(message.getEncodedSize()));
   const int encoded = message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  fullarm_lcm::joint_state_t decoded;
+  fullarm_lcm::joint_state_t decoded{};
   const bool round_trip = decoded.decode(bytes.data(), 0, encoded) == encoded && decoded.q_rad.at(0) == 0.5;
   std::printf("consumer: joint_state_t of %d bytes through the ring and back: %s\n", encoded,
               passed && round_trip ? "ok" : "FAILED");
