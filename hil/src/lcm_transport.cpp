@@ -57,14 +57,23 @@ DecodeStatus decodeToRecord(std::span<const std::uint8_t> bytes, Record& out) no
 
 void count(DecodeStatus status, LcmChannelCounters& c) noexcept {
   switch (status) {
-    case DecodeStatus::kOk: break;
-    case DecodeStatus::kTruncated: ++c.truncated; break;
-    case DecodeStatus::kWrongHash: ++c.wrong_hash; break;
-    case DecodeStatus::kMalformed: ++c.malformed; break;
+    case DecodeStatus::kOk:
+      break;
+    case DecodeStatus::kTruncated:
+      ++c.truncated;
+      break;
+    case DecodeStatus::kWrongHash:
+      ++c.wrong_hash;
+      break;
+    case DecodeStatus::kMalformed:
+      ++c.malformed;
+      break;
   }
 }
 
-void increment(std::atomic<std::uint64_t>& n) noexcept { n.store(n.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed); }
+void increment(std::atomic<std::uint64_t>& n) noexcept {
+  n.store(n.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+}
 
 }  // namespace
 
@@ -126,7 +135,9 @@ LcmPublisher::LcmPublisher(lcm::LCM& lcm, LcmPublisherOptions options)
   thread_ = std::thread([this] { run(); });
 }
 
-LcmPublisher::~LcmPublisher() { stop(); }
+LcmPublisher::~LcmPublisher() {
+  stop();
+}
 
 void LcmPublisher::wake() noexcept {
   // The count only grows by one per wake and the thread takes one per pass: far below max().
@@ -228,9 +239,9 @@ void LcmPublisher::sendHeartbeat() {
   const bool safe = node_safe_.load(std::memory_order_acquire);
   sendQueued();
   HeartbeatRecord h;
-  h.utime_us = std::chrono::duration_cast<std::chrono::microseconds>(
-                   std::chrono::system_clock::now().time_since_epoch())
-                   .count();
+  h.utime_us =
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count();
   h.seq = heartbeat_seq_;
   h.node = options_.node;
   h.tick = tick;
@@ -335,7 +346,9 @@ struct LcmReceiver::RawHandler {
 };
 
 LcmReceiver::LcmReceiver(lcm::LCM& lcm, LcmReceiverOptions options)
-    : lcm_(lcm), handler_(std::make_unique<RawHandler>(RawHandler{this})), minima_set_(std::make_unique<MinimaSetRecord>()) {
+    : lcm_(lcm),
+      handler_(std::make_unique<RawHandler>(RawHandler{this})),
+      minima_set_(std::make_unique<MinimaSetRecord>()) {
   auto subscribe = [&](const char* name) {
     lcm_subscription_t* s = detail::subscribeRaw(lcm_, name, handler_.get(), options.queue_capacity);
     if (s == nullptr) throw std::runtime_error(std::string("LCM: cannot subscribe to channel ") + name);

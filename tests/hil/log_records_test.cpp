@@ -15,7 +15,9 @@
 namespace fullarm::hil {
 namespace {
 
-bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool sameBits(double a, double b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
 
 haptics::LocalMinimum makeMinimum(int i) {
   haptics::LocalMinimum m;
@@ -71,11 +73,13 @@ void expectSameSet(const MinimaSetRecord& a, const MinimaSetRecord& b) {
   EXPECT_EQ(a.computed_utime_us, b.computed_utime_us);
   EXPECT_EQ(a.adopted_tick, b.adopted_tick);
   ASSERT_EQ(a.num_joints, b.num_joints);
-  for (int j = 0; j < a.num_joints; ++j) EXPECT_TRUE(sameBits(a.q_rad[static_cast<std::size_t>(j)], b.q_rad[static_cast<std::size_t>(j)]));
+  for (int j = 0; j < a.num_joints; ++j)
+    EXPECT_TRUE(sameBits(a.q_rad[static_cast<std::size_t>(j)], b.q_rad[static_cast<std::size_t>(j)]));
   ASSERT_EQ(a.num_minima, b.num_minima);
   EXPECT_EQ(a.num_minima_dropped, b.num_minima_dropped);
   for (int i = 0; i < a.num_minima; ++i) {
-    expectSameMinimum(toLocalMinimum(a.minima[static_cast<std::size_t>(i)]), toLocalMinimum(b.minima[static_cast<std::size_t>(i)]));
+    expectSameMinimum(toLocalMinimum(a.minima[static_cast<std::size_t>(i)]),
+                      toLocalMinimum(b.minima[static_cast<std::size_t>(i)]));
   }
 }
 
@@ -100,8 +104,9 @@ TEST(LogRecords, FillMinimaKeepsTheClosestInTheirOrder) {
   }
   std::vector<int> order(minima.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return minima[static_cast<std::size_t>(a)].distance_m < minima[static_cast<std::size_t>(b)].distance_m; });
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return minima[static_cast<std::size_t>(a)].distance_m < minima[static_cast<std::size_t>(b)].distance_m;
+  });
   std::vector<int> expected(order.begin(), order.begin() + kMaxMinimaPerSet);
   std::sort(expected.begin(), expected.end());
 

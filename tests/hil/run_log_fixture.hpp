@@ -44,7 +44,8 @@ inline HapticStatusRecord sampleHapticStatus(std::int64_t tick) {
   r.minima_set_id = tick / 10;
   r.num_joints = 7;
   r.num_links = 7;
-  for (int j = 0; j < 7; ++j) r.tau_contact_nm[static_cast<std::size_t>(j)] = 0.5 * j + 1e-3 * static_cast<double>(tick);
+  for (int j = 0; j < 7; ++j)
+    r.tau_contact_nm[static_cast<std::size_t>(j)] = 0.5 * j + 1e-3 * static_cast<double>(tick);
   r.links[6].force_world_n = {1.0, 0.0, -static_cast<double>(tick)};
   r.links[6].in_contact = tick % 3 == 0;
   return r;
