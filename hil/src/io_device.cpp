@@ -86,6 +86,7 @@ core::RtStatus IoDevice::read(JointSample& sample) noexcept {
   if (state_ == IoState::kUnconfigured) {
     return core::RtStatus::fault(core::RtCode::kNotConfigured, kFaultDeviceState, "device read before configure");
   }
+  sample.pressure_mask = 0;  // a back-end that reads pressures sets its bits
   const core::RtStatus s = onRead(sample);
   sample.sequence = ++reads_;
   if (!s.ok()) {

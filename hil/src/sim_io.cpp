@@ -39,6 +39,8 @@ core::RtStatus SimIoDevice::onRead(JointSample& sample) noexcept {
   const int n = arm_.numJoints();
   sample.q_rad.resize(n);
   sample.tau_load_cell_nm.resize(n);
+  sample.p_a_pa.setZero(n);
+  sample.p_b_pa.setZero(n);
   sample.out_of_range_mask = 0;
   sample.t_s = arm_.readingTime();
   for (int k = 0; k < n; ++k) {
@@ -58,6 +60,12 @@ core::RtStatus SimIoDevice::onRead(JointSample& sample) noexcept {
           at_end(m.tau_counts, p.torque_sensor.bits) ? std::numeric_limits<double>::quiet_NaN() : m.tau_nm;
     }
     if (std::isnan(sample.q_rad[k]) || std::isnan(sample.tau_load_cell_nm[k])) sample.out_of_range_mask |= 1u << k;
+    // Pressure transducers have no channel in a DAQ map: only the plant's own readings carry them.
+    if (m.pressures && options_.converters == nullptr) {
+      sample.p_a_pa[k] = m.p_a_pa;
+      sample.p_b_pa[k] = m.p_b_pa;
+      sample.pressure_mask |= 1u << k;
+    }
   }
   return s;
 }

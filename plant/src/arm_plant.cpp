@@ -553,6 +553,7 @@ void ArmPlant::reset(const std::vector<JointState>& initial) {
                                           : arm::bodyPointInWorld(*reduced_data_, cuff_point_.body, cuff_point_.p_B);
   }
   noise_.reseed(seed_);
+  pressure_noise_.reseed(seed_ ^ kPressureNoiseStream);
   for (JointSensorState& s : sensor_state_) s = {};
   initialiseSensors();
 }
@@ -564,6 +565,8 @@ void ArmPlant::initialiseSensors() noexcept {
     measured_[static_cast<std::size_t>(k)] =
         sampleJointSensors(params_[static_cast<std::size_t>(k)], sensor_state_[static_cast<std::size_t>(k)], noise_,
                            y[angleIndex(n_, k)], tau_cell_[k], 0.0);
+    samplePressureSensors(params_[static_cast<std::size_t>(k)], pressure_noise_, y[hydraulicIndex(k, kPressureA)],
+                          y[hydraulicIndex(k, kPressureB)], measured_[static_cast<std::size_t>(k)]);
   }
 }
 
@@ -1049,6 +1052,8 @@ void ArmPlant::sampleOutputs(double dt_s) noexcept {
     measured_[static_cast<std::size_t>(k)] =
         sampleJointSensors(params_[static_cast<std::size_t>(k)], sensor_state_[static_cast<std::size_t>(k)], noise_,
                            yv[angleIndex(n_, k)], tau_cell_[k], dt_s);
+    samplePressureSensors(params_[static_cast<std::size_t>(k)], pressure_noise_, yv[hydraulicIndex(k, kPressureA)],
+                          yv[hydraulicIndex(k, kPressureB)], measured_[static_cast<std::size_t>(k)]);
   }
 }
 

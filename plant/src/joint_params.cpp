@@ -111,6 +111,13 @@ void validateJointParams(const JointParams& p, const std::string& file, const st
   if (!std::isfinite(p.sensor_noise.torque_bias_nm))
     c.fail("sensors.torque_bias_nm", p.sensor_noise.torque_bias_nm, "a finite number");
   c.nonNegative("sensors.torque_filter_hz", p.sensor_noise.torque_filter_hz);
+  const double full_scale = p.sensor_noise.pressure_full_scale_pa;
+  if (!(full_scale == 0.0 || (std::isfinite(full_scale) && full_scale >= p.supply_pressure_pa))) {
+    c.fail("sensors.pressure_full_scale_pa", full_scale,
+           "0 (no pressure transducers) or a full scale of at least the supply pressure");
+  }
+  c.range("sensors.pressure_bits", p.sensor_noise.pressure_bits, 8, 24);
+  c.nonNegative("sensors.pressure_noise_pa", p.sensor_noise.pressure_noise_pa);
   if (p.potentiometer.slope_rad_per_count == 0.0 || p.torque_sensor.slope_nm_per_count == 0.0) {
     c.fail("sensors", 0.0, "non-zero potentiometer and torque-sensor slopes (from the arm model)");
   }

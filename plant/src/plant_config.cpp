@@ -103,6 +103,11 @@ JointParams readJoint(const core::YamlMap& m, const arm::ArmModel& model, const 
   p.sensor_noise.torque_noise_nm = s.number("torque_noise_nm", "N m");
   p.sensor_noise.torque_bias_nm = s.number("torque_bias_nm", "N m");
   p.sensor_noise.torque_filter_hz = s.number("torque_filter_hz", "Hz");
+  if (const auto full_scale = s.optionalNumber("pressure_full_scale_pa", "Pa")) {
+    p.sensor_noise.pressure_full_scale_pa = *full_scale;
+    p.sensor_noise.pressure_bits = s.integer("pressure_bits");
+    p.sensor_noise.pressure_noise_pa = s.number("pressure_noise_pa", "Pa");
+  }
   s.finish();
   m.finish();
   return p;
@@ -359,7 +364,12 @@ std::string formatPlantConfigYaml(const PlantConfig& config, const arm::ArmModel
       << ", damping_s_per_rad: " << num(p.hard_stop.damping_s_per_rad) << "}\n"
       << "    torque_loop: {gain_v_per_nm: " << num(p.torque_loop.gain_v_per_nm) << "}\n"
       << "    sensors: {angle_noise_rad: " << num(n.angle_noise_rad) << ", torque_noise_nm: " << num(n.torque_noise_nm)
-      << ", torque_bias_nm: " << num(n.torque_bias_nm) << ", torque_filter_hz: " << num(n.torque_filter_hz) << "}\n";
+      << ", torque_bias_nm: " << num(n.torque_bias_nm) << ", torque_filter_hz: " << num(n.torque_filter_hz);
+    if (n.pressure_full_scale_pa > 0.0) {
+      o << ", pressure_full_scale_pa: " << num(n.pressure_full_scale_pa) << ", pressure_bits: " << n.pressure_bits
+        << ", pressure_noise_pa: " << num(n.pressure_noise_pa);
+    }
+    o << "}\n";
   }
   return o.str();
 }

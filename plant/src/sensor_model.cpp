@@ -1,5 +1,6 @@
 #include "fullarm/plant/sensor_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -72,6 +73,21 @@ JointMeasurement sampleJointSensors(const JointParams& p, JointSensorState& stat
       arm::quantizeCode(arm::torqueSensorCounts(p.torque_sensor, state.torque_filtered_nm), p.torque_sensor.bits);
   m.tau_nm = arm::torqueSensorTorque(p.torque_sensor, m.tau_counts);
   return m;
+}
+
+void samplePressureSensors(const JointParams& p, GaussianNoise& noise, double p_a_true_pa, double p_b_true_pa,
+                           JointMeasurement& m) noexcept {
+  const SensorNoiseParams& n = p.sensor_noise;
+  if (!(n.pressure_full_scale_pa > 0.0)) return;
+  const double top = std::ldexp(1.0, n.pressure_bits) - 1.0;
+  const double step = n.pressure_full_scale_pa / top;
+  auto convert = [&](double pressure_pa) {
+    const double analog = pressure_pa + n.pressure_noise_pa * noise.next();
+    return std::clamp(std::round(analog / step), 0.0, top) * step;
+  };
+  m.p_a_pa = convert(p_a_true_pa);
+  m.p_b_pa = convert(p_b_true_pa);
+  m.pressures = true;
 }
 
 }  // namespace fullarm::plant

@@ -101,6 +101,35 @@ TEST(PlantConfig, BadYamlGivesFileLineAndKeyPath) {
   expectConfigError(replaced(text, "  atol_spool: 1.0e-4\n", ""), "solver", "atol_spool");
 }
 
+// Pressure transducers are optional per joint; given, the three keys come together and are checked.
+TEST(PlantConfig, PressureTransducerKeysAreCheckedAndNameTheJoint) {
+  const std::string text = defaultText();
+  const std::string sensors = "torque_bias_nm: 0.0, torque_filter_hz: 200.0";
+  const std::size_t eb = text.find("name: R_EB");
+  const auto withElbow = [&](const std::string& extra) {
+    std::string t = text;
+    t.replace(t.find(sensors, eb), sensors.size(), sensors + extra);
+    return t;
+  };
+  const PlantConfig ok =
+      parsePlantConfig(withElbow(", pressure_full_scale_pa: 25.0e6, pressure_bits: 12, pressure_noise_pa: 1.0e4"),
+                       "p.yaml", test::dtsModel());
+  EXPECT_EQ(ok.joints[3].sensor_noise.pressure_full_scale_pa, 25.0e6);
+  EXPECT_EQ(ok.joints[3].sensor_noise.pressure_bits, 12);
+  EXPECT_EQ(ok.joints[3].sensor_noise.pressure_noise_pa, 1.0e4);
+  EXPECT_EQ(ok.joints[2].sensor_noise.pressure_full_scale_pa, 0.0);  // the others have none
+  expectConfigError(withElbow(", pressure_full_scale_pa: 25.0e6"), "joints[3].sensors", "pressure_bits");
+  expectConfigError(withElbow(", pressure_full_scale_pa: 1.0e6, pressure_bits: 12, pressure_noise_pa: 0"),
+                    "joints[3].sensors.pressure_full_scale_pa", "at least the supply pressure");
+  expectConfigError(withElbow(", pressure_full_scale_pa: .nan, pressure_bits: 12, pressure_noise_pa: 0"),
+                    "joints[3].sensors.pressure_full_scale_pa", "");
+  expectConfigError(withElbow(", pressure_full_scale_pa: 25.0e6, pressure_bits: 40, pressure_noise_pa: 0"),
+                    "joints[3].sensors.pressure_bits", "[8, 24]");
+  expectConfigError(withElbow(", pressure_full_scale_pa: 25.0e6, pressure_bits: 12, pressure_noise_pa: -1"),
+                    "joints[3].sensors.pressure_noise_pa", ">= 0");
+  expectConfigError(withElbow(", pressure_bits: 12"), "joints[3].sensors.pressure_bits", "");
+}
+
 TEST(PlantConfig, StepBeforeConfigureIsNotConfigured) {
   ArmPlant plant;
   const core::RtStatus status = plant.step(1e-3, PlantCommand::zero(1));

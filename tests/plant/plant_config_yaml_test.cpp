@@ -23,6 +23,9 @@ TEST(PlantConfigYamlTest, WrittenPlantReadsBackToTheSameDoubles) {
   a.user_arm.enabled = true;
   a.user_arm.point_L = {0.1, -0.2, 1.0 / 7.0};
   a.seed = 42;
+  a.joints[3].sensor_noise.pressure_full_scale_pa = 25.0e6 + 1.0 / 3.0;
+  a.joints[3].sensor_noise.pressure_bits = 14;
+  a.joints[3].sensor_noise.pressure_noise_pa = 1.0e4 / 3.0;
   const PlantConfig b = parsePlantConfig(formatPlantConfigYaml(a, model, {"a header line"}), "written.yaml", model);
   EXPECT_EQ(b.seed, a.seed);
   EXPECT_EQ(b.solver.integrator, a.solver.integrator);
@@ -85,6 +88,9 @@ TEST(PlantConfigYamlTest, WrittenPlantReadsBackToTheSameDoubles) {
     EXPECT_EQ(y.sensor_noise.torque_noise_nm, x.sensor_noise.torque_noise_nm);
     EXPECT_EQ(y.sensor_noise.torque_bias_nm, x.sensor_noise.torque_bias_nm);
     EXPECT_EQ(y.sensor_noise.torque_filter_hz, x.sensor_noise.torque_filter_hz);
+    EXPECT_EQ(y.sensor_noise.pressure_full_scale_pa, x.sensor_noise.pressure_full_scale_pa);
+    EXPECT_EQ(y.sensor_noise.pressure_bits, x.sensor_noise.pressure_bits);
+    EXPECT_EQ(y.sensor_noise.pressure_noise_pa, x.sensor_noise.pressure_noise_pa);
   }
 }
 

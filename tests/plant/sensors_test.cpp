@@ -3,8 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "fullarm/arm/arm_data.hpp"
 #include "fullarm/arm/dynamics.hpp"
@@ -101,6 +103,86 @@ TEST(PlantSensors, RunsAreDeterministicForASeed) {
   };
   EXPECT_EQ(run(5), run(5));
   EXPECT_NE(run(5), run(6));
+}
+
+// Pressure transducers: an ADC of pressure_bits over [0, full scale] that saturates at both ends,
+// within half a count of the pressure without noise, and the requested spread with it.
+TEST(PlantSensors, PressureTransducersQuantiseOverTheirFullScaleAndSaturate) {
+  JointParams p = test::dtsPlant().joints[3];
+  p.sensor_noise = {};
+  GaussianNoise noise(3);
+  JointMeasurement none;
+  samplePressureSensors(p, noise, 1.0e6, 2.0e6, none);  // no transducers: nothing read
+  EXPECT_FALSE(none.pressures);
+  EXPECT_EQ(none.p_a_pa, 0.0);
+  p.sensor_noise.pressure_full_scale_pa = 25.0e6;
+  p.sensor_noise.pressure_bits = 12;
+  const double count = 25.0e6 / 4095.0;
+  for (double pa : {0.0, 1.234e6, 10.3e6, 20.7e6, 25.0e6}) {
+    JointMeasurement m;
+    samplePressureSensors(p, noise, pa, 25.0e6 - pa, m);
+    EXPECT_TRUE(m.pressures);
+    EXPECT_NEAR(m.p_a_pa, pa, 0.5 * count + 1e-6) << pa;
+    EXPECT_NEAR(m.p_b_pa, 25.0e6 - pa, 0.5 * count + 1e-6) << pa;
+    EXPECT_NEAR(std::remainder(m.p_a_pa, count), 0.0, 1e-6) << "not a whole count";
+  }
+  JointMeasurement out;
+  samplePressureSensors(p, noise, -0.5e6, 40.0e6, out);  // below vacuum gauge, above full scale
+  EXPECT_EQ(out.p_a_pa, 0.0);
+  EXPECT_NEAR(out.p_b_pa, 25.0e6, 1e-6);
+
+  p.sensor_noise.pressure_bits = 24;  // counts of 1.5 Pa: the noise shows through
+  p.sensor_noise.pressure_noise_pa = 1.0e4;
+  double sum = 0.0, sum2 = 0.0;
+  constexpr int kSamples = 20000;
+  for (int i = 0; i < kSamples; ++i) {
+    JointMeasurement m;
+    samplePressureSensors(p, noise, 10.0e6, 10.0e6, m);
+    sum += m.p_a_pa - 10.0e6;
+    sum2 += (m.p_a_pa - 10.0e6) * (m.p_a_pa - 10.0e6);
+  }
+  const double mean = sum / kSamples;
+  EXPECT_NEAR(mean, 0.0, 5.0 * 1.0e4 / std::sqrt(kSamples));
+  EXPECT_NEAR(std::sqrt(sum2 / kSamples - mean * mean), 1.0e4, 0.05 * 1.0e4);
+}
+
+// The plant reads its chambers through the transducers (the readings within a count and the
+// noise of the true pressures, whose hydraulic torque p_a dV_a/dq + p_b dV_b/dq is the plant's),
+// and adding them leaves the angle and load-cell readings of a seeded run unchanged.
+TEST(PlantSensors, PressureReadingsFollowTheChambersAndLeaveTheOtherReadingsAlone) {
+  const arm::ArmModel& model = test::dtsModel();
+  const PlantConfig& config = test::dtsPlant();
+  auto run = [&](bool transducers) {
+    JointParams p = config.joints[3];
+    if (transducers) {
+      p.sensor_noise.pressure_full_scale_pa = 25.0e6;
+      p.sensor_noise.pressure_bits = 16;
+      p.sensor_noise.pressure_noise_pa = 1.0e3;
+    }
+    ArmPlant plant;
+    plant.configure(model, {p}, model.defaultPosture(), UserArmParams{}, config.solver, 9);
+    PlantCommand cmd = PlantCommand::zero(1);
+    std::vector<int> counts;
+    double worst = 0.0;
+    for (int k = 0; k < 300; ++k) {
+      cmd.command[0] = 1.5 * std::sin(k * 0.04);
+      EXPECT_TRUE(plant.step(1e-3, cmd).ok());
+      const JointMeasurement& m = plant.measurement(0);
+      counts.push_back(m.tau_counts);
+      counts.push_back(m.q_counts);
+      EXPECT_EQ(m.pressures, transducers);
+      if (transducers) {
+        const JointState s = plant.state(0);
+        worst = std::max({worst, std::abs(m.p_a_pa - s.p_a_pa), std::abs(m.p_b_pa - s.p_b_pa)});
+      }
+    }
+    if (transducers) {
+      // 6 sigma of the noise plus half a 16-bit count.
+      EXPECT_LT(worst, 6.0e3 + 0.5 * 25.0e6 / 65535.0);
+    }
+    return counts;
+  };
+  EXPECT_EQ(run(true), run(false));
 }
 
 }  // namespace

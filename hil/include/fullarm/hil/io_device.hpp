@@ -60,6 +60,12 @@ struct JointSample {
   /// Bit k: a reading of joint k was at an end of its converter's range (Comedi reports it out
   /// of range; the value is then NaN).
   std::uint32_t out_of_range_mask = 0;
+  /// Chamber pressures [Pa, gauge], device order, where the back-end reads them: bit k of
+  /// `pressure_mask` says joint k's are valid (the simulated DTS with pressure transducers in its
+  /// plant file; the DTS master itself has none, so the hardware back-ends leave the mask 0).
+  IoVector p_a_pa;
+  IoVector p_b_pa;
+  std::uint32_t pressure_mask = 0;
 };
 
 /// Lifecycle state of a device.
@@ -145,7 +151,9 @@ class IoDevice {
   virtual void onConfigure() = 0;
   virtual void onActivate() noexcept {}
   virtual void onDeactivate() noexcept {}
-  /// Fills q_rad, tau_load_cell_nm (sized numJoints()), t_s and out_of_range_mask.
+  /// Fills q_rad, tau_load_cell_nm (sized numJoints()), t_s and out_of_range_mask, and where the
+  /// back-end reads chamber pressures p_a_pa, p_b_pa (sized numJoints()) and pressure_mask
+  /// (reset to 0 before every call).
   virtual core::RtStatus onRead(JointSample& sample) noexcept = 0;
   /// Puts `valve_v` (already limited) on the outputs; `toggle_enable` is true when the enable
   /// line must change state (a heartbeat), false when it must stay as it is.

@@ -302,6 +302,9 @@ class ArmPlant {
 
   // Sensors.
   GaussianNoise noise_{1};
+  /// The pressure transducers' noise, a stream of its own (sensor_model.hpp).
+  GaussianNoise pressure_noise_{2};
+  static constexpr std::uint64_t kPressureNoiseStream = 0x70726573737572ULL;
   std::uint64_t seed_ = 1;
   std::vector<JointSensorState> sensor_state_;
   std::vector<JointMeasurement> measured_;

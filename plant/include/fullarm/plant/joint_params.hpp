@@ -106,6 +106,12 @@ struct SensorNoiseParams {
   double torque_noise_nm = 0.0;   ///< standard deviation of load-cell noise before the filter
   double torque_bias_nm = 0.0;    ///< load-cell offset
   double torque_filter_hz = 0.0;  ///< first-order analog low-pass of the load cell; 0 = none
+  /// Chamber pressure transducers (gauge, 0 .. full scale through an ADC of `pressure_bits`):
+  /// full scale 0 = the joint has none (the DTS master's joints have none; a test rig's or a
+  /// simulated joint's may).
+  double pressure_full_scale_pa = 0.0;
+  int pressure_bits = 12;          ///< ADC resolution of the pressure transducers
+  double pressure_noise_pa = 0.0;  ///< standard deviation of their noise before the ADC
 };
 
 /// Everything about one hydraulic joint. Constant after validateJointParams().

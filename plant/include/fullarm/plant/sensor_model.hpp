@@ -39,6 +39,11 @@ struct JointMeasurement {
   double tau_nm = 0.0;  ///< load-cell torque after the filter and the ADC
   int q_counts = 0;     ///< ADC code of the potentiometer
   int tau_counts = 0;   ///< ADC code of the load cell
+  /// Chamber pressures [Pa, gauge] after their transducers' ADC (SensorNoiseParams; both 0 and
+  /// `pressures` false for a joint without pressure transducers).
+  double p_a_pa = 0.0;
+  double p_b_pa = 0.0;
+  bool pressures = false;
 };
 
 /// Samples both sensors of one joint at the end of a control period of `dt_s`.
@@ -47,5 +52,14 @@ struct JointMeasurement {
 /// @rt
 JointMeasurement sampleJointSensors(const JointParams& p, JointSensorState& state, GaussianNoise& noise,
                                     double q_true_rad, double tau_true_nm, double dt_s) noexcept;
+
+/// Samples a joint's chamber pressure transducers into `m` (p_a_pa, p_b_pa, pressures = true):
+/// noise of SensorNoiseParams::pressure_noise_pa, then an ADC of pressure_bits over
+/// [0, pressure_full_scale_pa] that saturates at both ends. No effect for a joint without them
+/// (full scale 0). Their noise comes from its own stream, so adding transducers leaves the
+/// angle and load-cell readings of a seeded run unchanged.
+/// @rt
+void samplePressureSensors(const JointParams& p, GaussianNoise& noise, double p_a_true_pa, double p_b_true_pa,
+                           JointMeasurement& m) noexcept;
 
 }  // namespace fullarm::plant
