@@ -29,12 +29,14 @@ bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
 
 bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
                             const fullarm_lcm::ident_experiment_t* /*type*/) noexcept {
-  // utime; fullarm_version, command_line, source, joint; sample_period_s; num_held and the names.
+  // utime; fullarm_version, command_line, source, joint; sample_period_s; num_held and the names;
+  // num_pressures.
   LcmWalk w(bytes);
   w.skip(8);
   w.strings(4);
   w.skip(8);
   w.strings(w.count(1));
+  w.skip(1);
   return w.finish() == DecodeStatus::kOk;
 }
 

@@ -77,7 +77,16 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   }
 
   ExperimentResult result;
+  hil::JointSample sample;
+  detail::PacedReader reader(device, options.before_read);
+  const auto read = [&] { return reader.read(sample); };
+  const auto readFailure = [&] { return reader.failure(); };
+  if (!read()) throw std::runtime_error("experiment: the device could not be read: " + readFailure());
+  // The driven joint's chamber pressures, where the device reads them, follow the five columns.
+  const bool log_pressures = (sample.pressure_mask >> j & 1u) != 0;
   result.log.names = kExperimentColumns;
+  if (log_pressures) result.log.names.insert(result.log.names.end(), kPressureColumns.begin(), kPressureColumns.end());
+  const std::size_t first_held_column = result.log.names.size();
   if (log_held) {
     for (int k = 0; k < n; ++k) {
       if (k != j) result.log.names.push_back(heldAngleColumn(options.joint_names[static_cast<std::size_t>(k)]));
@@ -85,12 +94,6 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   }
   result.log.columns.assign(result.log.names.size(), {});
   for (auto& c : result.log.columns) c.reserve(excitation.value_v.size());
-
-  hil::JointSample sample;
-  detail::PacedReader reader(device, options.before_read);
-  const auto read = [&] { return reader.read(sample); };
-  const auto readFailure = [&] { return reader.failure(); };
-  if (!read()) throw std::runtime_error("experiment: the device could not be read: " + readFailure());
   result.hold_rad.assign(sample.q_rad.data(), sample.q_rad.data() + n);
   if (!(sample.q_rad[j] >= lo && sample.q_rad[j] <= hi)) {
     throw std::invalid_argument("experiment: joint " + std::to_string(j) + " starts at " +
@@ -119,6 +122,10 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
       result.stop_reason = "joint " + std::to_string(j) + ": load-cell reading out of range";
       return result;
     }
+    if (log_pressures && (sample.pressure_mask >> j & 1u) == 0) {
+      result.stop_reason = "joint " + std::to_string(j) + ": the chamber pressures stopped being read";
+      return result;
+    }
     for (int k = 0; k < n; ++k) {
       if (k == j) continue;
       if (!std::isfinite(sample.q_rad[k]) ||
@@ -145,8 +152,12 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
       c[2].push_back(device.appliedCommand()[j]);
       c[3].push_back(q);
       c[4].push_back(sample.tau_load_cell_nm[j]);
+      if (log_pressures) {
+        c[5].push_back(sample.p_a_pa[j]);
+        c[6].push_back(sample.p_b_pa[j]);
+      }
       if (log_held) {
-        std::size_t column = kExperimentColumns.size();
+        std::size_t column = first_held_column;
         for (int k = 0; k < n; ++k) {
           if (k != j) c[column++].push_back(sample.q_rad[k]);
         }

@@ -49,9 +49,21 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
     columns.push_back(&table.column(name));
   }
   const std::vector<HeldAngle> held = heldAngles(table);
-  if (table.names.size() != kExperimentColumns.size() + held.size() || table.columns.size() != table.names.size()) {
+  const bool pressures = table.has(kPressureColumns[0]) || table.has(kPressureColumns[1]);
+  std::vector<const std::vector<double>*> pressure_columns;
+  if (pressures) {
+    for (const std::string& name : kPressureColumns) {
+      if (!table.has(name)) {
+        throw std::invalid_argument("experiment LCM log: the table has one chamber pressure but no column " + name);
+      }
+      pressure_columns.push_back(&table.column(name));
+    }
+  }
+  if (table.names.size() != kExperimentColumns.size() + pressure_columns.size() + held.size() ||
+      table.columns.size() != table.names.size()) {
     throw std::invalid_argument(
-        "experiment LCM log: columns other than the experiment's and the held joints' angles (held_<joint>_rad)");
+        "experiment LCM log: columns other than the experiment's, the chamber pressures and the held joints' angles "
+        "(held_<joint>_rad)");
   }
   if (held.size() > static_cast<std::size_t>(kMaxHeldJoints)) {
     throw std::invalid_argument("experiment LCM log: " + std::to_string(held.size()) + " held joints (at most " +
@@ -95,11 +107,14 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
   header.sample_period_s = info.sample_period_s;
   header.num_held = static_cast<std::int8_t>(held.size());
   for (const HeldAngle& h : held) header.held_joints.push_back(h.joint);
+  header.num_pressures = static_cast<std::int8_t>(pressure_columns.size());
   log.writeMessage(channel::kIdentExperiment, header.utime, header);
 
   fullarm_lcm::ident_sample_t sample{};
   sample.num_held = header.num_held;
   sample.held_q_rad.resize(held.size());
+  sample.num_pressures = header.num_pressures;
+  sample.pressure_pa.resize(pressure_columns.size());
   for (std::size_t k = 0; k < rows; ++k) {
     sample.t_s = (*columns[0])[k];
     sample.utime = microseconds(sample.t_s);
@@ -109,6 +124,7 @@ void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable&
     sample.q_rad = (*columns[3])[k];
     sample.tau_measured_nm = (*columns[4])[k];
     for (std::size_t j = 0; j < held.size(); ++j) sample.held_q_rad[j] = (*held_columns[j])[k];
+    for (std::size_t j = 0; j < pressure_columns.size(); ++j) sample.pressure_pa[j] = (*pressure_columns[j])[k];
     log.writeMessage(channel::kIdentSample, sample.utime, sample);
     if (k % 1024 == 1023 && !log.error().empty()) break;  // a failed write: the rest would fail too
   }
@@ -142,7 +158,14 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
       }
       if (header.joint.empty())
         fail(file, "joint is empty: expected the driven joint's name", event.offset, event.channel);
+      if (header.num_pressures != 0 && header.num_pressures != static_cast<std::int8_t>(kPressureColumns.size())) {
+        fail(file, "num_pressures " + std::to_string(header.num_pressures) + ": expected 0 or 2 (chambers A and B)",
+             event.offset, event.channel);
+      }
       out.table.names = kExperimentColumns;
+      if (header.num_pressures != 0) {
+        out.table.names.insert(out.table.names.end(), kPressureColumns.begin(), kPressureColumns.end());
+      }
       for (const std::string& name : header.held_joints) {
         if (!isLoggableJointName(name)) {
           fail(file, "held joint '" + name + "': expected a joint name", event.offset, event.channel);
@@ -183,6 +206,20 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
                " held angles, the description " + std::to_string(header.num_held),
            event.offset, event.channel);
     }
+    if (s.num_pressures != header.num_pressures) {
+      fail(file,
+           "sample " + std::to_string(s.seq) + " carries " + std::to_string(s.num_pressures) +
+               " chamber pressures, the description " + std::to_string(header.num_pressures),
+           event.offset, event.channel);
+    }
+    for (std::size_t j = 0; j < s.pressure_pa.size(); ++j) {
+      if (!std::isfinite(s.pressure_pa[j])) {
+        fail(file,
+             "sample " + std::to_string(s.seq) + ": " + kPressureColumns[j] + " is " +
+                 std::to_string(s.pressure_pa[j]) + ": expected a finite number",
+             event.offset, event.channel);
+      }
+    }
     auto& c = out.table.columns;
     const std::array<double, kRowValues> values{s.t_s, s.excitation_v, s.command_v, s.q_rad, s.tau_measured_nm};
     for (std::size_t i = 0; i < kRowValues; ++i) {
@@ -208,7 +245,9 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
            event.offset, event.channel);
     }
     for (std::size_t i = 0; i < kRowValues; ++i) c[i].push_back(values[i]);
-    for (std::size_t j = 0; j < s.held_q_rad.size(); ++j) c[kRowValues + j].push_back(s.held_q_rad[j]);
+    for (std::size_t j = 0; j < s.pressure_pa.size(); ++j) c[kRowValues + j].push_back(s.pressure_pa[j]);
+    const std::size_t held_at = kRowValues + s.pressure_pa.size();
+    for (std::size_t j = 0; j < s.held_q_rad.size(); ++j) c[held_at + j].push_back(s.held_q_rad[j]);
     ++next_seq;
   }
   const std::string cut = reader.truncated() ? " (" + reader.warning() + ")" : std::string();

@@ -81,6 +81,7 @@ fullarm_lcm::ident_experiment_t experiment() {
   x.sample_period_s = 0.001;
   x.num_held = 2;
   x.held_joints = {"R_SFE", "R_SAA"};
+  x.num_pressures = 2;
   return x;
 }
 

@@ -113,6 +113,13 @@ fullarm_lcm::ident_sample_t sample(std::int64_t seq, int held) {
   return s;
 }
 
+fullarm_lcm::ident_sample_t sampleWithPressures(std::int64_t seq, double p_a_pa, double p_b_pa) {
+  fullarm_lcm::ident_sample_t s = sample(seq, 0);
+  s.num_pressures = 2;
+  s.pressure_pa = {p_a_pa, p_b_pa};
+  return s;
+}
+
 void expectRefused(const std::filesystem::path& file, const std::string& says, bool names_offset = true) {
   try {
     (void)readExperimentLcmLog(file);
@@ -188,6 +195,37 @@ TEST(ExperimentLcmLogTest, ATableWrittenAndReadBackIsTheSameToTheBit) {
   }
 }
 
+// The driven joint's chamber pressures, where logged, travel with every sample and come back as
+// the same columns in the same place (after the five, before the held joints').
+TEST(ExperimentLcmLogTest, ChamberPressuresRoundTripToTheBit) {
+  SignalTable written = table(300);
+  const std::vector<std::string> held_names(written.names.begin() + 5, written.names.end());
+  std::vector<std::vector<double>> held_columns(written.columns.begin() + 5, written.columns.end());
+  written.names.resize(5);
+  written.columns.resize(5);
+  written.names.insert(written.names.end(), kPressureColumns.begin(), kPressureColumns.end());
+  std::vector<double> pa, pb;
+  for (std::size_t k = 0; k < 300; ++k) {
+    pa.push_back(1.0e7 + 1.0e5 * std::sin(0.3 * static_cast<double>(k)) / 3.0);
+    pb.push_back(0.9e7 - 1.0e5 * std::cos(0.2 * static_cast<double>(k)) / 7.0);
+  }
+  written.columns.push_back(pa);
+  written.columns.push_back(pb);
+  written.names.insert(written.names.end(), held_names.begin(), held_names.end());
+  written.columns.insert(written.columns.end(), held_columns.begin(), held_columns.end());
+  const auto file = tempFile("pressures.lcm");
+  writeExperimentLcmLog(file, written, info());
+  const ExperimentLcmLog read = readExperimentLcmLog(file);
+  EXPECT_EQ(read.table.names, written.names);
+  EXPECT_EQ(read.table.columns, written.columns);
+  EXPECT_EQ(heldAngles(read.table).size(), 2u);
+  // One chamber's pressure without the other's is refused.
+  SignalTable one = written;
+  one.names.erase(one.names.begin() + 6);
+  one.columns.erase(one.columns.begin() + 6);
+  EXPECT_THROW(writeExperimentLcmLog(tempFile("one.lcm"), one, info()), std::invalid_argument);
+}
+
 TEST(ExperimentLcmLogTest, OtherChannelsAreSkippedAndATruncatedLastEventIsDroppedWithAWarning) {
   const auto file = tempFile("mixed.lcm");
   {
@@ -235,6 +273,30 @@ TEST(ExperimentLcmLogTest, EveryWayALogCanBeWrongIsRefusedNamingTheFileAndTheOff
   }
   expectRefused(write("no_header.lcm", [](LogBuilder& b) { b.add(channel::kIdentSample, sample(0, 0)); }),
                 "a sample before the experiment description");
+  {
+    fullarm_lcm::ident_experiment_t three = header(0);
+    three.num_pressures = 3;
+    expectRefused(write("three_pressures.lcm",
+                        [&](LogBuilder& b) {
+                          b.add(channel::kIdentExperiment, three);
+                          b.add(channel::kIdentSample, sample(0, 0));
+                        }),
+                  "num_pressures 3: expected 0 or 2");
+    // A description with both chamber pressures, a first sample that carries them, then `second`.
+    const auto withPressures = [&](const std::string& name, const fullarm_lcm::ident_sample_t& second) {
+      fullarm_lcm::ident_experiment_t two = header(0);
+      two.num_pressures = 2;
+      return write(name, [&](LogBuilder& b) {
+        b.add(channel::kIdentExperiment, two);
+        b.add(channel::kIdentSample, sampleWithPressures(0, 1.0e7, 0.9e7));
+        b.add(channel::kIdentSample, second);
+      });
+    };
+    expectRefused(withPressures("pressure_count.lcm", sample(1, 0)), "carries 0 chamber pressures, the description 2");
+    expectRefused(
+        withPressures("pressure_inf.lcm", sampleWithPressures(1, 1.0e7, std::numeric_limits<double>::infinity())),
+        "pressure_b_pa is inf");
+  }
   expectRefused(write("no_samples.lcm", [](LogBuilder& b) { b.add(channel::kIdentExperiment, header(0)); }),
                 "has no samples", false);
   expectRefused(write("two_headers.lcm",

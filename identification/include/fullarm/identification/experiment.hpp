@@ -15,7 +15,9 @@
 /// The log has one row per control period of the excitation: `time_s` (the reading's device
 /// time, or the control time: ExperimentOptions::log_control_time), `excitation_v`, `command_v`
 /// (what the device put out after its clamp, held over the next period), `q_rad` and
-/// `tau_measured_nm` (the driven joint's reading), then, when the device's joints are named
+/// `tau_measured_nm` (the driven joint's reading), then, where the device reads the driven
+/// joint's chamber pressures (hil::JointSample::pressure_mask), `pressure_a_pa` and
+/// `pressure_b_pa`, then, when the device's joints are named
 /// (ExperimentOptions::joint_names), `held_<joint>_rad` for every held joint: the posture the
 /// driven joint moved in, which sets its link inertia and gravity load (heldAngles reads it back).
 

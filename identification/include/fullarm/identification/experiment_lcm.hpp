@@ -11,7 +11,7 @@
 ///
 /// Reading is strict: a log whose first experiment event is missing or is not the first sample's
 /// predecessor, a payload that does not decode, a lost sample (a gap in seq), a sample whose held
-/// count differs from the header's, a non-finite value or a time that does not strictly increase
+/// or pressure count differs from the header's, a non-finite value or a time that does not strictly increase
 /// is a hil::RunLogError naming the file, the byte offset and what was expected. A truncated last
 /// event (a log cut short while it was written) is dropped and said in the warning.
 
@@ -36,8 +36,8 @@ struct ExperimentLogInfo {
   std::string fullarm_version;   ///< set by the reader (the writer puts its own)
 };
 
-/// Writes `table` (kExperimentColumns, then `held_<joint>_rad` per held joint, as runExperiment logs
-/// it) as an LCM log.
+/// Writes `table` (kExperimentColumns, the chamber pressures kPressureColumns where logged, then
+/// `held_<joint>_rad` per held joint, as runExperiment logs it) as an LCM log.
 /// @throws std::invalid_argument for a table without the experiment columns, columns of unequal
 ///   length or other extra columns; hil::RunLogError naming the file when it cannot be written
 void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable& table, const ExperimentLogInfo& info);

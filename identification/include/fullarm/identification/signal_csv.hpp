@@ -18,6 +18,9 @@ namespace fullarm::identification {
 /// The columns of a closed-loop experiment log, in order.
 inline const std::vector<std::string> kExperimentColumns{"time_s", "excitation_v", "command_v", "q_rad",
                                                          "tau_measured_nm"};
+/// The driven joint's chamber pressures [Pa, gauge], logged after kExperimentColumns where the
+/// device reads them.
+inline const std::vector<std::string> kPressureColumns{"pressure_a_pa", "pressure_b_pa"};
 
 /// A malformed CSV file; what() names the file and the line (1-based; 0 for the file as a whole).
 class CsvFormatError : public std::runtime_error {
