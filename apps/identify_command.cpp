@@ -86,9 +86,13 @@ struct Outcome {
   std::optional<double> start_gravity_nm;  // the gravity load there (none with --start)
 };
 
-id::ExperimentData dataFromLog(const id::SignalTable& log, const std::string& file) {
+// The experiment a log holds, with the hydraulic torque of its chamber pressures (where logged)
+// through the driven joint's geometry.
+id::ExperimentData dataFromLog(const id::SignalTable& log, const std::string& file, const plant::JointParams& driven) {
   try {
-    return id::experimentFromLog(log);
+    id::ExperimentData data = id::experimentFromLog(log);
+    id::addHydraulicTorque(data, log, driven);
+    return data;
   } catch (const std::invalid_argument& e) {
     throw core::ConfigError(file, "", e.what());
   }
@@ -137,7 +141,7 @@ id::SampledSignal validationExcitation(double amplitude_v, double duration_s) {
   return id::schroederMultisine(amplitude_v, low, kBandHz, duration_s, 1, kSamplePeriod_s).signal;
 }
 
-Experiment experimentOf(const id::ExperimentResult& r, const std::string& name) {
+Experiment experimentOf(const id::ExperimentResult& r, const std::string& name, const plant::JointParams& driven) {
   Experiment e;
   e.name = name;
   e.log = r.log;
@@ -148,7 +152,7 @@ Experiment experimentOf(const id::ExperimentResult& r, const std::string& name) 
                             "the experiment stopped after " + std::to_string(e.log.rows()) + " samples (" +
                                 r.stop_reason + "): expected a joint that can move about its start");
   }
-  e.data = dataFromLog(e.log, name);
+  e.data = dataFromLog(e.log, name, driven);
   return e;
 }
 
@@ -173,7 +177,7 @@ Experiment runSimExperiment(const arm::ArmModel& model, plant::PlantConfig plant
   options.joint = 0;
   options.min_rad = driven.min_rad;
   options.max_rad = driven.max_rad;
-  return experimentOf(id::runExperiment(backend.device(), excitation, options), name);
+  return experimentOf(id::runExperiment(backend.device(), excitation, options), name, driven);
 }
 
 // The driven joint's index among the device's joints.
@@ -202,7 +206,7 @@ Experiment runDeviceExperiment(const arm::ArmModel& model, CommandDevice& device
   }
   const int model_joint = joints.modelIndex(device_joint);
   const id::ExperimentResult result = id::runExperiment(device.backend->device(), excitation, options);
-  Experiment e = experimentOf(result, name);
+  Experiment e = experimentOf(result, name, driven);
   e.posture = postureOfLog(model, e.log, model_joint, name);
   return e;
 }
@@ -354,6 +358,11 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
         {"fit_torque_percent", v.torque.fit_percent},
         {"prediction_fit_angle_percent", v.angle.prediction_fit_percent},
         {"prediction_fit_torque_percent", v.torque.prediction_fit_percent},
+        {"fit_hydraulic_torque_percent",
+         v.has_hydraulic ? nlohmann::json(v.hydraulic_fit_percent) : nlohmann::json(nullptr)},
+        {"prediction_fit_hydraulic_torque_percent", v.has_hydraulic && std::isfinite(v.hydraulic_prediction_fit_percent)
+                                                        ? nlohmann::json(v.hydraulic_prediction_fit_percent)
+                                                        : nlohmann::json(nullptr)},
         {"angle_autocorrelation", correlationJson(v.angle.autocorrelation)},
         {"angle_cross_correlation", correlationJson(v.angle.cross_correlation)},
         {"torque_autocorrelation", correlationJson(v.torque.autocorrelation)},
@@ -480,6 +489,10 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   };
   overlay("Held-out experiment: angle, measured vs simulated", "Angle", "rad", d.q_rad, sim.q_rad);
   overlay("Held-out experiment: load-cell torque, measured vs simulated", "Torque", "N·m", d.tau_nm, sim.tau_nm);
+  if (d.tau_hydraulic_nm.size() == d.q_rad.size()) {
+    overlay("Held-out experiment: hydraulic torque from the chamber pressures, measured vs simulated", "Torque", "N·m",
+            d.tau_hydraulic_nm, sim.tau_hydraulic_nm);
+  }
 
   // FRF from valve command to angle, with the excitation as instrument.
   const std::size_t n = d.q_rad.size();
@@ -582,6 +595,10 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   vt.rows.push_back({"torque", v.torque.fit_percent, cfg.validation.min_fit_torque_percent,
                      v.torque.prediction_fit_percent, outside(v.torque.autocorrelation),
                      outside(v.torque.cross_correlation)});
+  if (v.has_hydraulic) {
+    vt.rows.push_back({"hydraulic torque (chamber pressures; reported, not judged)", v.hydraulic_fit_percent,
+                       std::string("-"), v.hydraulic_prediction_fit_percent, std::string("-"), std::string("-")});
+  }
   vt.significant_digits = 4;
   section.addTable(std::move(vt));
   if (v.pass) {
@@ -598,8 +615,11 @@ std::string verdictText(const Outcome& o) {
   s << std::fixed << std::setprecision(1) << o.joint << " identified: held-out simulation fit angle "
     << o.validation_result.angle.fit_percent << " %, torque " << o.validation_result.torque.fit_percent
     << " %; one-step prediction fit angle " << o.validation_result.angle.prediction_fit_percent << " %, torque "
-    << o.validation_result.torque.prediction_fit_percent << " % ("
-    << (o.validation_result.pass ? "passes its validation" : "fails its validation") << ")";
+    << o.validation_result.torque.prediction_fit_percent << " %";
+  if (o.validation_result.has_hydraulic) {
+    s << "; hydraulic torque from the chamber pressures " << o.validation_result.hydraulic_fit_percent << " %";
+  }
+  s << " (" << (o.validation_result.pass ? "passes its validation" : "fails its validation") << ")";
   return s.str();
 }
 
@@ -699,7 +719,7 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
                                 std::to_string(e.log.rows()) + " samples: expected at least " +
                                     std::to_string(kMinLogSamples) + " to fit or validate");
       }
-      e.data = dataFromLog(e.log, o.logs[k]);
+      e.data = dataFromLog(e.log, o.logs[k], jp);
       if (k + 1 < o.logs.size()) {
         r.fit_experiments.push_back(std::move(e));
       } else {

@@ -294,7 +294,7 @@ StateT<T> initialState(const GreyModel& m, const Values<T>& p, double first_angl
 // The closed loop of simulateClosedLoop in scalar T.
 template <class T>
 struct Trajectory {
-  std::vector<T> q_rad, tau_nm;
+  std::vector<T> q_rad, tau_nm, tau_hydraulic_nm;
   std::vector<double> command_v;
   bool ok = true;
 };
@@ -306,6 +306,7 @@ Trajectory<T> simulate(const GreyModel& model, const Values<T>& p, const Experim
   Trajectory<T> s;
   s.q_rad.resize(n);
   s.tau_nm.resize(n);
+  s.tau_hydraulic_nm.resize(n);
   s.command_v.resize(n);
   const std::size_t d = static_cast<std::size_t>(std::max(0, model.delay_samples));
   // The first state is the one reading d shows (the readings before it show earlier states,
@@ -313,7 +314,7 @@ Trajectory<T> simulate(const GreyModel& model, const Values<T>& p, const Experim
   StateT<T> x =
       initialState(model, p, n > 0 ? data.q_rad[std::min(d, n - 1)] : valueOf(p[kAngleOffset]), speed, torque_offset);
   const T q_ref = x.q;
-  std::vector<T> out_q(n), out_tau(n);
+  std::vector<T> out_q(n), out_tau(n), out_hydraulic(n);
   const int substeps = model.spool_hz > 0.0 ? 2 * kSubsteps : kSubsteps;
   const double h = data.sample_period_s / substeps;
   // (I1)-(I2) in closed loop: the hold law on the delayed reading, the command held over the
@@ -321,15 +322,18 @@ Trajectory<T> simulate(const GreyModel& model, const Values<T>& p, const Experim
   for (std::size_t k = 0; k < n; ++k) {
     out_q[k] = x.q + p[kAngleOffset];
     out_tau[k] = measuredTorque(model, p, x);
+    out_hydraulic[k] = x.th;
     if (k >= d) {
       s.q_rad[k] = out_q[k - d];
       s.tau_nm[k] = out_tau[k - d];
+      s.tau_hydraulic_nm[k] = out_hydraulic[k - d];
     } else {
       // The first d readings show states from before the first one, which the simulation does
       // not model: they are taken as logged (at rest, the first state's readings), and so is
       // the command the hold law computed from them (a log without torques: the first state's).
       s.q_rad[k] = T(data.q_rad[k]);
       s.tau_nm[k] = data.tau_nm.size() == n ? T(data.tau_nm[k]) : out_tau[0];
+      s.tau_hydraulic_nm[k] = data.tau_hydraulic_nm.size() == n ? T(data.tau_hydraulic_nm[k]) : out_hydraulic[0];
     }
     const T u = data.hold_gain_v_per_rad * (data.hold_rad - s.q_rad[k]) + data.excitation_v[k];
     s.command_v[k] = valueOf(u);
@@ -473,6 +477,15 @@ struct Coordinates {
   [[nodiscard]] Eigen::VectorXd clamp(const Eigen::VectorXd& z) const { return z.cwiseMax(lo).cwiseMin(hi); }
 };
 
+// (I12) The gap between the hydraulic torque and the load cell's reading: the friction, as the
+// load cell's filter and offset show it. The fit compares it, simulated against logged, as the
+// third channel where the log has the chamber pressures.
+std::vector<double> frictionGap(const ExperimentData& e) {
+  std::vector<double> g(e.q_rad.size());
+  for (std::size_t k = 0; k < g.size(); ++k) g[k] = e.tau_hydraulic_nm[k] - e.tau_nm[k];
+  return g;
+}
+
 class Problem {
  public:
   /// Residuals from reading `first` of each experiment on: the first d readings of a simulation
@@ -483,9 +496,12 @@ class Problem {
     for (const auto& e : experiments_) {
       q_scale_.push_back(spread(e.q_rad));
       tau_scale_.push_back(spread(e.tau_nm));
+      const bool hydraulic = e.tau_hydraulic_nm.size() == e.q_rad.size() && !e.q_rad.empty();
+      hydraulic_scale_.push_back(hydraulic ? spread(frictionGap(e)) : 0.0);
+      channels_.push_back(hydraulic ? 3 : 2);
       offset_.push_back(residual_count_);
       first_.push_back(std::min(static_cast<std::size_t>(std::max(0, first)), e.q_rad.size()));
-      residual_count_ += 2 * static_cast<Eigen::Index>(e.q_rad.size() - first_.back());
+      residual_count_ += channels_.back() * static_cast<Eigen::Index>(e.q_rad.size() - first_.back());
     }
   }
   [[nodiscard]] Eigen::Index residualCount() const noexcept { return residual_count_; }
@@ -507,6 +523,11 @@ class Problem {
         const double rt = (s.tau_nm[k] - x.tau_nm[k]) / tau_scale_[e];
         r[at++] = s.ok && std::isfinite(rq) ? rq : kDivergedResidual;
         r[at++] = s.ok && std::isfinite(rt) ? rt : kDivergedResidual;
+        if (channels_[e] == 3) {
+          const double rh =
+              ((s.tau_hydraulic_nm[k] - s.tau_nm[k]) - (x.tau_hydraulic_nm[k] - x.tau_nm[k])) / hydraulic_scale_[e];
+          r[at++] = s.ok && std::isfinite(rh) ? rh : kDivergedResidual;
+        }
       }
     }
   }
@@ -528,12 +549,20 @@ class Problem {
       const double rt = (s.tau_nm[k].v - x.tau_nm[k]) / tau_scale_[e];
       jac(at++, col) = s.ok && std::isfinite(rq) ? s.q_rad[k].d[j] * factor / q_scale_[e] : 0.0;
       jac(at++, col) = s.ok && std::isfinite(rt) ? s.tau_nm[k].d[j] * factor / tau_scale_[e] : 0.0;
+      if (channels_[e] == 3) {
+        const double rh =
+            ((s.tau_hydraulic_nm[k].v - s.tau_nm[k].v) - (x.tau_hydraulic_nm[k] - x.tau_nm[k])) / hydraulic_scale_[e];
+        jac(at++, col) = s.ok && std::isfinite(rh)
+                             ? (s.tau_hydraulic_nm[k].d[j] - s.tau_nm[k].d[j]) * factor / hydraulic_scale_[e]
+                             : 0.0;
+      }
     }
   }
 
  private:
   const std::vector<ExperimentData>& experiments_;
-  std::vector<double> q_scale_, tau_scale_;
+  std::vector<double> q_scale_, tau_scale_, hydraulic_scale_;
+  std::vector<Eigen::Index> channels_;  // 2: angle and load cell; 3: and the hydraulic torque
   std::vector<Eigen::Index> offset_;
   std::vector<std::size_t> first_;
   Eigen::Index residual_count_ = 0;
@@ -808,6 +837,7 @@ Simulation simulateClosedLoop(const GreyModel& model, const ExperimentData& data
   Simulation s;
   s.q_rad = std::move(t.q_rad);
   s.tau_nm = std::move(t.tau_nm);
+  s.tau_hydraulic_nm = std::move(t.tau_hydraulic_nm);
   s.command_v = std::move(t.command_v);
   s.ok = t.ok;
   return s;
@@ -827,6 +857,7 @@ SimulationSensitivity simulateSensitivities(const GreyModel& model, const Experi
   out.simulation = simulateClosedLoop(model, data, initial);
   out.q_rad.setZero(n, p);
   out.tau_nm.setZero(n, p);
+  out.tau_hydraulic_nm.setZero(n, p);
   for (std::size_t first = 0; first < directions.size(); first += kDirections) {
     std::array<int, kDirections> run{};
     run.fill(-1);
@@ -841,6 +872,7 @@ SimulationSensitivity simulateSensitivities(const GreyModel& model, const Experi
         const auto col = static_cast<Eigen::Index>(first + j);
         out.q_rad(k, col) = s.q_rad[static_cast<std::size_t>(k)].d[j];
         out.tau_nm(k, col) = s.tau_nm[static_cast<std::size_t>(k)].d[j];
+        out.tau_hydraulic_nm(k, col) = s.tau_hydraulic_nm[static_cast<std::size_t>(k)].d[j];
       }
     }
   }
@@ -894,6 +926,7 @@ Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, co
   Simulation s;
   s.q_rad.resize(n);
   s.tau_nm.resize(n);
+  s.tau_hydraulic_nm.resize(n);
   s.command_v.resize(n);
   if (n == 0) return s;
   const auto& p = model.value;
@@ -924,6 +957,7 @@ Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, co
   for (std::size_t j = 0; j < std::min(d, n); ++j) {
     s.q_rad[j] = first[0];
     s.tau_nm[j] = first[1];
+    s.tau_hydraulic_nm[j] = x[2];
   }
   // I9: the extended Kalman filter's predict-update cycle. State m is seen by reading m + d; the
   // command of sample m acts over [m, m + 1].
@@ -932,6 +966,7 @@ Simulation predictOneStep(const GreyModel& model, const ExperimentData& data, co
     const Eigen::Vector2d predicted = readings(model, x);
     s.q_rad[j] = predicted[0];
     s.tau_nm[j] = predicted[1];
+    s.tau_hydraulic_nm[j] = x[2];
     // Update with reading j.
     Eigen::Matrix<double, 2, kStates> hm;
     for (int i = 0; i < kStates; ++i) {

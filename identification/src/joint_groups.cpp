@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "fullarm/plant/hydraulics.hpp"
 
@@ -35,6 +37,43 @@ GreyModel greyModelFromJoint(const plant::JointParams& joint, double q_rad, doub
   m.value[kLoadTorque] = load_torque_nm;
   m.delay_samples = delay_samples;
   return m;
+}
+
+// (I12) tau_hyd = p_a dV_a/dq + p_b dV_b/dq through the plant's chamber geometry (H5).
+std::vector<double> hydraulicTorque(const plant::JointParams& joint, const std::vector<double>& q_rad,
+                                    const std::vector<double>& p_a_pa, const std::vector<double>& p_b_pa) {
+  if (q_rad.size() != p_a_pa.size() || q_rad.size() != p_b_pa.size()) {
+    throw std::invalid_argument("hydraulic torque: " + std::to_string(q_rad.size()) + " angles, " +
+                                std::to_string(p_a_pa.size()) + " and " + std::to_string(p_b_pa.size()) +
+                                " chamber pressures");
+  }
+  if (joint.actuator.kind == plant::ActuatorKind::kIdealTorque) {
+    throw std::invalid_argument("hydraulic torque: joint " + joint.name + " has no hydraulic actuator");
+  }
+  const plant::StrokeRange range = plant::strokeRange(joint);
+  std::vector<double> tau(q_rad.size());
+  for (std::size_t k = 0; k < q_rad.size(); ++k) {
+    const plant::ChamberVolumes v = plant::chamberVolumes(joint, range, q_rad[k]);
+    tau[k] = p_a_pa[k] * v.dva_dq + p_b_pa[k] * v.dvb_dq;
+  }
+  return tau;
+}
+
+void addHydraulicTorque(ExperimentData& data, const SignalTable& log, const plant::JointParams& joint) {
+  const bool a = log.has(kPressureColumns[0]);
+  const bool b = log.has(kPressureColumns[1]);
+  if (!a && !b) return;
+  if (!(a && b)) {
+    throw std::invalid_argument("experiment log: column " + kPressureColumns[0] + " without " + kPressureColumns[1] +
+                                " or the other way round: the chamber pressures come as a pair (" +
+                                (a ? kPressureColumns[1] : kPressureColumns[0]) + " is missing)");
+  }
+  if (log.rows() != data.q_rad.size()) {
+    throw std::invalid_argument("experiment log: " + std::to_string(log.rows()) + " rows, the experiment " +
+                                std::to_string(data.q_rad.size()));
+  }
+  data.tau_hydraulic_nm =
+      hydraulicTorque(joint, data.q_rad, log.column(kPressureColumns[0]), log.column(kPressureColumns[1]));
 }
 
 }  // namespace fullarm::identification

@@ -197,6 +197,13 @@ ModelValidation validateModel(const GreyModel& model, const ExperimentData& data
   };
   v.angle = channel("angle", data.q_rad, s.q_rad, predictor.prediction.q_rad);
   v.torque = channel("torque", data.tau_nm, s.tau_nm, predictor.prediction.tau_nm);
+  if (data.tau_hydraulic_nm.size() == data.q_rad.size() && !data.q_rad.empty()) {
+    v.has_hydraulic = true;
+    v.hydraulic_fit_percent = fitPercent(data.tau_hydraulic_nm, s.tau_hydraulic_nm);
+    if (predictor.prediction.ok) {
+      v.hydraulic_prediction_fit_percent = fitPercent(data.tau_hydraulic_nm, predictor.prediction.tau_hydraulic_nm);
+    }
+  }
   if (!predictor.prediction.ok) v.failures.emplace_back("the one-step predictor diverges on this experiment");
   auto check = [&](const char* name, const ChannelValidation& c, double min_fit) {
     std::ostringstream msg;

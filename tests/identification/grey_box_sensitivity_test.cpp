@@ -1,6 +1,6 @@
-// Forward sensitivities of the grey-box simulation against central differences of the simulation
-// itself (an independent derivative of the same discretised map), at several parameter points:
-// the valve's orifice law with its laps and rounding, the spool and load-cell filter, an initial
+// Forward sensitivities of the grey-box simulation (angle, load cell and hydraulic torque) against
+// central differences of the simulation itself (an independent derivative of the same discretised map), at several
+// parameter points: the valve's orifice law with its laps and rounding, the spool and load-cell filter, an initial
 // state off rest, and a load near the stall torque.
 
 #include <gtest/gtest.h>
@@ -66,6 +66,7 @@ void expectMatchesCentralDifferences(const GreyModel& model, const ExperimentDat
   ASSERT_TRUE(s.simulation.ok) << label;
   EXPECT_EQ(s.simulation.q_rad, plain.q_rad) << label;
   EXPECT_EQ(s.simulation.tau_nm, plain.tau_nm) << label;
+  EXPECT_EQ(s.simulation.tau_hydraulic_nm, plain.tau_hydraulic_nm) << label;
   for (std::size_t j = 0; j < directions.size(); ++j) {
     const int dir = directions[j];
     GreyModel up = model, down = model;
@@ -91,17 +92,22 @@ void expectMatchesCentralDifferences(const GreyModel& model, const ExperimentDat
     } else {
       EXPECT_GT(q_scale + tau_scale, 0.0) << label << ": " << name(dir) << " has no effect";
     }
-    double q_err = 0.0, tau_err = 0.0;
+    const double hydraulic_scale = s.tau_hydraulic_nm.col(col).cwiseAbs().maxCoeff();
+    double q_err = 0.0, tau_err = 0.0, hydraulic_err = 0.0;
     for (std::size_t k = 0; k < data.q_rad.size(); ++k) {
       const auto row = static_cast<Eigen::Index>(k);
       q_err = std::max(q_err, std::abs((a.q_rad[k] - b.q_rad[k]) / (2.0 * h) - s.q_rad(row, col)));
       tau_err = std::max(tau_err, std::abs((a.tau_nm[k] - b.tau_nm[k]) / (2.0 * h) - s.tau_nm(row, col)));
+      hydraulic_err = std::max(hydraulic_err, std::abs((a.tau_hydraulic_nm[k] - b.tau_hydraulic_nm[k]) / (2.0 * h) -
+                                                       s.tau_hydraulic_nm(row, col)));
     }
     // Rounding of the differences: 1e-16 of outputs of order 1 rad and 100 N m over 2 h.
     EXPECT_LE(q_err, rel * q_scale + 1e-14 / h)
         << label << ": d angle / d " << name(dir) << " (scale " << q_scale << ")";
     EXPECT_LE(tau_err, rel * tau_scale + 1e-12 / h)
         << label << ": d torque / d " << name(dir) << " (scale " << tau_scale << ")";
+    EXPECT_LE(hydraulic_err, rel * hydraulic_scale + 1e-12 / h)
+        << label << ": d hydraulic torque / d " << name(dir) << " (scale " << hydraulic_scale << ")";
   }
 }
 

@@ -10,7 +10,7 @@
 ///   J w'   = tau_h - f(w) - tau_g - k_g (q - q_0)                  link                     (I2)
 ///   f(w)   = (tau_c + tau_st exp(-(w / w_s)^2)) tanh(w / w_eps) + b w
 ///   q'     = w
-///   q_meas = q + q_off,   tau_meas = tau_h - f(w) + tau_off
+///   q_meas = q + q_off,   tau_meas = tau_h - f(w) + tau_off,   tau_hyd = tau_h
 ///
 /// Q is the four-edge orifice law of a matched symmetric valve (the plant's H6 with H10's no-load
 /// gain factored out): r the edge opening rounded over `edge_rounding_v` (H2), l the underlap, and
@@ -25,8 +25,10 @@
 /// linearised valve.
 ///
 /// The fit simulates the known closed loop (the logged hold law u = K (q_hold - q_meas) + r
-/// driven by the logged excitation r) and minimises the output error on angle and torque,
-/// each normalised by its spread, over several experiments at once. Parameters are log-scaled
+/// driven by the logged excitation r) and minimises the output error on angle and torque, and on
+/// the hydraulic torque tau_hyd where the chamber pressures were logged (hydraulicTorque in
+/// joint_groups.hpp: the friction then shows directly as tau_hyd - tau_meas), each channel
+/// normalised by its spread, over several experiments at once. Parameters are log-scaled
 /// (signed offsets linear) inside bounds; a global stage samples the box at every delay, the best
 /// candidates are polished by Levenberg-Marquardt with the exact forward sensitivities of the
 /// discretised simulation (central differences selectable), and the delay is settled by
@@ -92,6 +94,9 @@ struct GreyModel {
 struct ExperimentData {
   double sample_period_s = 1.0e-3;
   std::vector<double> excitation_v, command_v, q_rad, tau_nm;
+  /// The hydraulic torque the chamber pressures give [N m], one per sample (empty: no pressures
+  /// were logged; hydraulicTorque in joint_groups.hpp fills it from a log that has them).
+  std::vector<double> tau_hydraulic_nm;
   double hold_gain_v_per_rad = 0.0;  ///< K of the hold law
   double hold_rad = 0.0;             ///< q_hold of the hold law
 };
@@ -117,9 +122,10 @@ inline constexpr int kInitialTorqueOffset = kGreyParams + 1;
 /// Name of an InitialState member with its unit ("initial_speed_radps", ...).
 [[nodiscard]] const char* initialStateName(int direction) noexcept;
 
-/// The model's outputs over an experiment.
+/// The model's outputs over an experiment: the readings of angle, load cell and hydraulic torque
+/// (the state tau_h, as pressure transducers would give it), each delayed as the readings are.
 struct Simulation {
-  std::vector<double> q_rad, tau_nm, command_v;
+  std::vector<double> q_rad, tau_nm, command_v, tau_hydraulic_nm;
   bool ok = true;  ///< false when the state diverged (non-finite or beyond 1e3 rad)
 };
 
@@ -145,6 +151,7 @@ struct SimulationSensitivity {
   Simulation simulation;
   Eigen::MatrixXd q_rad;   ///< samples x directions [rad per unit]
   Eigen::MatrixXd tau_nm;  ///< samples x directions [N m per unit]
+  Eigen::MatrixXd tau_hydraulic_nm;  ///< samples x directions [N m per unit]
 };
 
 /// The exact derivatives of simulateClosedLoop's outputs (the discretised simulation: every RK4
@@ -181,6 +188,8 @@ struct PredictorNoise {
 /// a delay of d samples reading k shows the state of sample k - d. The filter starts from the
 /// simulation's initial state at rest (at the angle reading d shows), so the first d readings
 /// (before any reading reaches the filter) are that state's readings, as in the simulation.
+/// The hydraulic torque is predicted from the same estimate (the chamber pressures, where logged,
+/// are not among the filter's readings).
 /// @throws std::invalid_argument for a non-positive noise level (the cell's may be zero)
 [[nodiscard]] Simulation predictOneStep(const GreyModel& model, const ExperimentData& data,
                                         const PredictorNoise& noise);

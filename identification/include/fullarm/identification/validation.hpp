@@ -11,6 +11,7 @@
 /// (autocorrelation at lags 1 .. max_lag). Both against their 99 % bounds, and a verdict against
 /// thresholds (config/identification.yaml).
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -85,6 +86,12 @@ struct ChannelValidation {
 /// Validation of a model on one experiment.
 struct ModelValidation {
   ChannelValidation angle, torque;
+  /// Where the experiment has the chamber pressures (ExperimentData::tau_hydraulic_nm): the
+  /// hydraulic torque's simulation and one-step prediction fits, reported and not judged (NaN
+  /// without them).
+  bool has_hydraulic = false;
+  double hydraulic_fit_percent = std::numeric_limits<double>::quiet_NaN();
+  double hydraulic_prediction_fit_percent = std::numeric_limits<double>::quiet_NaN();
   double process_scale = 1.0;  ///< the predictor's estimated process-noise factor (tunePredictorNoise)
   bool pass = false;
   std::vector<std::string> failures;  ///< one sentence per threshold missed
