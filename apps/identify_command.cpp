@@ -358,8 +358,9 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
         {"fit_torque_percent", v.torque.fit_percent},
         {"prediction_fit_angle_percent", v.angle.prediction_fit_percent},
         {"prediction_fit_torque_percent", v.torque.prediction_fit_percent},
-        {"fit_hydraulic_torque_percent",
-         v.has_hydraulic ? nlohmann::json(v.hydraulic_fit_percent) : nlohmann::json(nullptr)},
+        {"fit_hydraulic_torque_percent", v.has_hydraulic && std::isfinite(v.hydraulic_fit_percent)
+                                             ? nlohmann::json(v.hydraulic_fit_percent)
+                                             : nlohmann::json(nullptr)},
         {"prediction_fit_hydraulic_torque_percent", v.has_hydraulic && std::isfinite(v.hydraulic_prediction_fit_percent)
                                                         ? nlohmann::json(v.hydraulic_prediction_fit_percent)
                                                         : nlohmann::json(nullptr)},
@@ -596,8 +597,10 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
                      v.torque.prediction_fit_percent, outside(v.torque.autocorrelation),
                      outside(v.torque.cross_correlation)});
   if (v.has_hydraulic) {
-    vt.rows.push_back({"hydraulic torque (chamber pressures; reported, not judged)", v.hydraulic_fit_percent,
-                       std::string("-"), v.hydraulic_prediction_fit_percent, std::string("-"), std::string("-")});
+    const auto percent = [](double x) { return std::isfinite(x) ? reports::Cell(x) : reports::Cell(std::string("-")); };
+    vt.rows.push_back({"hydraulic torque (chamber pressures; reported, not judged)", percent(v.hydraulic_fit_percent),
+                       std::string("-"), percent(v.hydraulic_prediction_fit_percent), std::string("-"),
+                       std::string("-")});
   }
   vt.significant_digits = 4;
   section.addTable(std::move(vt));

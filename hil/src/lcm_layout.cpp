@@ -40,4 +40,15 @@ bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
   return w.finish() == DecodeStatus::kOk;
 }
 
+bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
+                            const fullarm_lcm::ident_experiment_v1_t* /*type*/) noexcept {
+  // utime; fullarm_version, command_line, source, joint; sample_period_s; num_held and the names.
+  LcmWalk w(bytes);
+  w.skip(8);
+  w.strings(4);
+  w.skip(8);
+  w.strings(w.count(1));
+  return w.finish() == DecodeStatus::kOk;
+}
+
 }  // namespace fullarm::hil

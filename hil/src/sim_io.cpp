@@ -41,6 +41,7 @@ core::RtStatus SimIoDevice::onRead(JointSample& sample) noexcept {
   sample.tau_load_cell_nm.resize(n);
   sample.p_a_pa.setZero(n);
   sample.p_b_pa.setZero(n);
+  sample.pressure_mask = 0;  // also when a plant node calls this directly
   sample.out_of_range_mask = 0;
   sample.t_s = arm_.readingTime();
   for (int k = 0; k < n; ++k) {

@@ -122,8 +122,9 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
       result.stop_reason = "joint " + std::to_string(j) + ": load-cell reading out of range";
       return result;
     }
-    if (log_pressures && (sample.pressure_mask >> j & 1u) == 0) {
-      result.stop_reason = "joint " + std::to_string(j) + ": the chamber pressures stopped being read";
+    if (log_pressures && ((sample.pressure_mask >> j & 1u) == 0 || !std::isfinite(sample.p_a_pa[j]) ||
+                          !std::isfinite(sample.p_b_pa[j]))) {
+      result.stop_reason = "joint " + std::to_string(j) + ": chamber pressure reading missing or out of range";
       return result;
     }
     for (int k = 0; k < n; ++k) {

@@ -9,7 +9,9 @@
 #include "fullarm/hil/run_log.hpp"
 #include "fullarm/identification/experiment.hpp"
 #include "fullarm_lcm/ident_experiment_t.hpp"
+#include "fullarm_lcm/ident_experiment_v1_t.hpp"
 #include "fullarm_lcm/ident_sample_t.hpp"
+#include "fullarm_lcm/ident_sample_v1_t.hpp"
 
 namespace fullarm::identification {
 namespace {
@@ -26,6 +28,53 @@ constexpr std::size_t kRowValues = 5;
                        : std::string()) +
           what,
       offset, channel);
+}
+
+// True when the event's payload starts with `Message`'s type hash.
+template <class Message>
+bool hasTypeHash(const hil::LcmLogEvent& event) {
+  if (event.data.size() < 8) return false;
+  std::uint64_t h = 0;
+  for (std::size_t i = 0; i < 8; ++i) h = (h << 8) | event.data[i];
+  return static_cast<std::int64_t>(h) == Message::getHash();
+}
+
+// Logs written before the chamber pressures were logged carry the earlier layouts (the _v1_t
+// types): read as the current ones without pressures.
+fullarm_lcm::ident_experiment_t decodeExperiment(const hil::LcmLogEvent& event, const std::filesystem::path& file,
+                                                 bool& earlier_layout) {
+  earlier_layout = hasTypeHash<fullarm_lcm::ident_experiment_v1_t>(event);
+  if (!earlier_layout) return hil::decodeEvent<fullarm_lcm::ident_experiment_t>(event, file);
+  const auto v1 = hil::decodeEvent<fullarm_lcm::ident_experiment_v1_t>(event, file);
+  fullarm_lcm::ident_experiment_t h{};
+  h.utime = v1.utime;
+  h.fullarm_version = v1.fullarm_version;
+  h.command_line = v1.command_line;
+  h.source = v1.source;
+  h.joint = v1.joint;
+  h.sample_period_s = v1.sample_period_s;
+  h.num_held = v1.num_held;
+  h.held_joints = v1.held_joints;
+  h.num_pressures = 0;
+  return h;
+}
+
+fullarm_lcm::ident_sample_t decodeSample(const hil::LcmLogEvent& event, const std::filesystem::path& file,
+                                         bool earlier_layout) {
+  if (!earlier_layout) return hil::decodeEvent<fullarm_lcm::ident_sample_t>(event, file);
+  const auto v1 = hil::decodeEvent<fullarm_lcm::ident_sample_v1_t>(event, file);
+  fullarm_lcm::ident_sample_t s{};
+  s.utime = v1.utime;
+  s.seq = v1.seq;
+  s.t_s = v1.t_s;
+  s.excitation_v = v1.excitation_v;
+  s.command_v = v1.command_v;
+  s.q_rad = v1.q_rad;
+  s.tau_measured_nm = v1.tau_measured_nm;
+  s.num_held = v1.num_held;
+  s.held_q_rad = v1.held_q_rad;
+  s.num_pressures = 0;
+  return s;
 }
 
 std::int64_t microseconds(double t_s) {
@@ -139,6 +188,7 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
   hil::LcmLogReader reader(file);
   ExperimentLcmLog out;
   bool have_header = false;
+  bool earlier_layout = false;
   fullarm_lcm::ident_experiment_t header{};
   std::int64_t next_seq = 0;
   hil::LcmLogEvent event;
@@ -146,7 +196,7 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
     if (event.channel == channel::kIdentExperiment) {
       if (have_header)
         fail(file, "a second experiment description: one experiment per log", event.offset, event.channel);
-      header = hil::decodeEvent<fullarm_lcm::ident_experiment_t>(event, file);
+      header = decodeExperiment(event, file, earlier_layout);
       have_header = true;
       if (header.num_held > kMaxHeldJoints) {
         fail(file, "num_held " + std::to_string(header.num_held) + ": expected 0 to " + std::to_string(kMaxHeldJoints),
@@ -193,7 +243,7 @@ ExperimentLcmLog readExperimentLcmLog(const std::filesystem::path& file) {
            std::string("a sample before the experiment description: expected ") + channel::kIdentExperiment + " first",
            event.offset, event.channel);
     }
-    const auto s = hil::decodeEvent<fullarm_lcm::ident_sample_t>(event, file);
+    const auto s = decodeSample(event, file, earlier_layout);
     if (s.seq != next_seq) {
       fail(file,
            "sample seq " + std::to_string(s.seq) + " where " + std::to_string(next_seq) +

@@ -496,7 +496,7 @@ class Problem {
     for (const auto& e : experiments_) {
       q_scale_.push_back(spread(e.q_rad));
       tau_scale_.push_back(spread(e.tau_nm));
-      const bool hydraulic = e.tau_hydraulic_nm.size() == e.q_rad.size() && !e.q_rad.empty();
+      const bool hydraulic = !e.tau_hydraulic_nm.empty();  // its length checked by fitGreyModel
       hydraulic_scale_.push_back(hydraulic ? spread(frictionGap(e)) : 0.0);
       channels_.push_back(hydraulic ? 3 : 2);
       offset_.push_back(residual_count_);
@@ -790,10 +790,12 @@ ExperimentData experimentFromLog(const SignalTable& log) {
   ExperimentData d;
   const auto& t = log.column("time_s");
   if (t.size() < 3) throw std::invalid_argument("experiment log: fewer than three rows");
-  for (const auto& column : log.columns) {
+  for (std::size_t c = 0; c < log.columns.size(); ++c) {
+    const auto& column = log.columns[c];
     for (std::size_t k = 0; k < column.size(); ++k) {
       if (!std::isfinite(column[k])) {
-        throw std::invalid_argument("experiment log: a non-finite value at row " + std::to_string(k + 1));
+        throw std::invalid_argument("experiment log: a non-finite value at row " + std::to_string(k + 1) +
+                                    (c < log.names.size() ? " of column " + log.names[c] : std::string()));
       }
     }
   }
@@ -1045,6 +1047,18 @@ FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const Gre
       throw std::invalid_argument(std::string("grey-box fit: the bounds of ") + name + " (" +
                                   std::to_string(spec->min) + ".." + std::to_string(spec->max) +
                                   ") do not hold 0, the state at rest");
+    }
+  }
+  for (std::size_t e = 0; e < experiments.size(); ++e) {
+    const std::vector<double>& h = experiments[e].tau_hydraulic_nm;
+    if (!h.empty() && h.size() != experiments[e].q_rad.size()) {
+      throw std::invalid_argument("grey-box fit: experiment " + std::to_string(e + 1) + " has " +
+                                  std::to_string(h.size()) + " hydraulic torques for " +
+                                  std::to_string(experiments[e].q_rad.size()) + " samples");
+    }
+    if (!std::all_of(h.begin(), h.end(), [](double v) { return std::isfinite(v); })) {
+      throw std::invalid_argument("grey-box fit: experiment " + std::to_string(e + 1) +
+                                  " has a non-finite hydraulic torque");
     }
   }
   const Coordinates c(options, experiments.size());

@@ -64,9 +64,10 @@ void addHydraulicTorque(ExperimentData& data, const SignalTable& log, const plan
   const bool b = log.has(kPressureColumns[1]);
   if (!a && !b) return;
   if (!(a && b)) {
-    throw std::invalid_argument("experiment log: column " + kPressureColumns[0] + " without " + kPressureColumns[1] +
-                                " or the other way round: the chamber pressures come as a pair (" +
-                                (a ? kPressureColumns[1] : kPressureColumns[0]) + " is missing)");
+    const std::string& present = a ? kPressureColumns[0] : kPressureColumns[1];
+    const std::string& missing = a ? kPressureColumns[1] : kPressureColumns[0];
+    throw std::invalid_argument("experiment log: column " + present + " but no column " + missing +
+                                ": the chamber pressures come as a pair");
   }
   if (log.rows() != data.q_rad.size()) {
     throw std::invalid_argument("experiment log: " + std::to_string(log.rows()) + " rows, the experiment " +

@@ -197,11 +197,20 @@ ModelValidation validateModel(const GreyModel& model, const ExperimentData& data
   };
   v.angle = channel("angle", data.q_rad, s.q_rad, predictor.prediction.q_rad);
   v.torque = channel("torque", data.tau_nm, s.tau_nm, predictor.prediction.tau_nm);
-  if (data.tau_hydraulic_nm.size() == data.q_rad.size() && !data.q_rad.empty()) {
+  if (!data.tau_hydraulic_nm.empty()) {
+    if (data.tau_hydraulic_nm.size() != data.q_rad.size()) {
+      throw std::invalid_argument("validation: " + std::to_string(data.tau_hydraulic_nm.size()) +
+                                  " hydraulic torques for " + std::to_string(data.q_rad.size()) + " samples");
+    }
     v.has_hydraulic = true;
-    v.hydraulic_fit_percent = fitPercent(data.tau_hydraulic_nm, s.tau_hydraulic_nm);
-    if (predictor.prediction.ok) {
-      v.hydraulic_prediction_fit_percent = fitPercent(data.tau_hydraulic_nm, predictor.prediction.tau_hydraulic_nm);
+    // Reported, not judged: a hydraulic torque that never changes has no fit percentage (NaN).
+    const bool varies = std::any_of(data.tau_hydraulic_nm.begin(), data.tau_hydraulic_nm.end(),
+                                    [&](double x) { return x != data.tau_hydraulic_nm.front(); });
+    if (varies) {
+      v.hydraulic_fit_percent = fitPercent(data.tau_hydraulic_nm, s.tau_hydraulic_nm);
+      if (predictor.prediction.ok) {
+        v.hydraulic_prediction_fit_percent = fitPercent(data.tau_hydraulic_nm, predictor.prediction.tau_hydraulic_nm);
+      }
     }
   }
   if (!predictor.prediction.ok) v.failures.emplace_back("the one-step predictor diverges on this experiment");

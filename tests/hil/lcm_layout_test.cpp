@@ -160,6 +160,19 @@ TEST(LcmLayout, EveryStringLengthOutOfRangeIsRefused) {
     for (auto& h : x.held_joints) s.push_back(&h);
     return s;
   });
+  fullarm_lcm::ident_experiment_v1_t earlier{};
+  earlier.fullarm_version = "0.9";
+  earlier.command_line = "fullarm identify";
+  earlier.source = "sim";
+  earlier.joint = "R_EB";
+  earlier.sample_period_s = 0.001;
+  earlier.num_held = 1;
+  earlier.held_joints = {"R_SFE"};
+  expectEveryBadLengthRefused(earlier, [](fullarm_lcm::ident_experiment_v1_t& x) {
+    std::vector<std::string*> s = {&x.fullarm_version, &x.command_line, &x.source, &x.joint};
+    for (auto& h : x.held_joints) s.push_back(&h);
+    return s;
+  });
 }
 
 TEST(LcmLayout, ANegativeArrayCountIsRefused) {
@@ -240,7 +253,8 @@ TEST(LcmLayout, EveryTypeWithAStringIsWalked) {
     }
   }
   const std::set<std::string> walked = {"run_header_t",       "run_file_t",         "run_parameter_t",
-                                        "supervisor_event_t", "ident_experiment_t", "io_node_info_t"};
+                                        "supervisor_event_t", "ident_experiment_t", "ident_experiment_v1_t",
+                                        "io_node_info_t"};
   EXPECT_EQ(with_strings, walked);
 }
 

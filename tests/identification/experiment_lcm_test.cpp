@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -224,6 +225,35 @@ TEST(ExperimentLcmLogTest, ChamberPressuresRoundTripToTheBit) {
   one.names.erase(one.names.begin() + 6);
   one.columns.erase(one.columns.begin() + 6);
   EXPECT_THROW(writeExperimentLcmLog(tempFile("one.lcm"), one, info()), std::invalid_argument);
+}
+
+// A log written before the chamber pressures were logged (tests/identification/data: the elbow's
+// 0.5 s PRBS experiment as `fullarm identify --log-format lcm` 0.1.0 wrote it, in the earlier
+// layouts of both types) reads as a log without pressures: the five columns, every sample, its
+// description.
+TEST(ExperimentLcmLogTest, ALogInTheEarlierLayoutReadsWithoutPressures) {
+  const char* root = std::getenv("FULLARM_SOURCE_DIR");
+  const std::filesystem::path file =
+      std::filesystem::path(root != nullptr ? root : ".") / "tests/identification/data/experiment_before_pressures.lcm";
+  ASSERT_TRUE(std::filesystem::exists(file)) << file;
+  const ExperimentLcmLog read = readExperimentLcmLog(file);
+  EXPECT_EQ(read.table.names, kExperimentColumns);
+  ASSERT_EQ(read.table.rows(), 500u);
+  EXPECT_EQ(read.info.joint, "R_EB");
+  EXPECT_EQ(read.info.source, "sim");
+  EXPECT_EQ(read.info.fullarm_version, "0.1.0");
+  EXPECT_EQ(read.info.sample_period_s, 1e-3);
+  EXPECT_NE(read.info.command_line.find("--log-format lcm"), std::string::npos) << read.info.command_line;
+  EXPECT_TRUE(read.warning.empty());
+  const std::vector<double>& t = read.table.column("time_s");
+  for (std::size_t k = 1; k < t.size(); ++k) EXPECT_NEAR(t[k] - t[k - 1], 1e-3, 1e-9) << k;
+  // The PRBS of +-0.5 V, and the elbow near its default angle.
+  for (double r : read.table.column("excitation_v")) EXPECT_EQ(std::abs(r), 0.5);
+  for (double q : read.table.column("q_rad")) EXPECT_NEAR(q, 1.54, 0.05);
+  // Written again it is a log in the current layout with the same rows.
+  const auto again = tempFile("earlier_rewritten.lcm");
+  writeExperimentLcmLog(again, read.table, read.info);
+  EXPECT_EQ(readExperimentLcmLog(again).table.columns, read.table.columns);
 }
 
 TEST(ExperimentLcmLogTest, OtherChannelsAreSkippedAndATruncatedLastEventIsDroppedWithAWarning) {

@@ -355,7 +355,8 @@ TEST(GreyBoxTest, NoisyFitStandardErrorsCoverTheTruth) {
 
 // The hydraulic torque the chamber pressures give (a third channel) shows the friction directly,
 // as its gap to the load cell: with it the friction groups' standard errors shrink, and the fit
-// still covers the truth. Same noisy experiments as above, the pressures with 0.1 N m of noise.
+// still covers the truth; its Jacobian rows agree with central differences. Same noisy
+// experiments as above, the pressures with 0.1 N m of noise.
 TEST(GreyBoxTest, AHydraulicTorqueChannelNarrowsTheFrictionGroups) {
   const GreyModel want = truth();
   const SampledSignal prbs_r = prbs(1.5, 10, 3, 1, kT);
@@ -391,6 +392,19 @@ TEST(GreyBoxTest, AHydraulicTorqueChannelNarrowsTheFrictionGroups) {
   for (int i : {kFlowGain, kStiffness, kInertia}) {
     const auto k = static_cast<std::size_t>(i);
     EXPECT_NEAR(with.model.value[k], want.value[k], 0.05 * want.value[k]) << greyParamName(i);
+  }
+  // The third channel's rows of the Jacobian: the polish on central differences of the residuals
+  // reaches the same optimum, with the same standard errors to 10 %.
+  FitOptions differenced_options = options;
+  differenced_options.jacobian = JacobianMethod::kCentralDifferences;
+  const FitResult differenced = fitGreyModel(data, want, differenced_options);
+  EXPECT_EQ(differenced.model.delay_samples, with.model.delay_samples);
+  EXPECT_NEAR(differenced.cost, with.cost, 1e-6 * with.cost);
+  for (int i : with.free_params) {
+    const auto k = static_cast<std::size_t>(i);
+    EXPECT_LE(std::abs(with.model.value[k] - differenced.model.value[k]), with.standard_error[k]) << greyParamName(i);
+    EXPECT_NEAR(with.standard_error[k], differenced.standard_error[k], 0.1 * differenced.standard_error[k])
+        << greyParamName(i);
   }
   // The simulation carries the channel: at the truth it is the hydraulic torque the log shows.
   const Simulation at_truth = simulateClosedLoop(want, data[0]);

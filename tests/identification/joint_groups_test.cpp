@@ -7,6 +7,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "fullarm/arm/arm_yaml.hpp"
+#include "fullarm/plant/hydraulics.hpp"
+#include "fullarm/plant/plant_config.hpp"
 
 namespace fullarm::identification {
 namespace {
@@ -59,6 +66,59 @@ TEST(JointGroupsTest, RotaryVaneGroupsFollowMerrittsFormulas) {
   EXPECT_NEAR(m.edge_rounding_v, 0.02, 1e-12);
   EXPECT_DOUBLE_EQ(m.value[kLoadTorque], 4.0);
   EXPECT_EQ(m.delay_samples, 2);
+}
+
+// The hydraulic torque of the chamber pressures: D (p_a - p_b) for a vane; for a cylinder
+// R(q) (A_a p_a - A_b p_b), the moment arm the plant's lever gives, unequal areas counted (against
+// the plant's own finite difference of the chamber volume). Pressures from a log with one chamber
+// only, unequal lengths and a joint without hydraulics are refused.
+TEST(JointGroupsTest, HydraulicTorqueIsTheChamberPressuresThroughTheGeometry) {
+  plant::JointParams vane;
+  vane.actuator.kind = plant::ActuatorKind::kRotaryVane;
+  vane.actuator.displacement_m3_per_rad = 2.0e-6;
+  vane.min_rad = -1.0;
+  vane.max_rad = 1.0;
+  const std::vector<double> tau = hydraulicTorque(vane, {0.0, 0.5}, {10.0e6, 3.0e6}, {4.0e6, 9.0e6});
+  EXPECT_NEAR(tau[0], 2.0e-6 * 6.0e6, 1e-9);
+  EXPECT_NEAR(tau[1], -2.0e-6 * 6.0e6, 1e-9);
+
+  // The shipped elbow (a cylinder on a lever), with a rod side of two thirds of the cap's area.
+  const arm::ArmModel model = arm::loadArmModel(arm::defaultArmModelPath());
+  plant::JointParams cylinder = plant::loadPlantConfig(plant::defaultPlantConfigPath(), model).joints[3];
+  ASSERT_EQ(cylinder.actuator.kind, plant::ActuatorKind::kCylinder);
+  cylinder.actuator.piston_area_b_m2 = cylinder.actuator.piston_area_a_m2 * 2.0 / 3.0;
+  const plant::StrokeRange range = plant::strokeRange(cylinder);
+  for (const double q : {cylinder.min_rad + 0.2, 0.5 * (cylinder.min_rad + cylinder.max_rad), cylinder.max_rad - 0.2}) {
+    const double h = 1e-6;
+    const double dva =
+        (plant::chamberVolumes(cylinder, range, q + h).v_a_m3 - plant::chamberVolumes(cylinder, range, q - h).v_a_m3) /
+        (2.0 * h);
+    const double dvb =
+        (plant::chamberVolumes(cylinder, range, q + h).v_b_m3 - plant::chamberVolumes(cylinder, range, q - h).v_b_m3) /
+        (2.0 * h);
+    const double want = 12.0e6 * dva + 5.0e6 * dvb;
+    EXPECT_NEAR(hydraulicTorque(cylinder, {q}, {12.0e6}, {5.0e6})[0], want, 1e-6 * std::abs(want)) << q;
+    EXPECT_GT(dva, 0.0) << "chamber A drives q positive";
+  }
+
+  EXPECT_THROW((void)hydraulicTorque(vane, {0.0, 0.1}, {1.0e6}, {1.0e6, 1.0e6}), std::invalid_argument);
+  plant::JointParams ideal = vane;
+  ideal.actuator.kind = plant::ActuatorKind::kIdealTorque;
+  EXPECT_THROW((void)hydraulicTorque(ideal, {0.0}, {1.0e6}, {1.0e6}), std::invalid_argument);
+  SignalTable log;
+  log.names = {"time_s", "q_rad", "pressure_b_pa"};
+  log.columns = {{0.0, 0.001}, {0.1, 0.1}, {1.0e6, 1.0e6}};
+  ExperimentData data;
+  data.q_rad = {0.1, 0.1};
+  try {
+    addHydraulicTorque(data, log, vane);
+    ADD_FAILURE() << "a log with one chamber's pressure was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no column pressure_a_pa"), std::string::npos) << e.what();
+  }
+  log.names[2] = "tau_other_nm";  // no pressures at all: nothing added
+  addHydraulicTorque(data, log, vane);
+  EXPECT_TRUE(data.tau_hydraulic_nm.empty());
 }
 
 }  // namespace

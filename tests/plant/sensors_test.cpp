@@ -146,9 +146,9 @@ TEST(PlantSensors, PressureTransducersQuantiseOverTheirFullScaleAndSaturate) {
   EXPECT_NEAR(std::sqrt(sum2 / kSamples - mean * mean), 1.0e4, 0.05 * 1.0e4);
 }
 
-// The plant reads its chambers through the transducers (the readings within a count and the
-// noise of the true pressures, whose hydraulic torque p_a dV_a/dq + p_b dV_b/dq is the plant's),
-// and adding them leaves the angle and load-cell readings of a seeded run unchanged.
+// The plant reads its chambers through the transducers (the readings within a count and six
+// sigma of the noise of the true chamber pressures), and adding them leaves the angle and
+// load-cell readings of a seeded run unchanged.
 TEST(PlantSensors, PressureReadingsFollowTheChambersAndLeaveTheOtherReadingsAlone) {
   const arm::ArmModel& model = test::dtsModel();
   const PlantConfig& config = test::dtsPlant();

@@ -12,6 +12,7 @@
 #include <span>
 
 #include "fullarm_lcm/ident_experiment_t.hpp"
+#include "fullarm_lcm/ident_experiment_v1_t.hpp"
 #include "fullarm_lcm/run_header_t.hpp"
 #include "fullarm_lcm/supervisor_event_t.hpp"
 
@@ -27,6 +28,8 @@ namespace fullarm::hil {
                                           const fullarm_lcm::supervisor_event_t* type) noexcept;
 [[nodiscard]] bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
                                           const fullarm_lcm::ident_experiment_t* type) noexcept;
+[[nodiscard]] bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
+                                          const fullarm_lcm::ident_experiment_v1_t* type) noexcept;
 /// Types without strings: nothing to check.
 template <class Message>
 [[nodiscard]] constexpr bool stringLengthsInPayload(std::span<const std::uint8_t> /*bytes*/,

@@ -8,6 +8,9 @@
 /// and command that wrote the log, the back-end, the driven joint, the control period and the
 /// held joints' names. Then one ident_sample_t per row on FULLARM_IDENT_SAMPLE, seq 0, 1, 2, ...
 /// Events on other channels (a log recorded with `lcm-logger` beside other traffic) are skipped.
+/// Logs written before the chamber pressures were logged (the earlier layouts of both types,
+/// `ident_experiment_v1_t` and `ident_sample_v1_t`, told apart by their type hash) read as logs
+/// without pressures.
 ///
 /// Reading is strict: a log whose first experiment event is missing or is not the first sample's
 /// predecessor, a payload that does not decode, a lost sample (a gap in seq), a sample whose held
@@ -38,8 +41,9 @@ struct ExperimentLogInfo {
 
 /// Writes `table` (kExperimentColumns, the chamber pressures kPressureColumns where logged, then
 /// `held_<joint>_rad` per held joint, as runExperiment logs it) as an LCM log.
-/// @throws std::invalid_argument for a table without the experiment columns, columns of unequal
-///   length or other extra columns; hil::RunLogError naming the file when it cannot be written
+/// @throws std::invalid_argument for a table without the experiment columns, one chamber pressure
+///   without the other, columns of unequal length or other extra columns; hil::RunLogError naming the file when it
+///   cannot be written
 void writeExperimentLcmLog(const std::filesystem::path& file, const SignalTable& table, const ExperimentLogInfo& info);
 
 /// An experiment log read back.

@@ -25,10 +25,10 @@
 /// linearised valve.
 ///
 /// The fit simulates the known closed loop (the logged hold law u = K (q_hold - q_meas) + r
-/// driven by the logged excitation r) and minimises the output error on angle and torque, and on
-/// the hydraulic torque tau_hyd where the chamber pressures were logged (hydraulicTorque in
-/// joint_groups.hpp: the friction then shows directly as tau_hyd - tau_meas), each channel
-/// normalised by its spread, over several experiments at once. Parameters are log-scaled
+/// driven by the logged excitation r) and minimises the output error on angle and torque, and,
+/// where the chamber pressures were logged (hydraulicTorque in joint_groups.hpp), on the gap
+/// tau_hyd - tau_meas between hydraulic torque and load cell, which is the friction (I12); each
+/// channel normalised by its spread, over several experiments at once. Parameters are log-scaled
 /// (signed offsets linear) inside bounds; a global stage samples the box at every delay, the best
 /// candidates are polished by Levenberg-Marquardt with the exact forward sensitivities of the
 /// discretised simulation (central differences selectable), and the delay is settled by
@@ -258,7 +258,8 @@ struct FitResult {
 /// The cost counts each experiment's residuals from reading `max_delay_samples` on, at every
 /// delay: a simulation with a delay of d takes its first d readings as logged, and a cost over all
 /// the readings it simulates would favour longer delays.
-/// @throws std::invalid_argument for no experiments, bounds that do not hold the start, or
+/// @throws std::invalid_argument for no experiments, hydraulic torques that are not one finite value
+///   per sample, bounds that do not hold the start, or
 ///   non-positive bounds of a log-scaled parameter, or initial-state bounds that do not hold 0,
 ///   or an experiment with no more samples than max_delay_samples plus the fit's coordinates
 [[nodiscard]] FitResult fitGreyModel(const std::vector<ExperimentData>& experiments, const GreyModel& start,

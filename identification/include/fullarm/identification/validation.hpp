@@ -88,7 +88,7 @@ struct ModelValidation {
   ChannelValidation angle, torque;
   /// Where the experiment has the chamber pressures (ExperimentData::tau_hydraulic_nm): the
   /// hydraulic torque's simulation and one-step prediction fits, reported and not judged (NaN
-  /// without them).
+  /// without them, for a hydraulic torque that never changes, and for a diverged predictor).
   bool has_hydraulic = false;
   double hydraulic_fit_percent = std::numeric_limits<double>::quiet_NaN();
   double hydraulic_prediction_fit_percent = std::numeric_limits<double>::quiet_NaN();
@@ -100,6 +100,7 @@ struct ModelValidation {
 /// Simulates `model` on `data` and predicts it one step ahead (tunePredictorNoise), and judges
 /// it against `thresholds`: each channel's simulation fit, the independence of its simulation
 /// residual from the past excitation and the whiteness of its one-step prediction errors.
+/// @throws std::invalid_argument for hydraulic torques that are not one per sample
 [[nodiscard]] ModelValidation validateModel(const GreyModel& model, const ExperimentData& data,
                                             const ValidationThresholds& thresholds);
 
