@@ -5,15 +5,18 @@
 // stage and of the Levenberg-Marquardt polish side by side, the polish once with the forward
 // sensitivities and once with central differences (the same start, the same global stage), the
 // simulations each ran, and the recovered parameters against the truth (BENCHMARKS.md; the
-// target is 60 s wall on 2 cores for the whole fit with sensitivities).
+// target is 60 s wall on 2 cores for the whole fit with sensitivities). With --pressures the
+// experiments also carry the hydraulic torque the chamber pressures would give, and the fit its
+// third channel (the gap to the load cell, tag I12).
 //
-//   identification_fit_bench [global_samples] [sensitivities-only]
+//   identification_fit_bench [--pressures] [global_samples] [sensitivities-only]
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "fullarm/identification/excitation.hpp"
 #include "fullarm/identification/grey_box.hpp"
@@ -22,7 +25,8 @@ namespace id = fullarm::identification;
 
 namespace {
 
-id::ExperimentData experiment(const id::GreyModel& truth, const std::vector<double>& r, double hold_gain) {
+id::ExperimentData experiment(const id::GreyModel& truth, const std::vector<double>& r, double hold_gain,
+                              bool pressures) {
   id::ExperimentData d;
   d.excitation_v = r;
   d.hold_gain_v_per_rad = hold_gain;
@@ -33,6 +37,7 @@ id::ExperimentData experiment(const id::GreyModel& truth, const std::vector<doub
   d.q_rad = s.q_rad;
   d.tau_nm = s.tau_nm;
   d.command_v = s.command_v;
+  if (pressures) d.tau_hydraulic_nm = s.tau_hydraulic_nm;
   return d;
 }
 
@@ -40,6 +45,15 @@ id::ExperimentData experiment(const id::GreyModel& truth, const std::vector<doub
 
 int main(int argc, char** argv) {
   constexpr double kT = 1.0e-3;
+  bool pressures = false;
+  std::vector<std::string> args;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--pressures") {
+      pressures = true;
+    } else {
+      args.emplace_back(argv[i]);
+    }
+  }
   id::GreyModel truth;
   truth.value = {0.4, 8.0e3, 5.0e-4, 0.06, 0.8, 0.6, 0.4, 4.0, 0.0, 0.0, 0.0};
   truth.delay_samples = 2;
@@ -50,10 +64,10 @@ int main(int argc, char** argv) {
   truth.load_gradient_nm_per_rad = 5.0;
   const id::SampledSignal prbs = id::prbs(1.5, 12, 5, 1, kT);                    // 20.5 s
   const id::Multisine ms = id::schroederMultisine(2.0, 0.5, 120.0, 4.0, 5, kT);  // 20 s
-  const std::vector<id::ExperimentData> data{experiment(truth, prbs.value_v, 10.0),
-                                             experiment(truth, ms.signal.value_v, 15.0)};
+  const std::vector<id::ExperimentData> data{experiment(truth, prbs.value_v, 10.0, pressures),
+                                             experiment(truth, ms.signal.value_v, 15.0, pressures)};
   id::FitOptions options = id::defaultFitOptions(truth, 3.0);
-  options.global_samples = argc > 1 ? std::atoi(argv[1]) : 100;
+  options.global_samples = !args.empty() ? std::atoi(args[0].c_str()) : 100;
   options.polished_candidates = 2;
   options.threads = 2;
   options.params[id::kStribeck].free = false;  // held at its value, as config/identification.yaml does
@@ -64,9 +78,10 @@ int main(int argc, char** argv) {
   start.delay_samples = 0;
   options.initial_speed = {true, -5.0, 5.0, false};
   options.initial_torque_offset = {true, -60.0, 60.0, false};
-  std::printf("samples %zu + %zu, global stage %d points x %d delays, %d threads\n", data[0].q_rad.size(),
-              data[1].q_rad.size(), options.global_samples, options.max_delay_samples + 1, options.threads);
-  const bool peer = argc <= 2;
+  std::printf("samples %zu + %zu, global stage %d points x %d delays, %d threads, channels: %s\n", data[0].q_rad.size(),
+              data[1].q_rad.size(), options.global_samples, options.max_delay_samples + 1, options.threads,
+              pressures ? "angle, load cell, hydraulic torque" : "angle, load cell");
+  const bool peer = args.size() <= 1;
   id::FitResult fits[2];
   double walls[2] = {0.0, 0.0};
   const char* labels[2] = {"sensitivities", "central differences"};
