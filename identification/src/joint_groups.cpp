@@ -28,7 +28,8 @@ GreyModel greyModelFromJoint(const plant::JointParams& joint, double q_rad, doub
   // rounding in volts of command (a lap below zero is an underlap).
   m.stall_torque_nm = d * (joint.supply_pressure_pa - joint.return_pressure_pa);
   const double metre_per_volt = joint.valve.spool_stroke_m * joint.valve.amplifier_gain_per_v;
-  const double lap_m = 0.25 * (joint.valve.lap_pa_m + joint.valve.lap_pb_m + joint.valve.lap_at_m + joint.valve.lap_bt_m);
+  const double lap_m =
+      0.25 * (joint.valve.lap_pa_m + joint.valve.lap_pb_m + joint.valve.lap_at_m + joint.valve.lap_bt_m);
   m.underlap_v = std::max(0.0, -lap_m) / metre_per_volt;
   m.edge_rounding_v = joint.valve.edge_rounding_m / metre_per_volt;
   m.spool_hz = joint.valve.natural_frequency_hz;

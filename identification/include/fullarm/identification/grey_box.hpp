@@ -149,8 +149,8 @@ struct Simulation {
 /// sample's output with respect to `directions[j]` (in that parameter's own unit).
 struct SimulationSensitivity {
   Simulation simulation;
-  Eigen::MatrixXd q_rad;   ///< samples x directions [rad per unit]
-  Eigen::MatrixXd tau_nm;  ///< samples x directions [N m per unit]
+  Eigen::MatrixXd q_rad;             ///< samples x directions [rad per unit]
+  Eigen::MatrixXd tau_nm;            ///< samples x directions [N m per unit]
   Eigen::MatrixXd tau_hydraulic_nm;  ///< samples x directions [N m per unit]
 };
 
