@@ -27,28 +27,30 @@ bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
   return w.finish() == DecodeStatus::kOk;
 }
 
-bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
-                            const fullarm_lcm::ident_experiment_t* /*type*/) noexcept {
-  // utime; fullarm_version, command_line, source, joint; sample_period_s; num_held and the names;
-  // num_pressures.
+namespace {
+
+// An identification experiment's description: utime; fullarm_version, command_line, source,
+// joint; sample_period_s; num_held and the names; then num_pressures (not in the earlier layout).
+bool experimentLayout(std::span<const std::uint8_t> bytes, bool with_pressures) noexcept {
   LcmWalk w(bytes);
   w.skip(8);
   w.strings(4);
   w.skip(8);
   w.strings(w.count(1));
-  w.skip(1);
+  if (with_pressures) w.skip(1);
   return w.finish() == DecodeStatus::kOk;
+}
+
+}  // namespace
+
+bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
+                            const fullarm_lcm::ident_experiment_t* /*type*/) noexcept {
+  return experimentLayout(bytes, true);
 }
 
 bool stringLengthsInPayload(std::span<const std::uint8_t> bytes,
                             const fullarm_lcm::ident_experiment_v1_t* /*type*/) noexcept {
-  // utime; fullarm_version, command_line, source, joint; sample_period_s; num_held and the names.
-  LcmWalk w(bytes);
-  w.skip(8);
-  w.strings(4);
-  w.skip(8);
-  w.strings(w.count(1));
-  return w.finish() == DecodeStatus::kOk;
+  return experimentLayout(bytes, false);
 }
 
 }  // namespace fullarm::hil
