@@ -96,11 +96,17 @@ class ComediBackend final : public IoDevice {
     pots_.clear();
     cells_.clear();
     valves_.clear();
+    pressures_a_.clear();
+    pressures_b_.clear();
     for (std::size_t k = 0; k < map_.joints.size(); ++k) {
-      const std::string key = "joints[" + std::to_string(k) + "] (" + map_.joints[k].name + ")";
-      pots_.push_back(channel(ai_, map_.ai_range, map_.joints[k].potentiometer, key + ".potentiometer"));
-      cells_.push_back(channel(ai_, map_.ai_range, map_.joints[k].load_cell, key + ".load_cell"));
-      valves_.push_back(channel(ao_, map_.ao_range, map_.joints[k].valve, key + ".valve"));
+      const DaqJoint& j = map_.joints[k];
+      const std::string key = "joints[" + std::to_string(k) + "] (" + j.name + ")";
+      pots_.push_back(channel(ai_, map_.ai_range, j.potentiometer, key + ".potentiometer"));
+      cells_.push_back(channel(ai_, map_.ai_range, j.load_cell, key + ".load_cell"));
+      valves_.push_back(channel(ao_, map_.ao_range, j.valve, key + ".valve"));
+      // A joint without transducers keeps a default entry, never read.
+      pressures_a_.push_back(j.hasPressures() ? channel(ai_, map_.ai_range, j.pressure_a, key + ".pressure_a") : Channel{});
+      pressures_b_.push_back(j.hasPressures() ? channel(ai_, map_.ai_range, j.pressure_b, key + ".pressure_b") : Channel{});
     }
     if (map_.enable_channel >= api::comedi_get_n_channels(device_, static_cast<unsigned>(dio_))) {
       fail("board.enable_channel " + std::to_string(map_.enable_channel) + " does not exist on the digital-I/O subdevice");
@@ -135,7 +141,10 @@ class ComediBackend final : public IoDevice {
     const int n = static_cast<int>(pots_.size());
     sample.q_rad.resize(n);
     sample.tau_load_cell_nm.resize(n);
+    sample.p_a_pa.setZero(n);
+    sample.p_b_pa.setZero(n);
     sample.out_of_range_mask = 0;
+    sample.pressure_mask = 0;
     timespec now{};
     clock_gettime(CLOCK_MONOTONIC, &now);
     sample.t_s = static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
@@ -152,6 +161,20 @@ class ComediBackend final : public IoDevice {
       sample.q_rad[k] = physical(pots_[i], q_code);
       sample.tau_load_cell_nm[k] = physical(cells_[i], tau_code);
       if (std::isnan(sample.q_rad[k]) || std::isnan(sample.tau_load_cell_nm[k])) sample.out_of_range_mask |= 1u << k;
+      if (!map_.joints[i].hasPressures()) continue;
+      // The chamber pressures: a code at a range end reads NaN (a saturated transducer), which
+      // the controllers never use; an identification experiment stops on it.
+      api::lsampl_t pa_code = 0;
+      api::lsampl_t pb_code = 0;
+      if (api::comedi_data_read(device_, static_cast<unsigned>(ai_), pressures_a_[i].channel,
+                                static_cast<unsigned>(map_.ai_range), api::kArefGround, &pa_code) < 0 ||
+          api::comedi_data_read(device_, static_cast<unsigned>(ai_), pressures_b_[i].channel,
+                                static_cast<unsigned>(map_.ai_range), api::kArefGround, &pb_code) < 0) {
+        return core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead, "comedi_data_read failed");
+      }
+      sample.p_a_pa[k] = physical(pressures_a_[i], pa_code);
+      sample.p_b_pa[k] = physical(pressures_b_[i], pb_code);
+      sample.pressure_mask |= 1u << k;
     }
     return {};
   }
@@ -187,7 +210,7 @@ class ComediBackend final : public IoDevice {
   int ai_ = -1;
   int ao_ = -1;
   int dio_ = -1;
-  std::vector<Channel> pots_, cells_, valves_;
+  std::vector<Channel> pots_, cells_, valves_, pressures_a_, pressures_b_;
   bool enable_level_ = false;
 };
 

@@ -48,6 +48,17 @@ double physicalToChannelVolts(const ChannelCalibration& cal, double value) noexc
   return (value - cal.offset) / cal.scale;
 }
 
+std::uint32_t physicalToInputCode(const ChannelCalibration& cal, double value, const ConverterRange& range) noexcept {
+  if (cal.kind == ChannelCalibration::Kind::kCounts) {
+    if (!std::isfinite(value) || range.maxdata == 0) return 0;
+    const double code = std::floor((value - cal.offset) / cal.slope_per_count - cal.offset_counts + 0.5);
+    if (!(code > 0.0)) return 0;
+    if (code >= static_cast<double>(range.maxdata)) return range.maxdata;
+    return static_cast<std::uint32_t>(code);
+  }
+  return voltsToCode(physicalToChannelVolts(cal, value), range);
+}
+
 namespace {
 
 ChannelCalibration readCalibration(const core::YamlMap& m, bool output) {
@@ -159,12 +170,25 @@ DaqConfig readDaqConfig(const core::YamlMap& root, const arm::ArmModel& model) {
     dj.potentiometer = readChannel(j.map("potentiometer"), false);
     dj.load_cell = readChannel(j.map("load_cell"), false);
     dj.valve = readChannel(j.map("valve"), true);
-    for (const auto& [key, ch] : {std::pair{"potentiometer", &dj.potentiometer}, std::pair{"load_cell", &dj.load_cell}}) {
+    // Chamber pressure transducers: both chambers or neither.
+    if (j.has("pressure_a") != j.has("pressure_b")) {
+      j.fail(j.has("pressure_a") ? "pressure_b" : "pressure_a",
+             "expected the pressure channels of both chambers (pressure_a and pressure_b) or of neither");
+    }
+    std::vector<std::pair<std::string, DaqChannel*>> inputs{{"potentiometer", &dj.potentiometer},
+                                                            {"load_cell", &dj.load_cell}};
+    if (j.has("pressure_a")) {
+      dj.pressure_a = readChannel(j.map("pressure_a"), false);
+      dj.pressure_b = readChannel(j.map("pressure_b"), false);
+      inputs.emplace_back("pressure_a", &dj.pressure_a);
+      inputs.emplace_back("pressure_b", &dj.pressure_b);
+    }
+    for (const auto& [key, ch] : inputs) {
       if (!ai_used.insert(ch->channel).second) {
-        j.fail(std::string(key) + ".channel", "analog input " + std::to_string(ch->channel) + " is used twice");
+        j.fail(key + ".channel", "analog input " + std::to_string(ch->channel) + " is used twice");
       }
       if (ch->channel >= c.fake_ai_channels) {
-        j.fail(std::string(key) + ".channel", "expected a channel below fake_board.analog_input_channels");
+        j.fail(key + ".channel", "expected a channel below fake_board.analog_input_channels");
       }
       softcal_used = softcal_used || ch->calibration.kind == ChannelCalibration::Kind::kSoftcal;
     }

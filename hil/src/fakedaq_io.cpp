@@ -18,6 +18,7 @@
 
 #include "fake_comedilib.hpp"
 #include "fullarm/hil/fake_daq.hpp"
+#include "fullarm/hil/sim_io.hpp"
 
 #define FULLARM_COMEDI_NAMESPACE fakedaq_board
 #define FULLARM_COMEDI_API ::fullarm::hil::fakedaq_api
@@ -308,11 +309,7 @@ FakeDaqRig::FakeDaqRig(FakeDaqBoard& board, SimulatedArm& arm, const DaqConfig& 
       map_(map),
       timeout_periods_(static_cast<std::uint64_t>(std::llround(watchdog_timeout_s / arm.period()))),
       volts_(IoVector::Zero(arm.numJoints())) {
-  if (static_cast<int>(map.joints.size()) != arm.numJoints()) {
-    throw std::invalid_argument("fake DAQ: the channel map " + map.source.string() + " lists " +
-                                std::to_string(map.joints.size()) + " joints, the simulated arm has " +
-                                std::to_string(arm.numJoints()));
-  }
+  checkChannelMapFitsArm(map, arm, "fake DAQ");
   publishReadings();
 }
 
@@ -322,6 +319,11 @@ void FakeDaqRig::publishReadings() noexcept {
     const DaqJoint& j = map_.joints[static_cast<std::size_t>(k)];
     s.ai_codes[j.potentiometer.channel] = static_cast<std::uint32_t>(arm_.reading(k).q_counts);
     s.ai_codes[j.load_cell.channel] = static_cast<std::uint32_t>(arm_.reading(k).tau_counts);
+    // The transducers' outputs (checkChannelMapFitsArm: wired only where the plant has them).
+    if (j.hasPressures()) {
+      s.ai_codes[j.pressure_a.channel] = physicalToInputCode(j.pressure_a.calibration, arm_.reading(k).p_a_pa, s.ai);
+      s.ai_codes[j.pressure_b.channel] = physicalToInputCode(j.pressure_b.calibration, arm_.reading(k).p_b_pa, s.ai);
+    }
   }
 }
 

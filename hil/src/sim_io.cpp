@@ -8,25 +8,31 @@
 
 namespace fullarm::hil {
 
+void checkChannelMapFitsArm(const DaqConfig& map, const SimulatedArm& arm, std::string_view who) {
+  const std::string where = std::string(who) + ": the channel map " + map.source.string();
+  if (static_cast<int>(map.joints.size()) != arm.numJoints()) {
+    throw std::invalid_argument(where + " lists " + std::to_string(map.joints.size()) + " joints, the plant has " +
+                                std::to_string(arm.numJoints()));
+  }
+  for (int k = 0; k < arm.numJoints(); ++k) {
+    const DaqJoint& j = map.joints[static_cast<std::size_t>(k)];
+    const std::string& expected = arm.model().joints[static_cast<std::size_t>(arm.joints().modelIndex(k))].name;
+    if (j.name != expected) {
+      throw std::invalid_argument(where + ": its joint " + std::to_string(k) + " is " + j.name + ", the plant's is " +
+                                  expected);
+    }
+    if (j.hasPressures() && arm.plant().joint(k).sensor_noise.pressure_full_scale_pa <= 0.0) {
+      throw std::invalid_argument(where + " wires pressure channels for " + j.name +
+                                  ", whose plant joint has no chamber pressure transducers (expected "
+                                  "sensors.pressure_full_scale_pa and its companions in the plant file)");
+    }
+  }
+}
+
 SimIoDevice::SimIoDevice(SimulatedArm& arm, const SimIoOptions& options, const IoSafetyParams& safety)
     : IoDevice(arm.joints(), arm.period(), safety), arm_(arm), options_(options) {
   held_v_ = IoVector::Zero(arm.numJoints());
-  if (options.converters != nullptr) {
-    const DaqConfig& map = *options.converters;
-    if (static_cast<int>(map.joints.size()) != arm.numJoints()) {
-      throw std::invalid_argument("sim I/O: the channel map " + map.source.string() + " lists " +
-                                  std::to_string(map.joints.size()) + " joints, the plant has " +
-                                  std::to_string(arm.numJoints()));
-    }
-    for (int k = 0; k < arm.numJoints(); ++k) {
-      const std::string& expected = arm.model().joints[static_cast<std::size_t>(arm.joints().modelIndex(k))].name;
-      if (map.joints[static_cast<std::size_t>(k)].name != expected) {
-        throw std::invalid_argument("sim I/O: joint " + std::to_string(k) + " of the channel map " +
-                                    map.source.string() + " is " + map.joints[static_cast<std::size_t>(k)].name +
-                                    ", the plant's is " + expected);
-      }
-    }
-  }
+  if (options.converters != nullptr) checkChannelMapFitsArm(*options.converters, arm, "sim I/O");
 }
 
 void SimIoDevice::onConfigure() {
@@ -61,10 +67,18 @@ core::RtStatus SimIoDevice::onRead(JointSample& sample) noexcept {
           at_end(m.tau_counts, p.torque_sensor.bits) ? std::numeric_limits<double>::quiet_NaN() : m.tau_nm;
     }
     if (std::isnan(sample.q_rad[k]) || std::isnan(sample.tau_load_cell_nm[k])) sample.out_of_range_mask |= 1u << k;
-    // Pressure transducers have no channel in a DAQ map: only the plant's own readings carry them.
-    if (m.pressures && options_.converters == nullptr) {
+    if (!m.pressures) continue;
+    if (options_.converters == nullptr) {
       sample.p_a_pa[k] = m.p_a_pa;
       sample.p_b_pa[k] = m.p_b_pa;
+      sample.pressure_mask |= 1u << k;
+    } else if (const DaqJoint& map = options_.converters->joints[static_cast<std::size_t>(k)]; map.hasPressures()) {
+      // Through the board's converter, as the fake DAQ reads them.
+      const ConverterRange& range = options_.converters->fake_ai;
+      sample.p_a_pa[k] = channelToPhysical(map.pressure_a.calibration,
+                                           physicalToInputCode(map.pressure_a.calibration, m.p_a_pa, range), range);
+      sample.p_b_pa[k] = channelToPhysical(map.pressure_b.calibration,
+                                           physicalToInputCode(map.pressure_b.calibration, m.p_b_pa, range), range);
       sample.pressure_mask |= 1u << k;
     }
   }

@@ -98,5 +98,61 @@ TEST(DaqConfig, ErrorsNameTheFileTheKeyAndTheValue) {
   expectError(replaced(text, "maxdata: 4095", "maxdata: 0"), "fake_board.analog_input.maxdata", "positive");
 }
 
+// The inverse that the fake DAQ puts on an input: every code in the range reads back as itself,
+// a value reads back within half a code of itself, and a value beyond the range reads as the
+// range end, out of range.
+TEST(DaqConfig, InputCodesInvertTheCalibration) {
+  const ConverterRange range{-10.0, 10.0, 4095};
+  ChannelCalibration linear;
+  linear.kind = ChannelCalibration::Kind::kLinear;
+  linear.scale = 2.5e6;  // a 0-10 V, 0-25 MPa transducer
+  linear.offset = 1.0e5;
+  ChannelCalibration counts;
+  counts.kind = ChannelCalibration::Kind::kCounts;
+  counts.slope_per_count = -0.0486667;
+  counts.offset_counts = -2047;
+  counts.offset = 0.25;
+  for (const ChannelCalibration& cal : {linear, counts}) {
+    const double lsb =
+        cal.kind == ChannelCalibration::Kind::kLinear ? cal.scale * 20.0 / 4095.0 : std::abs(cal.slope_per_count);
+    for (std::uint32_t code = 1; code < range.maxdata; ++code) {
+      const double value = channelToPhysical(cal, code, range);
+      ASSERT_EQ(physicalToInputCode(cal, value, range), code);
+      ASSERT_EQ(physicalToInputCode(cal, value + 0.49 * lsb, range), code);
+      ASSERT_EQ(physicalToInputCode(cal, value - 0.49 * lsb, range), code);
+    }
+    const double beyond = 1e3 * lsb * 4095.0;
+    for (const double v : {beyond, -beyond}) {
+      const std::uint32_t code = physicalToInputCode(cal, v, range);
+      EXPECT_TRUE(code == 0 || code == range.maxdata) << v;
+      EXPECT_TRUE(std::isnan(channelToPhysical(cal, code, range))) << v;
+    }
+    EXPECT_TRUE(std::isnan(channelToPhysical(cal, physicalToInputCode(cal, std::nan(""), range), range)));
+  }
+}
+
+// Chamber pressure channels: optional, both or neither, checked like the others.
+TEST(DaqConfig, PressureChannelsComeInPairsAndAreCheckedLikeTheOthers) {
+  const std::string text = shippedText();
+  const std::string elbow_valve = "valve: {channel: 3, calibration: {type: linear, scale: 1.0, offset: 0.0}}";
+  const std::string pa = "\n    pressure_a: {channel: 7, calibration: {type: linear, scale: 2.5e6, offset: 0.0}}";
+  const std::string pb = "\n    pressure_b: {channel: 15, calibration: {type: linear, scale: 2.5e6, offset: 0.0}}";
+  const DaqConfig map = parseDaqConfig(replaced(text, elbow_valve, elbow_valve + pa + pb), "map.yaml", test::model());
+  for (std::size_t k = 0; k < map.joints.size(); ++k) EXPECT_EQ(map.joints[k].hasPressures(), k == 3) << k;
+  EXPECT_EQ(map.joints[3].pressure_a.channel, 7);
+  EXPECT_EQ(map.joints[3].pressure_b.channel, 15);
+  EXPECT_EQ(map.joints[3].pressure_b.calibration.scale, 2.5e6);
+  EXPECT_FALSE(parseDaqConfig(text, "map.yaml", test::model()).joints[3].hasPressures());
+
+  expectError(replaced(text, elbow_valve, elbow_valve + pa), "joints[3].pressure_b", "both chambers");
+  expectError(replaced(text, elbow_valve, elbow_valve + pb), "joints[3].pressure_a", "both chambers");
+  expectError(replaced(text, elbow_valve, elbow_valve + replaced(pa, "channel: 7", "channel: 3") + pb),
+              "joints[3].pressure_a.channel", "used twice");
+  expectError(replaced(text, elbow_valve, elbow_valve + pa + replaced(pb, "channel: 15", "channel: 16")),
+              "joints[3].pressure_b.channel", "below fake_board.analog_input_channels");
+  expectError(replaced(text, elbow_valve, elbow_valve + replaced(pa, "scale: 2.5e6", "scale: .nan") + pb),
+              "joints[3].pressure_a.calibration.scale", "finite");
+}
+
 }  // namespace
 }  // namespace fullarm::hil

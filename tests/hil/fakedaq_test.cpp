@@ -1,9 +1,10 @@
 // The fake DAQ: the comedi back-end's own code on a stand-in for comedilib with Comedi's
 // semantics, wired to the simulated DTS. The same closed loop as the sim back-end, bit for bit,
 // when both use the channel map's converters; readings at the range ends out of range; clear
-// errors for a missing device and a channel the board lacks; the enable line as a heartbeat;
-// and a process killed while driving the arm: the analog outputs hold their last codes and the
-// rig's hardware watchdog drops the amplifier enable.
+// errors for a missing device and a channel the board lacks; chamber pressure channels read
+// through their calibration, and refused on a joint without transducers; the enable line as a
+// heartbeat; and a process killed while driving the arm: the analog outputs hold their last codes
+// and the rig's hardware watchdog drops the amplifier enable.
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -13,10 +14,13 @@
 
 #include <chrono>
 #include <cmath>
+#include <functional>
+#include <string>
 #include <thread>
 
 #include "fullarm/core/config_error.hpp"
 #include "fullarm/hil/fake_daq.hpp"
+#include "fullarm/hil/sim_io.hpp"
 #include "hil_fixture.hpp"
 #include "run_fixture.hpp"
 #include "scratch_dir.hpp"
@@ -77,6 +81,90 @@ TEST(FakeDaq, ReadingsAtTheRangeEndsAreOutOfRange) {
   EXPECT_TRUE(std::isnan(s.q_rad[2]));
   EXPECT_TRUE(std::isnan(s.tau_load_cell_nm[5]));
   EXPECT_EQ(s.out_of_range_mask, (1u << 2) | (1u << 5));
+}
+
+// A channel map that wires the elbow's chamber pressure transducers (0-10 V for 0-25 MPa on
+// inputs 7 and 15) to a plant whose elbow has them.
+struct PressureRig {
+  PressureRig() {
+    plant.joints[3].sensor_noise.pressure_full_scale_pa = 25.0e6;
+    plant.joints[3].sensor_noise.pressure_bits = 16;
+    map.joints[3].pressure_a.channel = 7;
+    map.joints[3].pressure_b.channel = 15;
+    for (DaqChannel* ch : {&map.joints[3].pressure_a, &map.joints[3].pressure_b}) {
+      ch->calibration.kind = ChannelCalibration::Kind::kLinear;
+      ch->calibration.scale = 2.5e6;
+      ch->calibration.offset = 0.0;
+    }
+  }
+  plant::PlantConfig plant = test::plantConfig();
+  DaqConfig map = test::daqConfig();
+};
+
+// The comedi back-end reads the transducers through their channels' calibration, within half a
+// converter code of the plant's own readings; only the wired joint's pressure bit is set; a
+// saturated transducer reads NaN without flagging the joint's angle or torque out of range.
+TEST(FakeDaq, ChamberPressureChannelsReadThePlantsTransducers) {
+  const PressureRig wiring;
+  const double half_code_pa = 0.5 * 2.5e6 * 20.0 / 4095.0;
+  {
+    SimulatedArm arm(test::model(), wiring.plant, test::restPosture(), kPeriod_s, 1);
+    FakeDaqBoard board(wiring.map);
+    FakeDaqRig rig(board, arm, wiring.map, 0.05);
+    auto device = makeFakeDaqIoDevice(wiring.map, test::model(), kPeriod_s, {}, &rig);
+    device->configure();
+    JointSample s;
+    for (int tick = 0; tick < 50; ++tick) {
+      ASSERT_TRUE(device->read(s).ok());
+      ASSERT_EQ(s.pressure_mask, 1u << 3);
+      const plant::JointMeasurement& m = arm.reading(3);
+      ASSERT_TRUE(m.pressures);
+      EXPECT_NEAR(s.p_a_pa[3], m.p_a_pa, half_code_pa) << "tick " << tick;
+      EXPECT_NEAR(s.p_b_pa[3], m.p_b_pa, half_code_pa) << "tick " << tick;
+    }
+    // Holding the forearm against gravity: the chambers are pressurised and differ.
+    EXPECT_GT(s.p_a_pa[3] + s.p_b_pa[3], 1.0e6);
+    EXPECT_GT(std::abs(s.p_a_pa[3] - s.p_b_pa[3]), 10.0 * half_code_pa);
+  }
+  FakeDaqBoard board(wiring.map);
+  auto device = makeFakeDaqIoDevice(wiring.map, test::model(), kPeriod_s, {}, nullptr);  // codes stay
+  device->configure();
+  const DaqJoint& elbow = wiring.map.joints[3];
+  board.state().ai_codes[elbow.potentiometer.channel] = 2000;
+  board.state().ai_codes[elbow.load_cell.channel] = 2000;
+  board.state().ai_codes[7] = wiring.map.fake_ai.maxdata;
+  board.state().ai_codes[15] = 3000;
+  JointSample s;
+  ASSERT_TRUE(device->read(s).ok());
+  EXPECT_EQ(s.pressure_mask, 1u << 3);
+  EXPECT_TRUE(std::isfinite(s.q_rad[3]));
+  EXPECT_TRUE(std::isnan(s.p_a_pa[3]));
+  EXPECT_DOUBLE_EQ(s.p_b_pa[3], 2.5e6 * (3000.0 / 4095.0 * 20.0 - 10.0));
+  EXPECT_EQ(s.out_of_range_mask & (1u << 3), 0u);
+}
+
+// Pressure channels on a joint whose plant has no transducers: the fake DAQ's rig and the sim
+// back-end both refuse the map, naming it and the joint.
+TEST(FakeDaq, PressureChannelsOnAJointWithoutTransducersAreRefused) {
+  const PressureRig wiring;
+  SimulatedArm arm(test::model(), test::plantConfig(), test::restPosture(), kPeriod_s, 1);
+  FakeDaqBoard board(wiring.map);
+  const auto expect_refused = [](const std::function<void()>& build, const std::string& who) {
+    try {
+      build();
+      FAIL() << who << " accepted pressure channels without transducers";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(who), std::string::npos) << what;
+      EXPECT_NE(what.find("dts_daq.yaml"), std::string::npos) << what;
+      EXPECT_NE(what.find("pressure channels for R_EB"), std::string::npos) << what;
+      EXPECT_NE(what.find("pressure_full_scale_pa"), std::string::npos) << what;
+    }
+  };
+  expect_refused([&] { FakeDaqRig rig(board, arm, wiring.map, 0.05); }, "fake DAQ");
+  SimIoOptions options;
+  options.converters = &wiring.map;
+  expect_refused([&] { SimIoDevice device(arm, options, {}); }, "sim I/O");
 }
 
 TEST(FakeDaq, AMissingDeviceOrChannelIsAClearError) {

@@ -1,14 +1,17 @@
 // The closed-loop experiment on the fake DAQ (the comedi back-end on the simulated DTS, built by
 // hil::IoBackend as `fullarm run` builds it): a device fault injected mid-experiment and a joint
 // driven into its limit margin both stop the experiment with the valve amplifiers' codes at
-// 0 V, the enable line no longer toggling, and the log ending at the stop.
+// 0 V, the enable line no longer toggling, and the log ending at the stop. Chamber pressures
+// wired through the channel map are logged as the sim back-end reads them.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "fullarm/hil/io_backend.hpp"
 #include "fullarm/identification/experiment.hpp"
@@ -153,6 +156,70 @@ TEST(ExperimentFakeDaq, PacingOverrunStopsBeforeTheLateReadWithTheValvesAtNull) 
     EXPECT_NE(std::string(e.what()).find("pacing overrun"), std::string::npos) << e.what();
   }
   EXPECT_NE(rig2.device().state(), hil::IoState::kActive);
+}
+
+// The elbow's chamber pressures wired through the channel map (0-10 V for 0-25 MPa on inputs 7
+// and 15): the experiment on the fake DAQ logs them, bit for bit as the sim back-end through the
+// same map's converters, and within half a converter code of the sim back-end's readings of the
+// plant's own 16-bit transducers. The map's count rules read the angle and the torque exactly as
+// the plant does, so the three runs follow one trajectory.
+TEST(ExperimentFakeDaq, ChamberPressuresWiredThroughTheChannelMapAreLogged) {
+  plant::PlantConfig plant = hil::test::plantConfig();
+  plant.joints[kElbow].sensor_noise.pressure_full_scale_pa = 25.0e6;
+  plant.joints[kElbow].sensor_noise.pressure_bits = 16;
+  hil::DaqConfig map = hil::test::daqConfig();
+  map.joints[kElbow].pressure_a.channel = 7;
+  map.joints[kElbow].pressure_b.channel = 15;
+  for (hil::DaqChannel* ch : {&map.joints[kElbow].pressure_a, &map.joints[kElbow].pressure_b}) {
+    ch->calibration.kind = hil::ChannelCalibration::Kind::kLinear;
+    ch->calibration.scale = 2.5e6;
+    ch->calibration.offset = 0.0;
+  }
+  const auto run = [&](hil::IoKind io, bool through_map) {
+    hil::IoBackendOptions o;
+    o.io = io;
+    o.safety = hil::IoSafetyParams{0.2, 10.0};
+    o.plant = &plant;
+    o.posture = hil::test::restPosture();
+    o.daq = &map;
+    o.sim_uses_daq_converters = through_map;
+    hil::IoBackend backend(hil::test::model(), o);
+    ExperimentOptions options;
+    options.joint = kElbow;
+    options.min_rad = 0.2;
+    options.max_rad = 2.2;
+    options.settle_s = 0.3;
+    options.log_control_time = true;
+    return runExperiment(backend.device(), linearChirp(0.5, 0.5, 20.0, 1.0, 1e-3), options);
+  };
+  const ExperimentResult fake = run(hil::IoKind::kFakeDaq, true);
+  const ExperimentResult mapped = run(hil::IoKind::kSim, true);
+  const ExperimentResult own = run(hil::IoKind::kSim, false);
+  for (const ExperimentResult* r : {&fake, &mapped, &own}) {
+    ASSERT_TRUE(r->completed) << r->stop_reason;
+    ASSERT_EQ(r->log.names.size(), kExperimentColumns.size() + 2);
+    EXPECT_EQ(r->log.names[5], "pressure_a_pa");
+    EXPECT_EQ(r->log.names[6], "pressure_b_pa");
+  }
+  ASSERT_EQ(fake.log.rows(), mapped.log.rows());
+  ASSERT_EQ(fake.log.rows(), own.log.rows());
+  // Every column but the time (the board's readings carry the wall clock, the sim's the plant's).
+  for (std::size_t c = 1; c < fake.log.names.size(); ++c) {
+    EXPECT_EQ(fake.log.columns[c], mapped.log.columns[c]) << fake.log.names[c];
+  }
+  EXPECT_EQ(own.log.column("q_rad"), mapped.log.column("q_rad"));
+  EXPECT_EQ(own.log.column("tau_measured_nm"), mapped.log.column("tau_measured_nm"));
+  const double half_code_pa = 0.5 * 2.5e6 * 20.0 / 4095.0;
+  double moved_pa = 0.0;
+  for (const char* name : {"pressure_a_pa", "pressure_b_pa"}) {
+    const std::vector<double>& through = mapped.log.column(name);
+    const std::vector<double>& plant_own = own.log.column(name);
+    for (std::size_t k = 0; k < through.size(); ++k) {
+      ASSERT_NEAR(through[k], plant_own[k], half_code_pa) << name << " sample " << k;
+      moved_pa = std::max(moved_pa, std::abs(plant_own[k] - plant_own.front()));
+    }
+  }
+  EXPECT_GT(moved_pa, 20.0 * half_code_pa) << "the excitation did not move the pressures";
 }
 
 }  // namespace

@@ -52,7 +52,7 @@ TEST(ExperimentTest, OnTheSimulatedArmTheExcitationMovesOnlyTheDrivenJoint) {
 // A joint with chamber pressure transducers: the sim back-end reads them, the log carries them
 // after the five columns, and the hydraulic torque they give (hydraulicTorque) is the plant's
 // own at the last reading (no latency; 16-bit transducers without noise: within a count). Through
-// a DAQ channel map, which has no pressure channels, the same joint's pressures are not read.
+// a DAQ channel map that wires no pressure channels, the same joint's pressures are not read.
 TEST(ExperimentTest, ChamberPressuresAreLoggedWhereTheBackEndReadsThem) {
   plant::PlantConfig config = hil::test::plantConfig();
   plant::JointParams elbow = config.joints[3];

@@ -45,16 +45,20 @@ struct ChannelCalibration {
 
 /// One analog channel of the map.
 struct DaqChannel {
-  int channel = -1;
+  int channel = -1;  ///< -1: not wired (an optional channel the map does not list)
   ChannelCalibration calibration;
 };
 
-/// The three channels of one joint.
+/// The channels of one joint: three always, two more where the joint's actuator has chamber
+/// pressure transducers (a rig or an arm retrofitted with them; the DTS master has none).
 struct DaqJoint {
   std::string name;          ///< arm joint name
   DaqChannel potentiometer;  ///< analog input [rad]
   DaqChannel load_cell;      ///< analog input [N m]
   DaqChannel valve;          ///< analog output [V at the valve amplifier]
+  DaqChannel pressure_a;     ///< analog input [Pa, gauge], chamber A; channel -1 when not wired
+  DaqChannel pressure_b;     ///< analog input [Pa, gauge], chamber B; wired exactly when A is
+  [[nodiscard]] bool hasPressures() const noexcept { return pressure_a.channel >= 0; }
 };
 
 /// The board and its channel map. Constant after loadDaqConfig().
@@ -99,5 +103,11 @@ struct DaqConfig {
 /// Volts the converter must put out for the physical value `value` of an output channel
 /// (kLinear: (value - offset) / scale). @rt
 [[nodiscard]] double physicalToChannelVolts(const ChannelCalibration& cal, double value) noexcept;
+/// The code an input channel reads when its sensor gives `value`: the inverse of
+/// channelToPhysical, rounded to the nearest code and clamped to [0, maxdata] (a value beyond the
+/// range reads as a range end, that is out of range). Kinds kCounts and kLinear; what the fake DAQ
+/// and the simulated device put on an input channel. @rt
+[[nodiscard]] std::uint32_t physicalToInputCode(const ChannelCalibration& cal, double value,
+                                                const ConverterRange& range) noexcept;
 
 }  // namespace fullarm::hil

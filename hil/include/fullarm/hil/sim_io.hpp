@@ -22,10 +22,17 @@ struct SimIoOptions {
   const DaqConfig* converters = nullptr;
 };
 
+/// Checks that the channel map `map` can wire the simulated arm `arm`: the arm's joints in order,
+/// and pressure channels only on joints whose plant has chamber pressure transducers.
+/// @param who names the back-end in the error
+/// @throws std::invalid_argument naming the map, the joint and what was expected
+void checkChannelMapFitsArm(const DaqConfig& map, const SimulatedArm& arm, std::string_view who);
+
 class SimIoDevice final : public IoDevice {
  public:
   /// @param arm the simulated DTS (not owned; outlives the device)
-  /// @throws std::invalid_argument when the channel map does not list the plant's joints in order
+  /// @throws std::invalid_argument when the channel map does not fit the arm
+  /// (checkChannelMapFitsArm)
   SimIoDevice(SimulatedArm& arm, const SimIoOptions& options, const IoSafetyParams& safety);
   [[nodiscard]] std::string_view name() const noexcept override { return "sim"; }
   [[nodiscard]] SimulatedArm& simulatedArm() noexcept { return arm_; }
