@@ -105,9 +105,11 @@ DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_
   if (s != DecodeStatus::kOk) return s;
   const auto n = static_cast<std::size_t>(out.num_joints);
   if (out.num_joints < 0 || out.num_joints > kMaxIoJoints || out.q_rad.size() != n ||
-      out.tau_load_cell_nm.size() != n) {
+      out.tau_load_cell_nm.size() != n || out.p_a_pa.size() != n || out.p_b_pa.size() != n) {
     return DecodeStatus::kMalformed;
   }
+  // Pressure bits only for joints the reading has.
+  if ((static_cast<std::uint32_t>(out.pressure_mask) >> out.num_joints) != 0) return DecodeStatus::kMalformed;
   if (out.status_code < 0 || out.status_code > static_cast<int>(core::RtCode::kSolverFailure))
     return DecodeStatus::kMalformed;
   return DecodeStatus::kOk;
@@ -315,9 +317,17 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
   const int n = numJoints();
   sample.q_rad.resize(n);
   sample.tau_load_cell_nm.resize(n);
+  sample.p_a_pa.setZero(n);
+  sample.p_b_pa.setZero(n);
+  sample.pressure_mask = static_cast<std::uint32_t>(m.pressure_mask);
   for (int k = 0; k < n; ++k) {
-    sample.q_rad[k] = m.q_rad[static_cast<std::size_t>(k)];
-    sample.tau_load_cell_nm[k] = m.tau_load_cell_nm[static_cast<std::size_t>(k)];
+    const auto i = static_cast<std::size_t>(k);
+    sample.q_rad[k] = m.q_rad[i];
+    sample.tau_load_cell_nm[k] = m.tau_load_cell_nm[i];
+    if ((sample.pressure_mask >> k) & 1u) {
+      sample.p_a_pa[k] = m.p_a_pa[i];
+      sample.p_b_pa[k] = m.p_b_pa[i];
+    }
   }
   sample.t_s = m.t_s;
   sample.out_of_range_mask = static_cast<std::uint32_t>(m.out_of_range_mask);
@@ -508,6 +518,19 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     reading.tau_load_cell_nm.assign(sample.tau_load_cell_nm.data(),
                                     sample.tau_load_cell_nm.data() + sample.tau_load_cell_nm.size());
     reading.out_of_range_mask = static_cast<std::int32_t>(sample.out_of_range_mask);
+    // The chamber pressures where the back-end read them; zero elsewhere.
+    const auto n = static_cast<std::size_t>(device_.numJoints());
+    const bool has_pressures =
+        sample.p_a_pa.size() == device_.numJoints() && sample.p_b_pa.size() == device_.numJoints();
+    reading.pressure_mask = has_pressures ? static_cast<std::int32_t>(sample.pressure_mask) : 0;
+    reading.p_a_pa.assign(n, 0.0);
+    reading.p_b_pa.assign(n, 0.0);
+    for (std::size_t k = 0; k < n; ++k) {
+      if ((static_cast<std::uint32_t>(reading.pressure_mask) >> k) & 1u) {
+        reading.p_a_pa[k] = sample.p_a_pa[static_cast<Eigen::Index>(k)];
+        reading.p_b_pa[k] = sample.p_b_pa[static_cast<Eigen::Index>(k)];
+      }
+    }
     reading.status_code = static_cast<std::int8_t>(status.code);
     reading.status_faults = static_cast<std::int32_t>(status.faults);
     reading.description_id = description_id;

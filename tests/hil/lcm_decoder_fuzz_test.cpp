@@ -78,6 +78,11 @@ Bytes ioReadingBytes() {
   m.num_joints = 7;
   m.q_rad.assign(7, 0.25);
   m.tau_load_cell_nm.assign(7, -4.0);
+  m.pressure_mask = 1 << 3;
+  m.p_a_pa.assign(7, 0.0);
+  m.p_b_pa.assign(7, 0.0);
+  m.p_a_pa[3] = 8.0e6;
+  m.p_b_pa[3] = 6.5e6;
   Bytes b;
   encodeMessage(m, b);
   return b;
@@ -177,6 +182,9 @@ std::vector<Case> cases() {
                      EXPECT_TRUE(m.num_joints >= 0 && m.num_joints <= kMaxIoJoints);
                      EXPECT_EQ(m.q_rad.size(), static_cast<std::size_t>(m.num_joints));
                      EXPECT_EQ(m.tau_load_cell_nm.size(), static_cast<std::size_t>(m.num_joints));
+                     EXPECT_EQ(m.p_a_pa.size(), static_cast<std::size_t>(m.num_joints));
+                     EXPECT_EQ(m.p_b_pa.size(), static_cast<std::size_t>(m.num_joints));
+                     EXPECT_EQ(static_cast<std::uint32_t>(m.pressure_mask) >> m.num_joints, 0u);
                    }
                    return s;
                  },

@@ -2,7 +2,8 @@
 // nothing can leave the process's own namespace). The plant node serves from a thread with its
 // own LCM instances, exactly as it would from another process. A lockstep run over the remote
 // device equals the in-process run bit for bit; the plant node's watchdog puts out the safe
-// output when commands stop; a read without an answer faults the device.
+// output when commands stop; a read without an answer faults the device; chamber pressures travel
+// with the readings.
 
 #include <gtest/gtest.h>
 
@@ -464,8 +465,10 @@ PlantNodeOptions withArmJoints(PlantNodeOptions options) {
 
 /// A plant node serving a simulated arm from a thread.
 struct PlantThread {
-  explicit PlantThread(PlantNodeOptions options)
-      : arm(test::makeArm(1)), device(*arm, SimIoOptions{}, IoSafetyParams{}), node(device, withArmJoints(options)) {
+  explicit PlantThread(PlantNodeOptions options, const plant::PlantConfig& plant = test::plantConfig())
+      : arm(std::make_unique<SimulatedArm>(test::model(), plant, test::restPosture(), 1e-3, 1)),
+        device(*arm, SimIoOptions{}, IoSafetyParams{}),
+        node(device, withArmJoints(options)) {
     thread = std::thread([this] { result = node.serve([this] { return stop.load(); }); });
   }
   ~PlantThread() { join(); }
@@ -563,6 +566,37 @@ TEST_F(LcmIo, ConsecutiveReadsWithoutAnAnswerFaultTheDevice) {
   EXPECT_EQ(device.state(), IoState::kFault);
   EXPECT_EQ(device.counters().timeouts, static_cast<std::uint64_t>(n));
   EXPECT_EQ(device.counters().readings, 5u);
+}
+
+// A plant whose elbow has chamber pressure transducers: the remote device's readings carry the
+// pressures, bit for bit as the same plant's in-process sim device reads them, and only the
+// elbow's bit in the mask.
+TEST_F(LcmIo, ChamberPressuresTravelWithTheReadings) {
+  plant::PlantConfig plant_config = test::plantConfig();
+  plant_config.joints[3].sensor_noise.pressure_full_scale_pa = 25.0e6;
+  plant_config.joints[3].sensor_noise.pressure_bits = 16;
+  PlantNodeOptions po;
+  po.url = kUrl;
+  po.idle_exit_s = 5.0;
+  PlantThread plant(po, plant_config);
+  LcmIoDevice remote(test::armJoints(), 1e-3, IoSafetyParams{}, deviceOptions());
+  remote.configure();
+  SimulatedArm arm(test::model(), plant_config, test::restPosture(), 1e-3, 1);
+  SimIoDevice in_process(arm, SimIoOptions{}, IoSafetyParams{});
+  in_process.configure();
+  JointSample a;
+  JointSample b;
+  for (int k = 0; k < 30; ++k) {
+    ASSERT_TRUE(remote.read(a).ok()) << k;
+    ASSERT_TRUE(in_process.read(b).ok()) << k;
+    ASSERT_EQ(a.pressure_mask, 1u << 3) << k;
+    ASSERT_EQ(b.pressure_mask, 1u << 3) << k;
+    EXPECT_EQ(a.q_rad, b.q_rad) << k;
+    EXPECT_EQ(a.p_a_pa, b.p_a_pa) << k;
+    EXPECT_EQ(a.p_b_pa, b.p_b_pa) << k;
+  }
+  EXPECT_GT(a.p_a_pa[3], 0.0);
+  EXPECT_GT(a.p_b_pa[3], 0.0);
 }
 
 /// The message of configure() on `device`, or "" when it succeeded.
