@@ -61,8 +61,9 @@ struct JointSample {
   /// of range; the value is then NaN).
   std::uint32_t out_of_range_mask = 0;
   /// Chamber pressures [Pa, gauge], device order, where the back-end reads them: bit k of
-  /// `pressure_mask` says joint k's are valid (the simulated DTS with pressure transducers in its
-  /// plant file; the DTS master itself has none, so the hardware back-ends leave the mask 0).
+  /// `pressure_mask` says joint k's were read (the simulated DTS with pressure transducers in
+  /// its plant file; on a board, the joints whose channel map wires them: the DTS master itself
+  /// has none). NaN where a transducer saturated; that does not set out_of_range_mask.
   IoVector p_a_pa;
   IoVector p_b_pa;
   std::uint32_t pressure_mask = 0;
