@@ -162,8 +162,8 @@ class ComediBackend final : public IoDevice {
       sample.tau_load_cell_nm[k] = physical(cells_[i], tau_code);
       if (std::isnan(sample.q_rad[k]) || std::isnan(sample.tau_load_cell_nm[k])) sample.out_of_range_mask |= 1u << k;
       if (!map_.joints[i].hasPressures()) continue;
-      // The chamber pressures: a code at a range end reads NaN (a saturated transducer), which
-      // the controllers never use; an identification experiment stops on it.
+      // The chamber pressures: a code at a range end reads NaN, which no controller uses and
+      // which does not flag the joint out of range; an identification experiment stops on it.
       api::lsampl_t pa_code = 0;
       api::lsampl_t pb_code = 0;
       if (api::comedi_data_read(device_, static_cast<unsigned>(ai_), pressures_a_[i].channel,

@@ -108,8 +108,11 @@ DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_
       out.tau_load_cell_nm.size() != n || out.p_a_pa.size() != n || out.p_b_pa.size() != n) {
     return DecodeStatus::kMalformed;
   }
-  // Pressure bits only for joints the reading has.
-  if ((static_cast<std::uint32_t>(out.pressure_mask) >> out.num_joints) != 0) return DecodeStatus::kMalformed;
+  // Flag bits only for joints the reading has.
+  if ((static_cast<std::uint32_t>(out.pressure_mask) >> out.num_joints) != 0 ||
+      (static_cast<std::uint32_t>(out.out_of_range_mask) >> out.num_joints) != 0) {
+    return DecodeStatus::kMalformed;
+  }
   if (out.status_code < 0 || out.status_code > static_cast<int>(core::RtCode::kSolverFailure))
     return DecodeStatus::kMalformed;
   return DecodeStatus::kOk;
@@ -292,8 +295,14 @@ core::RtStatus LcmIoDevice::onRead(JointSample& sample) noexcept {
       lost_ = true;
       ++counters_.timeouts;
       if (++counters_.consecutive_missed >= options_.max_missed_replies || !have_sample_) {
+        // Replies that arrived but did not decode: most likely a node of another version (the
+        // message's type hash differs), not a lost link.
         return core::RtStatus::fault(core::RtCode::kBadState, kFaultDeviceRead | kFaultLinkLost,
-                                     "lcm I/O: no reading from the I/O node in time (communication lost)");
+                                     counters_.rejected > 0
+                                         ? "lcm I/O: no reading from the I/O node in time; readings that arrived were "
+                                           "rejected as damaged or of another message version (is the node a "
+                                           "`fullarm plant serve` of this version?)"
+                                         : "lcm I/O: no reading from the I/O node in time (communication lost)");
       }
       sample = last_sample_;  // a held reading, as a late DAQ conversion would give
       return {};
@@ -522,7 +531,8 @@ PlantNodeResult LcmPlantNode::serve(const std::function<bool()>& stop) {
     const auto n = static_cast<std::size_t>(device_.numJoints());
     const bool has_pressures =
         sample.p_a_pa.size() == device_.numJoints() && sample.p_b_pa.size() == device_.numJoints();
-    reading.pressure_mask = has_pressures ? static_cast<std::int32_t>(sample.pressure_mask) : 0;
+    const std::uint32_t joint_bits = (1u << n) - 1u;
+    reading.pressure_mask = has_pressures ? static_cast<std::int32_t>(sample.pressure_mask & joint_bits) : 0;
     reading.p_a_pa.assign(n, 0.0);
     reading.p_b_pa.assign(n, 0.0);
     for (std::size_t k = 0; k < n; ++k) {

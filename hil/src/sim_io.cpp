@@ -21,6 +21,10 @@ void checkChannelMapFitsArm(const DaqConfig& map, const SimulatedArm& arm, std::
       throw std::invalid_argument(where + ": its joint " + std::to_string(k) + " is " + j.name + ", the plant's is " +
                                   expected);
     }
+    if ((j.pressure_a.channel >= 0) != (j.pressure_b.channel >= 0)) {
+      throw std::invalid_argument(where + " wires one chamber's pressure channel for " + j.name +
+                                  ": expected both (pressure_a and pressure_b) or neither");
+    }
     if (j.hasPressures() && arm.plant().joint(k).sensor_noise.pressure_full_scale_pa <= 0.0) {
       throw std::invalid_argument(where + " wires pressure channels for " + j.name +
                                   ", whose plant joint has no chamber pressure transducers (expected "

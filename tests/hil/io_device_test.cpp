@@ -5,8 +5,11 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <string>
 
 #include "alloc_guard.hpp"
+#include "fullarm/hil/fake_daq.hpp"
 #include "fullarm/hil/sim_io.hpp"
 #include "hil_fixture.hpp"
 
@@ -178,6 +181,40 @@ TEST(SimIo, ReadAndWriteDoNotAllocate) {
   for (int k = 0; k < 50; ++k) {
     EXPECT_NO_HEAP_ALLOCATION(device.read(s));
     EXPECT_NO_HEAP_ALLOCATION(device.write(cmd));
+  }
+}
+
+// The same with chamber pressure transducers on the elbow, read by sim itself, by sim through a
+// channel map that wires them, and by the fake DAQ's comedi back-end.
+TEST(SimIo, ReadingChamberPressuresDoesNotAllocate) {
+  plant::PlantConfig plant = test::plantConfig();
+  plant.joints[3].sensor_noise.pressure_full_scale_pa = 25.0e6;
+  DaqConfig map = test::daqConfig();
+  map.joints[3].pressure_a = {7, {ChannelCalibration::Kind::kLinear, 1.0, 0.0, 2.5e6, 0.0}};
+  map.joints[3].pressure_b = {15, {ChannelCalibration::Kind::kLinear, 1.0, 0.0, 2.5e6, 0.0}};
+  SimulatedArm own_arm(test::model(), plant, test::restPosture(), 1e-3, 1);
+  SimulatedArm mapped_arm(test::model(), plant, test::restPosture(), 1e-3, 1);
+  SimulatedArm board_arm(test::model(), plant, test::restPosture(), 1e-3, 1);
+  SimIoOptions through_map;
+  through_map.converters = &map;
+  SimIoDevice own(own_arm, {}, {});
+  SimIoDevice mapped(mapped_arm, through_map, {});
+  FakeDaqBoard board(map);
+  FakeDaqRig rig(board, board_arm, map, 0.05);
+  std::unique_ptr<IoDevice> fake = makeFakeDaqIoDevice(map, test::model(), 1e-3, {}, &rig);
+  for (IoDevice* device : {static_cast<IoDevice*>(&own), static_cast<IoDevice*>(&mapped), fake.get()}) {
+    SCOPED_TRACE(std::string(device->name()));
+    device->configure();
+    device->activate();
+    const IoVector cmd = volts(device->numJoints(), 0.5);
+    JointSample s;
+    ASSERT_TRUE(device->read(s).ok());
+    for (int k = 0; k < 20; ++k) {
+      EXPECT_NO_HEAP_ALLOCATION(device->read(s));
+      EXPECT_NO_HEAP_ALLOCATION(device->write(cmd));
+    }
+    EXPECT_EQ(s.pressure_mask, 1u << 3);
+    EXPECT_GT(s.p_a_pa[3], 0.0);
   }
 }
 

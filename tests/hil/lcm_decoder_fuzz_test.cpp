@@ -275,6 +275,33 @@ TEST(LcmDecoderFuzz, CountsBeyondTheirBoundsOrNegativeAreRejected) {
   EXPECT_EQ(cases()[2].decode(h), DecodeStatus::kMalformed);
 }
 
+// io_reading_t's flag masks name joints the reading has, and nothing else.
+TEST(LcmDecoderFuzz, ReadingFlagBitsBeyondTheJointsAreRejected) {
+  const auto decode = [](int num_joints, std::int32_t pressure_mask, std::int32_t out_of_range_mask) {
+    fullarm_lcm::io_reading_t m{};
+    m.num_joints = static_cast<std::int8_t>(num_joints);
+    const auto n = static_cast<std::size_t>(num_joints);
+    m.q_rad.assign(n, 0.5);
+    m.tau_load_cell_nm.assign(n, 1.0);
+    m.p_a_pa.assign(n, 7.0e6);
+    m.p_b_pa.assign(n, 6.0e6);
+    m.pressure_mask = pressure_mask;
+    m.out_of_range_mask = out_of_range_mask;
+    Bytes b;
+    encodeMessage(m, b);
+    fullarm_lcm::io_reading_t out{};
+    return decodeChecked(b, out);
+  };
+  EXPECT_EQ(decode(7, 1 << 6, 1 << 6), DecodeStatus::kOk);
+  EXPECT_EQ(decode(7, 0x7F, 0), DecodeStatus::kOk);
+  EXPECT_EQ(decode(7, 1 << 7, 0), DecodeStatus::kMalformed);
+  EXPECT_EQ(decode(7, -1, 0), DecodeStatus::kMalformed);
+  EXPECT_EQ(decode(0, 1, 0), DecodeStatus::kMalformed);
+  EXPECT_EQ(decode(7, 0, 1 << 7), DecodeStatus::kMalformed);
+  EXPECT_EQ(decode(kMaxIoJoints, 1 << (kMaxIoJoints - 1), 0), DecodeStatus::kOk);
+  EXPECT_EQ(decode(kMaxIoJoints, 1 << kMaxIoJoints, 0), DecodeStatus::kMalformed);
+}
+
 // io_node_info_t: hash(8) utime(8) seq(8) num_joints(1), then each name as an int32 length
 // (counting its NUL) and its bytes. The generated decoder would take a length of 0 or less as
 // a huge one: the checked decoder refuses it before.

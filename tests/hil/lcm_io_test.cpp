@@ -2,8 +2,8 @@
 // nothing can leave the process's own namespace). The plant node serves from a thread with its
 // own LCM instances, exactly as it would from another process. A lockstep run over the remote
 // device equals the in-process run bit for bit; the plant node's watchdog puts out the safe
-// output when commands stop; a read without an answer faults the device; chamber pressures travel
-// with the readings.
+// output when commands stop; a read without an answer faults the device, naming readings of
+// another message version; chamber pressures travel with the readings.
 
 #include <gtest/gtest.h>
 
@@ -794,6 +794,54 @@ TEST_F(LcmIo, ANodeRestartedUnderAnotherDescriptionFaultsTheDevice) {
   b = a;
   b.period_us += 1;
   EXPECT_NE(descriptionId(a), descriptionId(b));
+}
+
+// A node of another version answers every command with a reading the device cannot decode (its
+// type hash differs): the read fails naming the likely cause, not as a plain lost link.
+TEST_F(LcmIo, ReadingsOfAnotherMessageVersionAreNamedAsSuch) {
+  PlantNodeOptions po;
+  po.url = kUrl;
+  po.idle_exit_s = 5.0;
+  auto plant = std::make_unique<PlantThread>(po);
+  LcmIoDevice device(test::armJoints(), 1e-3, IoSafetyParams{}, deviceOptions());
+  device.configure();
+  plant->join();
+  lcm::LCM lcm(kUrl);
+  ASSERT_TRUE(lcm.good());
+  struct OldNode {
+    lcm::LCM* lcm;
+    int answered = 0;
+    void onCommand(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      fullarm_lcm::io_command_t command{};
+      if (command.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) return;
+      fullarm_lcm::io_reading_t reading{};
+      reading.seq = command.seq;
+      reading.num_joints = 7;
+      reading.q_rad.assign(7, 0.5);
+      reading.tau_load_cell_nm.assign(7, 0.0);
+      reading.p_a_pa.assign(7, 0.0);
+      reading.p_b_pa.assign(7, 0.0);
+      std::vector<std::uint8_t> bytes;
+      encodeMessage(reading, bytes);
+      bytes[7] ^= 0x5A;  // the type hash of another layout
+      lcm->publish(channel::kIoReading, bytes.data(), static_cast<unsigned int>(bytes.size()));
+      ++answered;
+    }
+  } old_node{&lcm};
+  lcm.subscribe(channel::kIoCommand, &OldNode::onCommand, &old_node);
+  std::atomic<bool> stop{false};
+  std::thread serve([&] {
+    while (!stop) lcm.handleTimeout(10);
+  });
+  JointSample s;
+  const core::RtStatus status = device.read(s);
+  stop = true;
+  serve.join();
+  ASSERT_FALSE(status.ok());
+  EXPECT_GE(old_node.answered, 1);
+  EXPECT_GE(device.counters().rejected, 1u);
+  EXPECT_NE(status.faults & kFaultLinkLost, 0u);
+  EXPECT_NE(std::string(status.message).find("another message version"), std::string::npos) << status.message;
 }
 
 TEST_F(LcmIo, ConfiguringWithoutAPlantNodeIsADeviceError) {

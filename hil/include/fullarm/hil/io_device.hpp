@@ -63,7 +63,8 @@ struct JointSample {
   /// Chamber pressures [Pa, gauge], device order, where the back-end reads them: bit k of
   /// `pressure_mask` says joint k's were read (the simulated DTS with pressure transducers in
   /// its plant file; on a board, the joints whose channel map wires them: the DTS master itself
-  /// has none). NaN where a transducer saturated; that does not set out_of_range_mask.
+  /// has none). NaN where a board's code is at a converter range end (the plant's own
+  /// transducers clamp instead); that does not set out_of_range_mask.
   IoVector p_a_pa;
   IoVector p_b_pa;
   std::uint32_t pressure_mask = 0;

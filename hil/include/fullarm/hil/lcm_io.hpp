@@ -82,7 +82,7 @@ struct IoNodeInfo {
 /// Decodes and checks an io_command_t (counts within kMaxIoJoints, array sizes). Never throws.
 DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_command_t& out) noexcept;
 /// Decodes and checks an io_reading_t (counts within kMaxIoJoints, array sizes, a known status
-/// code). Never throws.
+/// code, out-of-range and pressure bits only for the reading's joints). Never throws.
 DecodeStatus decodeChecked(std::span<const std::uint8_t> bytes, fullarm_lcm::io_reading_t& out) noexcept;
 /// Decodes and checks an io_node_info_t: the string lengths before the generated decoder reads
 /// them (each joint name 1 to kMaxNodeJointNameChars characters, the plant at most
