@@ -162,6 +162,7 @@ DaqConfig readDaqConfig(const core::YamlMap& root, const arm::ArmModel& model) {
   for (std::size_t i = 0; i < joints.size(); ++i) {
     const core::YamlMap j = joints.map(i);
     DaqJoint dj;
+    dj.file_index = static_cast<int>(i);
     dj.name = j.string("name");
     const int index = model.jointIndex(dj.name);
     if (index < 0) j.fail("name", "'" + dj.name + "' is not a joint of the arm model " + model.name);

@@ -5,30 +5,33 @@
 #include <stdexcept>
 
 #include "fullarm/arm/sensors.hpp"
+#include "fullarm/core/config_error.hpp"
 
 namespace fullarm::hil {
 
 void checkChannelMapFitsArm(const DaqConfig& map, const SimulatedArm& arm, std::string_view who) {
-  const std::string where = std::string(who) + ": the channel map " + map.source.string();
+  const auto fail = [&](const std::string& key, const std::string& what) {
+    throw core::ConfigError(map.source, key, std::string(who) + ": " + what);
+  };
   if (static_cast<int>(map.joints.size()) != arm.numJoints()) {
-    throw std::invalid_argument(where + " lists " + std::to_string(map.joints.size()) + " joints, the plant has " +
-                                std::to_string(arm.numJoints()));
+    fail("joints", "the map lists " + std::to_string(map.joints.size()) + " joints, the plant has " +
+                       std::to_string(arm.numJoints()));
   }
   for (int k = 0; k < arm.numJoints(); ++k) {
     const DaqJoint& j = map.joints[static_cast<std::size_t>(k)];
+    // The key in the map's file: a caller may have kept only some of its joints.
+    const std::string key = "joints[" + std::to_string(j.file_index >= 0 ? j.file_index : k) + "]";
     const std::string& expected = arm.model().joints[static_cast<std::size_t>(arm.joints().modelIndex(k))].name;
-    if (j.name != expected) {
-      throw std::invalid_argument(where + ": its joint " + std::to_string(k) + " is " + j.name + ", the plant's is " +
-                                  expected);
-    }
+    if (j.name != expected) fail(key + ".name", "the map's joint is " + j.name + ", the plant's is " + expected);
     if ((j.pressure_a.channel >= 0) != (j.pressure_b.channel >= 0)) {
-      throw std::invalid_argument(where + " wires one chamber's pressure channel for " + j.name +
-                                  ": expected both (pressure_a and pressure_b) or neither");
+      fail(key + (j.pressure_a.channel >= 0 ? ".pressure_b" : ".pressure_a"),
+           "expected the pressure channels of both chambers of " + j.name + " or of neither");
     }
     if (j.hasPressures() && arm.plant().joint(k).sensor_noise.pressure_full_scale_pa <= 0.0) {
-      throw std::invalid_argument(where + " wires pressure channels for " + j.name +
-                                  ", whose plant joint has no chamber pressure transducers (expected "
-                                  "sensors.pressure_full_scale_pa and its companions in the plant file)");
+      fail(key + ".pressure_a", "pressure channels for " + j.name +
+                                    ", whose plant joint has no chamber pressure transducers (expected "
+                                    "sensors.pressure_full_scale_pa and its companions in the plant file, or no "
+                                    "pressure channels)");
     }
   }
 }

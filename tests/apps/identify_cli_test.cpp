@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -484,6 +485,20 @@ TEST(IdentifyCli, BackEndOptionsOutOfPlaceExitTwoNamingTheOption) {
   expectBad("--log " + log + " " + log + " --seed 2", "--seed");
   // No board on this machine: the error names the device file of the channel map.
   expectBad("--io comedi", "/dev/comedi0");
+  // A channel map that wires the elbow's chamber pressures, on the shipped plant, which has no
+  // transducers: the map's file and key.
+  std::ifstream shipped(fullarm::arm::test::sourcePath("config/dts_daq.yaml"));
+  std::string map_text((std::istreambuf_iterator<char>(shipped)), std::istreambuf_iterator<char>());
+  const std::string elbow_valve = "valve: {channel: 3, calibration: {type: linear, scale: 1.0, offset: 0.0}}";
+  const std::size_t at = map_text.find(elbow_valve);
+  ASSERT_NE(at, std::string::npos);
+  map_text.insert(at + elbow_valve.size(),
+                  "\n    pressure_a: {channel: 7, calibration: {type: linear, scale: 2.5e6, offset: 0.0}}"
+                  "\n    pressure_b: {channel: 15, calibration: {type: linear, scale: 2.5e6, offset: 0.0}}");
+  const std::string map = (dir / "pressure_map.yaml").string();
+  { std::ofstream(map) << map_text; }
+  expectBad("--io fakedaq --joint EB --daq-config " + map, "pressure_map.yaml");
+  expectBad("--io fakedaq --joint EB --daq-config " + map, "joints[3].pressure_a");
 }
 
 }  // namespace

@@ -144,7 +144,7 @@ TEST(FakeDaq, ChamberPressureChannelsReadThePlantsTransducers) {
 }
 
 // Pressure channels on a joint whose plant has no transducers: the fake DAQ's rig and the sim
-// back-end both refuse the map, naming it and the joint.
+// back-end both refuse the map, naming its file, the key and the joint.
 TEST(FakeDaq, PressureChannelsOnAJointWithoutTransducersAreRefused) {
   const PressureRig wiring;
   SimulatedArm arm(test::model(), test::plantConfig(), test::restPosture(), kPeriod_s, 1);
@@ -153,8 +153,9 @@ TEST(FakeDaq, PressureChannelsOnAJointWithoutTransducersAreRefused) {
     try {
       build();
       FAIL() << who << " accepted pressure channels without transducers";
-    } catch (const std::invalid_argument& e) {
+    } catch (const core::ConfigError& e) {
       const std::string what = e.what();
+      EXPECT_EQ(e.keyPath(), "joints[3].pressure_a") << what;
       EXPECT_NE(what.find(who), std::string::npos) << what;
       EXPECT_NE(what.find("dts_daq.yaml"), std::string::npos) << what;
       EXPECT_NE(what.find("pressure channels for R_EB"), std::string::npos) << what;

@@ -53,6 +53,7 @@ struct DaqChannel {
 /// pressure transducers (a rig or an arm retrofitted with them; the DTS master has none).
 struct DaqJoint {
   std::string name;          ///< arm joint name
+  int file_index = -1;       ///< its place in the file's `joints` list (-1: built in code)
   DaqChannel potentiometer;  ///< analog input [rad]
   DaqChannel load_cell;      ///< analog input [N m]
   DaqChannel valve;          ///< analog output [V at the valve amplifier]

@@ -25,14 +25,14 @@ struct SimIoOptions {
 /// Checks that the channel map `map` can wire the simulated arm `arm`: the arm's joints in order,
 /// and pressure channels only on joints whose plant has chamber pressure transducers.
 /// @param who names the back-end in the error
-/// @throws std::invalid_argument naming the map, the joint and what was expected
+/// @throws core::ConfigError naming the map's file, the key (`joints[3].pressure_a`) and what
+///   was expected
 void checkChannelMapFitsArm(const DaqConfig& map, const SimulatedArm& arm, std::string_view who);
 
 class SimIoDevice final : public IoDevice {
  public:
   /// @param arm the simulated DTS (not owned; outlives the device)
-  /// @throws std::invalid_argument when the channel map does not fit the arm
-  /// (checkChannelMapFitsArm)
+  /// @throws core::ConfigError when the channel map does not fit the arm (checkChannelMapFitsArm)
   SimIoDevice(SimulatedArm& arm, const SimIoOptions& options, const IoSafetyParams& safety);
   [[nodiscard]] std::string_view name() const noexcept override { return "sim"; }
   [[nodiscard]] SimulatedArm& simulatedArm() noexcept { return arm_; }
