@@ -7,10 +7,10 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <atomic>
 #include <map>
 #include <mutex>
 #include <new>
@@ -58,7 +58,8 @@ FakeDaqBoard::FakeDaqBoard(const DaqConfig& map, const std::filesystem::path& st
     state_ = memory_.get();
   } else {
     const int fd = ::open(file_.c_str(), O_RDWR | O_CREAT | O_TRUNC, 0644);
-    if (fd < 0) throw std::runtime_error(file_.string() + ": cannot create the fake DAQ's state file: " + std::strerror(errno));
+    if (fd < 0)
+      throw std::runtime_error(file_.string() + ": cannot create the fake DAQ's state file: " + std::strerror(errno));
     mapped_bytes_ = sizeof(FakeDaqState);
     if (::ftruncate(fd, static_cast<off_t>(mapped_bytes_)) != 0) {
       ::close(fd);
@@ -66,7 +67,8 @@ FakeDaqBoard::FakeDaqBoard(const DaqConfig& map, const std::filesystem::path& st
     }
     void* p = ::mmap(nullptr, mapped_bytes_, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
     ::close(fd);
-    if (p == MAP_FAILED) throw std::runtime_error(file_.string() + ": cannot map the fake DAQ's state: " + std::strerror(errno));
+    if (p == MAP_FAILED)
+      throw std::runtime_error(file_.string() + ": cannot map the fake DAQ's state: " + std::strerror(errno));
     state_ = new (p) FakeDaqState();
   }
   FakeDaqState& s = *state_;
@@ -92,18 +94,19 @@ FakeDaqBoard::~FakeDaqBoard() {
 
 std::shared_ptr<const FakeDaqState> FakeDaqBoard::inspect(const std::filesystem::path& state_file) {
   const int fd = ::open(state_file.c_str(), O_RDONLY);
-  if (fd < 0) throw std::runtime_error(state_file.string() + ": cannot open the fake DAQ's state file: " + std::strerror(errno));
+  if (fd < 0)
+    throw std::runtime_error(state_file.string() + ": cannot open the fake DAQ's state file: " + std::strerror(errno));
   void* p = ::mmap(nullptr, sizeof(FakeDaqState), PROT_READ, MAP_SHARED, fd, 0);
   ::close(fd);
-  if (p == MAP_FAILED) throw std::runtime_error(state_file.string() + ": cannot map the fake DAQ's state: " + std::strerror(errno));
+  if (p == MAP_FAILED)
+    throw std::runtime_error(state_file.string() + ": cannot map the fake DAQ's state: " + std::strerror(errno));
   const auto* state = static_cast<const FakeDaqState*>(p);
   if (state->magic != kFakeDaqMagic) {
     ::munmap(p, sizeof(FakeDaqState));
     throw std::runtime_error(state_file.string() + ": not a fake DAQ state file");
   }
-  return std::shared_ptr<const FakeDaqState>(state, [](const FakeDaqState* s) {
-    ::munmap(const_cast<FakeDaqState*>(s), sizeof(FakeDaqState));
-  });
+  return std::shared_ptr<const FakeDaqState>(
+      state, [](const FakeDaqState* s) { ::munmap(const_cast<FakeDaqState*>(s), sizeof(FakeDaqState)); });
 }
 
 bool amplifierEnabled(const FakeDaqState& state, std::int64_t now_ns, double timeout_s) noexcept {
@@ -238,7 +241,8 @@ int comedi_data_write(comedi_t* device, unsigned int subdevice, unsigned int cha
 }
 
 int comedi_dio_config(comedi_t* device, unsigned int subdevice, unsigned int channel, unsigned int direction) {
-  if (device == nullptr || subdevice != kDio || static_cast<int>(channel) >= device->state->dio_channels) return fail(EINVAL);
+  if (device == nullptr || subdevice != kDio || static_cast<int>(channel) >= device->state->dio_channels)
+    return fail(EINVAL);
   if (direction == kDigitalOutput) {
     device->state->dio_outputs |= 1u << channel;
   } else {
@@ -248,7 +252,8 @@ int comedi_dio_config(comedi_t* device, unsigned int subdevice, unsigned int cha
 }
 
 int comedi_dio_write(comedi_t* device, unsigned int subdevice, unsigned int channel, unsigned int bit) {
-  if (device == nullptr || subdevice != kDio || static_cast<int>(channel) >= device->state->dio_channels) return fail(EINVAL);
+  if (device == nullptr || subdevice != kDio || static_cast<int>(channel) >= device->state->dio_channels)
+    return fail(EINVAL);
   FakeDaqState& s = *device->state;
   if (((s.dio_outputs >> channel) & 1u) == 0) return fail(EINVAL);  // not configured as an output
   const std::uint32_t before = s.dio_levels;
