@@ -133,6 +133,12 @@ class ComediBackend final : public IoDevice {
     return std::numeric_limits<double>::quiet_NaN();
   }
 
+  /// One conversion of an analog input; false when comedilib fails. @rt
+  bool readCode(const Channel& ch, api::lsampl_t& code) const noexcept {
+    return api::comedi_data_read(device_, static_cast<unsigned>(ai_), ch.channel, static_cast<unsigned>(map_.ai_range),
+                                 api::kArefGround, &code) >= 0;
+  }
+
   core::RtStatus onRead(JointSample& sample) noexcept override {
     if (clock_.before_read != nullptr) {
       const core::RtStatus s = clock_.before_read(clock_.context);
@@ -152,10 +158,7 @@ class ComediBackend final : public IoDevice {
       api::lsampl_t q_code = 0;
       api::lsampl_t tau_code = 0;
       const std::size_t i = static_cast<std::size_t>(k);
-      if (api::comedi_data_read(device_, static_cast<unsigned>(ai_), pots_[i].channel,
-                                static_cast<unsigned>(map_.ai_range), api::kArefGround, &q_code) < 0 ||
-          api::comedi_data_read(device_, static_cast<unsigned>(ai_), cells_[i].channel,
-                                static_cast<unsigned>(map_.ai_range), api::kArefGround, &tau_code) < 0) {
+      if (!readCode(pots_[i], q_code) || !readCode(cells_[i], tau_code)) {
         return core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead, "comedi_data_read failed");
       }
       sample.q_rad[k] = physical(pots_[i], q_code);
@@ -166,10 +169,7 @@ class ComediBackend final : public IoDevice {
       // which does not flag the joint out of range; an identification experiment stops on it.
       api::lsampl_t pa_code = 0;
       api::lsampl_t pb_code = 0;
-      if (api::comedi_data_read(device_, static_cast<unsigned>(ai_), pressures_a_[i].channel,
-                                static_cast<unsigned>(map_.ai_range), api::kArefGround, &pa_code) < 0 ||
-          api::comedi_data_read(device_, static_cast<unsigned>(ai_), pressures_b_[i].channel,
-                                static_cast<unsigned>(map_.ai_range), api::kArefGround, &pb_code) < 0) {
+      if (!readCode(pressures_a_[i], pa_code) || !readCode(pressures_b_[i], pb_code)) {
         return core::RtStatus::fault(core::RtCode::kBadInput, kFaultDeviceRead, "comedi_data_read failed");
       }
       sample.p_a_pa[k] = physical(pressures_a_[i], pa_code);

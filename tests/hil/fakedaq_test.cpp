@@ -83,22 +83,10 @@ TEST(FakeDaq, ReadingsAtTheRangeEndsAreOutOfRange) {
   EXPECT_EQ(s.out_of_range_mask, (1u << 2) | (1u << 5));
 }
 
-// A channel map that wires the elbow's chamber pressure transducers (0-10 V for 0-25 MPa on
-// inputs 7 and 15) to a plant whose elbow has them.
+// The elbow's chamber pressure transducers wired to the board, on a plant whose elbow has them.
 struct PressureRig {
-  PressureRig() {
-    plant.joints[3].sensor_noise.pressure_full_scale_pa = 25.0e6;
-    plant.joints[3].sensor_noise.pressure_bits = 16;
-    map.joints[3].pressure_a.channel = 7;
-    map.joints[3].pressure_b.channel = 15;
-    for (DaqChannel* ch : {&map.joints[3].pressure_a, &map.joints[3].pressure_b}) {
-      ch->calibration.kind = ChannelCalibration::Kind::kLinear;
-      ch->calibration.scale = 2.5e6;
-      ch->calibration.offset = 0.0;
-    }
-  }
-  plant::PlantConfig plant = test::plantConfig();
-  DaqConfig map = test::daqConfig();
+  plant::PlantConfig plant = test::plantWithElbowTransducers();
+  DaqConfig map = test::daqConfigWithElbowPressures();
 };
 
 // The comedi back-end reads the transducers through their channels' calibration, within half a
@@ -106,7 +94,7 @@ struct PressureRig {
 // saturated transducer reads NaN without flagging the joint's angle or torque out of range.
 TEST(FakeDaq, ChamberPressureChannelsReadThePlantsTransducers) {
   const PressureRig wiring;
-  const double half_code_pa = 0.5 * 2.5e6 * 20.0 / 4095.0;
+  const double half_code_pa = test::kElbowPressureHalfCodePa;
   {
     SimulatedArm arm(test::model(), wiring.plant, test::restPosture(), kPeriod_s, 1);
     FakeDaqBoard board(wiring.map);

@@ -32,6 +32,27 @@ inline const DaqConfig& daqConfig() {
   return config;
 }
 
+/// The shipped plant with chamber pressure transducers on the elbow (joint 3): 0-25 MPa, 16 bits,
+/// no noise.
+inline plant::PlantConfig plantWithElbowTransducers() {
+  plant::PlantConfig c = plantConfig();
+  c.joints[3].sensor_noise.pressure_full_scale_pa = 25.0e6;
+  c.joints[3].sensor_noise.pressure_bits = 16;
+  return c;
+}
+
+/// The shipped channel map with the elbow's transducers wired: 0-10 V for 0-25 MPa on analog
+/// inputs 7 and 15.
+inline DaqConfig daqConfigWithElbowPressures() {
+  DaqConfig map = daqConfig();
+  map.joints[3].pressure_a = {7, {ChannelCalibration::Kind::kLinear, 1.0, 0.0, 2.5e6, 0.0}};
+  map.joints[3].pressure_b = {15, {ChannelCalibration::Kind::kLinear, 1.0, 0.0, 2.5e6, 0.0}};
+  return map;
+}
+
+/// Half a code of those inputs on the shipped map's +-10 V, 12-bit converter [Pa].
+inline constexpr double kElbowPressureHalfCodePa = 0.5 * 2.5e6 * 20.0 / 4095.0;
+
 /// The seven arm joints, the simulated devices' joints.
 inline arm::JointSelection armJoints() {
   return arm::JointSelection(model().numJoints(), {0, 1, 2, 3, 4, 5, 6});

@@ -187,11 +187,8 @@ TEST(SimIo, ReadAndWriteDoNotAllocate) {
 // The same with chamber pressure transducers on the elbow, read by sim itself, by sim through a
 // channel map that wires them, and by the fake DAQ's comedi back-end.
 TEST(SimIo, ReadingChamberPressuresDoesNotAllocate) {
-  plant::PlantConfig plant = test::plantConfig();
-  plant.joints[3].sensor_noise.pressure_full_scale_pa = 25.0e6;
-  DaqConfig map = test::daqConfig();
-  map.joints[3].pressure_a = {7, {ChannelCalibration::Kind::kLinear, 1.0, 0.0, 2.5e6, 0.0}};
-  map.joints[3].pressure_b = {15, {ChannelCalibration::Kind::kLinear, 1.0, 0.0, 2.5e6, 0.0}};
+  const plant::PlantConfig plant = test::plantWithElbowTransducers();
+  const DaqConfig map = test::daqConfigWithElbowPressures();
   SimulatedArm own_arm(test::model(), plant, test::restPosture(), 1e-3, 1);
   SimulatedArm mapped_arm(test::model(), plant, test::restPosture(), 1e-3, 1);
   SimulatedArm board_arm(test::model(), plant, test::restPosture(), 1e-3, 1);

@@ -572,9 +572,7 @@ TEST_F(LcmIo, ConsecutiveReadsWithoutAnAnswerFaultTheDevice) {
 // pressures, bit for bit as the same plant's in-process sim device reads them, and only the
 // elbow's bit in the mask.
 TEST_F(LcmIo, ChamberPressuresTravelWithTheReadings) {
-  plant::PlantConfig plant_config = test::plantConfig();
-  plant_config.joints[3].sensor_noise.pressure_full_scale_pa = 25.0e6;
-  plant_config.joints[3].sensor_noise.pressure_bits = 16;
+  const plant::PlantConfig plant_config = test::plantWithElbowTransducers();
   PlantNodeOptions po;
   po.url = kUrl;
   po.idle_exit_s = 5.0;

@@ -164,17 +164,8 @@ TEST(ExperimentFakeDaq, PacingOverrunStopsBeforeTheLateReadWithTheValvesAtNull) 
 // plant's own 16-bit transducers. The map's count rules read the angle and the torque exactly as
 // the plant does, so the three runs follow one trajectory.
 TEST(ExperimentFakeDaq, ChamberPressuresWiredThroughTheChannelMapAreLogged) {
-  plant::PlantConfig plant = hil::test::plantConfig();
-  plant.joints[kElbow].sensor_noise.pressure_full_scale_pa = 25.0e6;
-  plant.joints[kElbow].sensor_noise.pressure_bits = 16;
-  hil::DaqConfig map = hil::test::daqConfig();
-  map.joints[kElbow].pressure_a.channel = 7;
-  map.joints[kElbow].pressure_b.channel = 15;
-  for (hil::DaqChannel* ch : {&map.joints[kElbow].pressure_a, &map.joints[kElbow].pressure_b}) {
-    ch->calibration.kind = hil::ChannelCalibration::Kind::kLinear;
-    ch->calibration.scale = 2.5e6;
-    ch->calibration.offset = 0.0;
-  }
+  const plant::PlantConfig plant = hil::test::plantWithElbowTransducers();
+  const hil::DaqConfig map = hil::test::daqConfigWithElbowPressures();
   const auto run = [&](hil::IoKind io, bool through_map) {
     hil::IoBackendOptions o;
     o.io = io;
@@ -209,7 +200,7 @@ TEST(ExperimentFakeDaq, ChamberPressuresWiredThroughTheChannelMapAreLogged) {
   }
   EXPECT_EQ(own.log.column("q_rad"), mapped.log.column("q_rad"));
   EXPECT_EQ(own.log.column("tau_measured_nm"), mapped.log.column("tau_measured_nm"));
-  const double half_code_pa = 0.5 * 2.5e6 * 20.0 / 4095.0;
+  const double half_code_pa = hil::test::kElbowPressureHalfCodePa;
   double moved_pa = 0.0;
   for (const char* name : {"pressure_a_pa", "pressure_b_pa"}) {
     const std::vector<double>& through = mapped.log.column(name);
