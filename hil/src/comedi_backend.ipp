@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
+#include "board_clock.hpp"
 #include "fullarm/hil/daq_config.hpp"
 #include "fullarm/hil/io_device.hpp"
-#include "board_clock.hpp"
 
 namespace fullarm::hil::FULLARM_COMEDI_NAMESPACE {
 
@@ -47,7 +47,7 @@ class ComediBackend final : public IoDevice {
   [[noreturn]] void fail(const std::string& what) const {
     const int e = api::comedi_errno();
     throw DeviceError(map_.device + " (channel map " + map_.source.string() + "): " + what +
-                             (e != 0 ? std::string(": ") + api::comedi_strerror(e) : std::string()));
+                      (e != 0 ? std::string(": ") + api::comedi_strerror(e) : std::string()));
   }
 
   int subdevice(int configured, int type, const char* what) {
@@ -83,7 +83,8 @@ class ComediBackend final : public IoDevice {
   void onConfigure() override {
     if (device_ == nullptr) {
       device_ = api::comedi_open(map_.device.c_str());
-      if (device_ == nullptr) fail("cannot open the Comedi device (is the board there, its driver loaded, its file readable?)");
+      if (device_ == nullptr)
+        fail("cannot open the Comedi device (is the board there, its driver loaded, its file readable?)");
     }
     api::comedi_set_global_oor_behavior(api::kOutOfRangeNan);
     if (!map_.softcal_file.empty() && calibration_ == nullptr) {
@@ -105,11 +106,14 @@ class ComediBackend final : public IoDevice {
       cells_.push_back(channel(ai_, map_.ai_range, j.load_cell, key + ".load_cell"));
       valves_.push_back(channel(ao_, map_.ao_range, j.valve, key + ".valve"));
       // A joint without transducers keeps a default entry, never read.
-      pressures_a_.push_back(j.hasPressures() ? channel(ai_, map_.ai_range, j.pressure_a, key + ".pressure_a") : Channel{});
-      pressures_b_.push_back(j.hasPressures() ? channel(ai_, map_.ai_range, j.pressure_b, key + ".pressure_b") : Channel{});
+      pressures_a_.push_back(j.hasPressures() ? channel(ai_, map_.ai_range, j.pressure_a, key + ".pressure_a")
+                                              : Channel{});
+      pressures_b_.push_back(j.hasPressures() ? channel(ai_, map_.ai_range, j.pressure_b, key + ".pressure_b")
+                                              : Channel{});
     }
     if (map_.enable_channel >= api::comedi_get_n_channels(device_, static_cast<unsigned>(dio_))) {
-      fail("board.enable_channel " + std::to_string(map_.enable_channel) + " does not exist on the digital-I/O subdevice");
+      fail("board.enable_channel " + std::to_string(map_.enable_channel) +
+           " does not exist on the digital-I/O subdevice");
     }
     if (api::comedi_dio_config(device_, static_cast<unsigned>(dio_), static_cast<unsigned>(map_.enable_channel),
                                api::kDigitalOutput) < 0) {
