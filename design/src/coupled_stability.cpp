@@ -272,13 +272,19 @@ std::vector<ModalSpeed> modalHoldSpeeds(const PreparedJoint& m, const controller
     u[static_cast<std::size_t>(k)] = d.move_amplitude_rad * (k_h * r.position + b_h * r.rate_per_s);
   }
   const double u_end = d.move_amplitude_rad * k_h;
-  out.reserve(static_cast<std::size_t>(poles.size()));
+  // Modal coordinate at the end of the move: sum_k z^(N-1-k) g u[k] (Horner), less its steady
+  // state g u_end / (1 - z) under the final torque (none for a pole at 1: then u_end = 0). Every
+  // pole's recurrence advances together, one input sample at a time: the same operations per
+  // pole as one pole after the other, but independent ones side by side instead of a chain.
+  const auto n_poles = static_cast<std::size_t>(poles.size());
+  std::vector<std::complex<double>> modes(n_poles, std::complex<double>(0.0, 0.0));
+  for (double uk : u) {
+    for (std::size_t i = 0; i < n_poles; ++i) modes[i] = poles[static_cast<Eigen::Index>(i)] * modes[i] + uk;
+  }
+  out.reserve(n_poles);
   for (Eigen::Index i = 0; i < poles.size(); ++i) {
     const std::complex<double> z = poles[i];
-    // Modal coordinate at the end of the move: sum_k z^(N-1-k) g u[k] (Horner), less its steady
-    // state g u_end / (1 - z) under the final torque (none for a pole at 1: then u_end = 0).
-    std::complex<double> mode(0.0, 0.0);
-    for (double uk : u) mode = z * mode + uk;
+    std::complex<double> mode = modes[static_cast<std::size_t>(i)];
     mode *= g[i];
     if (std::abs(1.0 - z) > 1e-12) mode -= g[i] * u_end / (1.0 - z);
     out.push_back({z, c[i] * mode});
