@@ -45,6 +45,9 @@ constexpr double kBandHz = 30.0;            // excitation band (PRBS flat band, 
 constexpr int kLatencySamples = 1;          // the simulated DTS's I/O latency
 constexpr std::size_t kMaxPlotPoints = 1000;
 constexpr std::size_t kMinLogSamples = 64;  // the shortest experiment fitted or validated
+// --hold-angle's range before the joint is known (a turn either way); the joint's own limits less
+// the experiment's margin are checked once the plant file is read.
+constexpr double kMaxHoldAngleRad = 2.0 * std::numbers::pi;
 constexpr const char* kIdentifiedFile = "identified.yaml";
 constexpr const char* kIdentifiedPlantFile = "identified_plant.yaml";
 constexpr const char* kFitLog = "experiment_fit";
@@ -177,6 +180,7 @@ Experiment runSimExperiment(const arm::ArmModel& model, plant::PlantConfig plant
   options.joint = 0;
   options.min_rad = driven.min_rad;
   options.max_rad = driven.max_rad;
+  options.joint_names = {driven.name};  // the device serves the driven joint alone: no held columns
   return experimentOf(id::runExperiment(backend.device(), excitation, options), name, driven);
 }
 
@@ -192,12 +196,13 @@ int deviceJointIndex(hil::IoDevice& device, int model_joint, const std::string& 
 // plant node):
 // every device joint held, the driven one excited; the limits are the plant file's.
 Experiment runDeviceExperiment(const arm::ArmModel& model, CommandDevice& device, int device_joint,
-                               const plant::JointParams& driven, const id::SampledSignal& excitation,
-                               const std::string& name) {
+                               const plant::JointParams& driven, std::optional<double> hold_rad,
+                               const id::SampledSignal& excitation, const std::string& name) {
   id::ExperimentOptions options;
   options.joint = device_joint;
   options.min_rad = driven.min_rad;
   options.max_rad = driven.max_rad;
+  options.hold_rad = hold_rad;
   options.before_read = device.pace;
   options.log_control_time = true;
   const arm::JointSelection& joints = device.backend->device().joints();
@@ -222,6 +227,7 @@ void checkOptionCombination(const IdentifyOptions& o) {
     if (!o.hil_config.empty())
       refuse("--hil-config", "the loop configuration is read only when experiments run (not with --log)");
     if (o.seed) refuse("--seed", "seeds the simulated sensors' noise: no experiment runs with --log");
+    if (o.hold_angle_rad) refuse("--hold-angle", "no experiment runs with --log (the logs' angles are what they are)");
     return;
   }
   const hil::IoKind kind = commandIoKind(o.io);
@@ -648,36 +654,60 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
   const int model_joint = model.jointIndex(jp.name);
   if (model_joint < 0) throw core::ConfigError({}, "--joint", "'" + o.joint + "' is not a joint of the arm model");
 
+  if (o.hold_angle_rad) {
+    const double margin = id::ExperimentOptions{}.limit_margin_rad;
+    const double lo = jp.min_rad + margin;
+    const double hi = jp.max_rad - margin;
+    if (!(*o.hold_angle_rad >= lo && *o.hold_angle_rad <= hi)) {
+      throw core::ConfigError({}, "--hold-angle",
+                              numberText(*o.hold_angle_rad) + " rad is outside " + jp.name + "'s limits " +
+                                  numberText(jp.min_rad) + ".." + numberText(jp.max_rad) + " rad less the margin of " +
+                                  numberText(margin) + " rad: expected " + numberText(lo) + ".." + numberText(hi) +
+                                  " rad");
+    }
+  }
+
   progress.begin("identify", 0);
   if (o.logs.empty()) {
     r.source = o.io;
     const hil::IoKind kind = commandIoKind(o.io);
     const auto seed = static_cast<std::uint64_t>(o.seed.value_or(1));
-    const Eigen::VectorXd posture = model.defaultPosture();
+    Eigen::VectorXd posture = model.defaultPosture();
+    // The simulated DTS starts at the hold angle; a device moves the joint there (runExperiment).
+    if (kind == hil::IoKind::kSim && o.hold_angle_rad) posture[model_joint] = *o.hold_angle_rad;
     const std::string fit_log = logFileName(kFitLog, o.log_format);
     const std::string validation_log = logFileName(kValidationLog, o.log_format);
     const id::SampledSignal fit_excitation = fitExcitation(o.amplitude_v, o.duration_s);
     const id::SampledSignal validation_excitation = validationExcitation(o.amplitude_v, o.duration_s);
-    if (kind == hil::IoKind::kSim) {
-      progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint));
-      r.fit_experiments.push_back(runSimExperiment(model, plant_config, joint, posture, fit_excitation, seed, fit_log));
-      progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint));
-      r.validation =
-          runSimExperiment(model, plant_config, joint, posture, validation_excitation, seed + 1, validation_log);
-    } else {
-      // One device for both experiments, as on the real arm: the second starts where the first
-      // left. On the fake DAQ the simulated DTS locks the other joints, as --io sim does, and the
-      // board serves the driven joint's channels: the data show the joint alone (with every
-      // joint held instead, the neighbours' holds and the arm's coupling enter the data, which the
-      // single-joint model does not describe; docs/identification.md). The real arm holds them all.
-      const std::unique_ptr<CommandDevice> device =
-          openCommandDevice(kind, model, plant_config, posture, seed, o.daq_config, o.hil_config, kSamplePeriod_s,
-                            kind == hil::IoKind::kFakeDaq ? jp.name : std::string(), o.lcm_url);
-      const int device_joint = deviceJointIndex(device->backend->device(), model_joint, o.joint, o.io);
-      progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint) + " through " + o.io);
-      r.fit_experiments.push_back(runDeviceExperiment(model, *device, device_joint, jp, fit_excitation, fit_log));
-      progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint) + " through " + o.io);
-      r.validation = runDeviceExperiment(model, *device, device_joint, jp, validation_excitation, validation_log);
+    // A driven joint resting within the margin of a limit is refused before anything moves; the
+    // hold angle is what moves it away.
+    try {
+      if (kind == hil::IoKind::kSim) {
+        progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint));
+        r.fit_experiments.push_back(
+            runSimExperiment(model, plant_config, joint, posture, fit_excitation, seed, fit_log));
+        progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint));
+        r.validation =
+            runSimExperiment(model, plant_config, joint, posture, validation_excitation, seed + 1, validation_log);
+      } else {
+        // One device for both experiments, as on the real arm: the second starts where the first
+        // left. On the fake DAQ the simulated DTS locks the other joints, as --io sim does, and the
+        // board serves the driven joint's channels: the data show the joint alone (with every
+        // joint held instead, the neighbours' holds and the arm's coupling enter the data, which the
+        // single-joint model does not describe; docs/identification.md). The real arm holds them all.
+        const std::unique_ptr<CommandDevice> device =
+            openCommandDevice(kind, model, plant_config, posture, seed, o.daq_config, o.hil_config, kSamplePeriod_s,
+                              kind == hil::IoKind::kFakeDaq ? jp.name : std::string(), o.lcm_url);
+        const int device_joint = deviceJointIndex(device->backend->device(), model_joint, o.joint, o.io);
+        progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint) + " through " + o.io);
+        r.fit_experiments.push_back(
+            runDeviceExperiment(model, *device, device_joint, jp, o.hold_angle_rad, fit_excitation, fit_log));
+        progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint) + " through " + o.io);
+        r.validation = runDeviceExperiment(model, *device, device_joint, jp, o.hold_angle_rad, validation_excitation,
+                                           validation_log);
+      }
+    } catch (const id::ExperimentRefused& e) {
+      throw core::ConfigError({}, "--hold-angle", e.what());
     }
     for (const Experiment* e : {&r.fit_experiments[0], &r.validation}) {
       const std::filesystem::path file = out / e->name;
@@ -843,6 +873,11 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
       ->capture_default_str();
   declare.number("--amplitude", o.amplitude_v, "Peak of the excitation on the valve command", {0.01, 5.0, "V"})
       ->capture_default_str();
+  declare.number("--hold-angle", o.hold_angle_rad,
+                 "The driven joint's hold angle, inside its limits less 0.05 rad (sim: the joint starts there; "
+                 "fakedaq, comedi, lcm: its hold moves it there before each experiment; default: the default "
+                 "posture's with sim, where the joint is with a device)",
+                 {-kMaxHoldAngleRad, kMaxHoldAngleRad, "rad"});
   declare.integer("--threads", o.threads, "Threads of the fit's simulations", 1, 64)->capture_default_str();
   declare.file("--start", o.start, "identified.yaml whose model starts the fit (default: the plant joint's groups)");
   declare.file("--plant", o.plant_config,

@@ -30,6 +30,10 @@ struct IdentifyOptions {
   std::optional<int> seed;
   double duration_s = 5.0;         ///< excitation time of each experiment
   double amplitude_v = 0.5;        ///< peak of the excitation added to the valve command
+  /// --hold-angle: the driven joint's hold angle [rad] (sim: the posture's; a device moves the
+  /// joint there before each experiment); unset: the default posture's (sim) or where the joint
+  /// is (a device).
+  std::optional<double> hold_angle_rad;
   int threads = 2;                 ///< threads of the fit's simulations
   std::string start;               ///< identified.yaml whose model starts the fit (default: the plant's groups)
   std::vector<std::string> logs;   ///< recorded logs: all but the last fitted, the last held out

@@ -1,13 +1,24 @@
 #pragma once
 // What the experiment and the static holds share when they drive an IoDevice: the device
-// deactivated however the run ends, and reads preceded by the caller's pacing.
+// deactivated however the run ends, reads preceded by the caller's pacing, and the blend that
+// moves a hold target.
 
+#include <cmath>
 #include <functional>
+#include <numbers>
 #include <string>
 
 #include "fullarm/hil/io_device.hpp"
 
 namespace fullarm::identification::detail {
+
+/// Cosine blend from 0 to 1 over [0, 1] (zero slope at both ends: the hold target starts and
+/// stops without a step in velocity).
+inline double blend(double s) noexcept {
+  if (s <= 0.0) return 0.0;
+  if (s >= 1.0) return 1.0;
+  return 0.5 - 0.5 * std::cos(std::numbers::pi * s);
+}
 
 /// Deactivates the device however the run ends.
 struct DeactivateOnExit {

@@ -1,5 +1,6 @@
 #include "fullarm/identification/experiment.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -56,6 +57,14 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
                                 std::to_string(options.max_rad) + " rad leave no room inside a margin of " +
                                 std::to_string(options.limit_margin_rad) + " rad");
   }
+  if (options.hold_rad && !(*options.hold_rad >= lo && *options.hold_rad <= hi)) {
+    throw std::invalid_argument("experiment: hold angle " + std::to_string(*options.hold_rad) + " rad outside " +
+                                std::to_string(lo) + ".." + std::to_string(hi) + " rad (limits less the margin)");
+  }
+  if (!(options.move_s > 0.0 && options.move_speed_radps > 0.0 && options.move_max_error_rad > 0.0) ||
+      !std::isfinite(options.move_s) || !std::isfinite(options.move_speed_radps)) {
+    throw std::invalid_argument("experiment: the move's time, speed and error limit must be positive and finite");
+  }
 
   const bool log_held = !options.joint_names.empty();
   if (log_held) {
@@ -95,16 +104,37 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   result.log.columns.assign(result.log.names.size(), {});
   for (auto& c : result.log.columns) c.reserve(excitation.value_v.size());
   result.hold_rad.assign(sample.q_rad.data(), sample.q_rad.data() + n);
-  if (!(sample.q_rad[j] >= lo && sample.q_rad[j] <= hi)) {
-    throw std::invalid_argument("experiment: joint " + std::to_string(j) + " starts at " +
-                                std::to_string(sample.q_rad[j]) + " rad, outside " + std::to_string(lo) + ".." +
-                                std::to_string(hi) + " rad (limits less the margin)");
+  const double start = sample.q_rad[j];
+  const std::string joint_name =
+      log_held ? options.joint_names[static_cast<std::size_t>(j)] : "joint " + std::to_string(j);
+  const std::string range = std::to_string(lo) + ".." + std::to_string(hi) + " rad (its limits " +
+                            std::to_string(options.min_rad) + ".." + std::to_string(options.max_rad) +
+                            " rad less the margin of " + std::to_string(options.limit_margin_rad) + " rad)";
+  if (!std::isfinite(start)) {
+    throw ExperimentRefused(joint_name + " reads out of range at the start: expected an angle inside " + range);
   }
+  if (!options.hold_rad && !(start >= lo && start <= hi)) {
+    throw ExperimentRefused(joint_name + " starts at " + std::to_string(start) + " rad: expected it inside " + range +
+                            ", or a hold angle inside that range to move it to first");
+  }
+  const double hold = options.hold_rad.value_or(start);
+  // The move to the hold angle (none without one): its length, and the band the joint must stay
+  // in meanwhile: the limits less the margin, or, from a start inside the margin, no closer to
+  // the limit than it started, less half the margin for the readings' noise.
+  const double period = device.period();
+  const std::size_t move_steps =
+      options.hold_rad ? static_cast<std::size_t>(std::llround(
+                             std::max(options.move_s, std::abs(hold - start) / options.move_speed_radps) / period))
+                       : 0;
+  const double move_lo = start < lo ? start - 0.5 * options.limit_margin_rad : lo;
+  const double move_hi = start > hi ? start + 0.5 * options.limit_margin_rad : hi;
+  result.hold_rad[static_cast<std::size_t>(j)] = hold;
 
   device.activate();
   detail::DeactivateOnExit guard{device};
-  const auto settle_steps = static_cast<std::size_t>(std::llround(options.settle_s / device.period()));
-  const std::size_t total = settle_steps + excitation.value_v.size();
+  const auto settle_steps = static_cast<std::size_t>(std::llround(options.settle_s / period));
+  const std::size_t excitation_start = move_steps + settle_steps;
+  const std::size_t total = excitation_start + excitation.value_v.size();
   hil::IoVector command = hil::IoVector::Zero(n);
   for (std::size_t step = 0; step < total; ++step) {
     if (step > 0 && !read()) {
@@ -112,10 +142,21 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
       return result;
     }
     const double q = sample.q_rad[j];
-    if (!std::isfinite(q) || q < lo || q > hi) {
-      result.stop_reason = "joint " + std::to_string(j) + " at " + std::to_string(q) + " rad, within " +
+    const bool moving = step < move_steps;
+    const double target =
+        moving ? start + detail::blend(static_cast<double>(step + 1) / static_cast<double>(move_steps)) * (hold - start)
+               : hold;
+    if (!std::isfinite(q) || q < (moving ? move_lo : lo) || q > (moving ? move_hi : hi)) {
+      result.stop_reason = joint_name + " at " + std::to_string(q) + " rad, within " +
                            std::to_string(options.limit_margin_rad) + " rad of its limits " +
-                           std::to_string(options.min_rad) + ".." + std::to_string(options.max_rad) + " rad";
+                           std::to_string(options.min_rad) + ".." + std::to_string(options.max_rad) + " rad" +
+                           (moving ? " (moving to its hold angle " + std::to_string(hold) + " rad)" : "");
+      return result;
+    }
+    if (moving && std::abs(target - q) > options.move_max_error_rad) {
+      result.stop_reason = joint_name + " is " + std::to_string(std::abs(target - q)) +
+                           " rad from its target moving to its hold angle " + std::to_string(hold) +
+                           " rad (more than " + std::to_string(options.move_max_error_rad) + " rad)";
       return result;
     }
     if (!std::isfinite(sample.tau_load_cell_nm[j])) {
@@ -137,9 +178,9 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
       }
       command[k] = options.held_gain_v_per_rad * (result.hold_rad[static_cast<std::size_t>(k)] - sample.q_rad[k]);
     }
-    const bool exciting = step >= settle_steps;
-    const double r = exciting ? excitation.value_v[step - settle_steps] : 0.0;
-    command[j] = options.hold_gain_v_per_rad * (result.hold_rad[static_cast<std::size_t>(j)] - q) + r;
+    const bool exciting = step >= excitation_start;
+    const double r = exciting ? excitation.value_v[step - excitation_start] : 0.0;
+    command[j] = options.hold_gain_v_per_rad * (target - q) + r;
     if (!device.write(command).ok()) {
       result.stop_reason = std::string("device write failed: ") + device.status().message;
       return result;
@@ -147,7 +188,7 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
     if (exciting) {
       auto& c = result.log.columns;
       const double t0 = c[0].empty() ? sample.t_s : c[0].front();
-      c[0].push_back(options.log_control_time ? t0 + static_cast<double>(step - settle_steps) * device.period()
+      c[0].push_back(options.log_control_time ? t0 + static_cast<double>(step - excitation_start) * period
                                               : sample.t_s);
       c[1].push_back(r);
       c[2].push_back(device.appliedCommand()[j]);

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <fstream>
 #include <map>
-#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -25,14 +24,6 @@ std::vector<std::string> holdColumns(const std::vector<std::string>& joint_names
   for (const auto& j : joint_names) names.push_back(qColumn(j));
   for (const auto& j : joint_names) names.push_back(tauColumn(j));
   return names;
-}
-
-/// Cosine blend from 0 to 1 over [0, 1] (zero slope at both ends: the hold target starts and
-/// stops without a step in velocity).
-double blend(double s) noexcept {
-  if (s <= 0.0) return 0.0;
-  if (s >= 1.0) return 1.0;
-  return 0.5 - 0.5 * std::cos(std::numbers::pi * s);
 }
 
 }  // namespace
@@ -87,6 +78,22 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
   hil::IoVector command = hil::IoVector::Zero(n);
   Eigen::VectorXd target = Eigen::VectorXd::Map(sample.q_rad.data(), n);
   bool first_read = true;
+  // Each joint's allowed band: the limits less the margin, except that until the first move ends
+  // a joint that starts inside the margin (an arm resting at a stop) must only come no closer to
+  // the limit than it started, less half the margin for the readings' noise.
+  Eigen::VectorXd band_lo(n), band_hi(n);
+  const auto setBand = [&](bool from_start) {
+    for (int k = 0; k < n; ++k) {
+      const auto ks = static_cast<std::size_t>(k);
+      band_lo[k] = options.min_rad[ks] + options.limit_margin_rad;
+      band_hi[k] = options.max_rad[ks] - options.limit_margin_rad;
+      if (from_start && std::isfinite(target[k])) {
+        if (target[k] < band_lo[k]) band_lo[k] = target[k] - 0.5 * options.limit_margin_rad;
+        if (target[k] > band_hi[k]) band_hi[k] = target[k] + 0.5 * options.limit_margin_rad;
+      }
+    }
+  };
+  setBand(true);
 
   // One control period towards `target`: read (the first one is the read above), check, write.
   auto step = [&](std::string& failure) -> bool {
@@ -102,7 +109,7 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
         failure = "joint " + std::to_string(k) + ": reading not finite (out of range)";
         return false;
       }
-      if (q < options.min_rad[ks] + options.limit_margin_rad || q > options.max_rad[ks] - options.limit_margin_rad) {
+      if (q < band_lo[k] || q > band_hi[k]) {
         failure = "joint " + std::to_string(k) + " at " + std::to_string(q) + " rad, within " +
                   std::to_string(options.limit_margin_rad) + " rad of its limits " +
                   std::to_string(options.min_rad[ks]) + ".." + std::to_string(options.max_rad[ks]) + " rad";
@@ -133,11 +140,13 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
       std::string failure;
       bool ok = true;
       for (long s = 1; ok && s <= move_steps; ++s) {
-        target = from + blend(static_cast<double>(s) / static_cast<double>(move_steps)) * (start - from);
+        target = from + detail::blend(static_cast<double>(s) / static_cast<double>(move_steps)) * (start - from);
         ok = step(failure);
       }
+      setBand(false);  // the first move has ended: the limits less the margin from here on
       for (long s = 1; ok && s <= approach_steps; ++s) {
-        target = start + blend(static_cast<double>(s) / static_cast<double>(approach_steps)) * (posture - start);
+        target =
+            start + detail::blend(static_cast<double>(s) / static_cast<double>(approach_steps)) * (posture - start);
         ok = step(failure);
       }
       target = posture;

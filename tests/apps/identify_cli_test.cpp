@@ -23,6 +23,7 @@
 #include "fullarm/identification/experiment_lcm.hpp"
 #include "fullarm/identification/identified_model.hpp"
 #include "fullarm/identification/joint_groups.hpp"
+#include "fullarm/identification/signal_csv.hpp"
 #include "fullarm/plant/plant_config.hpp"
 
 namespace {
@@ -347,6 +348,12 @@ TEST(IdentifyCli, BadInputExitsTwoNamingTheOptionFileOrLine) {
   expectBad("--duration nan", "--duration");
   expectBad("--duration=-1", "--duration");
   expectBad("--duration 0", "--duration");
+  expectBad("--hold-angle nan", "--hold-angle");
+  expectBad("--hold-angle inf", "--hold-angle");
+  expectBad("--hold-angle 7", "--hold-angle");
+  // Outside the elbow's limits less the margin: the range it must be in.
+  expectBad("--joint EB --hold-angle 0.3", "--hold-angle: 0.3 rad is outside R_EB's limits");
+  expectBad("--joint EB --hold-angle 2.2", "expected 0.636132..2.1589 rad");
   const std::string missing = (dir / "missing.csv").string();
   expectBad("--log " + missing + " " + missing, "--log");
 
@@ -462,6 +469,55 @@ TEST(IdentifyCli, FakeDaqRunIdentifiesThePlantsOwnGroups) {
   EXPECT_GE(result["validation"]["fit_angle_percent"].get<double>(), 90.0);
 }
 
+// An arm resting with the elbow inside the margin of its lower stop (0.60 rad; the limit is
+// 0.586 rad and the experiment keeps 0.05 rad from it): identify refuses before anything moves,
+// naming --hold-angle and the range; given a hold angle, each experiment first moves the elbow
+// there through the fake DAQ and excites it about it.
+TEST(IdentifyCli, AJointRestingInsideItsMarginIsRefusedUntilAHoldAngleMovesItOut) {
+  const auto dir = tempDir("hold_angle");
+  std::ifstream shipped(fullarm::arm::test::sourcePath("config/dts_master.yaml"));
+  std::string arm_text((std::istreambuf_iterator<char>(shipped)), std::istreambuf_iterator<char>());
+  const std::string elbow_default = "default_rad: 1.57";
+  const std::size_t at = arm_text.find(elbow_default);
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_EQ(arm_text.find(elbow_default, at + 1), std::string::npos);
+  arm_text.replace(at, elbow_default.size(), "default_rad: 0.60");
+  const std::string arm = (dir / "arm_elbow_at_rest.yaml").string();
+  { std::ofstream(arm) << arm_text; }
+
+  for (const char* io : {"sim", "fakedaq"}) {
+    const Result refused =
+        runFullarm(std::string("identify --quiet --io ") + io + " --joint EB --duration 1 --config " + arm + " --out " +
+                   (dir / "refused").string());
+    EXPECT_EQ(refused.exit_code, 2) << io << "\n" << refused.output;
+    for (const char* named : {"--hold-angle", "R_EB starts at 0.6", "expected it inside 0.636132..2.158897 rad"}) {
+      EXPECT_NE(refused.output.find(named), std::string::npos) << io << ": expected '" << named << "' in\n"
+                                                               << refused.output;
+    }
+  }
+
+  const auto moved = dir / "moved";
+  const Result r = runFullarm("identify --quiet --io fakedaq --joint EB --duration 1 --hold-angle 1.2 --config " + arm +
+                              " --out " + moved.string());
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+  const nlohmann::json result = readSummary(moved)["results"]["identify"];
+  for (const nlohmann::json& e : result["experiments"]) {
+    EXPECT_TRUE(e["completed"].get<bool>()) << e.dump();
+    // The hold law recovered from the log is the one about the hold angle.
+    EXPECT_NEAR(e["hold_rad"].get<double>(), 1.2, 1e-6) << e.dump();
+  }
+  // The elbow moved 0.6 rad from its rest and was excited about the hold angle, below it by the
+  // proportional hold's droop: the valve command that holds the gravity load against the leakage
+  // (about 0.35 V) over the hold's 10 V/rad, 0.035 rad.
+  for (const char* log : {"experiment_fit.csv", "experiment_validation.csv"}) {
+    const id::SignalTable table = id::readSignalCsv(moved / log, id::kExperimentColumns);
+    double mean = 0.0;
+    for (double q : table.column("q_rad")) mean += q;
+    mean /= static_cast<double>(table.rows());
+    EXPECT_NEAR(mean, 1.2, 0.05) << log;
+  }
+}
+
 TEST(IdentifyCli, BackEndOptionsOutOfPlaceExitTwoNamingTheOption) {
   const auto dir = tempDir("io_bad");
   const std::string file = (dir / "any.yaml").string();
@@ -483,6 +539,7 @@ TEST(IdentifyCli, BackEndOptionsOutOfPlaceExitTwoNamingTheOption) {
   expectBad("--log " + log + " " + log + " --lcm-url udpm://239.255.76.98:7698?ttl=0", "--lcm-url");
   expectBad("--log " + log + " " + log + " --daq-config " + file, "--daq-config");
   expectBad("--log " + log + " " + log + " --seed 2", "--seed");
+  expectBad("--log " + log + " " + log + " --hold-angle 1.2", "--hold-angle");
   // No board on this machine: the error names the device file of the channel map.
   expectBad("--io comedi", "/dev/comedi0");
   // A channel map that wires the elbow's chamber pressures, on the shipped plant, which has no

@@ -7,7 +7,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace fullarm::identification {
 namespace {
@@ -31,6 +34,10 @@ class IntegratorDevice final : public hil::IoDevice {
   double gain_radps_per_v = 0.5;
   int reads = 0;
   int fail_read_at = -1;
+  /// Every angle read and every command written to joint `recorded_joint`, in order (capacity
+  /// reserved beforehand: recording does not allocate).
+  int recorded_joint = 0;
+  std::vector<double> read_q, written_u;
 
  private:
   void onConfigure() override {}
@@ -41,10 +48,12 @@ class IntegratorDevice final : public hil::IoDevice {
     sample.t_s = t_;
     sample.q_rad = q_;
     sample.tau_load_cell_nm = 100.0 * held_;
+    if (read_q.size() < read_q.capacity()) read_q.push_back(q_[recorded_joint]);
     return {};
   }
   core::RtStatus onWrite(const hil::IoVector& valve_v, bool) noexcept override {
     held_ = valve_v;
+    if (written_u.size() < written_u.capacity()) written_u.push_back(valve_v[recorded_joint]);
     return {};
   }
   hil::IoVector q_;
@@ -163,11 +172,142 @@ TEST(ExperimentTest, RejectsBadSetups) {
   EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
   options.joint = 0;
   EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, 2 * kT), options), std::invalid_argument);
-  options.min_rad = 0.25;  // the joint starts at 0.2 rad
-  EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
   options.min_rad = 0.0;
   options.max_rad = 0.05;
   EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
+  // A hold angle outside the limits less the margin, or not finite; move settings that are not
+  // positive and finite.
+  options.max_rad = 1.0;
+  for (double hold : {0.02, 0.96, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    options.hold_rad = hold;
+    EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument) << hold;
+  }
+  options.hold_rad = 0.5;
+  options.move_s = 0.0;
+  EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
+  options.move_s = 1.0;
+  options.move_speed_radps = std::numeric_limits<double>::infinity();
+  EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
+  EXPECT_NE(device.state(), hil::IoState::kActive);
+  EXPECT_EQ(device.appliedCommand()[0], 0.0);
+}
+
+// A driven joint that starts within the margin of a limit (an arm resting at its stop) is
+// refused before the device is activated, naming the joint, its angle and the range; given a
+// hold angle, the joint first moves there.
+TEST(ExperimentTest, RefusesAStartInsideTheMarginUnlessAHoldAngleMovesItOut) {
+  IntegratorDevice device(2, 0.0);  // every joint starts at 0.2 rad
+  ExperimentOptions options;
+  options.joint = 1;
+  options.joint_names = {"SFE", "EB"};
+  options.settle_s = 0.1;
+  options.min_rad = 0.18;  // 0.2 rad is within the 0.05 rad margin
+  options.max_rad = 1.5;
+  try {
+    (void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options);
+    ADD_FAILURE() << "expected ExperimentRefused";
+  } catch (const ExperimentRefused& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("EB starts at 0.200000 rad"), std::string::npos) << what;
+    EXPECT_NE(what.find("0.230000..1.450000 rad"), std::string::npos) << what;
+    EXPECT_NE(what.find("hold angle"), std::string::npos) << what;
+  }
+  EXPECT_NE(device.state(), hil::IoState::kActive);
+  EXPECT_EQ(device.appliedCommand()[1], 0.0);
+
+  options.hold_rad = 0.5;
+  options.settle_s = 1.0;
+  const ExperimentResult moved = runExperiment(device, linearChirp(0.05, 1.0, 20.0, 0.5, kT), options);
+  ASSERT_TRUE(moved.completed) << moved.stop_reason;
+  EXPECT_DOUBLE_EQ(moved.hold_rad[1], 0.5);
+  EXPECT_DOUBLE_EQ(moved.hold_rad[0], 0.2);
+  for (double q : moved.log.column("q_rad")) EXPECT_NEAR(q, 0.5, 0.01);
+  for (double q : moved.log.column("held_SFE_rad")) EXPECT_DOUBLE_EQ(q, 0.2);
+}
+
+// The move: the hold target follows a cosine blend from the start to the hold angle over
+// max(move_s, distance / move_speed_radps), then the settling time and the excitation about the
+// hold angle. Each command written is K (target - q) with the target recomputed here from the
+// blend's closed form.
+TEST(ExperimentTest, MovesToTheHoldAngleAlongACosineBlendThenExcitesAboutIt) {
+  IntegratorDevice device(3, 0.0);
+  device.recorded_joint = 1;
+  device.read_q.reserve(10000);
+  device.written_u.reserve(10000);
+  ExperimentOptions options;
+  options.joint = 1;
+  options.settle_s = 1.0;
+  options.hold_rad = 0.6;  // from 0.2 rad: 0.4 rad at 0.2 rad/s on average, 2 s (longer than move_s)
+  const SampledSignal r = linearChirp(0.05, 1.0, 20.0, 0.5, kT);
+  const ExperimentResult result = runExperiment(device, r, options);
+  ASSERT_TRUE(result.completed) << result.stop_reason;
+  constexpr std::size_t kMoveSteps = 2000;
+  constexpr std::size_t kSettleSteps = 1000;
+  // The device writes its safe output (zero) when configured and when deactivated, around the
+  // run's commands; its ramp-in puts out the safe output at the first command after activation.
+  ASSERT_EQ(device.written_u.size(), 1 + kMoveSteps + kSettleSteps + r.value_v.size() + 1);
+  EXPECT_EQ(device.written_u.front(), 0.0);
+  EXPECT_EQ(device.written_u[1], 0.0);
+  EXPECT_EQ(device.written_u.back(), 0.0);
+  const double K = options.hold_gain_v_per_rad;
+  for (std::size_t k = 1; k < kMoveSteps; ++k) {
+    const double s = static_cast<double>(k + 1) / static_cast<double>(kMoveSteps);
+    const double target = 0.2 + 0.4 * (0.5 - 0.5 * std::cos(std::acos(-1.0) * s));
+    ASSERT_NEAR(device.written_u[1 + k], K * (target - device.read_q[k]), 1e-12) << k;
+  }
+  for (std::size_t k = kMoveSteps; k < kMoveSteps + kSettleSteps; ++k) {
+    ASSERT_NEAR(device.written_u[1 + k], K * (0.6 - device.read_q[k]), 1e-12) << k;
+  }
+  // The log starts with the excitation, the hold law about the hold angle.
+  const auto& u = result.log.column("command_v");
+  const auto& q = result.log.column("q_rad");
+  for (std::size_t k = 0; k < r.value_v.size(); ++k) {
+    ASSERT_NEAR(u[k], K * (0.6 - q[k]) + r.value_v[k], 1e-12) << k;
+  }
+  EXPECT_NEAR(q.front(), 0.6, 1e-3);
+  EXPECT_NEAR(result.log.column("time_s").front(), 0.001 * (1 + kMoveSteps + kSettleSteps), 1e-9);
+  EXPECT_DOUBLE_EQ(result.hold_rad[1], 0.6);
+}
+
+// Fault injection during the move: a read failure, a joint that does not follow its target (a
+// stuck valve), and one that moves the wrong way from inside the margin (a reversed valve or
+// sensor) each stop the run with the valves at null before the excitation starts.
+TEST(ExperimentTest, StopsSafelyDuringTheMove) {
+  ExperimentOptions options;
+  options.joint = 0;
+  options.settle_s = 0.1;
+  options.min_rad = -1.0;
+  options.max_rad = 1.0;
+  options.hold_rad = 0.6;
+  const SampledSignal r = stepSequence({0.1}, 0.5, kT);
+
+  IntegratorDevice failing(2, 0.0);
+  failing.fail_read_at = 500;
+  const ExperimentResult failed = runExperiment(failing, r, options);
+  EXPECT_FALSE(failed.completed);
+  EXPECT_NE(failed.stop_reason.find("read failed"), std::string::npos) << failed.stop_reason;
+  EXPECT_EQ(failed.log.rows(), 0u);
+  EXPECT_NE(failing.state(), hil::IoState::kActive);
+  EXPECT_EQ(failing.appliedCommand()[0], 0.0);
+
+  IntegratorDevice stuck(2, 0.0);
+  stuck.gain_radps_per_v = 0.0;
+  const ExperimentResult stopped = runExperiment(stuck, r, options);
+  EXPECT_FALSE(stopped.completed);
+  EXPECT_NE(stopped.stop_reason.find("from its target moving to its hold angle"), std::string::npos)
+      << stopped.stop_reason;
+  EXPECT_EQ(stopped.log.rows(), 0u);
+  EXPECT_EQ(stuck.appliedCommand()[0], 0.0);
+
+  IntegratorDevice reversed(2, 0.0);
+  reversed.gain_radps_per_v = -0.5;
+  options.min_rad = 0.18;  // starts inside the margin; moving the wrong way approaches the stop
+  const ExperimentResult towards = runExperiment(reversed, r, options);
+  EXPECT_FALSE(towards.completed);
+  EXPECT_NE(towards.stop_reason.find("of its limits"), std::string::npos) << towards.stop_reason;
+  EXPECT_NE(towards.stop_reason.find("moving to its hold angle"), std::string::npos) << towards.stop_reason;
+  EXPECT_EQ(towards.log.rows(), 0u);
+  EXPECT_EQ(reversed.appliedCommand()[0], 0.0);
 }
 
 }  // namespace

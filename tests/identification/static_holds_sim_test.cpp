@@ -138,5 +138,46 @@ TEST(StaticHoldsSimTest, FittedBaseParametersPredictThePlantsGravityAtHeldOutPos
   EXPECT_GT(nominal_worst, 10.0 * tolerance_nm);
 }
 
+// An arm resting with its elbow at the lower stop, inside the run's margin (as the hydraulic
+// arm hangs when it is off): the first move takes it out, no closer to the stop than it started,
+// and every hold is taken.
+TEST(StaticHoldsSimTest, AnArmRestingInsideTheMarginMovesOutOnTheFirstMove) {
+  const arm::ArmModel& model = hil::test::model();
+  plant::PlantConfig plant_config = plant::loadPlantConfig(arm::test::sourcePath("config/dts_plant.yaml"), model);
+  plant_config.solver.integrator = plant::IntegratorKind::kRodas3;
+  const int elbow = model.jointIndex("R_EB");
+  ASSERT_GE(elbow, 0);
+  Eigen::VectorXd rest = hil::test::restPosture();
+  rest[elbow] = model.joints[static_cast<std::size_t>(elbow)].limits.min_rad + 0.008;
+  hil::SimulatedArm arm(model, plant_config, rest, 1e-3, 1);
+  hil::SimIoDevice device(arm, {}, hil::IoSafetyParams{0.2, 10.0});
+  const arm::JointSelection& joints = arm.joints();
+
+  StaticHoldOptions options;
+  options.approach_s = 0.3;
+  options.settle_s = 0.3;
+  options.average_s = 0.1;
+  for (int k = 0; k < joints.size(); ++k) {
+    const auto& limits = model.joints[static_cast<std::size_t>(joints.modelIndex(k))].limits;
+    options.min_rad.push_back(limits.min_rad);
+    options.max_rad.push_back(limits.max_rad);
+  }
+  int device_elbow = -1;
+  for (int k = 0; k < joints.size(); ++k) {
+    if (joints.modelIndex(k) == elbow) device_elbow = k;
+  }
+  ASSERT_GE(device_elbow, 0);
+  const auto de = static_cast<std::size_t>(device_elbow);
+  ASSERT_LT(rest[elbow], options.min_rad[de] + options.limit_margin_rad);  // inside the margin
+
+  const auto postures = devicePostures(joints, 1, 0.15, 3);
+  const StaticHoldRun run = runStaticHolds(device, postures, options);
+  ASSERT_TRUE(run.completed) << run.stop_reason;
+  ASSERT_EQ(run.holds.size(), 2u);
+  for (const StaticHold& h : run.holds) {
+    EXPECT_NEAR(h.q_rad[device_elbow], postures.front()[device_elbow], 0.03);
+  }
+}
+
 }  // namespace
 }  // namespace fullarm::identification

@@ -5,12 +5,14 @@
 ///
 /// The DTS joints cannot run open loop near their stops, so every joint of the device is held
 /// by a low-gain proportional position hold u_j = K_j (q_hold_j - q_j) about the angle it had
-/// when the experiment started, and the excitation r is added to the driven joint's valve
-/// command: u = K (q_hold - q) + r. The device first ramps its outputs in (its safety policy);
-/// the excitation starts after a settling time. The run stops early, with the outputs at their
+/// when the experiment started (the driven joint, optionally, about a hold angle it first moves
+/// to), and the excitation r is added to the driven joint's valve command:
+/// u = K (q_hold - q) + r. The device first ramps its outputs in (its safety policy); the
+/// excitation starts after a settling time. The run stops early, with the outputs at their
 /// safe value (valve null), when the driven joint comes within a margin of its limits, its load
 /// cell reads out of range, a held joint drifts too far from its hold, or the device reports a
-/// fault.
+/// fault. A driven joint that starts within the margin of a limit, with no hold angle to move
+/// it away, is refused before anything moves (ExperimentRefused).
 ///
 /// The log has one row per control period of the excitation: `time_s` (the reading's device
 /// time, or the control time: ExperimentOptions::log_control_time), `excitation_v`, `command_v`
@@ -22,6 +24,8 @@
 /// driven joint moved in, which sets its link inertia and gravity load (heldAngles reads it back).
 
 #include <functional>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -30,6 +34,15 @@
 #include "fullarm/identification/signal_csv.hpp"
 
 namespace fullarm::identification {
+
+/// An experiment the device's state does not allow, refused before the device was activated
+/// (nothing moved): the driven joint reads out of range at the start, or starts within the margin
+/// of one of its limits and no hold angle was given to move it away first. The message names the
+/// joint, its angle and the range it must be in.
+class ExperimentRefused : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 /// Settings of one experiment.
 struct ExperimentOptions {
@@ -41,6 +54,17 @@ struct ExperimentOptions {
   double max_rad = 1.0;               ///< the driven joint's upper limit
   double limit_margin_rad = 0.05;     ///< stop when the driven joint comes this close to a limit
   double held_drift_limit_rad = 0.1;  ///< stop when a held joint leaves its hold by more than this
+  /// The driven joint's hold angle (empty: the angle it starts at). It must lie inside the limits
+  /// less the margin. The hold target first moves from the start to it along a cosine blend (zero
+  /// speed at both ends) over at least move_s, longer when it would average more than
+  /// move_speed_radps, the other joints holding where they started; then the settling time and
+  /// the excitation. The start may lie within the margin (an arm resting at a stop): during the
+  /// move the joint must not come closer to the limit than it started, less half the margin for
+  /// the readings' noise, nor leave its moving target by more than move_max_error_rad.
+  std::optional<double> hold_rad;
+  double move_s = 1.0;              ///< shortest move to the hold angle
+  double move_speed_radps = 0.2;    ///< the move's largest mean speed
+  double move_max_error_rad = 0.1;  ///< stop when the joint leaves its moving target by more than this
   /// Called before every read of the run (empty: none). A simulated device advances one period
   /// per read; a real board answers at once, so the caller paces its reads here (a wait for the
   /// next period on the real-time clock). Returning false stops the run before that read (the
@@ -60,7 +84,7 @@ struct ExperimentOptions {
 /// Outcome of one experiment.
 struct ExperimentResult {
   SignalTable log;               ///< kExperimentColumns, one row per excitation sample run
-  std::vector<double> hold_rad;  ///< the hold angle of every device joint
+  std::vector<double> hold_rad;  ///< the hold angle of every device joint (the driven joint's after its move)
   bool completed = false;        ///< the whole excitation ran
   std::string stop_reason;       ///< why it stopped early (empty when completed)
 };
@@ -83,12 +107,15 @@ struct HeldAngle {
 /// field or header would split on (comma, white space, quote).
 [[nodiscard]] bool isLoggableJointName(const std::string& name) noexcept;
 
-/// Runs the experiment: configures the device if needed, activates it, holds for
-/// `options.settle_s`, plays `excitation` on the driven joint, then deactivates the device
-/// (safe outputs) whatever happened.
+/// Runs the experiment: configures the device if needed, activates it, moves the driven joint to
+/// `options.hold_rad` if given, holds for `options.settle_s`, plays `excitation` on the driven
+/// joint, then deactivates the device (safe outputs) whatever happened.
 /// @throws std::invalid_argument for a joint outside the device, an excitation whose period
-///   differs from the device's, limits that leave no room, a start outside the margins, or
-///   joint names that are not one non-empty name per device joint
+///   differs from the device's, limits that leave no room, a hold angle or move settings that are
+///   not finite or outside the limits less the margin, or joint names that are not one non-empty
+///   name per device joint
+/// @throws ExperimentRefused when the driven joint reads out of range at the start, or starts
+///   within the margin of a limit and no hold angle was given
 [[nodiscard]] ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excitation,
                                              const ExperimentOptions& options);
 

@@ -13,7 +13,10 @@
 ///
 /// The run stops early, outputs at their safe value, when a joint comes within a margin of its
 /// limits, a joint is more than `max_error_rad` from its target, a reading is not finite or the
-/// device fails. The holds before the stop are kept.
+/// device fails. The holds before the stop are kept. A joint that starts inside the margin (an
+/// arm resting at a stop) may move out of it on the first move: until that move ends it must
+/// only come no closer to the limit than it started, less half the margin for the readings'
+/// noise.
 ///
 /// The log (writeStaticHoldsCsv) has one row per hold: `time_s` (end of the averaging window),
 /// `posture_index`, `side_sign` (+1 approached from above, -1 from below), then `q_<joint>_rad`
