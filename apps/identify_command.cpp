@@ -48,6 +48,10 @@ constexpr std::size_t kMinLogSamples = 64;  // the shortest experiment fitted or
 // --hold-angle's range before the joint is known (a turn either way); the joint's own limits less
 // the experiment's margin are checked once the plant file is read.
 constexpr double kMaxHoldAngleRad = 2.0 * std::numbers::pi;
+// Why the move to --hold-angle on the real arm needs --confirm-arm-motion.
+constexpr const char* kHoldMoveOnTheArm =
+    "the joint's hold moves it on the real arm, up to its whole range, with no check for self-collision or the "
+    "arm's surroundings; clear the workspace, then give --confirm-arm-motion";
 constexpr const char* kIdentifiedFile = "identified.yaml";
 constexpr const char* kIdentifiedPlantFile = "identified_plant.yaml";
 constexpr const char* kFitLog = "experiment_fit";
@@ -153,7 +157,10 @@ Experiment experimentOf(const id::ExperimentResult& r, const std::string& name, 
   if (e.log.rows() < kMinLogSamples) {
     throw core::ConfigError({}, "--joint",
                             "the experiment stopped after " + std::to_string(e.log.rows()) + " samples (" +
-                                r.stop_reason + "): expected a joint that can move about its start");
+                                r.stop_reason +
+                                "): expected a joint that can be held and excited about its hold "
+                                "angle (the hold's droop, about 0.035 rad on the elbow, inside its limits less "
+                                "the margin)");
   }
   e.data = dataFromLog(e.log, name, driven);
   return e;
@@ -228,6 +235,7 @@ void checkOptionCombination(const IdentifyOptions& o) {
       refuse("--hil-config", "the loop configuration is read only when experiments run (not with --log)");
     if (o.seed) refuse("--seed", "seeds the simulated sensors' noise: no experiment runs with --log");
     if (o.hold_angle_rad) refuse("--hold-angle", "no experiment runs with --log (the logs' angles are what they are)");
+    if (o.confirm_arm_motion) refuse("--confirm-arm-motion", "no experiment runs with --log: nothing moves");
     return;
   }
   const hil::IoKind kind = commandIoKind(o.io);
@@ -241,6 +249,13 @@ void checkOptionCombination(const IdentifyOptions& o) {
   }
   if (kind == hil::IoKind::kComedi && o.seed) {
     refuse("--seed", "seeds the simulated sensors' noise: the real arm (--io comedi) has none");
+  }
+  if (o.confirm_arm_motion && !(o.hold_angle_rad && (kind == hil::IoKind::kComedi || kind == hil::IoKind::kLcm))) {
+    refuse("--confirm-arm-motion",
+           "only the move to --hold-angle on the real arm (--io comedi, or --io lcm on a node serving it) needs it");
+  }
+  if (kind == hil::IoKind::kComedi && o.hold_angle_rad && !o.confirm_arm_motion) {
+    refuse("--confirm-arm-motion", std::string("is required with --hold-angle on --io comedi: ") + kHoldMoveOnTheArm);
   }
   if (kind == hil::IoKind::kLcm) {
     if (o.seed) refuse("--seed", "the plant node seeds its own sensors' noise (fullarm plant serve --seed)");
@@ -698,6 +713,15 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
         const std::unique_ptr<CommandDevice> device =
             openCommandDevice(kind, model, plant_config, posture, seed, o.daq_config, o.hil_config, kSamplePeriod_s,
                               kind == hil::IoKind::kFakeDaq ? jp.name : std::string(), o.lcm_url);
+        if (o.hold_angle_rad && device->node && !device->node->simulated && !o.confirm_arm_motion) {
+          throw core::ConfigError({}, "--confirm-arm-motion",
+                                  "is required with --hold-angle on a node serving the real arm (the node at " +
+                                      device->lcm_url + " says it is not simulated): " + kHoldMoveOnTheArm);
+        }
+        if (o.confirm_arm_motion && device->node && device->node->simulated) {
+          throw core::ConfigError({}, "--confirm-arm-motion",
+                                  "the node at " + device->lcm_url + " serves a simulated arm: no real arm moves");
+        }
         const int device_joint = deviceJointIndex(device->backend->device(), model_joint, o.joint, o.io);
         progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint) + " through " + o.io);
         r.fit_experiments.push_back(
@@ -874,10 +898,12 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
   declare.number("--amplitude", o.amplitude_v, "Peak of the excitation on the valve command", {0.01, 5.0, "V"})
       ->capture_default_str();
   declare.number("--hold-angle", o.hold_angle_rad,
-                 "The driven joint's hold angle, inside its limits less 0.05 rad (sim: the joint starts there; "
-                 "fakedaq, comedi, lcm: its hold moves it there before each experiment; default: the default "
-                 "posture's with sim, where the joint is with a device)",
+                 "The driven joint's hold angle, inside its limits less 0.05 rad and the hold's droop (sim: the "
+                 "joint starts there; fakedaq, comedi, lcm: its hold moves it there before each experiment; "
+                 "default: the default posture's with sim, where the joint is with a device)",
                  {-kMaxHoldAngleRad, kMaxHoldAngleRad, "rad"});
+  declare.flag("--confirm-arm-motion", o.confirm_arm_motion,
+               "comedi, or lcm on a node serving the real arm: the workspace is clear for the move to --hold-angle");
   declare.integer("--threads", o.threads, "Threads of the fit's simulations", 1, 64)->capture_default_str();
   declare.file("--start", o.start, "identified.yaml whose model starts the fit (default: the plant joint's groups)");
   declare.file("--plant", o.plant_config,

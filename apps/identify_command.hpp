@@ -34,6 +34,9 @@ struct IdentifyOptions {
   /// joint there before each experiment); unset: the default posture's (sim) or where the joint
   /// is (a device).
   std::optional<double> hold_angle_rad;
+  /// --confirm-arm-motion: the workspace is clear for the move to --hold-angle on the real arm
+  /// (--io comedi, or an LCM node serving it); required there, refused elsewhere.
+  bool confirm_arm_motion = false;
   int threads = 2;                 ///< threads of the fit's simulations
   std::string start;               ///< identified.yaml whose model starts the fit (default: the plant's groups)
   std::vector<std::string> logs;   ///< recorded logs: all but the last fitted, the last held out

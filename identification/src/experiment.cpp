@@ -62,7 +62,8 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
                                 std::to_string(lo) + ".." + std::to_string(hi) + " rad (limits less the margin)");
   }
   if (!(options.move_s > 0.0 && options.move_speed_radps > 0.0 && options.move_max_error_rad > 0.0) ||
-      !std::isfinite(options.move_s) || !std::isfinite(options.move_speed_radps)) {
+      !std::isfinite(options.move_s) || !std::isfinite(options.move_speed_radps) ||
+      !std::isfinite(options.move_max_error_rad)) {
     throw std::invalid_argument("experiment: the move's time, speed and error limit must be positive and finite");
   }
 
@@ -105,13 +106,22 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   for (auto& c : result.log.columns) c.reserve(excitation.value_v.size());
   result.hold_rad.assign(sample.q_rad.data(), sample.q_rad.data() + n);
   const double start = sample.q_rad[j];
-  const std::string joint_name =
-      log_held ? options.joint_names[static_cast<std::size_t>(j)] : "joint " + std::to_string(j);
-  const std::string range = std::to_string(lo) + ".." + std::to_string(hi) + " rad (its limits " +
-                            std::to_string(options.min_rad) + ".." + std::to_string(options.max_rad) +
-                            " rad less the margin of " + std::to_string(options.limit_margin_rad) + " rad)";
+  const auto nameOf = [&](int k) {
+    return log_held ? options.joint_names[static_cast<std::size_t>(k)] : "joint " + std::to_string(k);
+  };
+  const std::string joint_name = nameOf(j);
+  const std::string limits = std::to_string(options.min_rad) + ".." + std::to_string(options.max_rad) + " rad";
+  const std::string range = std::to_string(lo) + ".." + std::to_string(hi) + " rad (its limits " + limits +
+                            " less the margin of " + std::to_string(options.limit_margin_rad) + " rad)";
+  // A reading out of range, or beyond the joint's own limits, is no posture to move from: the
+  // sensor, its calibration or the limits are wrong.
   if (!std::isfinite(start)) {
-    throw ExperimentRefused(joint_name + " reads out of range at the start: expected an angle inside " + range);
+    throw hil::DeviceError("experiment: " + joint_name + " reads out of range before anything moved");
+  }
+  if (start < options.min_rad || start > options.max_rad) {
+    throw hil::DeviceError("experiment: " + joint_name + " reads " + std::to_string(start) +
+                           " rad, beyond its limits " + limits +
+                           ": the reading or the limits are wrong (calibration, channel map, plant file)");
   }
   if (!options.hold_rad && !(start >= lo && start <= hi)) {
     throw ExperimentRefused(joint_name + " starts at " + std::to_string(start) + " rad: expected it inside " + range +
@@ -119,13 +129,16 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   }
   const double hold = options.hold_rad.value_or(start);
   // The move to the hold angle (none without one): its length, and the band the joint must stay
-  // in meanwhile: the limits less the margin, or, from a start inside the margin, no closer to
-  // the limit than it started, less half the margin for the readings' noise.
+  // in meanwhile: the limits less the margin, or, from a start inside the margin (and inside the
+  // limits), no closer to the limit than it started, less half the margin for the readings' noise
+  // and the sag onto the stop while the hold takes the load.
   const double period = device.period();
   const std::size_t move_steps =
-      options.hold_rad ? static_cast<std::size_t>(std::llround(
-                             std::max(options.move_s, std::abs(hold - start) / options.move_speed_radps) / period))
-                       : 0;
+      options.hold_rad
+          ? std::max<std::size_t>(
+                1, static_cast<std::size_t>(std::llround(
+                       std::max(options.move_s, std::abs(hold - start) / options.move_speed_radps) / period)))
+          : 0;
   const double move_lo = start < lo ? start - 0.5 * options.limit_margin_rad : lo;
   const double move_hi = start > hi ? start + 0.5 * options.limit_margin_rad : hi;
   result.hold_rad[static_cast<std::size_t>(j)] = hold;
@@ -160,19 +173,19 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
       return result;
     }
     if (!std::isfinite(sample.tau_load_cell_nm[j])) {
-      result.stop_reason = "joint " + std::to_string(j) + ": load-cell reading out of range";
+      result.stop_reason = joint_name + ": load-cell reading out of range";
       return result;
     }
     if (log_pressures && ((sample.pressure_mask >> j & 1u) == 0 || !std::isfinite(sample.p_a_pa[j]) ||
                           !std::isfinite(sample.p_b_pa[j]))) {
-      result.stop_reason = "joint " + std::to_string(j) + ": chamber pressure reading missing or out of range";
+      result.stop_reason = joint_name + ": chamber pressure reading missing or out of range";
       return result;
     }
     for (int k = 0; k < n; ++k) {
       if (k == j) continue;
       if (!std::isfinite(sample.q_rad[k]) ||
           std::abs(sample.q_rad[k] - result.hold_rad[static_cast<std::size_t>(k)]) > options.held_drift_limit_rad) {
-        result.stop_reason = "held joint " + std::to_string(k) + " left its hold by more than " +
+        result.stop_reason = "held joint " + nameOf(k) + " left its hold by more than " +
                              std::to_string(options.held_drift_limit_rad) + " rad";
         return result;
       }

@@ -80,14 +80,18 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
   bool first_read = true;
   // Each joint's allowed band: the limits less the margin, except that until the first move ends
   // a joint that starts inside the margin (an arm resting at a stop) must only come no closer to
-  // the limit than it started, less half the margin for the readings' noise.
+  // the limit than it started, less half the margin for the readings' noise and the sag onto the
+  // stop while the holds take the load. A start beyond the limit (or not finite) keeps the band:
+  // the run stops at once.
   Eigen::VectorXd band_lo(n), band_hi(n);
   const auto setBand = [&](bool from_start) {
     for (int k = 0; k < n; ++k) {
       const auto ks = static_cast<std::size_t>(k);
-      band_lo[k] = options.min_rad[ks] + options.limit_margin_rad;
-      band_hi[k] = options.max_rad[ks] - options.limit_margin_rad;
-      if (from_start && std::isfinite(target[k])) {
+      const double min = options.min_rad[ks];
+      const double max = options.max_rad[ks];
+      band_lo[k] = min + options.limit_margin_rad;
+      band_hi[k] = max - options.limit_margin_rad;
+      if (from_start && target[k] >= min && target[k] <= max) {
         if (target[k] < band_lo[k]) band_lo[k] = target[k] - 0.5 * options.limit_margin_rad;
         if (target[k] > band_hi[k]) band_hi[k] = target[k] + 0.5 * options.limit_margin_rad;
       }

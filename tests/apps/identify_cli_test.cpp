@@ -496,6 +496,16 @@ TEST(IdentifyCli, AJointRestingInsideItsMarginIsRefusedUntilAHoldAngleMovesItOut
     }
   }
 
+  // With --io sim the simulated DTS starts at the hold angle: the hold law recovered from the
+  // logs is about it (its first reading, within the potentiometer's noise and counts).
+  const auto started = dir / "started";
+  const Result sim = runFullarm("identify --quiet --io sim --joint EB --duration 1 --hold-angle 1.2 --config " + arm +
+                                " --out " + started.string());
+  ASSERT_TRUE(sim.exit_code == 0 || sim.exit_code == 1) << sim.output;
+  for (const nlohmann::json& e : readSummary(started)["results"]["identify"]["experiments"]) {
+    EXPECT_NEAR(e["hold_rad"].get<double>(), 1.2, 0.002) << e.dump();
+  }
+
   const auto moved = dir / "moved";
   const Result r = runFullarm("identify --quiet --io fakedaq --joint EB --duration 1 --hold-angle 1.2 --config " + arm +
                               " --out " + moved.string());
@@ -540,6 +550,14 @@ TEST(IdentifyCli, BackEndOptionsOutOfPlaceExitTwoNamingTheOption) {
   expectBad("--log " + log + " " + log + " --daq-config " + file, "--daq-config");
   expectBad("--log " + log + " " + log + " --seed 2", "--seed");
   expectBad("--log " + log + " " + log + " --hold-angle 1.2", "--hold-angle");
+  // The move to a hold angle on the real arm needs the workspace confirmed; the confirmation is
+  // refused where nothing real moves. With it, the command goes on to open the board.
+  expectBad("--io comedi --hold-angle 1.2", "--confirm-arm-motion: is required with --hold-angle");
+  expectBad("--io comedi --confirm-arm-motion", "--confirm-arm-motion");
+  expectBad("--io sim --hold-angle 1.2 --confirm-arm-motion", "--confirm-arm-motion");
+  expectBad("--io fakedaq --hold-angle 1.2 --confirm-arm-motion", "--confirm-arm-motion");
+  expectBad("--log " + log + " " + log + " --confirm-arm-motion", "--confirm-arm-motion");
+  expectBad("--io comedi --hold-angle 1.2 --confirm-arm-motion", "/dev/comedi0");
   // No board on this machine: the error names the device file of the channel map.
   expectBad("--io comedi", "/dev/comedi0");
   // A channel map that wires the elbow's chamber pressures, on the shipped plant, which has no

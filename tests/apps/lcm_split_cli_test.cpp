@@ -573,6 +573,14 @@ TEST_F(LcmSplitCli, IdentifyAndGravityRefuseAPlantFileOtherThanTheNodes) {
   Process again({"--quiet", "plant", "serve", "--lcm-url", kUrl, "--no-user", "--plant-config", other.string(),
                  "--idle-exit", "2"},
                 dir_ / "plant2.txt");
+  // On a simulated node no real arm moves: --confirm-arm-motion is refused, naming the node.
+  const test::CliResult confirmed =
+      test::runFullarm("identify" + url + " --plant " + other.string() + " --hold-angle 1.2 --confirm-arm-motion" +
+                       " --duration 1 --quiet --out " + (dir_ / "id_confirmed").string());
+  EXPECT_EQ(confirmed.exit_code, 2) << confirmed.output;
+  EXPECT_NE(confirmed.output.find("--confirm-arm-motion: the node at " + std::string(kUrl) + " serves a simulated arm"),
+            std::string::npos)
+      << confirmed.output;
   const test::CliResult same = test::runFullarm("identify" + url + " --plant " + other.string() +
                                                 " --duration 1 --quiet --out " + (dir_ / "id2").string());
   EXPECT_TRUE(same.exit_code == 0 || same.exit_code == 1) << same.output;
@@ -580,7 +588,8 @@ TEST_F(LcmSplitCli, IdentifyAndGravityRefuseAPlantFileOtherThanTheNodes) {
 }
 
 // A node that says it serves the real arm (simulated = false; here the simulated DTS served from
-// this process, saying so): gravity's holds need --confirm-arm-motion, as on --io comedi.
+// this process, saying so): gravity's holds and identify's move to a hold angle need
+// --confirm-arm-motion, as on --io comedi.
 TEST_F(LcmSplitCli, GravityOnANodeServingTheRealArmNeedsConfirmArmMotion) {
   hil::RunOptions options;  // the shipped files
   options.scripted_user = false;
@@ -596,12 +605,16 @@ TEST_F(LcmSplitCli, GravityOnANodeServingTheRealArmNeedsConfirmArmMotion) {
   std::thread thread([&] { served = node.serve([&stop] { return stop.load(); }); });
   const test::CliResult r = test::runFullarm("gravity --io lcm --lcm-url '" + std::string(kUrl) +
                                              "' --postures 2 --out " + (dir_ / "g").string());
+  const test::CliResult id = test::runFullarm("identify --io lcm --lcm-url '" + std::string(kUrl) +
+                                              "' --hold-angle 1.2 --duration 1 --out " + (dir_ / "id").string());
   stop = true;
   thread.join();
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("--confirm-arm-motion"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("the node at " + std::string(kUrl) + " says it is not simulated"), std::string::npos)
-      << r.output;
+  for (const test::CliResult* result : {&r, &id}) {
+    EXPECT_EQ(result->exit_code, 2) << result->output;
+    EXPECT_NE(result->output.find("--confirm-arm-motion"), std::string::npos) << result->output;
+    EXPECT_NE(result->output.find("the node at " + std::string(kUrl) + " says it is not simulated"), std::string::npos)
+        << result->output;
+  }
   EXPECT_EQ(served.commands, 0u) << "nothing moved";
 }
 

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,8 @@ class IntegratorDevice final : public hil::IoDevice {
         q_(hil::IoVector::Constant(joints, 0.2)),
         held_(hil::IoVector::Zero(joints)) {}
   [[nodiscard]] std::string_view name() const noexcept override { return "integrator"; }
+  /// Every joint at `q_rad` (before the first read).
+  void startAt(double q_rad) { q_.setConstant(q_rad); }
   double gain_radps_per_v = 0.5;
   int reads = 0;
   int fail_read_at = -1;
@@ -188,8 +191,32 @@ TEST(ExperimentTest, RejectsBadSetups) {
   options.move_s = 1.0;
   options.move_speed_radps = std::numeric_limits<double>::infinity();
   EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
+  options.move_speed_radps = 0.2;
+  options.move_max_error_rad = std::numeric_limits<double>::infinity();
+  EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
   EXPECT_NE(device.state(), hil::IoState::kActive);
   EXPECT_EQ(device.appliedCommand()[0], 0.0);
+}
+
+// A first reading out of range, or beyond the joint's own limits, is no posture to move from (a
+// sensor, calibration or limits that are wrong): a device error before anything moves, with or
+// without a hold angle.
+TEST(ExperimentTest, AStartReadingOutOfRangeOrBeyondTheLimitsIsADeviceError) {
+  ExperimentOptions options;
+  options.joint = 0;
+  options.min_rad = 0.18;
+  options.max_rad = 1.5;
+  for (const double start : {std::nan(""), 0.17, 1.51}) {
+    for (const bool with_hold : {false, true}) {
+      IntegratorDevice device(2, 0.0);
+      device.startAt(start);
+      options.hold_rad = with_hold ? std::optional<double>(0.5) : std::nullopt;
+      EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), hil::DeviceError)
+          << start << " " << with_hold;
+      EXPECT_NE(device.state(), hil::IoState::kActive);
+      EXPECT_EQ(device.appliedCommand()[0], 0.0);
+    }
+  }
 }
 
 // A driven joint that starts within the margin of a limit (an arm resting at its stop) is
@@ -223,6 +250,41 @@ TEST(ExperimentTest, RefusesAStartInsideTheMarginUnlessAHoldAngleMovesItOut) {
   EXPECT_DOUBLE_EQ(moved.hold_rad[0], 0.2);
   for (double q : moved.log.column("q_rad")) EXPECT_NEAR(q, 0.5, 0.01);
   for (double q : moved.log.column("held_SFE_rad")) EXPECT_DOUBLE_EQ(q, 0.2);
+
+  // The same at the upper limit: a joint resting inside the upper margin moves down to its hold.
+  IntegratorDevice high(2, 0.0);
+  high.startAt(1.49);
+  options.min_rad = -1.0;
+  options.max_rad = 1.5;
+  EXPECT_THROW((void)runExperiment(high, stepSequence({0.0}, 0.1, kT), ExperimentOptions{[&] {
+                                     ExperimentOptions o = options;
+                                     o.hold_rad.reset();
+                                     return o;
+                                   }()}),
+               ExperimentRefused);
+  const ExperimentResult down = runExperiment(high, linearChirp(0.05, 1.0, 20.0, 0.5, kT), options);
+  ASSERT_TRUE(down.completed) << down.stop_reason;
+  for (double q : down.log.column("q_rad")) EXPECT_NEAR(q, 0.5, 0.01);
+}
+
+// Once the move has ended the joint is held to the limits less the margin again: a hold angle
+// just inside the margin, then a push towards the limit, stops the run at the margin, not at the
+// relaxed band the move from inside the margin had.
+TEST(ExperimentTest, TheMarginHoldsAgainOnceTheMoveHasEnded) {
+  IntegratorDevice device(2, 0.0);
+  ExperimentOptions options;
+  options.joint = 0;
+  options.settle_s = 0.5;
+  options.min_rad = 0.18;  // starts at 0.2, inside the margin (0.23)
+  options.max_rad = 1.5;
+  options.hold_rad = 0.235;
+  const ExperimentResult result = runExperiment(device, stepSequence({-2.0}, 0.5, kT), options);
+  EXPECT_FALSE(result.completed);
+  EXPECT_NE(result.stop_reason.find("of its limits"), std::string::npos) << result.stop_reason;
+  EXPECT_EQ(result.stop_reason.find("moving"), std::string::npos) << result.stop_reason;
+  ASSERT_GT(result.log.rows(), 0u);
+  for (double q : result.log.column("q_rad")) EXPECT_GE(q, 0.23);
+  EXPECT_EQ(device.appliedCommand()[0], 0.0);
 }
 
 // The move: the hold target follows a cosine blend from the start to the hold angle over
@@ -267,6 +329,16 @@ TEST(ExperimentTest, MovesToTheHoldAngleAlongACosineBlendThenExcitesAboutIt) {
   EXPECT_NEAR(q.front(), 0.6, 1e-3);
   EXPECT_NEAR(result.log.column("time_s").front(), 0.001 * (1 + kMoveSteps + kSettleSteps), 1e-9);
   EXPECT_DOUBLE_EQ(result.hold_rad[1], 0.6);
+
+  // With the control time logged, the log's clock starts at the first excitation reading, after
+  // the move and the settling, one period a row.
+  IntegratorDevice again(3, 0.0);
+  options.log_control_time = true;
+  const ExperimentResult timed = runExperiment(again, r, options);
+  ASSERT_TRUE(timed.completed) << timed.stop_reason;
+  const auto& t = timed.log.column("time_s");
+  EXPECT_NEAR(t.front(), 0.001 * (1 + kMoveSteps + kSettleSteps), 1e-9);
+  for (std::size_t k = 1; k < t.size(); ++k) ASSERT_NEAR(t[k] - t[0], static_cast<double>(k) * kT, 1e-12) << k;
 }
 
 // Fault injection during the move: a read failure, a joint that does not follow its target (a
@@ -301,6 +373,8 @@ TEST(ExperimentTest, StopsSafelyDuringTheMove) {
 
   IntegratorDevice reversed(2, 0.0);
   reversed.gain_radps_per_v = -0.5;
+  reversed.recorded_joint = 0;
+  reversed.read_q.reserve(10000);
   options.min_rad = 0.18;  // starts inside the margin; moving the wrong way approaches the stop
   const ExperimentResult towards = runExperiment(reversed, r, options);
   EXPECT_FALSE(towards.completed);
@@ -308,6 +382,12 @@ TEST(ExperimentTest, StopsSafelyDuringTheMove) {
   EXPECT_NE(towards.stop_reason.find("moving to its hold angle"), std::string::npos) << towards.stop_reason;
   EXPECT_EQ(towards.log.rows(), 0u);
   EXPECT_EQ(reversed.appliedCommand()[0], 0.0);
+  // It was let go below its start, to the relaxed band (the start less half the margin,
+  // 0.175 rad), and stopped on the first reading past it.
+  ASSERT_GE(reversed.read_q.size(), 3u);
+  for (std::size_t k = 0; k + 1 < reversed.read_q.size(); ++k) EXPECT_GE(reversed.read_q[k], 0.175) << k;
+  EXPECT_LT(reversed.read_q.back(), 0.175);
+  EXPECT_LT(reversed.read_q[reversed.read_q.size() - 2], 0.18);
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+#include <algorithm>
 #include <string>
 
 #include "fullarm/identification/signal_csv.hpp"
@@ -24,6 +26,75 @@ std::size_t errorLine(const std::string& text, std::string* message = nullptr) {
     return e.line();
   }
   return 0;
+}
+
+/// Two joints whose angles integrate their applied valve commands (q += 0.5 T u); at read
+/// `jump_at` joint 0's angle jumps to `jump_to` (a joint that slips back towards its stop).
+class SlippingDevice final : public hil::IoDevice {
+ public:
+  explicit SlippingDevice(double start_rad)
+      : hil::IoDevice(arm::JointSelection(2, {0, 1}), 1e-3, hil::IoSafetyParams{0.0, 10.0}),
+        q_(hil::IoVector::Constant(2, start_rad)),
+        held_(hil::IoVector::Zero(2)) {}
+  [[nodiscard]] std::string_view name() const noexcept override { return "slipping"; }
+  long jump_at = -1;
+  double jump_to = 0.0;
+  double lowest_read_rad = 1e9;  ///< joint 0's lowest reading
+
+ private:
+  void onConfigure() override {}
+  core::RtStatus onRead(hil::JointSample& sample) noexcept override {
+    q_ += 0.5e-3 * held_;
+    if (reads_++ == jump_at) q_[0] = jump_to;
+    t_ += 1e-3;
+    sample.t_s = t_;
+    sample.q_rad = q_;
+    sample.tau_load_cell_nm = hil::IoVector::Zero(2);
+    lowest_read_rad = std::min(lowest_read_rad, q_[0]);
+    return {};
+  }
+  core::RtStatus onWrite(const hil::IoVector& valve_v, bool) noexcept override {
+    held_ = valve_v;
+    return {};
+  }
+  hil::IoVector q_;
+  hil::IoVector held_;
+  double t_ = 0.0;
+  long reads_ = 0;
+};
+
+// A joint resting inside the margin (0.19 rad, limit 0.18, margin 0.02) leaves it on the first
+// move, then the limits less the margin hold again: a joint that slips back to where it started
+// after that move stops the run; on the first move it would have been let be.
+TEST(StaticHoldsTest, AStartInsideTheMarginIsAllowedOnlyUntilTheFirstMoveEnds) {
+  StaticHoldOptions options;
+  options.hold_gain_v_per_rad = 10.0;
+  options.approach_rad = 0.05;
+  options.move_s = 1.0;
+  options.approach_s = 0.2;
+  options.settle_s = 0.3;
+  options.average_s = 0.1;
+  options.max_error_rad = 0.2;
+  options.min_rad = {0.18, 0.18};
+  options.max_rad = {2.0, 2.0};
+  const std::vector<Eigen::VectorXd> postures{Eigen::Vector2d(0.6, 0.6)};
+
+  SlippingDevice resting(0.19);
+  const StaticHoldRun run = runStaticHolds(resting, postures, options);
+  ASSERT_TRUE(run.completed) << run.stop_reason;
+  EXPECT_EQ(run.holds.size(), 2u);
+  EXPECT_GE(resting.lowest_read_rad, 0.19 - 1e-12);
+
+  // The move from 0.19 to 0.65 takes 2.3 s (0.2 rad/s on average); at read 2500, in the approach,
+  // joint 0 slips back to 0.19 rad, inside the margin again.
+  SlippingDevice slipping(0.19);
+  slipping.jump_at = 2500;
+  slipping.jump_to = 0.19;
+  const StaticHoldRun stopped = runStaticHolds(slipping, postures, options);
+  EXPECT_FALSE(stopped.completed);
+  EXPECT_NE(stopped.stop_reason.find("joint 0 at 0.19"), std::string::npos) << stopped.stop_reason;
+  EXPECT_NE(stopped.stop_reason.find("of its limits"), std::string::npos) << stopped.stop_reason;
+  EXPECT_EQ(slipping.appliedCommand()[0], 0.0);
 }
 
 TEST(StaticHoldsTest, ParsesALogAndAveragesTheTwoSidesOfEachPosture) {

@@ -35,10 +35,10 @@
 
 namespace fullarm::identification {
 
-/// An experiment the device's state does not allow, refused before the device was activated
-/// (nothing moved): the driven joint reads out of range at the start, or starts within the margin
-/// of one of its limits and no hold angle was given to move it away first. The message names the
-/// joint, its angle and the range it must be in.
+/// An experiment the arm's posture does not allow, refused before the device was activated
+/// (nothing moved): the driven joint starts within the margin of one of its limits and no hold
+/// angle was given to move it away first. The message names the joint, its angle and the range
+/// it must be in.
 class ExperimentRefused : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -60,7 +60,10 @@ struct ExperimentOptions {
   /// move_speed_radps, the other joints holding where they started; then the settling time and
   /// the excitation. The start may lie within the margin (an arm resting at a stop): during the
   /// move the joint must not come closer to the limit than it started, less half the margin for
-  /// the readings' noise, nor leave its moving target by more than move_max_error_rad.
+  /// the readings' noise and the sag onto the stop while the hold takes the load (a start beyond
+  /// the limits is a device error), nor leave its moving target by more than move_max_error_rad. Under the proportional
+  /// hold the joint settles off its target by the hold's droop (the command that carries its load, over K): a hold
+  /// angle needs that much room inside the margin.
   std::optional<double> hold_rad;
   double move_s = 1.0;              ///< shortest move to the hold angle
   double move_speed_radps = 0.2;    ///< the move's largest mean speed
@@ -114,8 +117,10 @@ struct HeldAngle {
 ///   differs from the device's, limits that leave no room, a hold angle or move settings that are
 ///   not finite or outside the limits less the margin, or joint names that are not one non-empty
 ///   name per device joint
-/// @throws ExperimentRefused when the driven joint reads out of range at the start, or starts
-///   within the margin of a limit and no hold angle was given
+/// @throws ExperimentRefused when the driven joint starts within the margin of a limit and no hold
+///   angle was given
+/// @throws hil::DeviceError when the driven joint's first reading is out of range or beyond its
+///   limits (a sensor, calibration or limits that are wrong)
 [[nodiscard]] ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excitation,
                                              const ExperimentOptions& options);
 

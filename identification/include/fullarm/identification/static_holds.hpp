@@ -16,7 +16,8 @@
 /// device fails. The holds before the stop are kept. A joint that starts inside the margin (an
 /// arm resting at a stop) may move out of it on the first move: until that move ends it must
 /// only come no closer to the limit than it started, less half the margin for the readings'
-/// noise.
+/// noise and the sag onto the stop while the holds take the load (a start beyond the limits
+/// stops the run at once).
 ///
 /// The log (writeStaticHoldsCsv) has one row per hold: `time_s` (end of the averaging window),
 /// `posture_index`, `side_sign` (+1 approached from above, -1 from below), then `q_<joint>_rad`
