@@ -91,7 +91,8 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   detail::PacedReader reader(device, options.before_read);
   const auto read = [&] { return reader.read(sample); };
   const auto readFailure = [&] { return reader.failure(); };
-  if (!read()) throw std::runtime_error("experiment: the device could not be read: " + readFailure());
+  if (!read())
+    throw hil::DeviceError("experiment: the device could not be read before anything moved: " + readFailure());
   // The driven joint's chamber pressures, where the device reads them, follow the five columns.
   const bool log_pressures = (sample.pressure_mask >> j & 1u) != 0;
   result.log.names = kExperimentColumns;

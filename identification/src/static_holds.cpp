@@ -65,7 +65,9 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
   detail::PacedReader reader(device, options.before_read);
   const auto read = [&] { return reader.read(sample); };
   const auto readFailure = [&] { return reader.failure(); };
-  if (!read()) throw std::runtime_error("static holds: the device could not be read: " + readFailure());
+  if (!read()) {
+    throw hil::DeviceError("static holds: the device could not be read before anything moved: " + readFailure());
+  }
   device.activate();
   detail::DeactivateOnExit guard{device};
 

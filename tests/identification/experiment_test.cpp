@@ -198,14 +198,18 @@ TEST(ExperimentTest, RejectsBadSetups) {
   EXPECT_EQ(device.appliedCommand()[0], 0.0);
 }
 
-// A first reading out of range, or beyond the joint's own limits, is no posture to move from (a
-// sensor, calibration or limits that are wrong): a device error before anything moves, with or
-// without a hold angle.
+// A device that cannot be read, a first reading out of range, or one beyond the joint's own
+// limits is no posture to move from (a device, sensor, calibration or limits that are wrong): a
+// device error before anything moves, with or without a hold angle.
 TEST(ExperimentTest, AStartReadingOutOfRangeOrBeyondTheLimitsIsADeviceError) {
   ExperimentOptions options;
   options.joint = 0;
   options.min_rad = 0.18;
   options.max_rad = 1.5;
+  IntegratorDevice unreadable(2, 0.0);
+  unreadable.fail_read_at = 0;
+  EXPECT_THROW((void)runExperiment(unreadable, stepSequence({0.0}, 0.1, kT), options), hil::DeviceError);
+  EXPECT_NE(unreadable.state(), hil::IoState::kActive);
   for (const double start : {std::nan(""), 0.17, 1.51}) {
     for (const bool with_hold : {false, true}) {
       IntegratorDevice device(2, 0.0);

@@ -53,6 +53,15 @@ std::vector<Eigen::VectorXd> devicePostures(const arm::JointSelection& joints, i
   return out;
 }
 
+// The device joints' limits, from the model.
+void setLimits(StaticHoldOptions& options, const arm::ArmModel& model, const arm::JointSelection& joints) {
+  for (int k = 0; k < joints.size(); ++k) {
+    const auto& limits = model.joints[static_cast<std::size_t>(joints.modelIndex(k))].limits;
+    options.min_rad.push_back(limits.min_rad);
+    options.max_rad.push_back(limits.max_rad);
+  }
+}
+
 TEST(StaticHoldsSimTest, FittedBaseParametersPredictThePlantsGravityAtHeldOutPostures) {
   const arm::ArmModel& nominal = hil::test::model();
   const arm::ArmModel truth = perturbedTruth();
@@ -67,11 +76,7 @@ TEST(StaticHoldsSimTest, FittedBaseParametersPredictThePlantsGravityAtHeldOutPos
   options.approach_s = 0.5;
   options.settle_s = 1.0;
   options.average_s = 0.3;
-  for (int k = 0; k < joints.size(); ++k) {
-    const auto& limits = nominal.joints[static_cast<std::size_t>(joints.modelIndex(k))].limits;
-    options.min_rad.push_back(limits.min_rad);
-    options.max_rad.push_back(limits.max_rad);
-  }
+  setLimits(options, nominal, joints);
   const auto postures = devicePostures(joints, 16, 0.15, 1);
   // A posture whose approach leaves the limits is refused before the arm moves.
   Eigen::VectorXd too_close = postures.front();
@@ -157,11 +162,7 @@ TEST(StaticHoldsSimTest, AnArmRestingInsideTheMarginMovesOutOnTheFirstMove) {
   options.approach_s = 0.3;
   options.settle_s = 0.3;
   options.average_s = 0.1;
-  for (int k = 0; k < joints.size(); ++k) {
-    const auto& limits = model.joints[static_cast<std::size_t>(joints.modelIndex(k))].limits;
-    options.min_rad.push_back(limits.min_rad);
-    options.max_rad.push_back(limits.max_rad);
-  }
+  setLimits(options, model, joints);
   int device_elbow = -1;
   for (int k = 0; k < joints.size(); ++k) {
     if (joints.modelIndex(k) == elbow) device_elbow = k;

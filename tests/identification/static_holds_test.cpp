@@ -39,11 +39,13 @@ class SlippingDevice final : public hil::IoDevice {
   [[nodiscard]] std::string_view name() const noexcept override { return "slipping"; }
   long jump_at = -1;
   double jump_to = 0.0;
+  bool fail_first_read = false;
   double lowest_read_rad = 1e9;  ///< joint 0's lowest reading
 
  private:
   void onConfigure() override {}
   core::RtStatus onRead(hil::JointSample& sample) noexcept override {
+    if (fail_first_read) return core::RtStatus::fault(core::RtCode::kBadInput, 0, "scripted read failure");
     q_ += 0.5e-3 * held_;
     if (reads_++ == jump_at) q_[0] = jump_to;
     t_ += 1e-3;
@@ -65,7 +67,8 @@ class SlippingDevice final : public hil::IoDevice {
 
 // A joint resting inside the margin (0.19 rad, limit 0.18, margin 0.02) leaves it on the first
 // move, then the limits less the margin hold again: a joint that slips back to where it started
-// after that move stops the run; on the first move it would have been let be.
+// after that move stops the run; on the first move it would have been let be. A device that
+// cannot be read is a device error before anything moves.
 TEST(StaticHoldsTest, AStartInsideTheMarginIsAllowedOnlyUntilTheFirstMoveEnds) {
   StaticHoldOptions options;
   options.hold_gain_v_per_rad = 10.0;
@@ -78,6 +81,11 @@ TEST(StaticHoldsTest, AStartInsideTheMarginIsAllowedOnlyUntilTheFirstMoveEnds) {
   options.min_rad = {0.18, 0.18};
   options.max_rad = {2.0, 2.0};
   const std::vector<Eigen::VectorXd> postures{Eigen::Vector2d(0.6, 0.6)};
+
+  SlippingDevice unreadable(0.19);
+  unreadable.fail_first_read = true;
+  EXPECT_THROW((void)runStaticHolds(unreadable, postures, options), hil::DeviceError);
+  EXPECT_NE(unreadable.state(), hil::IoState::kActive);
 
   SlippingDevice resting(0.19);
   const StaticHoldRun run = runStaticHolds(resting, postures, options);

@@ -119,8 +119,9 @@ struct HeldAngle {
 ///   name per device joint
 /// @throws ExperimentRefused when the driven joint starts within the margin of a limit and no hold
 ///   angle was given
-/// @throws hil::DeviceError when the driven joint's first reading is out of range or beyond its
-///   limits (a sensor, calibration or limits that are wrong)
+/// @throws hil::DeviceError when the device cannot be read before the run, or the driven joint's
+///   first reading is out of range or beyond its limits (a sensor, calibration or limits that are
+///   wrong)
 [[nodiscard]] ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excitation,
                                              const ExperimentOptions& options);
 

@@ -77,6 +77,7 @@ struct StaticHoldRun {
 /// it, holds each posture from above then from below, and deactivates it whatever happens.
 /// @throws std::invalid_argument for limits or postures of the wrong size, non-positive times,
 ///   or a posture whose approach (posture +- approach_rad) is not inside the limits less the margin
+/// @throws hil::DeviceError when the device cannot be read before the holds start
 [[nodiscard]] StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::VectorXd>& postures_rad,
                                            const StaticHoldOptions& options);
 
