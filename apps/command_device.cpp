@@ -137,4 +137,18 @@ std::unique_ptr<CommandDevice> openCommandDevice(hil::IoKind kind, const arm::Ar
   return d;
 }
 
+void checkNodeArmMotion(const CommandDevice& device, bool moves, bool confirmed, const std::string& required_with,
+                        const std::string& why) {
+  if (!device.node) return;
+  if (moves && !device.node->simulated && !confirmed) {
+    throw core::ConfigError(
+        {}, "--confirm-arm-motion",
+        "is required with " + required_with + " (the node at " + device.lcm_url + " says it is not simulated): " + why);
+  }
+  if (confirmed && device.node->simulated) {
+    throw core::ConfigError({}, "--confirm-arm-motion",
+                            "the node at " + device.lcm_url + " serves a simulated arm: no real arm moves");
+  }
+}
+
 }  // namespace fullarm::app

@@ -84,4 +84,14 @@ class PeriodClock {
     std::uint64_t seed, const std::string& daq_config, const std::string& hil_config, double period_s,
     const std::string& only_joint = {}, const std::string& lcm_url = {});
 
+/// --confirm-arm-motion against what an LCM plant node says it serves (nothing to check for the
+/// other back-ends): when the command moves the arm (`moves`) on a node serving the real arm, the
+/// option is required, the message naming the node and saying `why`; on a node serving a
+/// simulated arm the option is refused.
+/// @param required_with what the option is required with, for the message ("--io lcm on a node
+///   serving the real arm")
+/// @throws core::ConfigError naming --confirm-arm-motion
+void checkNodeArmMotion(const CommandDevice& device, bool moves, bool confirmed, const std::string& required_with,
+                        const std::string& why);
+
 }  // namespace fullarm::app

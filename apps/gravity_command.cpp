@@ -203,15 +203,7 @@ std::string takeHolds(const GravityOptions& o, const arm::ArmModel& nominal, con
   const std::unique_ptr<CommandDevice> device =
       openCommandDevice(kind, simulated, plant_config, simulated.defaultPosture(), static_cast<std::uint64_t>(o.seed),
                         o.daq_config, o.hil_config, kHoldPeriod_s, {}, o.lcm_url);
-  if (device->node && !device->node->simulated && !o.confirm_arm_motion) {
-    throw core::ConfigError({}, "--confirm-arm-motion",
-                            "is required with --io lcm on a node serving the real arm (the node at " + device->lcm_url +
-                                " says it is not simulated): " + kRealArmMotion);
-  }
-  if (device->node && device->node->simulated && o.confirm_arm_motion) {
-    throw core::ConfigError({}, "--confirm-arm-motion",
-                            "the node at " + device->lcm_url + " serves a simulated arm: no real arm moves");
-  }
+  checkNodeArmMotion(*device, true, o.confirm_arm_motion, "--io lcm on a node serving the real arm", kRealArmMotion);
   hil::IoDevice& io = device->backend->device();
   if (io.joints().modelIndices() != armIndices(nominal)) {
     throw core::ConfigError({}, "--io",

@@ -159,8 +159,7 @@ Experiment experimentOf(const id::ExperimentResult& r, const std::string& name, 
                             "the experiment stopped after " + std::to_string(e.log.rows()) + " samples (" +
                                 r.stop_reason +
                                 "): expected a joint that can be held and excited about its hold "
-                                "angle (the hold's droop, about 0.035 rad on the elbow, inside its limits less "
-                                "the margin)");
+                                "angle, with room for the hold's droop inside its limits less the margin");
   }
   e.data = dataFromLog(e.log, name, driven);
   return e;
@@ -713,15 +712,8 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
         const std::unique_ptr<CommandDevice> device =
             openCommandDevice(kind, model, plant_config, posture, seed, o.daq_config, o.hil_config, kSamplePeriod_s,
                               kind == hil::IoKind::kFakeDaq ? jp.name : std::string(), o.lcm_url);
-        if (o.hold_angle_rad && device->node && !device->node->simulated && !o.confirm_arm_motion) {
-          throw core::ConfigError({}, "--confirm-arm-motion",
-                                  "is required with --hold-angle on a node serving the real arm (the node at " +
-                                      device->lcm_url + " says it is not simulated): " + kHoldMoveOnTheArm);
-        }
-        if (o.confirm_arm_motion && device->node && device->node->simulated) {
-          throw core::ConfigError({}, "--confirm-arm-motion",
-                                  "the node at " + device->lcm_url + " serves a simulated arm: no real arm moves");
-        }
+        checkNodeArmMotion(*device, o.hold_angle_rad.has_value(), o.confirm_arm_motion,
+                           "--hold-angle on a node serving the real arm", kHoldMoveOnTheArm);
         const int device_joint = deviceJointIndex(device->backend->device(), model_joint, o.joint, o.io);
         progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint) + " through " + o.io);
         r.fit_experiments.push_back(

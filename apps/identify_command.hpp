@@ -28,8 +28,8 @@ struct IdentifyOptions {
   /// Seed of the simulated sensors' noise (sim: experiment k uses seed + k; fakedaq: one arm for
   /// both); unset: 1. The real arm has no seed.
   std::optional<int> seed;
-  double duration_s = 5.0;         ///< excitation time of each experiment
-  double amplitude_v = 0.5;        ///< peak of the excitation added to the valve command
+  double duration_s = 5.0;   ///< excitation time of each experiment
+  double amplitude_v = 0.5;  ///< peak of the excitation added to the valve command
   /// --hold-angle: the driven joint's hold angle [rad] (sim: the posture's; a device moves the
   /// joint there before each experiment); unset: the default posture's (sim) or where the joint
   /// is (a device).

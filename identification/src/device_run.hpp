@@ -20,6 +20,27 @@ inline double blend(double s) noexcept {
   return 0.5 - 0.5 * std::cos(std::numbers::pi * s);
 }
 
+/// The angles a held joint must stay between.
+struct LimitBand {
+  double lo = 0.0;
+  double hi = 0.0;
+  [[nodiscard]] bool contains(double q) const noexcept { return q >= lo && q <= hi; }
+};
+
+/// A joint's band on its first move from `start`: its limits less the margin, except that from a
+/// start inside the margin (and inside the limits: an arm resting at a stop) it may come no
+/// closer to the limit than it started, less half the margin for the readings' noise and the sag
+/// onto the stop while the hold takes the load. A start beyond the limits (or not finite) gets the
+/// ordinary band, so the run stops at once.
+inline LimitBand firstMoveBand(double start, double min, double max, double margin) noexcept {
+  LimitBand band{min + margin, max - margin};
+  if (start >= min && start <= max) {
+    if (start < band.lo) band.lo = start - 0.5 * margin;
+    if (start > band.hi) band.hi = start + 0.5 * margin;
+  }
+  return band;
+}
+
 /// Deactivates the device however the run ends.
 struct DeactivateOnExit {
   hil::IoDevice& device;

@@ -129,10 +129,7 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
                             ", or a hold angle inside that range to move it to first");
   }
   const double hold = options.hold_rad.value_or(start);
-  // The move to the hold angle (none without one): its length, and the band the joint must stay
-  // in meanwhile: the limits less the margin, or, from a start inside the margin (and inside the
-  // limits), no closer to the limit than it started, less half the margin for the readings' noise
-  // and the sag onto the stop while the hold takes the load.
+  // The move to the hold angle (none without one) and the band the joint must stay in meanwhile.
   const double period = device.period();
   const std::size_t move_steps =
       options.hold_rad
@@ -140,8 +137,9 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
                 1, static_cast<std::size_t>(std::llround(
                        std::max(options.move_s, std::abs(hold - start) / options.move_speed_radps) / period)))
           : 0;
-  const double move_lo = start < lo ? start - 0.5 * options.limit_margin_rad : lo;
-  const double move_hi = start > hi ? start + 0.5 * options.limit_margin_rad : hi;
+  const detail::LimitBand held_band{lo, hi};
+  const detail::LimitBand move_band =
+      detail::firstMoveBand(start, options.min_rad, options.max_rad, options.limit_margin_rad);
   result.hold_rad[static_cast<std::size_t>(j)] = hold;
 
   device.activate();
@@ -160,7 +158,7 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
     const double target =
         moving ? start + detail::blend(static_cast<double>(step + 1) / static_cast<double>(move_steps)) * (hold - start)
                : hold;
-    if (!std::isfinite(q) || q < (moving ? move_lo : lo) || q > (moving ? move_hi : hi)) {
+    if (!std::isfinite(q) || !(moving ? move_band : held_band).contains(q)) {
       result.stop_reason = joint_name + " at " + std::to_string(q) + " rad, within " +
                            std::to_string(options.limit_margin_rad) + " rad of its limits " +
                            std::to_string(options.min_rad) + ".." + std::to_string(options.max_rad) + " rad" +

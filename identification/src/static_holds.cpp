@@ -80,26 +80,18 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
   hil::IoVector command = hil::IoVector::Zero(n);
   Eigen::VectorXd target = Eigen::VectorXd::Map(sample.q_rad.data(), n);
   bool first_read = true;
-  // Each joint's allowed band: the limits less the margin, except that until the first move ends
-  // a joint that starts inside the margin (an arm resting at a stop) must only come no closer to
-  // the limit than it started, less half the margin for the readings' noise and the sag onto the
-  // stop while the holds take the load. A start beyond the limit (or not finite) keeps the band:
-  // the run stops at once.
-  Eigen::VectorXd band_lo(n), band_hi(n);
-  const auto setBand = [&](bool from_start) {
-    for (int k = 0; k < n; ++k) {
-      const auto ks = static_cast<std::size_t>(k);
-      const double min = options.min_rad[ks];
-      const double max = options.max_rad[ks];
-      band_lo[k] = min + options.limit_margin_rad;
-      band_hi[k] = max - options.limit_margin_rad;
-      if (from_start && target[k] >= min && target[k] <= max) {
-        if (target[k] < band_lo[k]) band_lo[k] = target[k] - 0.5 * options.limit_margin_rad;
-        if (target[k] > band_hi[k]) band_hi[k] = target[k] + 0.5 * options.limit_margin_rad;
-      }
+  // Each joint's band: its first move's from where it starts (detail::firstMoveBand), then, once
+  // that move has ended, its limits less the margin.
+  std::vector<detail::LimitBand> bands(static_cast<std::size_t>(n));
+  for (int k = 0; k < n; ++k) {
+    const auto ks = static_cast<std::size_t>(k);
+    bands[ks] = detail::firstMoveBand(target[k], options.min_rad[ks], options.max_rad[ks], options.limit_margin_rad);
+  }
+  const auto endFirstMove = [&] {
+    for (std::size_t k = 0; k < bands.size(); ++k) {
+      bands[k] = {options.min_rad[k] + options.limit_margin_rad, options.max_rad[k] - options.limit_margin_rad};
     }
   };
-  setBand(true);
 
   // One control period towards `target`: read (the first one is the read above), check, write.
   auto step = [&](std::string& failure) -> bool {
@@ -115,7 +107,7 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
         failure = "joint " + std::to_string(k) + ": reading not finite (out of range)";
         return false;
       }
-      if (q < band_lo[k] || q > band_hi[k]) {
+      if (!bands[ks].contains(q)) {
         failure = "joint " + std::to_string(k) + " at " + std::to_string(q) + " rad, within " +
                   std::to_string(options.limit_margin_rad) + " rad of its limits " +
                   std::to_string(options.min_rad[ks]) + ".." + std::to_string(options.max_rad[ks]) + " rad";
@@ -149,7 +141,7 @@ StaticHoldRun runStaticHolds(hil::IoDevice& device, const std::vector<Eigen::Vec
         target = from + detail::blend(static_cast<double>(s) / static_cast<double>(move_steps)) * (start - from);
         ok = step(failure);
       }
-      setBand(false);  // the first move has ended: the limits less the margin from here on
+      endFirstMove();
       for (long s = 1; ok && s <= approach_steps; ++s) {
         target =
             start + detail::blend(static_cast<double>(s) / static_cast<double>(approach_steps)) * (posture - start);

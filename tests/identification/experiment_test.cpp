@@ -260,12 +260,9 @@ TEST(ExperimentTest, RefusesAStartInsideTheMarginUnlessAHoldAngleMovesItOut) {
   high.startAt(1.49);
   options.min_rad = -1.0;
   options.max_rad = 1.5;
-  EXPECT_THROW((void)runExperiment(high, stepSequence({0.0}, 0.1, kT), ExperimentOptions{[&] {
-                                     ExperimentOptions o = options;
-                                     o.hold_rad.reset();
-                                     return o;
-                                   }()}),
-               ExperimentRefused);
+  ExperimentOptions without_hold = options;
+  without_hold.hold_rad.reset();
+  EXPECT_THROW((void)runExperiment(high, stepSequence({0.0}, 0.1, kT), without_hold), ExperimentRefused);
   const ExperimentResult down = runExperiment(high, linearChirp(0.05, 1.0, 20.0, 0.5, kT), options);
   ASSERT_TRUE(down.completed) << down.stop_reason;
   for (double q : down.log.column("q_rad")) EXPECT_NEAR(q, 0.5, 0.01);
