@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <limits>
@@ -11,6 +12,7 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 #include "cli_values.hpp"
 #include "command_device.hpp"
@@ -148,6 +150,17 @@ id::SampledSignal validationExcitation(double amplitude_v, double duration_s) {
   return id::schroederMultisine(amplitude_v, low, kBandHz, duration_s, 1, kSamplePeriod_s).signal;
 }
 
+// Writes an experiment's log (file name, log) to the output folder as soon as the run ends, before
+// anything that follows can fail; a run that stopped early keeps what it logged.
+using KeepLog = std::function<void(const std::string&, const id::SignalTable&)>;
+
+void keepLogs(const std::vector<id::ExperimentResult>& results, const std::vector<std::string>& names,
+              const KeepLog& keep) {
+  for (std::size_t e = 0; e < results.size(); ++e) {
+    if (results[e].log.rows() > 0) keep(names[e], results[e].log);
+  }
+}
+
 Experiment experimentOf(const id::ExperimentResult& r, const std::string& name, const plant::JointParams& driven) {
   Experiment e;
   e.name = name;
@@ -155,11 +168,18 @@ Experiment experimentOf(const id::ExperimentResult& r, const std::string& name, 
   e.completed = r.completed;
   e.stop_reason = r.stop_reason;
   if (e.log.rows() < kMinLogSamples) {
-    throw core::ConfigError({}, "--joint",
-                            "the experiment stopped after " + std::to_string(e.log.rows()) + " samples (" +
-                                r.stop_reason +
-                                "): expected a joint that can be held and excited about its hold "
-                                "angle, with room for the hold's droop inside its limits less the margin");
+    const std::string expected =
+        ": expected a joint that can be held and excited about its hold angle (--hold-angle), with room "
+        "inside its limits less the margin for the hold's droop and the excitation's drift (--amplitude)";
+    constexpr std::string_view kNotRun = "not run: ";
+    if (e.log.rows() == 0 && r.stop_reason.starts_with(kNotRun)) {
+      throw core::ConfigError({}, "--joint",
+                              "the experiment logging to " + name + " did not run: the one before it stopped (" +
+                                  r.stop_reason.substr(kNotRun.size()) + ")" + expected);
+    }
+    throw core::ConfigError(
+        {}, "--joint",
+        "the experiment stopped after " + std::to_string(e.log.rows()) + " samples (" + r.stop_reason + ")" + expected);
   }
   e.data = dataFromLog(e.log, name, driven);
   return e;
@@ -167,7 +187,7 @@ Experiment experimentOf(const id::ExperimentResult& r, const std::string& name, 
 
 Experiment runSimExperiment(const arm::ArmModel& model, plant::PlantConfig plant_config, int joint,
                             const Eigen::VectorXd& posture, const id::SampledSignal& excitation, std::uint64_t seed,
-                            const std::string& name) {
+                            const std::string& name, const KeepLog& keep) {
   plant_config.seed = seed;
   plant_config.solver.integrator = plant::IntegratorKind::kRodas3;  // the lockstep loop's integrator
   // The simulated plant can lock joints (the real arm cannot): only the driven joint is active, the
@@ -187,7 +207,9 @@ Experiment runSimExperiment(const arm::ArmModel& model, plant::PlantConfig plant
   options.min_rad = driven.min_rad;
   options.max_rad = driven.max_rad;
   options.joint_names = {driven.name};  // the device serves the driven joint alone: no held columns
-  return experimentOf(id::runExperiment(backend.device(), excitation, options), name, driven);
+  const id::ExperimentResult result = id::runExperiment(backend.device(), excitation, options);
+  keepLogs({result}, {name}, keep);
+  return experimentOf(result, name, driven);
 }
 
 // The driven joint's index among the device's joints.
@@ -198,12 +220,14 @@ int deviceJointIndex(hil::IoDevice& device, int model_joint, const std::string& 
   throw core::ConfigError({}, "--joint", "'" + name + "' is not a joint of the " + io + " device's channel map");
 }
 
-// One experiment on a device that stays built between experiments (the fake DAQ, the real arm, a
-// plant node):
-// every device joint held, the driven one excited; the limits are the plant file's.
-Experiment runDeviceExperiment(const arm::ArmModel& model, CommandDevice& device, int device_joint,
-                               const plant::JointParams& driven, std::optional<double> hold_rad,
-                               const id::SampledSignal& excitation, const std::string& name) {
+// The experiments on a device that stays built and active from the first to the last (the fake
+// DAQ, the real arm, a plant node): every device joint held, the driven one excited in turn by
+// each excitation, the holds continuing between them; the limits are the plant file's. Every
+// experiment that logged anything keeps its log before one that stopped too early is refused.
+std::vector<Experiment> runDeviceExperiments(const arm::ArmModel& model, CommandDevice& device, int device_joint,
+                                             const plant::JointParams& driven, std::optional<double> hold_rad,
+                                             const std::vector<id::SampledSignal>& excitations,
+                                             const std::vector<std::string>& names, const KeepLog& keep) {
   id::ExperimentOptions options;
   options.joint = device_joint;
   options.min_rad = driven.min_rad;
@@ -216,10 +240,15 @@ Experiment runDeviceExperiment(const arm::ArmModel& model, CommandDevice& device
     options.joint_names.push_back(model.joints[static_cast<std::size_t>(joints.modelIndex(k))].name);
   }
   const int model_joint = joints.modelIndex(device_joint);
-  const id::ExperimentResult result = id::runExperiment(device.backend->device(), excitation, options);
-  Experiment e = experimentOf(result, name, driven);
-  e.posture = postureOfLog(model, e.log, model_joint, name);
-  return e;
+  const std::vector<id::ExperimentResult> results = id::runExperiments(device.backend->device(), excitations, options);
+  keepLogs(results, names, keep);
+  std::vector<Experiment> experiments;
+  for (std::size_t e = 0; e < results.size(); ++e) {
+    Experiment x = experimentOf(results[e], names[e], driven);
+    x.posture = postureOfLog(model, x.log, model_joint, names[e]);
+    experiments.push_back(std::move(x));
+  }
+  return experiments;
 }
 
 // Options that mean nothing with the chosen source are refused, not ignored.
@@ -693,50 +722,54 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
     const std::string validation_log = logFileName(kValidationLog, o.log_format);
     const id::SampledSignal fit_excitation = fitExcitation(o.amplitude_v, o.duration_s);
     const id::SampledSignal validation_excitation = validationExcitation(o.amplitude_v, o.duration_s);
-    // A driven joint resting within the margin of a limit is refused before anything moves; the
-    // hold angle is what moves it away.
-    try {
-      if (kind == hil::IoKind::kSim) {
-        progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint));
-        r.fit_experiments.push_back(
-            runSimExperiment(model, plant_config, joint, posture, fit_excitation, seed, fit_log));
-        progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint));
-        r.validation =
-            runSimExperiment(model, plant_config, joint, posture, validation_excitation, seed + 1, validation_log);
-      } else {
-        // One device for both experiments, as on the real arm: the second starts where the first
-        // left. On the fake DAQ the simulated DTS locks the other joints, as --io sim does, and the
-        // board serves the driven joint's channels: the data show the joint alone (with every
-        // joint held instead, the neighbours' holds and the arm's coupling enter the data, which the
-        // single-joint model does not describe; docs/identification.md). The real arm holds them all.
-        const std::unique_ptr<CommandDevice> device =
-            openCommandDevice(kind, model, plant_config, posture, seed, o.daq_config, o.hil_config, kSamplePeriod_s,
-                              kind == hil::IoKind::kFakeDaq ? jp.name : std::string(), o.lcm_url);
-        checkNodeArmMotion(*device, o.hold_angle_rad.has_value(), o.confirm_arm_motion,
-                           "--hold-angle on a node serving the real arm", kHoldMoveOnTheArm);
-        const int device_joint = deviceJointIndex(device->backend->device(), model_joint, o.joint, o.io);
-        progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint) + " through " + o.io);
-        r.fit_experiments.push_back(
-            runDeviceExperiment(model, *device, device_joint, jp, o.hold_angle_rad, fit_excitation, fit_log));
-        progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint) + " through " + o.io);
-        r.validation = runDeviceExperiment(model, *device, device_joint, jp, o.hold_angle_rad, validation_excitation,
-                                           validation_log);
-      }
-    } catch (const id::ExperimentRefused& e) {
-      throw core::ConfigError({}, "--hold-angle", e.what());
-    }
-    for (const Experiment* e : {&r.fit_experiments[0], &r.validation}) {
-      const std::filesystem::path file = out / e->name;
+    const KeepLog keep = [&](const std::string& name, const id::SignalTable& log) {
+      const std::filesystem::path file = out / name;
       if (o.log_format == "lcm") {
         id::ExperimentLogInfo info;
         info.command_line = o.command_line;
         info.source = o.io;
         info.joint = r.joint;
         info.sample_period_s = kSamplePeriod_s;
-        writeOutput(file, [&] { id::writeExperimentLcmLog(file, e->log, info); });
+        writeOutput(file, [&] { id::writeExperimentLcmLog(file, log, info); });
       } else {
-        writeOutput(file, [&] { id::writeSignalCsv(file, e->log); });
+        writeOutput(file, [&] { id::writeSignalCsv(file, log); });
       }
+    };
+    // A driven joint resting within the margin of a limit is refused before anything moves; the
+    // hold angle is what moves it away.
+    try {
+      if (kind == hil::IoKind::kSim) {
+        progress.step("experiment 1 of 2 (fit): PRBS on " + shortJointName(r.joint));
+        r.fit_experiments.push_back(
+            runSimExperiment(model, plant_config, joint, posture, fit_excitation, seed, fit_log, keep));
+        progress.step("experiment 2 of 2 (held out): multisine on " + shortJointName(r.joint));
+        r.validation = runSimExperiment(model, plant_config, joint, posture, validation_excitation, seed + 1,
+                                        validation_log, keep);
+      } else {
+        // One device for both experiments, as on the real arm, active from the first to the last:
+        // the held-out experiment continues the fitted one's holds. A gravity load drifts the
+        // joint off its hold over an experiment, by the hold's droop and more; a hold taken up
+        // anew would start where it drifted to (lower each time, into the limit's margin) after
+        // letting it sag through the ramp-in. On the fake DAQ the simulated DTS locks the other joints, as --io sim
+        // does, and the board serves the driven joint's channels: the data show the joint alone (with every joint held
+        // instead, the neighbours' holds and the arm's coupling enter the data, which the single-joint model does not
+        // describe; docs/identification.md). The real arm holds them all.
+        const std::unique_ptr<CommandDevice> device =
+            openCommandDevice(kind, model, plant_config, posture, seed, o.daq_config, o.hil_config, kSamplePeriod_s,
+                              kind == hil::IoKind::kFakeDaq ? jp.name : std::string(), o.lcm_url);
+        checkNodeArmMotion(*device, o.hold_angle_rad.has_value(), o.confirm_arm_motion,
+                           "--hold-angle on a node serving the real arm", kHoldMoveOnTheArm);
+        const int device_joint = deviceJointIndex(device->backend->device(), model_joint, o.joint, o.io);
+        progress.step("experiments 1 and 2 of 2 (fit, held out): PRBS then multisine on " + shortJointName(r.joint) +
+                      " through " + o.io);
+        std::vector<Experiment> run =
+            runDeviceExperiments(model, *device, device_joint, jp, o.hold_angle_rad,
+                                 {fit_excitation, validation_excitation}, {fit_log, validation_log}, keep);
+        r.fit_experiments.push_back(std::move(run[0]));
+        r.validation = std::move(run[1]);
+      }
+    } catch (const id::ExperimentRefused& e) {
+      throw core::ConfigError({}, "--hold-angle", e.what());
     }
   } else {
     r.source = "logs";

@@ -39,6 +39,12 @@ std::vector<HeldAngle> heldAngles(const SignalTable& log) {
 
 ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excitation,
                                const ExperimentOptions& options) {
+  return std::move(runExperiments(device, {excitation}, options).front());
+}
+
+std::vector<ExperimentResult> runExperiments(hil::IoDevice& device, const std::vector<SampledSignal>& excitations,
+                                             const ExperimentOptions& options) {
+  if (excitations.empty()) throw std::invalid_argument("experiment: no excitation");
   if (device.state() == hil::IoState::kUnconfigured) device.configure();
   const int n = device.numJoints();
   const int j = options.joint;
@@ -46,9 +52,11 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
     throw std::invalid_argument("experiment: joint " + std::to_string(j) + " outside the device's " +
                                 std::to_string(n) + " joints");
   }
-  if (std::abs(excitation.sample_period_s - device.period()) > 1e-12 * device.period()) {
-    throw std::invalid_argument("experiment: excitation sampled every " + std::to_string(excitation.sample_period_s) +
-                                " s, the device runs every " + std::to_string(device.period()) + " s");
+  for (const SampledSignal& excitation : excitations) {
+    if (std::abs(excitation.sample_period_s - device.period()) > 1e-12 * device.period()) {
+      throw std::invalid_argument("experiment: excitation sampled every " + std::to_string(excitation.sample_period_s) +
+                                  " s, the device runs every " + std::to_string(device.period()) + " s");
+    }
   }
   const double lo = options.min_rad + options.limit_margin_rad;
   const double hi = options.max_rad - options.limit_margin_rad;
@@ -86,7 +94,8 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
     }
   }
 
-  ExperimentResult result;
+  std::vector<ExperimentResult> results(excitations.size());
+  ExperimentResult& result = results.front();  // the first holds the log's layout and the holds
   hil::JointSample sample;
   detail::PacedReader reader(device, options.before_read);
   const auto read = [&] { return reader.read(sample); };
@@ -104,7 +113,6 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
     }
   }
   result.log.columns.assign(result.log.names.size(), {});
-  for (auto& c : result.log.columns) c.reserve(excitation.value_v.size());
   result.hold_rad.assign(sample.q_rad.data(), sample.q_rad.data() + n);
   const double start = sample.q_rad[j];
   const auto nameOf = [&](int k) {
@@ -141,66 +149,81 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
   const detail::LimitBand move_band =
       detail::firstMoveBand(start, options.min_rad, options.max_rad, options.limit_margin_rad);
   result.hold_rad[static_cast<std::size_t>(j)] = hold;
+  for (std::size_t e = 0; e < excitations.size(); ++e) {
+    if (e > 0) {
+      results[e].log.names = result.log.names;
+      results[e].log.columns.assign(result.log.names.size(), {});
+      results[e].hold_rad = result.hold_rad;
+    }
+    for (auto& c : results[e].log.columns) c.reserve(excitations[e].value_v.size());
+  }
 
   device.activate();
   detail::DeactivateOnExit guard{device};
   const auto settle_steps = static_cast<std::size_t>(std::llround(options.settle_s / period));
-  const std::size_t excitation_start = move_steps + settle_steps;
-  const std::size_t total = excitation_start + excitation.value_v.size();
+  // Each excitation after the move and its own settling time: [start, end) in steps.
+  std::vector<std::size_t> excitation_start(excitations.size()), excitation_end(excitations.size());
+  std::size_t total = move_steps;
+  for (std::size_t e = 0; e < excitations.size(); ++e) {
+    excitation_start[e] = total + settle_steps;
+    excitation_end[e] = excitation_start[e] + excitations[e].value_v.size();
+    total = excitation_end[e];
+  }
   hil::IoVector command = hil::IoVector::Zero(n);
+  std::size_t current = 0;  // the excitation being run or settled for
+  // A stop ends the excitation under way; the ones after it do not run.
+  const auto stop = [&](const std::string& reason) {
+    results[current].stop_reason = reason;
+    for (std::size_t e = current + 1; e < results.size(); ++e) results[e].stop_reason = "not run: " + reason;
+    return results;
+  };
   for (std::size_t step = 0; step < total; ++step) {
-    if (step > 0 && !read()) {
-      result.stop_reason = readFailure();
-      return result;
+    while (step >= excitation_end[current]) {  // step < total: a later excitation remains
+      results[current].completed = true;
+      ++current;
     }
+    if (step > 0 && !read()) return stop(readFailure());
     const double q = sample.q_rad[j];
     const bool moving = step < move_steps;
     const double target =
         moving ? start + detail::blend(static_cast<double>(step + 1) / static_cast<double>(move_steps)) * (hold - start)
                : hold;
     if (!std::isfinite(q) || !(moving ? move_band : held_band).contains(q)) {
-      result.stop_reason = joint_name + " at " + std::to_string(q) + " rad, within " +
-                           std::to_string(options.limit_margin_rad) + " rad of its limits " +
-                           std::to_string(options.min_rad) + ".." + std::to_string(options.max_rad) + " rad" +
-                           (moving ? " (moving to its hold angle " + std::to_string(hold) + " rad)" : "");
-      return result;
+      return stop(joint_name + " at " + std::to_string(q) + " rad, within " + std::to_string(options.limit_margin_rad) +
+                  " rad of its limits " + std::to_string(options.min_rad) + ".." + std::to_string(options.max_rad) +
+                  " rad" + (moving ? " (moving to its hold angle " + std::to_string(hold) + " rad)" : ""));
     }
     if (moving && std::abs(target - q) > options.move_max_error_rad) {
-      result.stop_reason = joint_name + " is " + std::to_string(std::abs(target - q)) +
-                           " rad from its target moving to its hold angle " + std::to_string(hold) +
-                           " rad (more than " + std::to_string(options.move_max_error_rad) + " rad)";
-      return result;
+      return stop(joint_name + " is " + std::to_string(std::abs(target - q)) +
+                  " rad from its target moving to its hold angle " + std::to_string(hold) + " rad (more than " +
+                  std::to_string(options.move_max_error_rad) + " rad)");
     }
     if (!std::isfinite(sample.tau_load_cell_nm[j])) {
-      result.stop_reason = joint_name + ": load-cell reading out of range";
-      return result;
+      return stop(joint_name + ": load-cell reading out of range");
     }
     if (log_pressures && ((sample.pressure_mask >> j & 1u) == 0 || !std::isfinite(sample.p_a_pa[j]) ||
                           !std::isfinite(sample.p_b_pa[j]))) {
-      result.stop_reason = joint_name + ": chamber pressure reading missing or out of range";
-      return result;
+      return stop(joint_name + ": chamber pressure reading missing or out of range");
     }
     for (int k = 0; k < n; ++k) {
       if (k == j) continue;
       if (!std::isfinite(sample.q_rad[k]) ||
           std::abs(sample.q_rad[k] - result.hold_rad[static_cast<std::size_t>(k)]) > options.held_drift_limit_rad) {
-        result.stop_reason = "held joint " + nameOf(k) + " left its hold by more than " +
-                             std::to_string(options.held_drift_limit_rad) + " rad";
-        return result;
+        return stop("held joint " + nameOf(k) + " left its hold by more than " +
+                    std::to_string(options.held_drift_limit_rad) + " rad");
       }
       command[k] = options.held_gain_v_per_rad * (result.hold_rad[static_cast<std::size_t>(k)] - sample.q_rad[k]);
     }
-    const bool exciting = step >= excitation_start;
-    const double r = exciting ? excitation.value_v[step - excitation_start] : 0.0;
+    const bool exciting = step >= excitation_start[current];
+    const double r = exciting ? excitations[current].value_v[step - excitation_start[current]] : 0.0;
     command[j] = options.hold_gain_v_per_rad * (target - q) + r;
     if (!device.write(command).ok()) {
-      result.stop_reason = std::string("device write failed: ") + device.status().message;
-      return result;
+      return stop(std::string("device write failed: ") + device.status().message);
     }
     if (exciting) {
-      auto& c = result.log.columns;
+      auto& c = results[current].log.columns;
       const double t0 = c[0].empty() ? sample.t_s : c[0].front();
-      c[0].push_back(options.log_control_time ? t0 + static_cast<double>(step - excitation_start) * period
+      c[0].push_back(options.log_control_time ? t0 + static_cast<double>(step - excitation_start[current]) * period
                                               : sample.t_s);
       c[1].push_back(r);
       c[2].push_back(device.appliedCommand()[j]);
@@ -218,8 +241,8 @@ ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excit
       }
     }
   }
-  result.completed = true;
-  return result;
+  results.back().completed = true;
+  return results;
 }
 
 }  // namespace fullarm::identification

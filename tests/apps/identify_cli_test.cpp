@@ -467,6 +467,30 @@ TEST(IdentifyCli, FakeDaqRunIdentifiesThePlantsOwnGroups) {
   }
   EXPECT_EQ(result["delay_samples"].get<int>(), 1);
   EXPECT_GE(result["validation"]["fit_angle_percent"].get<double>(), 90.0);
+  // The held-out experiment holds the elbow where the fitted one did, not where the PRBS left it:
+  // the hold law recovered from each log has the same target.
+  const double fitted_hold = result["experiments"][0]["hold_rad"].get<double>();
+  const double held_out_hold = result["experiments"][1]["hold_rad"].get<double>();
+  std::printf("hold angles: fitted %.7f rad, held out %.7f rad\n", fitted_hold, held_out_hold);
+  EXPECT_NEAR(held_out_hold, fitted_hold, 1e-6);
+}
+
+// An experiment that stops early keeps its log: a 5 V PRBS on the elbow held 0.02 rad short of its
+// upper limit's margin drives it into the margin within a few dozen samples, too few to fit
+// (exit 2), and the samples it ran are on disk.
+TEST(IdentifyCli, AnExperimentThatStopsEarlyKeepsWhatItLogged) {
+  const auto dir = tempDir("stopped");
+  const Result r = runFullarm(
+      "identify --quiet --io sim --joint EB --duration 1 --amplitude 5 --hold-angle 2.14 --out " + dir.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  const std::string marker = "the experiment stopped after ";
+  const std::size_t at = r.output.find(marker);
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const std::size_t rows = std::stoul(r.output.substr(at + marker.size()));
+  ASSERT_GT(rows, 0U) << r.output;
+  const id::SignalTable kept = id::readSignalCsv(dir / "experiment_fit.csv", id::kExperimentColumns);
+  EXPECT_EQ(kept.rows(), rows);
+  EXPECT_FALSE(std::filesystem::exists(dir / "experiment_validation.csv"));
 }
 
 // An arm resting with the elbow inside the margin of its lower stop (0.60 rad; the limit is

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -18,7 +19,8 @@ namespace {
 
 constexpr double kT = 1.0e-3;
 
-/// Each joint's angle integrates its applied command: q += gain * T * u (one period of delay).
+/// Each joint's angle integrates its applied command less a constant load: q += gain * T * (u - load)
+/// (one period of delay; a load makes a proportional hold droop by load / K).
 class IntegratorDevice final : public hil::IoDevice {
  public:
   IntegratorDevice(int joints, double ramp_in_s)
@@ -35,6 +37,7 @@ class IntegratorDevice final : public hil::IoDevice {
   /// Every joint at `q_rad` (before the first read).
   void startAt(double q_rad) { q_.setConstant(q_rad); }
   double gain_radps_per_v = 0.5;
+  double load_v = 0.0;
   int reads = 0;
   int fail_read_at = -1;
   /// Every angle read and every command written to joint `recorded_joint`, in order (capacity
@@ -46,7 +49,7 @@ class IntegratorDevice final : public hil::IoDevice {
   void onConfigure() override {}
   core::RtStatus onRead(hil::JointSample& sample) noexcept override {
     if (reads++ == fail_read_at) return core::RtStatus::fault(core::RtCode::kBadInput, 0, "scripted read failure");
-    q_ += gain_radps_per_v * kT * held_;
+    q_ += gain_radps_per_v * kT * (held_.array() - load_v).matrix();
     t_ += kT;
     sample.t_s = t_;
     sample.q_rad = q_;
@@ -194,6 +197,9 @@ TEST(ExperimentTest, RejectsBadSetups) {
   options.move_speed_radps = 0.2;
   options.move_max_error_rad = std::numeric_limits<double>::infinity();
   EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
+  // No excitation to run.
+  options.move_max_error_rad = 0.1;
+  EXPECT_THROW((void)runExperiments(device, {}, options), std::invalid_argument);
   EXPECT_NE(device.state(), hil::IoState::kActive);
   EXPECT_EQ(device.appliedCommand()[0], 0.0);
 }
@@ -340,6 +346,66 @@ TEST(ExperimentTest, MovesToTheHoldAngleAlongACosineBlendThenExcitesAboutIt) {
   const auto& t = timed.log.column("time_s");
   EXPECT_NEAR(t.front(), 0.001 * (1 + kMoveSteps + kSettleSteps), 1e-9);
   for (std::size_t k = 1; k < t.size(); ++k) ASSERT_NEAR(t[k] - t[0], static_cast<double>(k) * kT, 1e-12) << k;
+}
+
+// Several experiments in one activation: the joint carries a load (0.35 V, a droop of 0.035 rad
+// under the 10 V/rad hold) and the first excitation pushes it 0.05 rad further off its hold; the
+// second experiment still holds it at the first's hold angle, its first reading (0.2 rad less
+// the first period's sag), with no new ramp-in, every command K (hold - q) + r once the single
+// ramp-in is over. Each log keeps its own
+// control time. A stop during the first leaves the second not run and the valve at null.
+TEST(ExperimentTest, SeveralExperimentsRunInOneActivationTheHoldsContinuing) {
+  ExperimentOptions options;
+  options.joint = 0;
+  options.settle_s = 0.6;  // longer than the ramp-in
+  options.min_rad = 0.0;
+  options.max_rad = 1.5;
+  options.log_control_time = true;
+  const std::vector<SampledSignal> excitations{stepSequence({-0.5}, 0.3, kT), stepSequence({0.0}, 0.3, kT)};
+  constexpr std::size_t kSettle = 600, kLength = 300;
+
+  IntegratorDevice device(1, 0.5);
+  device.gain_radps_per_v = 5.0;
+  device.load_v = 0.35;
+  device.read_q.reserve(4000);
+  device.written_u.reserve(4000);
+  const std::vector<ExperimentResult> results = runExperiments(device, excitations, options);
+  ASSERT_EQ(results.size(), 2u);
+  const double hold = device.read_q.front();
+  EXPECT_NEAR(hold, 0.2, 0.002);
+  for (const ExperimentResult& r : results) {
+    ASSERT_TRUE(r.completed) << r.stop_reason;
+    EXPECT_EQ(r.log.rows(), kLength);
+    EXPECT_DOUBLE_EQ(r.hold_rad[0], hold);
+    const auto& t = r.log.column("time_s");
+    for (std::size_t k = 1; k < t.size(); ++k) ASSERT_NEAR(t[k] - t[0], static_cast<double>(k) * kT, 1e-12) << k;
+  }
+  // One activation: the safe output when configured, the commands, the safe output at the end.
+  constexpr std::size_t kSteps = 2 * (kSettle + kLength);
+  ASSERT_EQ(device.written_u.size(), 1 + kSteps + 1);
+  EXPECT_EQ(device.written_u.back(), 0.0);
+  const double K = options.hold_gain_v_per_rad;
+  for (std::size_t k = kSettle; k < kSteps; ++k) {
+    const double r = (k >= kSettle && k < kSettle + kLength) ? -0.5 : 0.0;
+    ASSERT_NEAR(device.written_u[1 + k], K * (hold - device.read_q[k]) + r, 1e-12) << k;
+  }
+  // The first excitation took the joint 0.05 rad below its droop; after its settling time the
+  // second finds it back at the droop below the same hold.
+  EXPECT_NEAR(results[0].log.column("q_rad").back(), hold - 0.035 - 0.05, 1e-3);
+  EXPECT_NEAR(results[1].log.column("q_rad").front(), hold - 0.035, 1e-3);
+
+  IntegratorDevice failing(1, 0.5);
+  failing.fail_read_at = static_cast<int>(kSettle + 100);
+  const std::vector<ExperimentResult> stopped = runExperiments(failing, excitations, options);
+  ASSERT_EQ(stopped.size(), 2u);
+  EXPECT_FALSE(stopped[0].completed);
+  EXPECT_GT(stopped[0].log.rows(), 0u);
+  EXPECT_NE(stopped[0].stop_reason.find("scripted read failure"), std::string::npos) << stopped[0].stop_reason;
+  EXPECT_FALSE(stopped[1].completed);
+  EXPECT_EQ(stopped[1].log.rows(), 0u);
+  EXPECT_EQ(stopped[1].stop_reason.rfind("not run: ", 0), 0u) << stopped[1].stop_reason;
+  EXPECT_NE(failing.state(), hil::IoState::kActive);
+  EXPECT_EQ(failing.appliedCommand()[0], 0.0);
 }
 
 // Fault injection during the move: a read failure, a joint that does not follow its target (a

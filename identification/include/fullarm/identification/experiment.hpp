@@ -125,4 +125,18 @@ struct HeldAngle {
 [[nodiscard]] ExperimentResult runExperiment(hil::IoDevice& device, const SampledSignal& excitation,
                                              const ExperimentOptions& options);
 
+/// Runs several experiments in one activation of the device, as runExperiment runs one: the move
+/// to the hold angle if given, then for each excitation in turn the settling time and the
+/// excitation, each logged on its own (its control time starting at its first reading). The holds
+/// continue from one experiment to the next: the driven joint is held at the same angle
+/// throughout, with no deactivation, ramp-in or new move between them. A joint that a gravity load
+/// drifted off its hold over one experiment is still pulled back to the hold angle for the next,
+/// where a new run would take up its hold where the joint drifted to, after letting it sag through
+/// the ramp-in (docs/identification.md). A stop ends the experiment under way (its stop reason, its log so far); the
+/// ones after it do not run (stop reason "not run: " and the reason, no rows).
+/// @throws as runExperiment, and std::invalid_argument for no excitation
+[[nodiscard]] std::vector<ExperimentResult> runExperiments(hil::IoDevice& device,
+                                                           const std::vector<SampledSignal>& excitations,
+                                                           const ExperimentOptions& options);
+
 }  // namespace fullarm::identification
