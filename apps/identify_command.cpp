@@ -150,6 +150,16 @@ id::SampledSignal validationExcitation(double amplitude_v, double duration_s) {
   return id::schroederMultisine(amplitude_v, low, kBandHz, duration_s, 1, kSamplePeriod_s).signal;
 }
 
+// The single-joint model leaves out the coupling of neighbours that are held rather than locked:
+// said wherever the fitted logs record held joints (every device that holds the whole arm, and
+// logs recorded on one).
+constexpr const char* kHeldNeighboursNote =
+    "the other joints were held, not locked (the fitted log records their angles): their coupling "
+    "through the arm's inertia and their holds is not in the single-joint model, and the groups carry it, "
+    "by an amount that depends on the posture (on the simulated DTS with every joint held, the elbow's "
+    "groups within 5 % at the scene's ready posture and up to 51 % off with the upper arm hanging; "
+    "docs/identification.md)";
+
 // Writes an experiment's log (file name, log) to the output folder as soon as the run ends, before
 // anything that follows can fail; a run that stopped early keeps what it logged.
 using KeepLog = std::function<void(const std::string&, const id::SignalTable&)>;
@@ -177,9 +187,9 @@ Experiment experimentOf(const id::ExperimentResult& r, const std::string& name, 
                               "the experiment logging to " + name + " did not run: the one before it stopped (" +
                                   r.stop_reason.substr(kNotRun.size()) + ")" + expected);
     }
-    throw core::ConfigError(
-        {}, "--joint",
-        "the experiment stopped after " + std::to_string(e.log.rows()) + " samples (" + r.stop_reason + ")" + expected);
+    throw core::ConfigError({}, "--joint",
+                            "the experiment logging to " + name + " stopped after " + std::to_string(e.log.rows()) +
+                                " samples (" + r.stop_reason + ")" + expected);
   }
   e.data = dataFromLog(e.log, name, driven);
   return e;
@@ -388,6 +398,7 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   report.results()["identify"] = {
       {"joint", o.joint},
       {"source", o.source},
+      {"neighbours_held", !id::heldAngles(o.fit_experiments.front().log).empty()},
       {"start", o.start_source},
       {"start_link_inertia_kgm2", o.start_link_inertia},
       {"start_gravity_load_nm", o.start_gravity_nm ? nlohmann::json(*o.start_gravity_nm) : nlohmann::json(nullptr)},
@@ -459,6 +470,11 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
     if (o.start_gravity_nm) posture << " and its gravity load " << *o.start_gravity_nm << " N m, the fit's start";
     posture << ".";
     section.addParagraph(posture.str());
+    if (!held.empty()) {
+      std::string note = kHeldNeighboursNote;
+      note[0] = 'T';
+      section.addParagraph(note + ".");
+    }
   }
   section.addParagraph(
       o.plant_written
@@ -716,7 +732,7 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
     const hil::IoKind kind = commandIoKind(o.io);
     const auto seed = static_cast<std::uint64_t>(o.seed.value_or(1));
     Eigen::VectorXd posture = model.defaultPosture();
-    // The simulated DTS starts at the hold angle; a device moves the joint there (runExperiment).
+    // The simulated DTS starts at the hold angle; a device moves the joint there (runExperiments).
     if (kind == hil::IoKind::kSim && o.hold_angle_rad) posture[model_joint] = *o.hold_angle_rad;
     const std::string fit_log = logFileName(kFitLog, o.log_format);
     const std::string validation_log = logFileName(kValidationLog, o.log_format);
@@ -886,6 +902,7 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   text << verdictText(r) << "\n";
   for (const std::string& f : r.validation_result.failures) text << "  " << f << "\n";
+  if (!id::heldAngles(r.fit_experiments.front().log).empty()) text << "  note: " << kHeldNeighboursNote << "\n";
   if (!allFinite(r.fit)) text << "  warning: the fit returned a non-finite value or standard error\n";
   return r;
 }
@@ -924,7 +941,7 @@ CLI::App* addIdentifyCommand(CLI::App& app, IdentifyOptions& o, OptionTable& tab
       ->capture_default_str();
   declare.number("--hold-angle", o.hold_angle_rad,
                  "The driven joint's hold angle, inside its limits less 0.05 rad and the hold's droop (sim: the "
-                 "joint starts there; fakedaq, comedi, lcm: its hold moves it there before each experiment; "
+                 "joint starts there; fakedaq, comedi, lcm: its hold moves it there before the experiments; "
                  "default: the default posture's with sim, where the joint is with a device)",
                  {-kMaxHoldAngleRad, kMaxHoldAngleRad, "rad"});
   declare.flag("--confirm-arm-motion", o.confirm_arm_motion,

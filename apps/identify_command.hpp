@@ -31,7 +31,7 @@ struct IdentifyOptions {
   double duration_s = 5.0;   ///< excitation time of each experiment
   double amplitude_v = 0.5;  ///< peak of the excitation added to the valve command
   /// --hold-angle: the driven joint's hold angle [rad] (sim: the posture's; a device moves the
-  /// joint there before each experiment); unset: the default posture's (sim) or where the joint
+  /// joint there before the experiments); unset: the default posture's (sim) or where the joint
   /// is (a device).
   std::optional<double> hold_angle_rad;
   /// --confirm-arm-motion: the workspace is clear for the move to --hold-angle on the real arm

@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string_view>
+#include <utility>
 
 #include "device_run.hpp"
 
@@ -68,6 +69,9 @@ std::vector<ExperimentResult> runExperiments(hil::IoDevice& device, const std::v
   if (options.hold_rad && !(*options.hold_rad >= lo && *options.hold_rad <= hi)) {
     throw std::invalid_argument("experiment: hold angle " + std::to_string(*options.hold_rad) + " rad outside " +
                                 std::to_string(lo) + ".." + std::to_string(hi) + " rad (limits less the margin)");
+  }
+  if (!(options.settle_s >= 0.0) || !std::isfinite(options.settle_s)) {
+    throw std::invalid_argument("experiment: the settling time must be non-negative and finite");
   }
   if (!(options.move_s > 0.0 && options.move_speed_radps > 0.0 && options.move_max_error_rad > 0.0) ||
       !std::isfinite(options.move_s) || !std::isfinite(options.move_speed_radps) ||
@@ -158,8 +162,6 @@ std::vector<ExperimentResult> runExperiments(hil::IoDevice& device, const std::v
     for (auto& c : results[e].log.columns) c.reserve(excitations[e].value_v.size());
   }
 
-  device.activate();
-  detail::DeactivateOnExit guard{device};
   const auto settle_steps = static_cast<std::size_t>(std::llround(options.settle_s / period));
   // Each excitation after the move and its own settling time: [start, end) in steps.
   std::vector<std::size_t> excitation_start(excitations.size()), excitation_end(excitations.size());
@@ -171,12 +173,16 @@ std::vector<ExperimentResult> runExperiments(hil::IoDevice& device, const std::v
   }
   hil::IoVector command = hil::IoVector::Zero(n);
   std::size_t current = 0;  // the excitation being run or settled for
-  // A stop ends the excitation under way; the ones after it do not run.
+  // A stop ends the excitation under way; the ones after it do not run. (The results move out:
+  // the guard deactivates the device once the return value is built.)
   const auto stop = [&](const std::string& reason) {
     results[current].stop_reason = reason;
     for (std::size_t e = current + 1; e < results.size(); ++e) results[e].stop_reason = "not run: " + reason;
-    return results;
+    return std::move(results);
   };
+
+  device.activate();
+  detail::DeactivateOnExit guard{device};
   for (std::size_t step = 0; step < total; ++step) {
     while (step >= excitation_end[current]) {  // step < total: a later excitation remains
       results[current].completed = true;
@@ -241,7 +247,8 @@ std::vector<ExperimentResult> runExperiments(hil::IoDevice& device, const std::v
       }
     }
   }
-  results.back().completed = true;
+  // The one under way, and any after it with no steps of their own, ran whole.
+  for (std::size_t e = current; e < results.size(); ++e) results[e].completed = true;
   return results;
 }
 

@@ -440,6 +440,9 @@ TEST(IdentifyCli, FakeDaqRunIdentifiesThePlantsOwnGroups) {
   }
   const nlohmann::json result = readSummary(dir)["results"]["identify"];
   EXPECT_EQ(result["source"], "fakedaq");
+  // The simulated DTS locks the neighbours: no coupling to warn of.
+  EXPECT_FALSE(result["neighbours_held"].get<bool>());
+  EXPECT_EQ(r.output.find("held, not locked"), std::string::npos) << r.output;
   EXPECT_TRUE(result["experiments"][0]["completed"].get<bool>());
   EXPECT_TRUE(result["experiments"][1]["completed"].get<bool>());
   std::printf("fakedaq: delay %d samples, fit angle %.1f %%, torque %.1f %%\n", result["delay_samples"].get<int>(),
@@ -483,7 +486,7 @@ TEST(IdentifyCli, AnExperimentThatStopsEarlyKeepsWhatItLogged) {
   const Result r = runFullarm(
       "identify --quiet --io sim --joint EB --duration 1 --amplitude 5 --hold-angle 2.14 --out " + dir.string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  const std::string marker = "the experiment stopped after ";
+  const std::string marker = "the experiment logging to experiment_fit.csv stopped after ";
   const std::size_t at = r.output.find(marker);
   ASSERT_NE(at, std::string::npos) << r.output;
   const std::size_t rows = std::stoul(r.output.substr(at + marker.size()));

@@ -472,6 +472,12 @@ TEST_F(LcmSplitCli, IdentifyRunsItsExperimentsOnThePlantNode) {
   html << report.rdbuf();
   EXPECT_NE(html.str().find("on a plant node over LCM"), std::string::npos);
   EXPECT_NE(html.str().find("the held joints at their mean angles in experiment_fit.csv"), std::string::npos);
+  // The held neighbours' coupling, which the single-joint model leaves out, is said in the report,
+  // the summary and the command's output.
+  EXPECT_NE(html.str().find("The other joints were held, not locked"), std::string::npos);
+  EXPECT_TRUE(j["results"]["identify"]["neighbours_held"].get<bool>());
+  EXPECT_NE(identify.output().find("note: the other joints were held, not locked"), std::string::npos)
+      << identify.output();
 
   // Each log records every other joint of the node, held, as a held_<joint>_rad column; the summary
   // gives their means over the log.

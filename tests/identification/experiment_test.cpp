@@ -197,9 +197,13 @@ TEST(ExperimentTest, RejectsBadSetups) {
   options.move_speed_radps = 0.2;
   options.move_max_error_rad = std::numeric_limits<double>::infinity();
   EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument);
-  // No excitation to run.
+  // No excitation to run; a settling time that is negative or not finite.
   options.move_max_error_rad = 0.1;
   EXPECT_THROW((void)runExperiments(device, {}, options), std::invalid_argument);
+  for (double settle : {-0.1, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    options.settle_s = settle;
+    EXPECT_THROW((void)runExperiment(device, stepSequence({0.0}, 0.1, kT), options), std::invalid_argument) << settle;
+  }
   EXPECT_NE(device.state(), hil::IoState::kActive);
   EXPECT_EQ(device.appliedCommand()[0], 0.0);
 }
@@ -361,7 +365,7 @@ TEST(ExperimentTest, SeveralExperimentsRunInOneActivationTheHoldsContinuing) {
   options.min_rad = 0.0;
   options.max_rad = 1.5;
   options.log_control_time = true;
-  const std::vector<SampledSignal> excitations{stepSequence({-0.5}, 0.3, kT), stepSequence({0.0}, 0.3, kT)};
+  const std::vector<SampledSignal> excitations{stepSequence({-0.5}, 0.3, kT), stepSequence({0.2}, 0.3, kT)};
   constexpr std::size_t kSettle = 600, kLength = 300;
 
   IntegratorDevice device(1, 0.5);
@@ -383,16 +387,32 @@ TEST(ExperimentTest, SeveralExperimentsRunInOneActivationTheHoldsContinuing) {
   // One activation: the safe output when configured, the commands, the safe output at the end.
   constexpr std::size_t kSteps = 2 * (kSettle + kLength);
   ASSERT_EQ(device.written_u.size(), 1 + kSteps + 1);
+  EXPECT_EQ(device.written_u.front(), 0.0);
   EXPECT_EQ(device.written_u.back(), 0.0);
   const double K = options.hold_gain_v_per_rad;
   for (std::size_t k = kSettle; k < kSteps; ++k) {
-    const double r = (k >= kSettle && k < kSettle + kLength) ? -0.5 : 0.0;
+    const double r = k < kSettle + kLength ? -0.5 : k >= 2 * kSettle + kLength ? 0.2 : 0.0;
     ASSERT_NEAR(device.written_u[1 + k], K * (hold - device.read_q[k]) + r, 1e-12) << k;
   }
   // The first excitation took the joint 0.05 rad below its droop; after its settling time the
-  // second finds it back at the droop below the same hold.
+  // second finds it back at the droop below the same hold and lifts it 0.02 rad above it. Each
+  // log has its own excitation.
   EXPECT_NEAR(results[0].log.column("q_rad").back(), hold - 0.035 - 0.05, 1e-3);
   EXPECT_NEAR(results[1].log.column("q_rad").front(), hold - 0.035, 1e-3);
+  EXPECT_NEAR(results[1].log.column("q_rad").back(), hold - 0.035 + 0.02, 1e-3);
+  for (double r : results[0].log.column("excitation_v")) ASSERT_EQ(r, -0.5);
+  for (double r : results[1].log.column("excitation_v")) ASSERT_EQ(r, 0.2);
+
+  // Excitations with no samples, and no settling time: each counts as run whole.
+  IntegratorDevice quick(1, 0.0);
+  ExperimentOptions at_once = options;
+  at_once.settle_s = 0.0;
+  const SampledSignal none{kT, {}, {}};
+  const std::vector<ExperimentResult> empty = runExperiments(quick, {excitations[0], none, none}, at_once);
+  ASSERT_EQ(empty.size(), 3u);
+  for (const ExperimentResult& r : empty) EXPECT_TRUE(r.completed) << r.stop_reason;
+  EXPECT_EQ(empty[0].log.rows(), kLength);
+  EXPECT_EQ(empty[2].log.rows(), 0u);
 
   IntegratorDevice failing(1, 0.5);
   failing.fail_read_at = static_cast<int>(kSettle + 100);

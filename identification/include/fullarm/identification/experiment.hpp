@@ -114,7 +114,8 @@ struct HeldAngle {
 /// `options.hold_rad` if given, holds for `options.settle_s`, plays `excitation` on the driven
 /// joint, then deactivates the device (safe outputs) whatever happened.
 /// @throws std::invalid_argument for a joint outside the device, an excitation whose period
-///   differs from the device's, limits that leave no room, a hold angle or move settings that are
+///   differs from the device's, limits that leave no room, a settling time that is negative or not
+///   finite, a hold angle or move settings that are
 ///   not finite or outside the limits less the margin, or joint names that are not one non-empty
 ///   name per device joint
 /// @throws ExperimentRefused when the driven joint starts within the margin of a limit and no hold
