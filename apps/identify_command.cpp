@@ -776,8 +776,12 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
         checkNodeArmMotion(*device, o.hold_angle_rad.has_value(), o.confirm_arm_motion,
                            "--hold-angle on a node serving the real arm", kHoldMoveOnTheArm);
         const int device_joint = deviceJointIndex(device->backend->device(), model_joint, o.joint, o.io);
+        // The run's loop reports nothing while it runs (no I/O there): the line says how long it
+        // takes in control time, which the arm runs in real time.
+        const double run_s = 2.0 * (id::ExperimentOptions{}.settle_s + o.duration_s);
         progress.step("experiments 1 and 2 of 2 (fit, held out): PRBS then multisine on " + shortJointName(r.joint) +
-                      " through " + o.io);
+                      " through " + o.io + ", " + core::formatDuration(run_s) + " of control time" +
+                      (o.hold_angle_rad ? " after the move to the hold angle" : ""));
         std::vector<Experiment> run =
             runDeviceExperiments(model, *device, device_joint, jp, o.hold_angle_rad,
                                  {fit_excitation, validation_excitation}, {fit_log, validation_log}, keep);
