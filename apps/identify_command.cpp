@@ -93,6 +93,7 @@ struct Outcome {
   std::vector<std::string> plant_notes;    // groups it carries only approximately
   double start_link_inertia = 0.0;         // the link's inertia at the start's posture [kg m^2]
   std::optional<double> start_gravity_nm;  // the gravity load there (none with --start)
+  bool neighbours_held = false;            // the fitted log records held joints (kHeldNeighboursNote)
 };
 
 // The experiment a log holds, with the hydraulic torque of its chamber pressures (where logged)
@@ -164,11 +165,8 @@ constexpr const char* kHeldNeighboursNote =
 // anything that follows can fail; a run that stopped early keeps what it logged.
 using KeepLog = std::function<void(const std::string&, const id::SignalTable&)>;
 
-void keepLogs(const std::vector<id::ExperimentResult>& results, const std::vector<std::string>& names,
-              const KeepLog& keep) {
-  for (std::size_t e = 0; e < results.size(); ++e) {
-    if (results[e].log.rows() > 0) keep(names[e], results[e].log);
-  }
+void keepLog(const std::string& name, const id::ExperimentResult& result, const KeepLog& keep) {
+  if (result.log.rows() > 0) keep(name, result.log);
 }
 
 Experiment experimentOf(const id::ExperimentResult& r, const std::string& name, const plant::JointParams& driven) {
@@ -218,7 +216,7 @@ Experiment runSimExperiment(const arm::ArmModel& model, plant::PlantConfig plant
   options.max_rad = driven.max_rad;
   options.joint_names = {driven.name};  // the device serves the driven joint alone: no held columns
   const id::ExperimentResult result = id::runExperiment(backend.device(), excitation, options);
-  keepLogs({result}, {name}, keep);
+  keepLog(name, result, keep);
   return experimentOf(result, name, driven);
 }
 
@@ -251,7 +249,7 @@ std::vector<Experiment> runDeviceExperiments(const arm::ArmModel& model, Command
   }
   const int model_joint = joints.modelIndex(device_joint);
   const std::vector<id::ExperimentResult> results = id::runExperiments(device.backend->device(), excitations, options);
-  keepLogs(results, names, keep);
+  for (std::size_t e = 0; e < results.size(); ++e) keepLog(names[e], results[e], keep);
   std::vector<Experiment> experiments;
   for (std::size_t e = 0; e < results.size(); ++e) {
     Experiment x = experimentOf(results[e], names[e], driven);
@@ -398,7 +396,7 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
   report.results()["identify"] = {
       {"joint", o.joint},
       {"source", o.source},
-      {"neighbours_held", !id::heldAngles(o.fit_experiments.front().log).empty()},
+      {"neighbours_held", o.neighbours_held},
       {"start", o.start_source},
       {"start_link_inertia_kgm2", o.start_link_inertia},
       {"start_gravity_load_nm", o.start_gravity_nm ? nlohmann::json(*o.start_gravity_nm) : nlohmann::json(nullptr)},
@@ -470,7 +468,7 @@ void addToReport(const Outcome& o, reports::Report& report, const std::string& h
     if (o.start_gravity_nm) posture << " and its gravity load " << *o.start_gravity_nm << " N m, the fit's start";
     posture << ".";
     section.addParagraph(posture.str());
-    if (!held.empty()) {
+    if (o.neighbours_held) {
       std::string note = kHeldNeighboursNote;
       note[0] = 'T';
       section.addParagraph(note + ".");
@@ -766,10 +764,11 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
         // the held-out experiment continues the fitted one's holds. A gravity load drifts the
         // joint off its hold over an experiment, by the hold's droop and more; a hold taken up
         // anew would start where it drifted to (lower each time, into the limit's margin) after
-        // letting it sag through the ramp-in. On the fake DAQ the simulated DTS locks the other joints, as --io sim
-        // does, and the board serves the driven joint's channels: the data show the joint alone (with every joint held
-        // instead, the neighbours' holds and the arm's coupling enter the data, which the single-joint model does not
-        // describe; docs/identification.md). The real arm holds them all.
+        // letting it sag through the ramp-in. On the fake DAQ the simulated DTS locks the other
+        // joints, as --io sim does, and the board serves the driven joint's channels: the data show
+        // the joint alone (with every joint held instead, the neighbours' holds and the arm's
+        // coupling enter the data, which the single-joint model does not describe;
+        // docs/identification.md). The real arm holds them all.
         const std::unique_ptr<CommandDevice> device =
             openCommandDevice(kind, model, plant_config, posture, seed, o.daq_config, o.hil_config, kSamplePeriod_s,
                               kind == hil::IoKind::kFakeDaq ? jp.name : std::string(), o.lcm_url);
@@ -829,6 +828,7 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
       }
     }
   }
+  r.neighbours_held = !id::heldAngles(r.fit_experiments.front().log).empty();
   // The start: a given model, or the plant joint's groups at the hold angle with the link's
   // inertia and gravity load there (the held joints at the angles the first fitted log records,
   // the others at the default posture).
@@ -906,7 +906,7 @@ Outcome identify(const IdentifyOptions& o, const std::filesystem::path& out, cor
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   text << verdictText(r) << "\n";
   for (const std::string& f : r.validation_result.failures) text << "  " << f << "\n";
-  if (!id::heldAngles(r.fit_experiments.front().log).empty()) text << "  note: " << kHeldNeighboursNote << "\n";
+  if (r.neighbours_held) text << "  note: " << kHeldNeighboursNote << "\n";
   if (!allFinite(r.fit)) text << "  warning: the fit returned a non-finite value or standard error\n";
   return r;
 }

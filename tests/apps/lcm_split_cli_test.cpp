@@ -443,9 +443,9 @@ TEST_F(LcmSplitCli, GravityHoldsOnThePlantNodePredictTheNodesArmsGravity) {
 
 // The two identification experiments over LCM, every joint of the node held: the node serves
 // exactly the commands of the two experiments, run in one activation (each a 1 s settle and the
-// excitation, then the one safe output sent at the end), none stale or damaged, and ends with safe outputs; the logs carry the
-// excitation on the driven joint's hold law; the command ends in its fit and verdict (exit 0 or
-// 1, not a device error).
+// excitation, then the one safe output sent at the end), none stale or damaged, and ends with
+// safe outputs; the logs carry the excitation on the driven joint's hold law; the command ends in
+// its fit and verdict (exit 0 or 1, not a device error).
 TEST_F(LcmSplitCli, IdentifyRunsItsExperimentsOnThePlantNode) {
   Process plant({"--quiet", "plant", "serve", "--lcm-url", kUrl, "--no-user", "--idle-exit", "2"}, dir_ / "plant.txt");
   Process identify({"identify", "--io", "lcm", "--lcm-url", kUrl, "--duration", "1", "--out", (dir_ / "id").string()},
